@@ -1,0 +1,10 @@
+"""rlcontroller: reinforcement-learning active control of buildings under earthquakes."""
+
+import gymnasium
+
+__version__ = "0.1.0"
+
+ENV_ID = "rlcontroller/Building-v0"
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(id=ENV_ID, entry_point="rlcontroller.env:BuildingEnv")

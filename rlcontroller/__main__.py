@@ -1,0 +1,3 @@
+from rlcontroller.cli import main
+
+main()

@@ -1,0 +1,250 @@
+"""State space of the building and its one-step linear maps.
+
+State z = [x; x'] (m, m/s):  z' = A z + B_u u + B_g a_g,
+A = [[0, I], [-M^-1 K, -M^-1 C]],  B_u = [0; M^-1 Gamma],  B_g = [0; -1].
+
+Over one control step of length dt the actuator forces u_k are held constant (zero-order
+hold) and the ground acceleration is piecewise linear between its samples (first-order hold).
+Both discretisations reduce a step to the same precomputed linear map
+
+    z_{k+1} = phi z_k + force_gain u_k + ground_gain a_g[k r : k r + r + 1],
+
+where r is the number of ground-motion samples per control step (sub-steps; a record sampled
+finer than the control step is never decimated). The exact map comes from a matrix
+exponential; Newmark-beta uses the held force at both ends of every sub-step.
+
+Outputs at time t_k are computed with the force held over the step that ends at t_k, so an
+absolute acceleration sensor never sees a force that has not been applied yet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+from numpy.lib.stride_tricks import sliding_window_view
+
+from rlcontroller.config import Quantity, SimulationConfig
+from rlcontroller.structure import Building
+
+QUANTITIES: tuple[str, ...] = (
+    "displacement",
+    "velocity",
+    "drift",
+    "absolute_acceleration",
+    "story_shear",
+    "base_shear",
+    "force",
+)
+
+
+@dataclass(frozen=True)
+class StateSpace:
+    """Continuous-time matrices of the building (SI units)."""
+
+    a: np.ndarray
+    b_force: np.ndarray
+    b_ground: np.ndarray
+
+
+def state_space(building: Building) -> StateSpace:
+    n = building.n_floors
+    mass_inverse = np.linalg.inv(building.mass)
+    a = np.block(
+        [
+            [np.zeros((n, n)), np.eye(n)],
+            [-mass_inverse @ building.stiffness, -mass_inverse @ building.damping],
+        ]
+    )
+    b_force = np.vstack([np.zeros((n, building.n_actuators)), mass_inverse @ building.actuator_matrix])
+    b_ground = np.concatenate([np.zeros(n), -np.ones(n)])
+    return StateSpace(a=a, b_force=b_force, b_ground=b_ground)
+
+
+@dataclass(frozen=True)
+class SubstepMap:
+    """z1 = phi z0 + force_gain u + ground_start a_g0 + ground_end a_g1 over one sub-step."""
+
+    phi: np.ndarray
+    force_gain: np.ndarray
+    ground_start: np.ndarray
+    ground_end: np.ndarray
+
+
+def exact_substep(system: StateSpace, dt: float) -> SubstepMap:
+    """Exact discretisation: zero-order hold on u, first-order hold on a_g (augmented expm)."""
+    n_state = system.a.shape[0]
+    n_force = system.b_force.shape[1]
+    size = n_state + n_force + 2
+    augmented = np.zeros((size, size))
+    augmented[:n_state, :n_state] = system.a
+    augmented[:n_state, n_state : n_state + n_force] = system.b_force
+    augmented[:n_state, n_state + n_force] = system.b_ground
+    augmented[n_state + n_force, n_state + n_force + 1] = 1.0  # d a_g / dt = slope
+    exponential = scipy.linalg.expm(augmented * dt)
+    ground = exponential[:n_state, n_state + n_force]
+    slope = exponential[:n_state, n_state + n_force + 1]
+    return SubstepMap(
+        phi=exponential[:n_state, :n_state],
+        force_gain=exponential[:n_state, n_state : n_state + n_force],
+        ground_start=ground - slope / dt,
+        ground_end=slope / dt,
+    )
+
+
+def newmark_substep(building: Building, dt: float, beta: float = 0.25, gamma: float = 0.5) -> SubstepMap:
+    """Newmark-beta as a linear map on [x; x'], the start acceleration taken from equilibrium.
+
+    The load is p = -M 1 a_g + Gamma u with the same held u at both ends of the step.
+    """
+    n = building.n_floors
+    mass, damping, stiffness = building.mass, building.damping, building.stiffness
+    identity, zero = np.eye(n), np.zeros((n, n))
+    # Each quantity is a matrix acting on w = [x0, v0, p0, p1].
+    x0 = np.hstack([identity, zero, zero, zero])
+    v0 = np.hstack([zero, identity, zero, zero])
+    p0 = np.hstack([zero, zero, identity, zero])
+    p1 = np.hstack([zero, zero, zero, identity])
+    a0 = np.linalg.solve(mass, p0 - damping @ v0 - stiffness @ x0)
+    effective = mass + gamma * dt * damping + beta * dt**2 * stiffness
+    a1 = np.linalg.solve(
+        effective,
+        p1 - damping @ (v0 + dt * (1 - gamma) * a0) - stiffness @ (x0 + dt * v0 + dt**2 * (0.5 - beta) * a0),
+    )
+    x1 = x0 + dt * v0 + dt**2 * ((0.5 - beta) * a0 + beta * a1)
+    v1 = v0 + dt * ((1 - gamma) * a0 + gamma * a1)
+    step = np.vstack([x1, v1])
+    load_start, load_end = step[:, 2 * n : 3 * n], step[:, 3 * n :]
+    inertia = -mass @ np.ones(n)
+    return SubstepMap(
+        phi=step[:, : 2 * n],
+        force_gain=(load_start + load_end) @ building.actuator_matrix,
+        ground_start=load_start @ inertia,
+        ground_end=load_end @ inertia,
+    )
+
+
+@dataclass(frozen=True)
+class StepMap:
+    """One control step: z_{k+1} = phi z_k + force_gain u_k + ground_gain @ a_g[k r : k r + r + 1]."""
+
+    phi: np.ndarray
+    force_gain: np.ndarray
+    ground_gain: np.ndarray
+    control_dt: float
+
+    @property
+    def substeps(self) -> int:
+        return self.ground_gain.shape[1] - 1
+
+    def ground_terms(self, ground: np.ndarray) -> np.ndarray:
+        """Ground contribution of every control step, shape (steps, 2n), for samples at dt/r."""
+        r = self.substeps
+        windows = sliding_window_view(ground, r + 1)[::r]
+        return windows @ self.ground_gain.T
+
+
+def compose(substep: SubstepMap, substeps: int, control_dt: float) -> StepMap:
+    """Chain `substeps` identical sub-steps into one control-step map (the force is held)."""
+    n_state = substep.phi.shape[0]
+    phi = np.eye(n_state)
+    force_gain = np.zeros_like(substep.force_gain)
+    ground_gain = np.zeros((n_state, substeps + 1))
+    for i in range(substeps):
+        force_gain = substep.phi @ force_gain + substep.force_gain
+        ground_gain = substep.phi @ ground_gain
+        ground_gain[:, i] += substep.ground_start
+        ground_gain[:, i + 1] += substep.ground_end
+        phi = substep.phi @ phi
+    return StepMap(phi=phi, force_gain=force_gain, ground_gain=ground_gain, control_dt=control_dt)
+
+
+def step_map(building: Building, simulation: SimulationConfig, substeps: int = 1) -> StepMap:
+    """The control-step map for the configured method, with `substeps` ground samples per step."""
+    dt = simulation.control_dt / substeps
+    if simulation.method == "newmark":
+        substep = newmark_substep(building, dt, simulation.newmark_beta, simulation.newmark_gamma)
+    else:
+        substep = exact_substep(state_space(building), dt)
+    return compose(substep, substeps, simulation.control_dt)
+
+
+def output_matrices(building: Building, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
+    """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] and actuator forces u."""
+    n, m = building.n_floors, building.n_actuators
+    zero_state, zero_force = np.zeros((n, n)), np.zeros((n, m))
+    drift_matrix = np.eye(n) - np.eye(n, k=-1)
+    shear_sum = np.triu(np.ones((n, n)))  # V_i = sum_{j >= i} m_j a_j
+    if quantity == "displacement":
+        return np.hstack([np.eye(n), zero_state]), zero_force
+    if quantity == "velocity":
+        return np.hstack([zero_state, np.eye(n)]), zero_force
+    if quantity == "drift":
+        return np.hstack([drift_matrix, zero_state]), zero_force
+    if quantity == "absolute_acceleration":
+        mass_inverse = np.linalg.inv(building.mass)
+        c = np.hstack([-mass_inverse @ building.stiffness, -mass_inverse @ building.damping])
+        return c, mass_inverse @ building.actuator_matrix
+    if quantity in ("story_shear", "base_shear"):
+        c = shear_sum @ np.hstack([-building.stiffness, -building.damping])
+        d = shear_sum @ building.actuator_matrix
+        return (c, d) if quantity == "story_shear" else (c[:1], d[:1])
+    if quantity == "force":
+        return np.zeros((m, 2 * n)), np.eye(m)
+    raise ValueError(f"unknown quantity {quantity!r}, expected one of {QUANTITIES}")
+
+
+@dataclass(frozen=True)
+class Response:
+    """Time histories at the control-step boundaries t_k = k dt, k = 0..K (SI units).
+
+    `force` row k is the force held over the step ending at t_k (row 0 is zero); the force
+    applied over [t_k, t_{k+1}) is row k + 1.
+    """
+
+    time: np.ndarray
+    ground: np.ndarray
+    displacement: np.ndarray
+    velocity: np.ndarray
+    drift: np.ndarray
+    absolute_acceleration: np.ndarray
+    story_shear: np.ndarray
+    base_shear: np.ndarray
+    force: np.ndarray
+
+    def quantity(self, name: str) -> np.ndarray:
+        return getattr(self, name)
+
+
+def response(
+    building: Building, states: np.ndarray, held_forces: np.ndarray, time: np.ndarray, ground: np.ndarray
+) -> Response:
+    """Outputs from states (K+1, 2n) and the forces held just before each instant (K+1, m)."""
+    values = {}
+    for quantity in QUANTITIES:
+        c, d = output_matrices(building, quantity)
+        values[quantity] = states @ c.T + held_forces @ d.T
+    values["base_shear"] = values["base_shear"][:, 0]
+    return Response(time=time, ground=ground, **values)
+
+
+def simulate(building: Building, step: StepMap, ground: np.ndarray, forces: np.ndarray | None = None) -> Response:
+    """Whole-record open-loop simulation from rest.
+
+    `ground` holds a_g (m/s^2) at the sub-step interval control_dt / substeps; `forces` (K, m)
+    are held over each control step (zero when None). K = (len(ground) - 1) // substeps.
+    """
+    ground_terms = step.ground_terms(ground)
+    n_steps = ground_terms.shape[0]
+    if forces is None:
+        forces = np.zeros((n_steps, building.n_actuators))
+    forcing = ground_terms + forces @ step.force_gain.T
+    states = np.zeros((n_steps + 1, step.phi.shape[0]))
+    phi_t = step.phi.T
+    for k in range(n_steps):
+        states[k + 1] = states[k] @ phi_t + forcing[k]
+    held = np.vstack([np.zeros((1, building.n_actuators)), forces])
+    samples = ground[:: step.substeps][: n_steps + 1]
+    time = np.arange(n_steps + 1) * step.control_dt
+    return response(building, states, held, time, samples)

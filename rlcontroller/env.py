@@ -1,0 +1,199 @@
+"""Gymnasium environment: a shear building under one ground motion per episode.
+
+Observation (float32, scaled to order one): H blocks, newest first, then the last action:
+    [readings(t_k), a_g(t_k), readings(t_{k-1}), a_g(t_{k-1}), ..., last action]
+where readings are the configured sensors divided by their scales (with noise), a_g is the
+ground acceleration divided by `ground_scale`, and the last action has m values in [-1, 1].
+Before the motion starts the history is zero.
+
+Action: one value per actuator in [-1, 1], clipped, times the actuator's force limit (N);
+the force is held constant over the control step.
+
+Reward: -sum over terms of weight * sum over components (quantity / scale)^2, the quantities
+taken at the end of the step with the force just applied. `info` holds each term's value
+(`reward_<quantity>`) and the step's drift (m), absolute_acceleration (m/s^2), base_shear (N),
+force (N) and time (s).
+
+Termination: never (the building is stable); the episode is truncated when the ground motion
+ends. The motion is drawn from the configured generator, or from `motions` given to the
+constructor, or passed as `reset(options={"motion": GroundMotion})`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from rlcontroller.config import Experiment, RewardConfig, SensorConfig, load_experiment
+from rlcontroller.dynamics import StepMap, output_matrices, step_map
+from rlcontroller.excitation import GroundMotion, for_control_step, generate
+from rlcontroller.structure import Building, build
+
+
+def sensor_matrices(building: Building, sensors: SensorConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(C, D, scale, noise_std) of the measurement vector y = C z + D u, one row per reading."""
+    rows_c, rows_d, scales, noises = [], [], [], []
+    for measurement in sensors.measurements:
+        c, d = output_matrices(building, measurement.quantity)
+        if measurement.floors is not None:
+            index = [floor - 1 for floor in measurement.floors]
+            c, d = c[index], d[index]
+        rows_c.append(c)
+        rows_d.append(d)
+        scales.append(np.full(c.shape[0], measurement.scale))
+        noises.append(np.full(c.shape[0], measurement.noise_std))
+    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises)
+
+
+def reward_matrices(building: Building, reward: RewardConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
+    """(C, D, sqrt(weight)/scale per row, one slice of rows per term) of the reward outputs."""
+    rows_c, rows_d, factors, slices = [], [], [], []
+    start = 0
+    for term in reward.terms:
+        c, d = output_matrices(building, term.quantity)
+        rows_c.append(c)
+        rows_d.append(d)
+        factors.append(np.full(c.shape[0], np.sqrt(term.weight) / term.scale))
+        slices.append(slice(start, start + c.shape[0]))
+        start += c.shape[0]
+    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
+
+
+class BuildingEnv(gym.Env):
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        config: Experiment | str | Path | None = None,
+        motions: list[GroundMotion] | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        if config is None:
+            config = Experiment()
+        elif not isinstance(config, Experiment):
+            config = load_experiment(config)
+        self.experiment = config
+        self.building = build(config.building, config.actuators)
+        self.motions = motions
+        self.render_mode = render_mode
+        self._maps: dict[int, StepMap] = {}
+
+        n = self.building.n_floors
+        m = self.building.n_actuators
+        self.history = config.sensors.history
+        self.force_limits = self.building.force_limits
+        self.control_dt = config.simulation.control_dt
+        sensor_c, sensor_d, sensor_scale, sensor_noise = sensor_matrices(self.building, config.sensors)
+        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(self.building, config.reward)
+        self._reward_names = [f"reward_{term.quantity}" for term in config.reward.terms]
+        self._reward_starts = np.array([rows.start for rows in reward_slices])
+        drift_c, drift_d = output_matrices(self.building, "drift")
+        acceleration_c, acceleration_d = output_matrices(self.building, "absolute_acceleration")
+        shear_c, shear_d = output_matrices(self.building, "base_shear")
+        # Every output of a step is one matrix product of the new state z and the force u:
+        # [scaled readings | ground reading | sqrt(weight)/scale * reward quantities | drift | acceleration |
+        # base shear]; the ground reading row is zero here and comes in through the forcing.
+        no_state, no_force = np.zeros((1, 2 * n)), np.zeros((1, m))
+        self._output_c = np.vstack(
+            [sensor_c / sensor_scale[:, None], no_state, reward_c * reward_factor[:, None], drift_c, acceleration_c, shear_c]
+        )
+        self._output_d = np.vstack(
+            [sensor_d / sensor_scale[:, None], no_force, reward_d * reward_factor[:, None], drift_d, acceleration_d, shear_d]
+        )
+        self._n_sensors = p = sensor_c.shape[0]
+        r = reward_c.shape[0]
+        # Output columns after the state: readings, ground reading, reward rows, drift, acceleration, shear.
+        first = 2 * n
+        self._reading_slice = slice(first, first + p + 1)
+        self._reward_slice = slice(first + p + 1, first + p + 1 + r)
+        self._drift_slice = slice(first + p + 1 + r, first + p + 1 + r + n)
+        self._acceleration_slice = slice(first + p + 1 + r + n, first + p + 1 + r + 2 * n)
+        self._base_shear_index = first + p + 1 + r + 2 * n
+        self._noise_scaled = sensor_noise / sensor_scale
+        self._ground_scale = config.sensors.ground_scale
+        self._ground_noise = config.sensors.ground_noise_std
+
+        # Observation layout: H blocks of (p readings, 1 ground reading), then the last action.
+        self._block = p + 1
+        self._action_start = self.history * self._block
+        observation_size = self._action_start + m
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
+        self._observation = np.zeros(observation_size, dtype=np.float32)
+        self._n_state = 2 * n
+        self._state_action = np.zeros(2 * n + m)  # [z | clipped action]
+        self._k = 0
+        self._n_steps = 0
+        self.motion: GroundMotion | None = None
+
+    def step_map(self, substeps: int) -> StepMap:
+        """The control-step map for `substeps` ground samples per step (cached)."""
+        if substeps not in self._maps:
+            self._maps[substeps] = step_map(self.building, self.experiment.simulation, substeps)
+        return self._maps[substeps]
+
+    def _draw_motion(self) -> GroundMotion:
+        if self.motions:
+            return self.motions[int(self.np_random.integers(len(self.motions)))]
+        return generate(self.experiment.excitation.generator, self.np_random)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        motion = (options or {}).get("motion") or self._draw_motion()
+        self.motion = motion
+        samples, substeps = for_control_step(motion, self.control_dt)
+        step = self.step_map(substeps)
+        ground_terms = step.ground_terms(samples)
+        self._n_steps = ground_terms.shape[0]
+        # [z_{k+1} | outputs_{k+1}] = [z_k | action_k] @ transition + forcing[k], u = action * limit
+        force_gain = step.force_gain * self.force_limits
+        self._transition = np.vstack(
+            [
+                np.hstack([step.phi.T, step.phi.T @ self._output_c.T]),
+                np.hstack([force_gain.T, (self._output_c @ force_gain + self._output_d * self.force_limits).T]),
+            ]
+        )
+        self._forcing = np.hstack([ground_terms, ground_terms @ self._output_c.T])
+        p, rng = self._n_sensors, self.np_random
+        ground = samples[::substeps][: self._n_steps + 1]
+        readings = np.empty((self._n_steps + 1, p + 1))
+        readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled
+        readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self._ground_scale
+        self._forcing[:, self._reading_slice] += readings[1:]
+        self._k = 0
+        self._state_action[:] = 0.0
+        self._observation[:] = 0.0
+        self._observation[: p + 1] = readings[0]
+        return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        k = self._k
+        if k >= self._n_steps:
+            raise RuntimeError("step() called after the episode ended; call reset()")
+        state_action, n_state = self._state_action, self._n_state
+        clipped = state_action[n_state:]
+        clipped[:] = action
+        np.minimum(clipped, 1.0, out=clipped)
+        np.maximum(clipped, -1.0, out=clipped)
+        outputs = state_action @ self._transition
+        outputs += self._forcing[k]
+        state_action[:n_state] = outputs[:n_state]
+        self._k = k = k + 1
+
+        observation, block, last = self._observation, self._block, self._action_start
+        observation[block:last] = observation[: last - block]
+        observation[:block] = outputs[self._reading_slice]
+        observation[last:] = clipped
+
+        weighted = outputs[self._reward_slice]
+        terms = np.add.reduceat(weighted * weighted, self._reward_starts).tolist()
+        info: dict[str, Any] = dict(zip(self._reward_names, terms, strict=True))
+        info["drift"] = outputs[self._drift_slice]
+        info["absolute_acceleration"] = outputs[self._acceleration_slice]
+        info["base_shear"] = outputs[self._base_shear_index]
+        info["force"] = clipped * self.force_limits
+        info["time"] = k * self.control_dt
+        return observation.copy(), -sum(terms), False, k >= self._n_steps, info

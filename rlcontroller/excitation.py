@@ -1,0 +1,221 @@
+"""Ground motions: PEER NGA .AT2 and CSV records, resampling, scaling, and generators.
+
+Every motion is held in SI units (m/s^2) from the moment it is read: records in g are
+converted once, here. Between samples a motion is piecewise linear.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.signal
+
+from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, NoiseImpulsesConfig
+
+STANDARD_GRAVITY = 9.80665  # m/s^2
+UNITS_TO_SI = {"g": STANDARD_GRAVITY, "m/s2": 1.0, "m/s^2": 1.0, "cm/s2": 0.01, "cm/s^2": 0.01, "gal": 0.01}
+
+
+class MotionError(ValueError):
+    """A ground-motion file that cannot be read; `str()` names the file and line."""
+
+
+@dataclass(frozen=True)
+class GroundMotion:
+    """A ground acceleration history (m/s^2) sampled every `dt` seconds from t = 0."""
+
+    name: str
+    dt: float
+    acceleration: np.ndarray = field(repr=False)
+    synthetic: bool = False
+
+    @property
+    def duration(self) -> float:
+        return self.dt * (self.acceleration.size - 1)
+
+    @property
+    def pga(self) -> float:
+        """Peak ground acceleration (m/s^2)."""
+        return float(np.max(np.abs(self.acceleration)))
+
+    @property
+    def time(self) -> np.ndarray:
+        return np.arange(self.acceleration.size) * self.dt
+
+
+_WEST2_HEADER = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.Ee+-]+)", re.IGNORECASE)
+_WEST1_HEADER = re.compile(r"^\s*(\d+)\s+([0-9.Ee+-]+)\s+NPTS", re.IGNORECASE)
+
+
+def read_at2(path: str | Path) -> GroundMotion:
+    """Read a PEER NGA (West1 or West2) .AT2 acceleration file in units of g."""
+    path = Path(path)
+    try:
+        lines = path.read_text(errors="replace").splitlines()
+    except OSError as error:
+        raise MotionError(f"{path}: cannot read the file ({error.strerror})") from None
+    if len(lines) < 4:
+        raise MotionError(f"{path}: expected a 4-line PEER header, the file has {len(lines)} lines")
+    if "UNITS OF G" not in lines[2].upper():
+        raise MotionError(f"{path}:3: expected 'ACCELERATION ... IN UNITS OF G', got {lines[2].strip()!r}")
+    header = _WEST2_HEADER.search(lines[3]) or _WEST1_HEADER.search(lines[3])
+    if header is None:
+        raise MotionError(f"{path}:4: expected 'NPTS=..., DT=...' (NGA-West2) or 'n dt NPTS, DT' (NGA-West1)")
+    npts, dt = int(header.group(1)), float(header.group(2))
+    if dt <= 0:
+        raise MotionError(f"{path}:4: DT must be positive, got {dt}")
+    values: list[float] = []
+    for number, line in enumerate(lines[4:], start=5):
+        for token in line.split():
+            try:
+                values.append(float(token))
+            except ValueError:
+                raise MotionError(f"{path}:{number}: expected a number, got {token!r}") from None
+    if len(values) != npts:
+        what = "truncated?" if len(values) < npts else "extra values?"
+        raise MotionError(f"{path}: header says NPTS={npts} but the file holds {len(values)} values ({what})")
+    acceleration = np.asarray(values) * STANDARD_GRAVITY
+    if not np.all(np.isfinite(acceleration)):
+        raise MotionError(f"{path}: the record holds non-finite values")
+    return GroundMotion(name=path.stem, dt=dt, acceleration=acceleration)
+
+
+def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
+    """Read a two-column CSV (time in s, acceleration) with a header row.
+
+    The unit is `unit` or taken from the second header, e.g. 'acceleration [g]', 'acc_m/s2';
+    known units: g, m/s2, cm/s2 (gal). Unevenly spaced times are interpolated to their median step.
+    """
+    path = Path(path)
+    try:
+        rows = list(csv.reader(path.read_text().splitlines()))
+    except OSError as error:
+        raise MotionError(f"{path}: cannot read the file ({error.strerror})") from None
+    if len(rows) < 3:
+        raise MotionError(f"{path}: expected a header row and at least two samples")
+    header = [cell.strip().lower() for cell in rows[0]]
+    if unit is None:
+        found = [u for u in UNITS_TO_SI if len(header) > 1 and re.search(rf"[\s_\[(]{re.escape(u)}[\])]?$", header[1])]
+        if not found:
+            raise MotionError(
+                f"{path}:1: cannot tell the acceleration unit from {rows[0]!r}; expected e.g. 'acceleration [g]'"
+            )
+        unit = max(found, key=len)
+    if unit not in UNITS_TO_SI:
+        raise MotionError(f"{path}: unknown unit {unit!r}, expected one of {sorted(UNITS_TO_SI)}")
+    time, acceleration = [], []
+    for number, row in enumerate(rows[1:], start=2):
+        if not row or not "".join(row).strip():
+            continue
+        if len(row) != 2:
+            raise MotionError(f"{path}:{number}: expected 2 columns (time, acceleration), got {len(row)}")
+        try:
+            time.append(float(row[0]))
+            acceleration.append(float(row[1]))
+        except ValueError:
+            raise MotionError(f"{path}:{number}: expected two numbers, got {row!r}") from None
+    times = np.asarray(time)
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        bad = int(np.argmax(steps <= 0)) + 3
+        raise MotionError(f"{path}:{bad}: time must increase strictly")
+    values = np.asarray(acceleration) * UNITS_TO_SI[unit]
+    dt = float(np.median(steps))
+    motion = GroundMotion(name=path.stem, dt=dt, acceleration=values)
+    if np.allclose(steps, dt, rtol=1e-6, atol=0.0):
+        return motion
+    uniform = np.arange(0.0, times[-1] - times[0] + 0.5 * dt, dt)
+    return GroundMotion(name=path.stem, dt=dt, acceleration=np.interp(uniform, times - times[0], values))
+
+
+def read_motion(path: str | Path) -> GroundMotion:
+    """Read a .AT2 or .csv ground-motion file by its extension."""
+    path = Path(path)
+    if path.suffix.lower() == ".at2":
+        return read_at2(path)
+    if path.suffix.lower() == ".csv":
+        return read_csv(path)
+    raise MotionError(f"{path}: unknown ground-motion format, expected .AT2 or .csv")
+
+
+def resample(motion: GroundMotion, dt: float) -> GroundMotion:
+    """Linear interpolation onto a grid of step `dt` (s) (exact for the piecewise-linear motion
+    when the new grid contains the old one)."""
+    if math.isclose(dt, motion.dt, rel_tol=1e-9):
+        return motion
+    count = int(math.floor(motion.duration / dt + 1e-9)) + 1
+    grid = np.arange(count) * dt
+    return GroundMotion(motion.name, dt, np.interp(grid, motion.time, motion.acceleration), motion.synthetic)
+
+
+def scale_to_pga(motion: GroundMotion, pga: float) -> GroundMotion:
+    """The motion scaled to a peak ground acceleration `pga` (m/s^2)."""
+    return GroundMotion(motion.name, motion.dt, motion.acceleration * (pga / motion.pga), motion.synthetic)
+
+
+def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarray, int]:
+    """Samples at control_dt / r with r = ceil(control_dt / motion.dt): never decimated.
+
+    Returns (samples, r); the motion is resampled only if its step does not divide control_dt.
+    """
+    substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
+    return resample(motion, control_dt / substeps).acceleration, substeps
+
+
+def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
+    return float(rng.uniform(bounds[0], bounds[1]))
+
+
+def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: str = "noise_impulses") -> GroundMotion:
+    """The paper's training motion: Gaussian white noise plus random half-sine impulses."""
+    duration = _uniform(rng, config.duration)
+    time = np.arange(int(duration / config.dt) + 1) * config.dt
+    acceleration = rng.normal(0.0, _uniform(rng, config.noise_std), time.size)
+    for _ in range(int(rng.integers(config.impulses[0], config.impulses[1] + 1))):
+        amplitude = _uniform(rng, config.impulse_amplitude) * rng.choice([-1.0, 1.0])
+        width = _uniform(rng, config.impulse_duration)
+        start = float(rng.uniform(0.0, max(duration - width, 0.0)))
+        inside = (time >= start) & (time <= start + width)
+        acceleration[inside] += amplitude * np.sin(np.pi * (time[inside] - start) / width)
+    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+
+
+def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str = "kanai_tajimi") -> GroundMotion:
+    """Kanai-Tajimi filtered white noise, H(s) = (2 z w s + w^2) / (s^2 + 2 z w s + w^2), times a
+    rise-plateau-decay envelope, scaled to a random PGA (m/s^2)."""
+    omega, zeta = _uniform(rng, config.ground_frequency), _uniform(rng, config.ground_damping)
+    rise, strong, decay = (
+        _uniform(rng, config.rise_time),
+        _uniform(rng, config.strong_duration),
+        _uniform(rng, config.decay_rate),
+    )
+    duration = _uniform(rng, config.duration)
+    time = np.arange(int(duration / config.dt) + 1) * config.dt
+    numerator, denominator, _ = scipy.signal.cont2discrete(
+        ([2 * zeta * omega, omega**2], [1.0, 2 * zeta * omega, omega**2]), config.dt, method="zoh"
+    )
+    filtered = scipy.signal.lfilter(numerator.ravel(), denominator, rng.normal(size=time.size))
+    envelope = np.where(time < rise, (time / rise) ** 2, np.exp(-decay * np.maximum(time - rise - strong, 0.0)))
+    acceleration = filtered * envelope
+    peak = np.max(np.abs(acceleration))
+    if peak > 0:
+        acceleration *= _uniform(rng, config.pga) / peak
+    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+
+
+def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None = None) -> GroundMotion:
+    """One synthetic motion from the configured generator."""
+    if isinstance(config, KanaiTajimiConfig):
+        return kanai_tajimi(config, rng, name or "kanai_tajimi")
+    return noise_impulses(config, rng, name or "noise_impulses")
+
+
+def generate_suite(config: GeneratorConfig, count: int, seed: int) -> list[GroundMotion]:
+    """`count` motions from one seed (the same seed gives the same suite)."""
+    rng = np.random.default_rng(seed)
+    return [generate(config, rng, f"{config.kind}_{seed}_{i}") for i in range(count)]

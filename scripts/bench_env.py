@@ -1,0 +1,66 @@
+"""Benchmark: environment step() rate against Gymnasium's Pendulum-v1, and whole-record simulation.
+
+Usage: python scripts/bench_env.py [--steps N]
+Both environments are built with gymnasium.make (the same wrappers) and driven by a random
+policy in the same process, alternately, three rounds; the best round of each is reported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import rlcontroller
+from rlcontroller.config import Experiment
+from rlcontroller.dynamics import simulate, step_map
+from rlcontroller.excitation import generate_suite
+from rlcontroller.structure import build
+
+
+def steps_per_second(env: gym.Env, steps: int, seed: int = 0) -> float:
+    env.reset(seed=seed)
+    actions = np.random.default_rng(seed).uniform(-1, 1, (1000,) + env.action_space.shape).astype(np.float32)
+    start = time.perf_counter()
+    for i in range(steps):
+        _, _, terminated, truncated, _ = env.step(actions[i % 1000])
+        if terminated or truncated:
+            env.reset()
+    return steps / (time.perf_counter() - start)
+
+
+def whole_record_rate(repeats: int = 5) -> float:
+    experiment = Experiment()
+    building = build(experiment.building, experiment.actuators)
+    step = step_map(building, experiment.simulation)
+    motions = generate_suite(experiment.excitation.generator, repeats, seed=1)
+    start = time.perf_counter()
+    total = 0
+    for motion in motions:
+        total += simulate(building, step, motion.acceleration).time.size - 1
+    return total / (time.perf_counter() - start)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=50_000)
+    arguments = parser.parse_args()
+    ours = gym.make(rlcontroller.ENV_ID)
+    pendulum = gym.make("Pendulum-v1")
+    rates: dict[str, list[float]] = {"building": [], "pendulum": []}
+    for _ in range(3):
+        rates["building"].append(steps_per_second(ours, arguments.steps))
+        rates["pendulum"].append(steps_per_second(pendulum, arguments.steps))
+    building_rate, pendulum_rate = max(rates["building"]), max(rates["pendulum"])
+    print(f"machine: {platform.node()} ({platform.processor() or platform.machine()}), python {platform.python_version()}")
+    print(f"rlcontroller/Building-v0 step(): {building_rate:,.0f} steps/s")
+    print(f"Pendulum-v1 step():              {pendulum_rate:,.0f} steps/s")
+    print(f"ratio building / pendulum:       {building_rate / pendulum_rate:.2f}")
+    print(f"whole-record simulation:         {whole_record_rate():,.0f} control steps/s")
+
+
+if __name__ == "__main__":
+    main()

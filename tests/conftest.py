@@ -1,0 +1,35 @@
+import os
+from pathlib import Path
+
+import pytest
+
+from rlcontroller.config import BuildingConfig, Experiment
+from rlcontroller.structure import Building, build
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+
+
+def records_folder() -> Path:
+    """The seven PEER records: $RLC_RECORDS, by default ../shared/records beside the clone."""
+    return Path(os.environ.get("RLC_RECORDS", REPOSITORY.parent / "shared" / "records"))
+
+
+@pytest.fixture
+def records() -> Path:
+    folder = records_folder()
+    if not (folder / "manifest.csv").is_file():
+        pytest.skip(f"no PEER records at {folder} (set RLC_RECORDS to the folder holding manifest.csv)")
+    return folder
+
+
+@pytest.fixture
+def paper_building() -> Building:
+    experiment = Experiment()
+    return build(experiment.building, experiment.actuators)
+
+
+def sdof(mass: float, stiffness: float, damping: float, force_limit: float = 1.0e5) -> Building:
+    from rlcontroller.config import ActuatorConfig
+
+    config = BuildingConfig(masses=[mass], stiffnesses=[stiffness], damping={"matrix": [[damping]]})
+    return build(config, [ActuatorConfig(story=1, force_limit=force_limit)])

@@ -1,0 +1,113 @@
+from pathlib import Path
+
+import pytest
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+from rlcontroller.config import ConfigError, Experiment, load_experiment
+
+CONFIGS = REPOSITORY / "configs"
+
+
+def test_the_five_story_config_is_the_embedded_default():
+    experiment = load_experiment(CONFIGS / "five_story.yaml")
+    default = Experiment()
+    for part in ("building", "actuators", "sensors", "reward", "excitation", "simulation", "algorithm"):
+        assert getattr(experiment, part) == getattr(default, part), part
+
+
+@pytest.mark.parametrize("path", sorted(p for p in CONFIGS.glob("*.yaml")), ids=lambda p: p.name)
+def test_every_experiment_config_loads(path: Path):
+    load_experiment(path)
+
+
+def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("building:\n  masss: [1]\n", "building.masss: unknown key"),
+        ("seed: zero\n", "seed: Input should be a valid integer"),
+        (
+            "building:\n  masses: [1.0, -2.0, 3.0, 4.0, 5.0]\n",
+            "building.masses[1]: Input should be greater than 0 (got -2.0)",
+        ),
+        (
+            "building:\n  stiffnesses: [1.0, 0, 3.0, 4.0, 5.0]\n",
+            "building.stiffnesses[1]: Input should be greater than 0",
+        ),
+        ("actuators:\n  - {story: 7}\n", "actuators[0].story: story 7 does not exist, expected 1..5"),
+        (
+            "building:\n  damping: {rayleigh: [{mode: 1, ratio: 1.0}, {mode: 2, ratio: 0.05}]}\n",
+            "rayleigh[0].ratio: Input should be less than 1",
+        ),
+        (
+            "building:\n  damping: {rayleigh: [{mode: 1, ratio: 0.01}, {mode: 6, ratio: 0.05}]}\n",
+            "damping mode 6 does not exist",
+        ),
+        ("building:\n  masses: [1.0, 2.0]\n", "'stiffnesses' has 5 values but 'masses' has 2"),
+        (
+            "excitation:\n  generator: {kind: kanai_tajimi, pga: [3, 1]}\n",
+            "excitation.generator.pga: expected [low, high]",
+        ),
+        (
+            "sensors:\n  measurements: [{quantity: drift, floors: [9], scale: 1}]\n",
+            "sensors.measurements[0].floors: floor 9 does not exist",
+        ),
+        ("algorithm:\n  name: DQN\n", "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG' or 'A2C'"),
+        ("building: [1, 2\n", "bad.yaml:2: invalid YAML"),
+        ("- 1\n", "expected a mapping of experiment keys"),
+    ],
+)
+def test_bad_configs_give_one_line_naming_file_and_key(tmp_path, text, expected):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError) as error:
+        load_experiment(path)
+    message = str(error.value)
+    assert message.startswith(str(path)) and expected in message and "\n" not in message
+
+
+def test_errors_in_a_part_file_name_that_file(tmp_path):
+    write(tmp_path, "masses: [1.0]\nstiffnesses: [-1.0]\ndamping: {matrix: [[0.0]]}\n", "building.yaml")
+    path = write(tmp_path, "building: building.yaml\nactuators: [{story: 1}]\n")
+    with pytest.raises(ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than 0"):
+        load_experiment(path)
+    with pytest.raises(ConfigError, match="building: file not found: nowhere.yaml"):
+        load_experiment(write(tmp_path, "building: nowhere.yaml\n"))
+
+
+def test_part_files_resolve_relative_to_the_experiment(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    experiment = load_experiment(CONFIGS / "five_story.yaml")
+    assert experiment.building.masses[0] == 25.0e3
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "building:\n  colour: red\n",
+        "seed: [1]\n",
+        "building:\n  masses: [-1, 1, 1, 1, 1]\n",
+        "actuators: [{story: 6}]\n",
+    ],
+)
+def test_rlc_info_exits_2_with_one_line_and_no_traceback(tmp_path, text):
+    result = CliRunner().invoke(app, ["info", str(write(tmp_path, text))])
+    assert result.exit_code == 2
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "bad.yaml" in lines[0]
+    assert "Traceback" not in result.output
+
+
+def test_rlc_info_prints_periods_damping_and_actuators():
+    result = CliRunner().invoke(app, ["info", str(CONFIGS / "five_story.yaml")])
+    assert result.exit_code == 0, result.output
+    assert "1.444" in result.output and "0.242" in result.output
+    assert "0.0100" in result.output and "0.0500" in result.output
+    assert "story 3, inter_story, limit 100 kN (+u on floor 3, -u on floor 2)" in result.output
+    assert "masses:" in result.output

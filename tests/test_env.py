@@ -1,0 +1,146 @@
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import REPOSITORY
+from gymnasium.utils.env_checker import check_env
+
+from rlcontroller import ENV_ID
+from rlcontroller.config import Experiment, MeasurementConfig, RewardTerm, SensorConfig
+from rlcontroller.dynamics import simulate
+from rlcontroller.env import BuildingEnv
+from rlcontroller.excitation import GroundMotion, read_at2
+
+
+def rollout(env, seed, policy_seed=0):
+    observation, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(policy_seed)
+    observations, rewards = [observation], []
+    truncated = False
+    while not truncated:
+        observation, reward, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 3).astype(np.float32))
+        assert not terminated
+        observations.append(observation)
+        rewards.append(reward)
+    return np.array(observations), np.array(rewards)
+
+
+def test_passes_the_gymnasium_env_checker():
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*infinity.*")
+        check_env(BuildingEnv(), skip_render_check=True)
+
+
+def test_gymnasium_make_builds_the_paper_case_or_a_config():
+    env = gym.make(ENV_ID)
+    assert env.observation_space.shape == (5 * 5 + 5 + 3,)
+    assert env.action_space.shape == (3,)
+    env = gym.make(ENV_ID, config=REPOSITORY / "configs" / "five_story.yaml")
+    assert env.unwrapped.building.n_floors == 5
+
+
+def test_same_seed_gives_identical_episodes():
+    noisy = Experiment(
+        sensors=SensorConfig(
+            measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.1)]
+        )
+    )
+    first = rollout(BuildingEnv(noisy), seed=11)
+    second = rollout(BuildingEnv(noisy), seed=11)
+    other = rollout(BuildingEnv(noisy), seed=12)
+    np.testing.assert_array_equal(first[0], second[0])
+    np.testing.assert_array_equal(first[1], second[1])
+    assert first[0].shape != other[0].shape or not np.array_equal(first[0], other[0])
+
+
+def test_steps_match_the_whole_record_simulation(records):
+    motion = read_at2(records / "RSN1084_NORTHR_SCS052.AT2")  # dt 0.005 s: four sub-steps per control step
+    env = BuildingEnv()
+    env.reset(seed=0, options={"motion": motion})
+    rng = np.random.default_rng(3)
+    actions = rng.uniform(-1.2, 1.2, (env._n_steps, 3))
+    drifts, accelerations, shears = [], [], []
+    for action in actions:
+        _, _, _, truncated, info = env.step(action)
+        drifts.append(info["drift"])
+        accelerations.append(info["absolute_acceleration"])
+        shears.append(info["base_shear"])
+    assert truncated
+    forces = np.clip(actions, -1, 1) * 1e5
+    from rlcontroller.excitation import for_control_step
+
+    samples, substeps = for_control_step(motion, 0.02)
+    reference = simulate(env.building, env.step_map(substeps), samples, forces)
+    np.testing.assert_allclose(drifts, reference.drift[1:], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(accelerations, reference.absolute_acceleration[1:], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(shears, reference.base_shear[1:], rtol=1e-9, atol=1e-6)
+
+
+def test_reward_is_the_weighted_sum_of_scaled_squares():
+    experiment = Experiment()
+    env = BuildingEnv(experiment)
+    env.reset(seed=4)
+    for _ in range(20):
+        _, reward, _, _, info = env.step(np.array([0.3, -0.8, 2.0]))
+    terms = {term.quantity: term for term in experiment.reward.terms}
+    drift = terms["drift"].weight * np.sum((info["drift"] / terms["drift"].scale) ** 2)
+    shear = terms["base_shear"].weight * (info["base_shear"] / terms["base_shear"].scale) ** 2
+    force = terms["force"].weight * np.sum((info["force"] / terms["force"].scale) ** 2)
+    assert info["reward_drift"] == pytest.approx(drift)
+    assert info["reward_base_shear"] == pytest.approx(shear)
+    assert info["reward_force"] == pytest.approx(force)
+    assert reward == pytest.approx(-(drift + shear + force))
+    np.testing.assert_allclose(info["force"], [0.3e5, -0.8e5, 1e5])  # clipped to the limit
+
+
+def test_observation_holds_the_history_newest_first():
+    motion = GroundMotion("ramp", 0.02, np.linspace(0.0, 3.0, 101))
+    env = BuildingEnv()
+    first, _ = env.reset(seed=0, options={"motion": motion})
+    assert np.all(first == 0)  # at rest and the ramp starts at zero
+    observations, infos = [], []
+    for _ in range(6):
+        observation, _, _, _, info = env.step(np.array([0.5, 0.0, -0.5]))
+        observations.append(observation)
+        infos.append(info)
+    latest, previous = observations[-1], observations[-2]
+    np.testing.assert_allclose(latest[6:30], previous[:24])  # blocks of 5 floors + ground shift by one
+    np.testing.assert_allclose(latest[:5], infos[-1]["absolute_acceleration"] / 5.0, rtol=1e-6)
+    np.testing.assert_allclose(latest[6:11], infos[-2]["absolute_acceleration"] / 5.0, rtol=1e-6)
+    assert latest[5] == pytest.approx(motion.acceleration[6] / 5.0, rel=1e-6)
+    assert latest[11] == pytest.approx(motion.acceleration[5] / 5.0, rel=1e-6)
+    np.testing.assert_allclose(latest[30:], [0.5, 0.0, -0.5])
+    assert latest.dtype == np.float32
+
+
+def test_a_selected_sensor_layout_and_force_reward():
+    experiment = Experiment(
+        sensors=SensorConfig(
+            history=2,
+            measurements=[
+                MeasurementConfig(quantity="drift", floors=[1, 5], scale=0.01),
+                MeasurementConfig(quantity="force", scale=1e5),
+            ],
+        ),
+        reward=Experiment().reward.model_copy(
+            update={"terms": [RewardTerm(quantity="velocity", weight=2.0, scale=0.5)]}
+        ),
+    )
+    env = BuildingEnv(experiment)
+    observation, _ = env.reset(seed=0)
+    assert observation.shape == (2 * (2 + 3) + 2 + 3,)
+    observation, _, _, _, info = env.step(np.array([1.0, 0.0, -1.0]))
+    np.testing.assert_allclose(observation[:2], info["drift"][[0, 4]] / 0.01, rtol=1e-5)
+    np.testing.assert_allclose(observation[2:5], [1.0, 0.0, -1.0], rtol=1e-6)
+    assert observation[5] == pytest.approx(env.motion.acceleration[1] / 5.0, rel=1e-6)
+    assert "reward_velocity" in info
+
+
+def test_step_after_the_end_is_refused():
+    env = BuildingEnv()
+    env.reset(options={"motion": GroundMotion("short", 0.02, np.zeros(3))})
+    env.step(np.zeros(3))
+    assert env.step(np.zeros(3))[3]
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(3))

@@ -1,0 +1,164 @@
+import csv
+
+import numpy as np
+import pytest
+
+from rlcontroller.config import KanaiTajimiConfig, NoiseImpulsesConfig
+from rlcontroller.excitation import (
+    STANDARD_GRAVITY,
+    GroundMotion,
+    MotionError,
+    for_control_step,
+    generate_suite,
+    kanai_tajimi,
+    noise_impulses,
+    read_at2,
+    read_csv,
+    resample,
+    scale_to_pga,
+)
+
+WEST2 = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\nACCELERATION TIME SERIES IN UNITS OF G\n"
+
+
+def write(path, text, newline="\n"):
+    path.write_bytes(text.replace("\n", newline).encode())
+    return path
+
+
+def test_the_seven_records_match_the_manifest(records):
+    with open(records / "manifest.csv") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 7
+    for row in rows:
+        motion = read_at2(records / row["file"])
+        assert motion.acceleration.size == int(row["npts"]), row["file"]
+        assert motion.dt == pytest.approx(float(row["dt_s"]), rel=1e-9)
+        assert motion.pga / STANDARD_GRAVITY == pytest.approx(float(row["pga_g"]), rel=1e-3), row["file"]
+
+
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+@pytest.mark.parametrize(
+    "header", ["NPTS=      4, DT=   .0100 SEC,", "NPTS =      4 , DT =   .010 SEC ,", "    4    0.0100    NPTS, DT"]
+)
+def test_at2_header_variants_and_line_endings(tmp_path, header, newline):
+    path = write(tmp_path / "r.AT2", WEST2 + header + "\n  .1E+00  -.2E+00\n   .3E+00\n  -.5E-01\n", newline)
+    motion = read_at2(path)
+    assert motion.dt == 0.01
+    np.testing.assert_allclose(motion.acceleration, np.array([0.1, -0.2, 0.3, -0.05]) * STANDARD_GRAVITY)
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        ("NPTS=      5, DT=   .0100 SEC\n .1 .2 .3\n .4\n", "NPTS=5 but the file holds 4 values (truncated?)"),
+        ("NPTS=      3, DT=   .0100 SEC\n .1 .2 .3\n .4\n", "NPTS=3 but the file holds 4 values (extra values?)"),
+        ("NPTS=      4, DT=   .0100 SEC\n .1 .2\n .3 abc\n", "r.AT2:6: expected a number, got 'abc'"),
+        ("GARBAGE\n .1 .2\n", "r.AT2:4: expected 'NPTS=..., DT=...'"),
+    ],
+)
+def test_broken_at2_files_give_clear_errors(tmp_path, body, expected):
+    path = write(tmp_path / "r.AT2", WEST2 + body)
+    with pytest.raises(MotionError, match=None) as error:
+        read_at2(path)
+    assert expected in str(error.value) and str(path) in str(error.value)
+    assert "\n" not in str(error.value)
+
+
+def test_at2_in_other_units_is_refused(tmp_path):
+    path = write(tmp_path / "r.AT2", WEST2.replace("UNITS OF G", "UNITS OF CM/S/S") + "NPTS= 1, DT= .01 SEC\n .1\n")
+    with pytest.raises(MotionError, match=r"r.AT2:3: expected"):
+        read_at2(path)
+
+
+def test_truncated_header(tmp_path):
+    with pytest.raises(MotionError, match="4-line PEER header"):
+        read_at2(write(tmp_path / "r.AT2", "PEER\n"))
+
+
+@pytest.mark.parametrize(
+    ("header", "factor"), [("acceleration [g]", STANDARD_GRAVITY), ("acc_m/s2", 1.0), ("a (cm/s2)", 0.01)]
+)
+def test_csv_units(tmp_path, header, factor):
+    path = write(tmp_path / "m.csv", f"time,{header}\n0.0,0.0\n0.01,1.0\n0.02,-2.0\n")
+    motion = read_csv(path)
+    assert motion.dt == pytest.approx(0.01)
+    np.testing.assert_allclose(motion.acceleration, np.array([0.0, 1.0, -2.0]) * factor)
+
+
+def test_csv_errors(tmp_path):
+    with pytest.raises(MotionError, match="cannot tell the acceleration unit"):
+        read_csv(write(tmp_path / "m.csv", "time,acceleration\n0,0\n0.01,1\n"))
+    with pytest.raises(MotionError, match=r"m.csv:3: expected two numbers"):
+        read_csv(write(tmp_path / "m.csv", "time,acc [g]\n0,0\n0.01,x\n"))
+    with pytest.raises(MotionError, match=r"m.csv:4: time must increase"):
+        read_csv(write(tmp_path / "m.csv", "time,acc [g]\n0,0\n0.01,1\n0.01,2\n"))
+
+
+def test_uneven_csv_is_interpolated(tmp_path):
+    motion = read_csv(write(tmp_path / "m.csv", "t,acc [m/s2]\n0,0\n0.01,1\n0.02,2\n0.04,4\n"))
+    assert motion.dt == pytest.approx(0.01)
+    np.testing.assert_allclose(motion.acceleration, [0, 1, 2, 3, 4])
+
+
+def test_resample_preserves_a_piecewise_linear_motion():
+    motion = GroundMotion("m", 0.02, np.array([0.0, 1.0, -1.0, 0.5]))
+    fine = resample(motion, 0.005)
+    assert fine.acceleration.size == 13
+    np.testing.assert_allclose(fine.acceleration[::4], motion.acceleration)
+    np.testing.assert_allclose(fine.acceleration[1:4], [0.25, 0.5, 0.75])
+
+
+def test_control_step_keeps_every_sample_and_subdivides_odd_steps():
+    samples, substeps = for_control_step(GroundMotion("m", 0.005, np.arange(9.0)), 0.02)
+    assert substeps == 4 and samples.size == 9
+    samples, substeps = for_control_step(GroundMotion("m", 0.015, np.arange(5.0)), 0.02)
+    assert substeps == 2 and np.isclose(samples[1], 0.01 / 0.015)
+    _, substeps = for_control_step(GroundMotion("m", 0.02, np.arange(5.0)), 0.02)
+    assert substeps == 1
+
+
+def test_scale_to_pga():
+    motion = scale_to_pga(GroundMotion("m", 0.01, np.array([0.0, -2.0, 1.0])), 3.0)
+    np.testing.assert_allclose(motion.acceleration, [0.0, -3.0, 1.5])
+
+
+def test_noise_impulses_are_seeded_and_respect_the_ranges():
+    config = NoiseImpulsesConfig(duration=(20.0, 20.0), noise_std=(1.0, 1.0), impulses=(0, 0))
+    first = noise_impulses(config, np.random.default_rng(5))
+    second = noise_impulses(config, np.random.default_rng(5))
+    np.testing.assert_array_equal(first.acceleration, second.acceleration)
+    assert first.duration == pytest.approx(20.0) and first.synthetic
+    assert np.std(first.acceleration) == pytest.approx(1.0, rel=0.05)
+    pulse = NoiseImpulsesConfig(
+        duration=(10.0, 10.0), noise_std=(0.0, 0.0), impulses=(1, 1), impulse_amplitude=(3.0, 3.0)
+    )
+    assert noise_impulses(pulse, np.random.default_rng(1)).pga == pytest.approx(3.0, rel=0.01)
+
+
+def test_kanai_tajimi_spectrum_peaks_near_the_ground_frequency():
+    config = KanaiTajimiConfig(
+        duration=(200.0, 200.0),
+        ground_frequency=(15.0, 15.0),
+        ground_damping=(0.3, 0.3),
+        pga=(2.0, 2.0),
+        rise_time=(0.5, 0.5),
+        strong_duration=(200.0, 200.0),
+        dt=0.01,
+    )
+    motion = kanai_tajimi(config, np.random.default_rng(2))
+    assert motion.pga == pytest.approx(2.0)
+    assert motion.acceleration[0] == 0.0  # the envelope starts from rest
+    spectrum = np.abs(np.fft.rfft(motion.acceleration)) ** 2
+    omega = 2 * np.pi * np.fft.rfftfreq(motion.acceleration.size, motion.dt)
+    smoothed = np.convolve(spectrum, np.ones(400) / 400, mode="same")
+    assert 11.0 < omega[np.argmax(smoothed)] < 17.0
+
+
+def test_generated_suites_are_reproducible():
+    first = generate_suite(KanaiTajimiConfig(), 3, seed=7)
+    second = generate_suite(KanaiTajimiConfig(), 3, seed=7)
+    assert [m.name for m in first] == [m.name for m in second]
+    for a, b in zip(first, second, strict=True):
+        np.testing.assert_array_equal(a.acceleration, b.acceleration)
+    assert not np.array_equal(first[0].acceleration[:100], first[1].acceleration[:100])
