@@ -73,6 +73,43 @@ def info(
         )
 
 
+@app.command()
+@user_errors
+def train(
+    config: Annotated[Path | None, typer.Argument(help="Experiment YAML (not needed with --resume).")] = None,
+    total_steps: Annotated[int | None, typer.Option(min=1, help="Override algorithm.total_steps.")] = None,
+    seed: Annotated[int | None, typer.Option(help="Override the experiment's seed.")] = None,
+    run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
+    resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
+    device: Annotated[str, typer.Option(help="cpu, cuda or auto.")] = "auto",
+    progress: Annotated[
+        bool, typer.Option(help="Show a progress bar (default: when on a terminal).")
+    ] = sys.stdout.isatty(),
+) -> None:
+    """Train SAC, PPO, TD3, DDPG or A2C on generated ground motions; checkpoints resume."""
+    from rlcontroller.training import train as run_training
+
+    if device not in ("cpu", "cuda", "auto"):
+        raise ConfigError(f"--device: expected cpu, cuda or auto, got {device!r}")
+    if resume is not None:
+        if config is not None or total_steps is not None or seed is not None:
+            raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
+        summary = run_training(resume=resume, device=device, progress_bar=progress)
+    else:
+        experiment = load(config)
+        if total_steps is not None:
+            experiment = experiment.model_copy(
+                update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": total_steps})}
+            )
+        if seed is not None:
+            experiment = experiment.model_copy(update={"seed": seed})
+        summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress)
+    typer.echo(summary.line())
+    if summary.interrupted:
+        typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
+        raise typer.Exit(130)
+
+
 def main() -> None:
     app(prog_name="rlc")
 

@@ -216,7 +216,13 @@ class PolicyConfig(StrictModel):
 
 
 class AlgorithmConfig(StrictModel):
-    """The stable-baselines3 learner, its keyword arguments and the training schedule."""
+    """The stable-baselines3 learner, its keyword arguments and the training schedule.
+
+    `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
+    gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run in a dummy
+    (same process) or subprocess vector env. `normalize_observations` adds a VecNormalize whose
+    statistics are checkpointed. `checkpoint_every` and `eval_every` count environment steps.
+    """
 
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
     total_steps: PositiveInt = 1_500_000
@@ -224,6 +230,8 @@ class AlgorithmConfig(StrictModel):
     vec_env: Literal["dummy", "subproc"] = "dummy"
     policy: PolicyConfig = PolicyConfig()
     kwargs: dict[str, Any] = Field(default_factory=lambda: {"gamma": 0.999})
+    normalize_observations: bool = False
+    torch_threads: PositiveInt = 1
     checkpoint_every: PositiveInt = 50_000
     eval_every: PositiveInt = 25_000
 

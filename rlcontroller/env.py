@@ -98,10 +98,24 @@ class BuildingEnv(gym.Env):
         # base shear]; the ground reading row is zero here and comes in through the forcing.
         no_state, no_force = np.zeros((1, 2 * n)), np.zeros((1, m))
         self._output_c = np.vstack(
-            [sensor_c / sensor_scale[:, None], no_state, reward_c * reward_factor[:, None], drift_c, acceleration_c, shear_c]
+            [
+                sensor_c / sensor_scale[:, None],
+                no_state,
+                reward_c * reward_factor[:, None],
+                drift_c,
+                acceleration_c,
+                shear_c,
+            ]
         )
         self._output_d = np.vstack(
-            [sensor_d / sensor_scale[:, None], no_force, reward_d * reward_factor[:, None], drift_d, acceleration_d, shear_d]
+            [
+                sensor_d / sensor_scale[:, None],
+                no_force,
+                reward_d * reward_factor[:, None],
+                drift_d,
+                acceleration_d,
+                shear_d,
+            ]
         )
         self._n_sensors = p = sensor_c.shape[0]
         r = reward_c.shape[0]
@@ -135,6 +149,16 @@ class BuildingEnv(gym.Env):
             self._maps[substeps] = step_map(self.building, self.experiment.simulation, substeps)
         return self._maps[substeps]
 
+    @property
+    def state(self) -> np.ndarray:
+        """Current state z = [x; x'] (m, m/s)."""
+        return self._state_action[: self._n_state].copy()
+
+    @property
+    def held_force(self) -> np.ndarray:
+        """The force (N) held over the step that ended at the current time."""
+        return self._state_action[self._n_state :] * self.force_limits
+
     def _draw_motion(self) -> GroundMotion:
         if self.motions:
             return self.motions[int(self.np_random.integers(len(self.motions)))]
@@ -159,6 +183,7 @@ class BuildingEnv(gym.Env):
         self._forcing = np.hstack([ground_terms, ground_terms @ self._output_c.T])
         p, rng = self._n_sensors, self.np_random
         ground = samples[::substeps][: self._n_steps + 1]
+        self.ground_samples = ground
         readings = np.empty((self._n_steps + 1, p + 1))
         readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled
         readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self._ground_scale

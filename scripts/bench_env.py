@@ -55,7 +55,9 @@ def main() -> None:
         rates["building"].append(steps_per_second(ours, arguments.steps))
         rates["pendulum"].append(steps_per_second(pendulum, arguments.steps))
     building_rate, pendulum_rate = max(rates["building"]), max(rates["pendulum"])
-    print(f"machine: {platform.node()} ({platform.processor() or platform.machine()}), python {platform.python_version()}")
+    print(
+        f"machine: {platform.node()} ({platform.processor() or platform.machine()}), python {platform.python_version()}"
+    )
     print(f"rlcontroller/Building-v0 step(): {building_rate:,.0f} steps/s")
     print(f"Pendulum-v1 step():              {pendulum_rate:,.0f} steps/s")
     print(f"ratio building / pendulum:       {building_rate / pendulum_rate:.2f}")

@@ -1,0 +1,39 @@
+"""The paper's evaluation criteria J1-J4, per story (or actuator), for one record.
+
+C = controlled, UC = uncontrolled response to the same record:
+    J1 = max|drift_C| / max|drift_UC|                       per story
+    J2 = max|a_C| / max|a_UC|  (absolute acceleration)      per floor
+    J3 = E(u) / E(V_b,UC),  E(x) = integral of x^2 dt       per actuator
+    J4 = max|V_C| / max|V_UC|  (story shear)                per story
+Forces are held over each control step, so their energy sums u_k^2 dt exactly; the base-shear
+energy uses the same rectangle rule on its samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rlcontroller.dynamics import Response
+
+METRICS = ("J1", "J2", "J3", "J4")
+
+
+def peak(history: np.ndarray) -> np.ndarray:
+    """Largest absolute value over time (axis 0), per component."""
+    return np.max(np.abs(history), axis=0)
+
+
+def energy(history: np.ndarray, dt: float) -> np.ndarray:
+    """Rectangle-rule integral of x^2 dt over samples 1..K (the samples of each held step)."""
+    return np.sum(history[1:] ** 2, axis=0) * dt
+
+
+def j_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndarray]:
+    """J1 (per story), J2 (per floor), J3 (per actuator), J4 (per story) of one record."""
+    dt = float(controlled.time[1] - controlled.time[0])
+    return {
+        "J1": peak(controlled.drift) / peak(uncontrolled.drift),
+        "J2": peak(controlled.absolute_acceleration) / peak(uncontrolled.absolute_acceleration),
+        "J3": energy(controlled.force, dt) / energy(uncontrolled.base_shear, dt),
+        "J4": peak(controlled.story_shear) / peak(uncontrolled.story_shear),
+    }

@@ -1,0 +1,187 @@
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+from rlcontroller.config import load_experiment
+from rlcontroller.training import RunFolder, load_policy, train
+
+SMOKE = REPOSITORY / "configs" / "smoke.yaml"
+
+
+def smoke(**algorithm):
+    experiment = load_experiment(SMOKE)
+    settings = experiment.algorithm.model_dump()
+    settings.update(algorithm)
+    return experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
+
+
+def curve(run_dir: Path) -> list[dict[str, str]]:
+    with open(run_dir / "learning_curve.csv", newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_a_run_folder_has_every_file(tmp_path):
+    summary = train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run")
+    run = tmp_path / "run"
+    for name in (
+        "config.yaml",
+        "run.json",
+        "learning_curve.csv",
+        "learning_curve.png",
+        "best_model.zip",
+        "final_model.zip",
+    ):
+        assert (run / name).is_file(), name
+    checkpoints = RunFolder(run).checkpoints()
+    assert [c.name for c in checkpoints] == ["step_0000000300", "step_0000000600"]
+    assert {p.name for p in checkpoints[-1].iterdir()} == {"model.zip", "replay_buffer.pkl", "state.json"}
+    rows = curve(run)
+    assert [int(r["steps"]) for r in rows] == [300, 600]
+    assert all(
+        np.isfinite(float(r[k])) for r in rows for k in ("eval_reward", "eval_J1", "eval_J2", "eval_peak_drift_m")
+    )
+    assert load_experiment(run / "config.yaml").algorithm.total_steps == 600
+    assert summary.steps == 600 and "run folder" in summary.line()
+    model, normalize = load_policy(run / "best_model.zip")
+    assert normalize is None and model.num_timesteps in (300, 600)
+
+
+def test_runs_are_never_overwritten(tmp_path):
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "keep.txt").write_text("work")
+    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--total-steps", "10"])
+    assert result.exit_code == 2 and "never overwritten" in result.output
+    assert (tmp_path / "run" / "keep.txt").read_text() == "work"
+
+
+def test_same_seed_gives_identical_parameters(tmp_path):
+    settings = {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
+    train(smoke(**settings), run_dir=tmp_path / "a")
+    train(smoke(**settings), run_dir=tmp_path / "b")
+    first, _ = load_policy(tmp_path / "a" / "final_model.zip")
+    second, _ = load_policy(tmp_path / "b" / "final_model.zip")
+    for (name, a), b in zip(first.policy.state_dict().items(), second.policy.state_dict().values(), strict=True):
+        assert np.array_equal(a.numpy(), b.numpy()), name
+
+
+def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
+    config = yaml.safe_load(SMOKE.read_text())
+    config.update(
+        {
+            key: f"{REPOSITORY}/configs/{value}"
+            for key, value in config.items()
+            if isinstance(value, str) and value.endswith(".yaml")
+        }
+    )
+    config["algorithm"].update(total_steps=2000, checkpoint_every=250, eval_every=250)
+    path = tmp_path / "long.yaml"
+    path.write_text(yaml.safe_dump(config))
+    run = tmp_path / "run"
+    command = [sys.executable, "-m", "rlcontroller", "train", str(path), "--run-dir", str(run), "--no-progress"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    deadline = time.time() + 120
+    while not (run / "checkpoints" / "step_0000000500").is_dir():
+        assert process.poll() is None and time.time() < deadline, process.communicate()[0]
+        time.sleep(0.1)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    steps_at_kill = int(RunFolder(run).checkpoints()[-1].name.removeprefix("step_"))
+    assert steps_at_kill < 2000
+    result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
+    assert result.exit_code == 0, result.output
+    assert "trained 2000 steps" in result.output
+    steps = [int(r["steps"]) for r in curve(run)]
+    assert steps == list(range(250, 2001, 250))  # continuous: no gap, no duplicate
+    wall = [float(r["wall_time_s"]) for r in curve(run)]
+    assert wall == sorted(wall)
+    assert RunFolder(run).checkpoints()[-1].name == "step_0000002000"
+
+
+def test_ctrl_c_saves_a_checkpoint_and_resume_finishes(tmp_path):
+    run = tmp_path / "run"
+    command = [
+        sys.executable,
+        "-m",
+        "rlcontroller",
+        "train",
+        str(SMOKE),
+        "--run-dir",
+        str(run),
+        "--total-steps",
+        "3000",
+        "--no-progress",
+    ]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    deadline = time.time() + 120
+    while not (run / "checkpoints" / "step_0000000500").is_dir():
+        assert process.poll() is None and time.time() < deadline, process.communicate()[0]
+        time.sleep(0.1)
+    process.send_signal(signal.SIGINT)
+    output, _ = process.communicate(timeout=120)
+    assert process.returncode == 130, output
+    assert "resume with: rlc train --resume" in output and "Traceback" not in output
+    interrupted_at = int(RunFolder(run).checkpoints()[-1].name.removeprefix("step_"))
+    assert 500 <= interrupted_at < 3000
+    assert not any(p.name.startswith(".incomplete") for p in (run / "checkpoints").iterdir())
+    summary = train(resume=run)
+    assert summary.steps == 3000
+
+
+@pytest.mark.parametrize(
+    ("name", "kwargs"),
+    [
+        ("PPO", {"n_steps": 64, "batch_size": 32, "n_epochs": 2}),
+        ("TD3", {"learning_starts": 50}),
+        ("DDPG", {"learning_starts": 50}),
+        ("A2C", {"n_steps": 8}),
+    ],
+)
+def test_other_learners_train(tmp_path, name, kwargs):
+    summary = train(
+        smoke(name=name, kwargs=kwargs, n_envs=2, total_steps=256, checkpoint_every=128, eval_every=128),
+        run_dir=tmp_path / name,
+    )
+    assert summary.steps >= 256 and (tmp_path / name / "final_model.zip").is_file()
+
+
+def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
+    train(
+        smoke(normalize_observations=True, total_steps=300, checkpoint_every=300, eval_every=300),
+        run_dir=tmp_path / "run",
+    )
+    assert (RunFolder(tmp_path / "run").checkpoints()[-1] / "vecnormalize.pkl").is_file()
+    _, normalize = load_policy(tmp_path / "run" / "final_model.zip")
+    assert normalize is not None and not normalize.training and normalize.obs_rms.count > 300
+
+
+@pytest.mark.parametrize(
+    ("algorithm", "expected"),
+    [
+        ("{name: DQN}", "algorithm.name: Input should be 'SAC'"),
+        ("{kwargs: {bogus: 1}}", "algorithm.kwargs.bogus: not a keyword argument of SAC"),
+        ("{kwargs: {policy_kwargs: {}}}", "algorithm.kwargs.policy_kwargs: set by rlc"),
+        ("{kwargs: {batch_size: -1}}", "algorithm.kwargs.batch_size: expected an integer in [1, "),
+        ("{kwargs: {gamma: 1.5}}", "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
+        ("{kwargs: {train_freq: often}}", "algorithm.kwargs: SAC refused them"),
+        ("{policy: {activation: swish}}", "algorithm.policy.activation: Input should be"),
+    ],
+)
+def test_bad_algorithm_settings_exit_2_naming_the_key(tmp_path, algorithm, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"algorithm: {algorithm}\n")
+    result = CliRunner().invoke(app, ["train", str(path), "--run-dir", str(tmp_path / "run")])
+    assert result.exit_code == 2, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and expected in lines[0] and "bad.yaml" in lines[0]
+    assert not (tmp_path / "run").exists()
