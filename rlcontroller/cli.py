@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable
 from functools import wraps
@@ -108,6 +109,155 @@ def train(
     if summary.interrupted:
         typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
         raise typer.Exit(130)
+
+
+DEFAULT_MODEL = Path("models") / "five_story"
+SMOKE_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "smoke.yaml"
+
+
+def model_folder(run_dir: Path | None) -> Path:
+    """The run folder given, or the committed default model."""
+    folder = run_dir or DEFAULT_MODEL
+    if not (folder / "config.yaml").is_file():
+        hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
+        raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
+    return folder
+
+
+def model_file(folder: Path, model: str) -> Path:
+    path = folder / f"{model}_model.zip"
+    if not path.is_file():
+        raise ConfigError(f"{folder}: no {path.name}; expected a run folder written by 'rlc train'")
+    return path
+
+
+def run_comparison(
+    experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None
+):
+    """Uncontrolled, LQG (accelerations only), LQG + measured ground, RL (if a run) and the optimal reference."""
+    from rlcontroller.controllers import PolicyController
+    from rlcontroller.env import BuildingEnv
+    from rlcontroller.evaluation import RECORDS_VARIABLE, choose_motions, evaluate
+    from rlcontroller.lqg import LQGController, design_lqg
+
+    if records is None and not os.environ.get(RECORDS_VARIABLE):
+        typer.echo(
+            "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
+        )
+    motions, label = choose_motions(records, scale_pga)
+    env = BuildingEnv(experiment)
+    controllers = [
+        LQGController(design_lqg(experiment), env, name="LQG"),
+        LQGController(design_lqg(experiment, known_ground=True), env, name="LQG + ground"),
+    ]
+    if run_dir is not None:
+        controllers.append(PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL"))
+    return evaluate(experiment, motions, controllers, label), motions, label
+
+
+def print_summary(evaluation, out: Path) -> None:
+    from rlcontroller.report import improvement_table, markdown_table, summary_table
+
+    typer.echo(f"# {evaluation.label}")
+    typer.echo(markdown_table(summary_table(evaluation)))
+    improvement = improvement_table(evaluation)
+    if improvement is not None:
+        typer.echo(markdown_table(improvement, digits=1))
+    typer.echo(f"evaluated {len(evaluation.records)} motions in {evaluation.seconds:.1f} s; tables and plots in {out}")
+
+
+RecordsOption = Annotated[
+    Path | None, typer.Option(help="Folder with the seven .AT2 records (default $RLC_RECORDS, else a synthetic suite).")
+]
+ScaleOption = Annotated[float | None, typer.Option(min=0.0, help="Scale every record to this PGA (g).")]
+ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: best or final.")]
+
+
+@app.command()
+@user_errors
+def evaluate(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+    ] = None,
+    records: RecordsOption = None,
+    out: Annotated[Path | None, typer.Option(help="Output folder (default RUN_DIR/evaluation).")] = None,
+    scale_pga: ScaleOption = None,
+    model: ModelOption = "best",
+) -> None:
+    """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
+    from rlcontroller.report import write_report
+
+    if model not in ("best", "final"):
+        raise ConfigError(f"--model: expected best or final, got {model!r}")
+    folder = model_folder(run_dir)
+    evaluation, _, _ = run_comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
+    out = out or folder / "evaluation"
+    write_report(evaluation, out)
+    print_summary(evaluation, out)
+
+
+@app.command()
+@user_errors
+def demo(
+    records: RecordsOption = None,
+    progress: Annotated[
+        bool, typer.Option(help="Show a progress bar (default: when on a terminal).")
+    ] = sys.stdout.isatty(),
+) -> None:
+    """The main job end to end: train the small smoke experiment, then evaluate it against LQG."""
+    from rlcontroller.report import write_report
+    from rlcontroller.training import train as run_training
+
+    summary = run_training(load_experiment(SMOKE_CONFIG), progress_bar=progress)
+    typer.echo(summary.line())
+    evaluation, _, _ = run_comparison(
+        load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
+    )
+    out = summary.run_dir / "evaluation"
+    write_report(evaluation, out)
+    print_summary(evaluation, out)
+
+
+compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers.")
+app.add_typer(compare_app, name="compare")
+
+
+@compare_app.command("lqg")
+@user_errors
+def compare_lqg(
+    run_dir: Annotated[Path | None, typer.Argument(help="Optional run folder: adds its RL policy.")] = None,
+    config: Annotated[
+        Path | None, typer.Option(help="Experiment YAML when no run is given (default: embedded).")
+    ] = None,
+    records: RecordsOption = None,
+    out: Annotated[
+        Path | None, typer.Option(help="Output folder (default RUN_DIR/compare_lqg or results/compare_lqg).")
+    ] = None,
+    scale_pga: ScaleOption = None,
+    sweep: Annotated[bool, typer.Option(help="Trace LQG's J1-J3 trade-off over force weights.")] = False,
+    model: ModelOption = "best",
+) -> None:
+    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
+    import numpy as np
+
+    from rlcontroller.evaluation import OPTIMAL, lqg_sweep, mean_metric
+    from rlcontroller.report import write_report, write_sweep
+
+    if run_dir is not None:
+        run_dir = model_folder(run_dir)
+        experiment = load_experiment(run_dir / "config.yaml")
+    else:
+        experiment = load(config)
+    evaluation, motions, label = run_comparison(experiment, run_dir, model, records, scale_pga)
+    out = out or (run_dir / "compare_lqg" if run_dir else Path("results") / "compare_lqg")
+    write_report(evaluation, out)
+    print_summary(evaluation, out)
+    if sweep:
+        table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
+        names = [name for name in ("RL", "LQG + ground", OPTIMAL) if name in evaluation.controllers]
+        points = {name: (mean_metric(evaluation, name, "J3"), mean_metric(evaluation, name, "J1")) for name in names}
+        write_sweep(table, out, label, points)
+        typer.echo((out / "lqg_sweep.md").read_text())
 
 
 def main() -> None:

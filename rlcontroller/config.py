@@ -138,10 +138,11 @@ class SensorConfig(StrictModel):
 
     history: PositiveInt = 5
     measurements: list[MeasurementConfig] = Field(
-        default_factory=lambda: [MeasurementConfig(quantity="absolute_acceleration", scale=5.0)], min_length=1
+        default_factory=lambda: [MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.05)],
+        min_length=1,
     )
     ground_scale: PositiveFloat = 5.0
-    ground_noise_std: NonNegativeFloat = 0.0
+    ground_noise_std: NonNegativeFloat = 0.05
 
 
 class RewardTerm(StrictModel):
@@ -157,7 +158,7 @@ class RewardConfig(StrictModel):
         default_factory=lambda: [
             RewardTerm(quantity="drift", weight=1.0, scale=0.01),
             RewardTerm(quantity="base_shear", weight=0.5, scale=5.0e5),
-            RewardTerm(quantity="force", weight=0.1, scale=1.0e5),
+            RewardTerm(quantity="force", weight=1.0, scale=1.0e5),
         ],
         min_length=1,
     )

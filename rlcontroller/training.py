@@ -42,6 +42,7 @@ from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.controllers import PolicyController, Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import generate_suite
+from rlcontroller.files import atomic_savefig, atomic_write
 from rlcontroller.metrics import j_metrics, peak
 
 CURVE_COLUMNS = ("steps", "wall_time_s", "episode_reward", "eval_reward", "eval_peak_drift_m", "eval_J1", "eval_J2")
@@ -153,12 +154,6 @@ def package_versions() -> dict[str, str]:
         except importlib.metadata.PackageNotFoundError:
             versions[name] = "not installed"
     return versions
-
-
-def atomic_write(path: Path, text: str) -> None:
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(text)
-    os.replace(temporary, path)
 
 
 class RunFolder:
@@ -471,9 +466,6 @@ def plot_learning_curve(run: RunFolder) -> Path:
     )
     metric_axis.legend()
     figure.tight_layout()
-    path = run.path / "learning_curve.png"
-    temporary = run.path / ".learning_curve.tmp.png"
-    figure.savefig(temporary, dpi=110)
+    path = atomic_savefig(figure, run.path / "learning_curve.png", dpi=110)
     plt.close(figure)
-    os.replace(temporary, path)
     return path

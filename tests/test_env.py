@@ -12,6 +12,12 @@ from rlcontroller.dynamics import simulate
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import GroundMotion, read_at2
 
+NOISE_FREE = Experiment(
+    sensors=SensorConfig(
+        measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0)], ground_noise_std=0.0
+    )
+)
+
 
 def rollout(env, seed, policy_seed=0):
     observation, _ = env.reset(seed=seed)
@@ -96,7 +102,7 @@ def test_reward_is_the_weighted_sum_of_scaled_squares():
 
 def test_observation_holds_the_history_newest_first():
     motion = GroundMotion("ramp", 0.02, np.linspace(0.0, 3.0, 101))
-    env = BuildingEnv()
+    env = BuildingEnv(NOISE_FREE)
     first, _ = env.reset(seed=0, options={"motion": motion})
     assert np.all(first == 0)  # at rest and the ramp starts at zero
     observations, infos = [], []
@@ -117,6 +123,7 @@ def test_observation_holds_the_history_newest_first():
 def test_a_selected_sensor_layout_and_force_reward():
     experiment = Experiment(
         sensors=SensorConfig(
+            ground_noise_std=0.0,
             history=2,
             measurements=[
                 MeasurementConfig(quantity="drift", floors=[1, 5], scale=0.01),

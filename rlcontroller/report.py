@@ -1,0 +1,228 @@
+"""Tables (CSV + Markdown) and the paper's plots from an Evaluation.
+
+Every table and plot carries the motion suite's label, so synthetic results can never pass for
+the records. Plots show drift in cm and forces in kN for readability; the CSVs are SI.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+
+from rlcontroller.evaluation import OPTIMAL, Evaluation, percent_better  # noqa: E402
+from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
+
+COLOURS = {"uncontrolled": "0.55", "LQG": "tab:blue", "LQG + ground": "tab:cyan", "RL": "tab:red", OPTIMAL: "black"}
+METRIC_NAMES = {
+    "J1": "J1 peak drift",
+    "J2": "J2 peak abs. acceleration",
+    "J3": "J3 force energy",
+    "J4": "J4 peak story shear",
+}
+FAIRNESS = (
+    "LQG is designed on the quadratic part of the RL reward (same weights and scales), with a Kalman "
+    "filter on the same noisy floor accelerations, and runs in the same simulator with the same force limits."
+)
+
+
+def markdown_table(frame: pd.DataFrame, digits: int = 3) -> str:
+    header = "| " + " | ".join([str(frame.index.name or "")] + [str(c) for c in frame.columns]) + " |"
+    rule = "|" + "---|" * (len(frame.columns) + 1)
+    lines = [header, rule]
+    for index, row in frame.iterrows():
+        cells = [f"{v:.{digits}f}" if isinstance(v, float | np.floating) else str(v) for v in row]
+        lines.append("| " + " | ".join([str(index)] + cells) + " |")
+    return "\n".join(lines)
+
+
+def summary_table(evaluation: Evaluation) -> pd.DataFrame:
+    """Means over records and stories, with percent reductions from the uncontrolled building."""
+    table = evaluation.summary()
+    for metric in ("J1", "J2", "J4"):
+        table[f"{metric} reduction %"] = 100.0 * (1.0 - table[metric])
+    table.index.name = "controller"
+    return table
+
+
+def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataFrame | None:
+    """Percent by which `candidate`'s mean J's are below each LQG variant's (positive = better)."""
+    table = evaluation.summary()
+    references = [r for r in ("LQG", "LQG + ground") if r in table.index]
+    if candidate not in table.index or not references:
+        return None
+    rows = {
+        f"{candidate} better than {reference} (%)": {
+            m: percent_better(table.loc[candidate, m], table.loc[reference, m]) for m in ("J1", "J2", "J3", "J4")
+        }
+        for reference in references
+    }
+    return pd.DataFrame.from_dict(rows, orient="index").rename_axis("comparison")
+
+
+def per_record_frame(evaluation: Evaluation) -> pd.DataFrame:
+    wide = evaluation.metrics.pivot_table(
+        index=["controller", "record", "metric"], columns="index", values="value", sort=False
+    )
+    wide.columns = [f"{c}" for c in wide.columns]
+    return wide.reset_index()
+
+
+def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    summary = summary_table(evaluation)
+    improvement = improvement_table(evaluation)
+    per_record = per_record_frame(evaluation)
+    written = [
+        atomic_write(out / "metrics.csv", evaluation.metrics.assign(suite=evaluation.label).to_csv(index=False)),
+        atomic_write(out / "per_record.csv", per_record.assign(suite=evaluation.label).to_csv(index=False)),
+        atomic_write(out / "summary.csv", summary.assign(suite=evaluation.label).to_csv()),
+    ]
+    text = [f"# Summary: {evaluation.label}", "", f"Mean over records and stories (J3: over actuators). {FAIRNESS}", ""]
+    text += [markdown_table(summary), ""]
+    if improvement is not None:
+        text += [markdown_table(improvement, digits=1), ""]
+    text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
+    atomic_write(out / "summary.md", "\n".join(text))
+    detail = [f"# J1-J4 per record and story: {evaluation.label}", "", "Columns: story (J3: actuator).", ""]
+    for metric in ("J1", "J2", "J3", "J4"):
+        for controller in evaluation.controllers:
+            if controller == "uncontrolled":
+                continue
+            chosen = per_record[(per_record["metric"] == metric) & (per_record["controller"] == controller)]
+            frame = chosen.drop(columns=["controller", "metric"]).set_index("record").dropna(axis=1)
+            frame.loc["mean"] = frame.mean()
+            detail += [f"## {METRIC_NAMES[metric]}, {controller}", "", markdown_table(frame), ""]
+    atomic_write(out / "per_record.md", "\n".join(detail))
+    return written + [out / "summary.md", out / "per_record.md"]
+
+
+def time_history_record(evaluation: Evaluation) -> str:
+    """The Northridge record the paper plots (Sylmar Olive View), else the first one."""
+    for name in evaluation.records:
+        if "NORTHR_SYL" in name:
+            return name
+    for name in evaluation.records:
+        if "NORTHR" in name:
+            return name
+    return evaluation.records[0]
+
+
+def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Path:
+    record = time_history_record(evaluation)
+    figure, (drift_axis, shear_axis) = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
+    for controller in evaluation.controllers:
+        result = evaluation.responses[controller, record]
+        style = {"color": COLOURS.get(controller), "linewidth": 1.0 if controller != OPTIMAL else 0.8}
+        if controller == OPTIMAL:
+            style["linestyle"] = "--"
+        drift_axis.plot(result.time, 100 * result.drift[:, story - 1], label=controller, **style)
+        shear_axis.plot(result.time, result.base_shear / 1e3, label=controller, **style)
+    drift_axis.set(ylabel=f"story-{story} drift (cm)", title=f"{record} — {evaluation.label}")
+    shear_axis.set(xlabel="time (s)", ylabel="base shear (kN)")
+    drift_axis.legend(loc="upper right", ncol=4, fontsize=9)
+    for axis in (drift_axis, shear_axis):
+        axis.grid(alpha=0.3)
+    figure.tight_layout()
+    path = atomic_savefig(figure, out / "time_histories.png")
+    plt.close(figure)
+    return path
+
+
+def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
+    controllers = [c for c in evaluation.controllers if c != "uncontrolled"]
+    figure, axes = plt.subplots(4, len(controllers), figsize=(4.2 * len(controllers), 11), sharey="row", squeeze=False)
+    frame = evaluation.metrics
+    for column, controller in enumerate(controllers):
+        for row, metric in enumerate(("J1", "J2", "J3", "J4")):
+            axis = axes[row, column]
+            chosen = frame[(frame["controller"] == controller) & (frame["metric"] == metric)]
+            table = chosen.pivot_table(index="index", columns="record", values="value", sort=False)
+            for record in table.columns:
+                axis.plot(
+                    table.index, table[record], color=COLOURS.get(controller, "tab:green"), alpha=0.35, linewidth=0.8
+                )
+            axis.plot(
+                table.index, table.mean(axis=1), color=COLOURS.get(controller, "tab:green"), linewidth=2.5, label="mean"
+            )
+            axis.set_xticks(table.index)
+            if metric != "J3":
+                axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
+            axis.grid(alpha=0.3)
+            if row == 0:
+                axis.set_title(controller)
+            if column == 0:
+                axis.set_ylabel(METRIC_NAMES[metric] + (" (C/UC)" if metric != "J3" else " (E_u / E_Vb,UC)"))
+            if row == 3 or metric == "J3":
+                axis.set_xlabel("actuator" if metric == "J3" else "story")
+    legend = [Line2D([], [], color="0.4", alpha=0.5, linewidth=0.8), Line2D([], [], color="0.2", linewidth=2.5)]
+    axes[0, 0].legend(legend, ["one record", "mean over records"], loc="upper right", fontsize=8)
+    figure.suptitle(f"J1–J4 per story: thin lines one record each, bold the mean — {evaluation.label}", fontsize=11)
+    figure.tight_layout()
+    path = atomic_savefig(figure, out / "metrics_per_story.png")
+    plt.close(figure)
+    return path
+
+
+def write_report(evaluation: Evaluation, out: Path) -> list[Path]:
+    """Tables and plots of one evaluation into `out`."""
+    out.mkdir(parents=True, exist_ok=True)
+    return write_tables(evaluation, out) + [
+        plot_time_histories(evaluation, out),
+        plot_metrics_per_story(evaluation, out),
+    ]
+
+
+def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tuple[float, float]]) -> list[Path]:
+    """LQG's J1-J3 trade-off (one row per force-weight multiplier) with other controllers marked."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = [atomic_write(out / "lqg_sweep.csv", sweep.assign(suite=label).to_csv(index=False))]
+    lines = [
+        f"# LQG trade-off: {label}",
+        "",
+        "A controller beats LQG only if it lies below this curve (lower J1 at equal J3).",
+        "",
+    ]
+    lines += [markdown_table(sweep.set_index("force_weight_multiplier")), ""]
+    for name, (j3, j1) in points.items():
+        lqg_j1 = lqg_j1_at(sweep, j3)
+        verdict = "below" if j1 < lqg_j1 else "above"
+        lines.append(
+            f"- {name}: J3 = {j3:.4f}, J1 = {j1:.3f}; LQG at the same J3: J1 = {lqg_j1:.3f} ({verdict} the curve)"
+        )
+    atomic_write(out / "lqg_sweep.md", "\n".join(lines) + "\n")
+    figure, axis = plt.subplots(figsize=(7, 5))
+    axis.plot(sweep["J3"], sweep["J1"], "o-", color=COLOURS["LQG"], label="LQG, force weight × multiplier")
+    for _, row in sweep.iterrows():
+        axis.annotate(
+            f"×{row['force_weight_multiplier']:g}",
+            (row["J3"], row["J1"]),
+            fontsize=7,
+            xytext=(3, 3),
+            textcoords="offset points",
+        )
+    for name, (j3, j1) in points.items():
+        marker = "*" if name == "RL" else "D"
+        axis.plot(
+            [j3], [j1], marker, markersize=13 if marker == "*" else 8, color=COLOURS.get(name, "tab:green"), label=name
+        )
+    axis.set(xscale="log", xlabel="J3 = E_u / E_Vb,UC (mean over actuators)", ylabel="J1 = peak drift ratio (mean)")
+    axis.set_title(f"LQG trade-off — {label}", fontsize=9)
+    axis.grid(alpha=0.3, which="both")
+    axis.legend(fontsize=8)
+    figure.tight_layout()
+    written += [out / "lqg_sweep.md", atomic_savefig(figure, out / "lqg_sweep.png")]
+    plt.close(figure)
+    return written
+
+
+def lqg_j1_at(sweep: pd.DataFrame, j3: float) -> float:
+    """LQG's J1 at the given J3, interpolated in log J3 along the sweep (clamped at the ends)."""
+    ordered = sweep.sort_values("J3")
+    return float(np.interp(np.log(j3), np.log(ordered["J3"]), ordered["J1"]))

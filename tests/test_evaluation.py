@@ -1,0 +1,78 @@
+import shutil
+
+import numpy as np
+import pytest
+
+from rlcontroller.config import Experiment
+from rlcontroller.controllers import Uncontrolled, rollout
+from rlcontroller.env import BuildingEnv
+from rlcontroller.evaluation import (
+    OPTIMAL,
+    RECORDS_VARIABLE,
+    SYNTHETIC_LABEL,
+    choose_motions,
+    evaluate,
+    load_records,
+    lqg_sweep,
+    synthetic_suite,
+    uncontrolled_response,
+)
+from rlcontroller.excitation import MotionError, read_at2
+from rlcontroller.lqg import LQGController, design_lqg
+
+
+def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
+    motion = read_at2(records / "RSN753_LOMAP_CLS000.AT2")
+    env = BuildingEnv()
+    whole = uncontrolled_response(env, motion)
+    stepped, _ = rollout(env, motion, Uncontrolled(3))
+    for quantity in ("drift", "absolute_acceleration", "story_shear"):
+        np.testing.assert_allclose(whole.quantity(quantity), stepped.quantity(quantity), rtol=1e-9, atol=1e-12)
+
+
+def test_uncontrolled_rows_are_one_and_lqg_helps():
+    experiment = Experiment()
+    motions = synthetic_suite(count=2)
+    env = BuildingEnv(experiment)
+    result = evaluate(experiment, motions, [LQGController(design_lqg(experiment), env)], SYNTHETIC_LABEL)
+    frame = result.metrics
+    bare = frame[(frame["controller"] == "uncontrolled") & (frame["metric"] != "J3")]
+    np.testing.assert_array_equal(bare["value"], 1.0)
+    summary = result.summary()
+    assert list(summary.index) == ["uncontrolled", "LQG", OPTIMAL]
+    assert summary.loc["LQG", "J1"] < 0.8 and summary.loc[OPTIMAL, "J1"] < summary.loc["LQG", "J1"]
+    assert len(frame[(frame["controller"] == "LQG") & (frame["metric"] == "J3")]) == 2 * 3  # per actuator
+
+
+def test_missing_records_are_listed_with_where_to_get_them(records, tmp_path):
+    shutil.copy(records / "RSN1086_NORTHR_SYL090.AT2", tmp_path)
+    with pytest.raises(MotionError) as error:
+        load_records(tmp_path)
+    message = str(error.value)
+    assert "6 of 7 records missing" in message and "RSN1106_KOBE_KJM000.AT2" in message
+    assert "RSN1086" not in message.split("missing:")[1].split(";")[0]
+    assert "ngawest2.berkeley.edu" in message and "\n" not in message
+
+
+def test_records_as_recorded_or_scaled(records):
+    motions = load_records(records)
+    assert len(motions) == 7
+    scaled = load_records(records, scale_pga_g=0.3)
+    assert all(m.pga == pytest.approx(0.3 * 9.80665) for m in scaled)
+
+
+def test_without_records_the_suite_is_synthetic_and_labelled(monkeypatch):
+    monkeypatch.delenv(RECORDS_VARIABLE, raising=False)
+    motions, label = choose_motions(None)
+    assert label == SYNTHETIC_LABEL and "SYNTHETIC" in label
+    assert len(motions) == 7 and all(m.synthetic for m in motions)
+    again, _ = choose_motions(None)
+    np.testing.assert_array_equal(motions[3].acceleration, again[3].acceleration)
+
+
+def test_sweep_trades_force_energy_for_drift():
+    experiment = Experiment()
+    table = lqg_sweep(experiment, synthetic_suite(count=2), SYNTHETIC_LABEL, np.array([0.01, 1.0, 100.0]))
+    assert list(table["force_weight_multiplier"]) == [0.01, 1.0, 100.0]
+    assert table["J3"].is_monotonic_decreasing
+    assert table["J1"].iloc[-1] > table["J1"].iloc[0]

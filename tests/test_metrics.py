@@ -1,0 +1,46 @@
+import numpy as np
+import pytest
+
+from rlcontroller.dynamics import Response
+from rlcontroller.metrics import energy, j_metrics, peak
+
+
+def response(scale: float, force: float, steps: int = 4) -> Response:
+    time = np.arange(steps + 1) * 0.5
+    wave = np.array([0.0, 1.0, -2.0, 0.5, 0.0])[: steps + 1]
+    floors = np.outer(wave, [1.0, 2.0])
+    return Response(
+        time=time,
+        ground=np.zeros(steps + 1),
+        displacement=scale * floors,
+        velocity=scale * floors,
+        drift=scale * floors,
+        absolute_acceleration=scale * floors * 3,
+        story_shear=scale * floors * 10,
+        base_shear=scale * wave * 10,
+        force=np.vstack([[0.0], np.full((steps, 1), force)]),
+    )
+
+
+def test_peak_and_energy_on_known_signals():
+    np.testing.assert_array_equal(peak(np.array([[1.0, -3.0], [-2.0, 2.0]])), [2.0, 3.0])
+    # A held force of 2 N over four 0.5 s steps: integral of u^2 = 4 * 0.5 * 4 = 8 N^2 s.
+    assert energy(np.vstack([[0.0], np.full((4, 1), 2.0)]), 0.5)[0] == pytest.approx(8.0)
+
+
+def test_j_metrics_of_a_halved_response():
+    controlled, uncontrolled = response(0.5, 2.0), response(1.0, 0.0)
+    metrics = j_metrics(controlled, uncontrolled)
+    np.testing.assert_allclose(metrics["J1"], [0.5, 0.5])
+    np.testing.assert_allclose(metrics["J2"], [0.5, 0.5])
+    np.testing.assert_allclose(metrics["J4"], [0.5, 0.5])
+    # E_u = 4 * 0.5 * 2^2 = 8; E_Vb,UC = 0.5 * (10^2 + 20^2 + 5^2 + 0) = 262.5
+    np.testing.assert_allclose(metrics["J3"], [8.0 / 262.5])
+
+
+def test_uncontrolled_against_itself_is_one():
+    bare = response(1.0, 0.0)
+    metrics = j_metrics(bare, bare)
+    for name in ("J1", "J2", "J4"):
+        np.testing.assert_array_equal(metrics[name], 1.0)
+    np.testing.assert_array_equal(metrics["J3"], 0.0)
