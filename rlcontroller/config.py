@@ -146,11 +146,24 @@ class SensorConfig(StrictModel):
 
 
 class RewardTerm(StrictModel):
-    """weight * sum over components of (quantity / scale)^2, subtracted from the reward."""
+    """weight * sum over components of |quantity / scale|^power, subtracted from the reward.
 
-    quantity: Quantity
+    `force_change` is the change of each actuator force from the previous step (N). LQG is
+    designed on the quadratic terms of linear quantities (power 2, not force_change) only.
+    """
+
+    quantity: Quantity | Literal["force_change"]
     weight: NonNegativeFloat
     scale: PositiveFloat
+    power: float = Field(2.0, ge=2.0, le=16.0)
+
+    @property
+    def quadratic(self) -> bool:
+        return self.power == 2.0 and self.quantity != "force_change"
+
+    @property
+    def label(self) -> str:
+        return f"reward_{self.quantity}" + ("" if self.power == 2.0 else f"_p{self.power:g}")
 
 
 class RewardConfig(StrictModel):
@@ -190,7 +203,22 @@ class KanaiTajimiConfig(StrictModel):
     decay_rate: Range = (0.2, 0.6)
 
 
-GeneratorConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig, Field(discriminator="kind")]
+SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig, Field(discriminator="kind")]
+
+
+class MixtureComponent(StrictModel):
+    weight: PositiveFloat
+    generator: SourceConfig
+
+
+class MixtureConfig(StrictModel):
+    """Each motion comes from one component, drawn with probability proportional to its weight."""
+
+    kind: Literal["mixture"] = "mixture"
+    components: list[MixtureComponent] = Field(min_length=1)
+
+
+GeneratorConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | MixtureConfig, Field(discriminator="kind")]
 
 
 class ExcitationConfig(StrictModel):
@@ -270,7 +298,7 @@ class Experiment(StrictModel):
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
-GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi")
+GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "mixture")
 
 
 def _format_location(location: tuple[Any, ...], prefix: str) -> str:

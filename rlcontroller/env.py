@@ -27,7 +27,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from rlcontroller.config import Experiment, RewardConfig, SensorConfig, load_experiment
+from rlcontroller.config import Experiment, RewardTerm, SensorConfig, load_experiment
 from rlcontroller.dynamics import StepMap, output_matrices, step_map
 from rlcontroller.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.structure import Building, build
@@ -48,17 +48,23 @@ def sensor_matrices(building: Building, sensors: SensorConfig) -> tuple[np.ndarr
     return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises)
 
 
-def reward_matrices(building: Building, reward: RewardConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
-    """(C, D, sqrt(weight)/scale per row, one slice of rows per term) of the reward outputs."""
+def reward_matrices(
+    building: Building, terms: list[RewardTerm]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
+    """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
+    so that a term's value is the sum over its rows of |factor * (C z + D u)|^power."""
     rows_c, rows_d, factors, slices = [], [], [], []
     start = 0
-    for term in reward.terms:
+    for term in terms:
         c, d = output_matrices(building, term.quantity)
         rows_c.append(c)
         rows_d.append(d)
-        factors.append(np.full(c.shape[0], np.sqrt(term.weight) / term.scale))
+        factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
         slices.append(slice(start, start + c.shape[0]))
         start += c.shape[0]
+    if not terms:
+        n_state = 2 * building.n_floors
+        return np.zeros((0, n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
     return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
 
 
@@ -87,9 +93,25 @@ class BuildingEnv(gym.Env):
         self.force_limits = self.building.force_limits
         self.control_dt = config.simulation.control_dt
         sensor_c, sensor_d, sensor_scale, sensor_noise = sensor_matrices(self.building, config.sensors)
-        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(self.building, config.reward)
-        self._reward_names = [f"reward_{term.quantity}" for term in config.reward.terms]
-        self._reward_starts = np.array([rows.start for rows in reward_slices])
+        # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
+        linear_terms = [t for t in config.reward.terms if t.quantity != "force_change"]
+        change_terms = [t for t in config.reward.terms if t.quantity == "force_change"]
+        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(self.building, linear_terms)
+        self._reward_names = [term.label for term in linear_terms + change_terms]
+        starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
+        self._reward_starts = np.array(starts, dtype=int)
+        self._change_factor = (
+            np.concatenate([self.building.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
+            if change_terms
+            else None
+        )
+        self._change_terms = len(change_terms)
+        row_powers = [
+            np.full(rows.stop - rows.start, t.power) for t, rows in zip(linear_terms, reward_slices, strict=True)
+        ]
+        row_powers += [np.full(m, t.power) for t in change_terms]
+        self._row_power = np.concatenate(row_powers)
+        self._all_quadratic = bool(np.all(self._row_power == 2.0))
         drift_c, drift_d = output_matrices(self.building, "drift")
         acceleration_c, acceleration_d = output_matrices(self.building, "absolute_acceleration")
         shear_c, shear_d = output_matrices(self.building, "base_shear")
@@ -190,6 +212,7 @@ class BuildingEnv(gym.Env):
         self._forcing[:, self._reading_slice] += readings[1:]
         self._k = 0
         self._state_action[:] = 0.0
+        self._previous_action = np.zeros(self.building.n_actuators)
         self._observation[:] = 0.0
         self._observation[: p + 1] = readings[0]
         return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
@@ -214,7 +237,12 @@ class BuildingEnv(gym.Env):
         observation[last:] = clipped
 
         weighted = outputs[self._reward_slice]
-        terms = np.add.reduceat(weighted * weighted, self._reward_starts).tolist()
+        if self._change_factor is not None:
+            change = np.tile(clipped - self._previous_action, self._change_terms) * self._change_factor
+            weighted = np.concatenate([weighted, change])
+        self._previous_action[:] = clipped
+        values = weighted * weighted if self._all_quadratic else np.abs(weighted) ** self._row_power
+        terms = np.add.reduceat(values, self._reward_starts).tolist()
         info: dict[str, Any] = dict(zip(self._reward_names, terms, strict=True))
         info["drift"] = outputs[self._drift_slice]
         info["absolute_acceleration"] = outputs[self._acceleration_slice]

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import scipy.signal
 
-from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, NoiseImpulsesConfig
+from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, MixtureConfig, NoiseImpulsesConfig
 
 STANDARD_GRAVITY = 9.80665  # m/s^2
 UNITS_TO_SI = {"g": STANDARD_GRAVITY, "m/s2": 1.0, "m/s^2": 1.0, "cm/s2": 0.01, "cm/s^2": 0.01, "gal": 0.01}
@@ -210,6 +210,10 @@ def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str 
 
 def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None = None) -> GroundMotion:
     """One synthetic motion from the configured generator."""
+    if isinstance(config, MixtureConfig):
+        weights = np.array([component.weight for component in config.components])
+        chosen = config.components[int(rng.choice(len(weights), p=weights / weights.sum()))]
+        return generate(chosen.generator, rng, name)
     if isinstance(config, KanaiTajimiConfig):
         return kanai_tajimi(config, rng, name or "kanai_tajimi")
     return noise_impulses(config, rng, name or "noise_impulses")

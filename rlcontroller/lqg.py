@@ -39,7 +39,7 @@ class QuadraticCost:
 
 
 def quadratic_cost(building: Building, reward: RewardConfig, step: StepMap) -> QuadraticCost:
-    c, d, factor, _ = reward_matrices(building, reward)
+    c, d, factor, _ = reward_matrices(building, [term for term in reward.terms if term.quadratic])
     weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
     action_gain = step.force_gain * building.force_limits
     return QuadraticCost(

@@ -43,9 +43,20 @@ from rlcontroller.controllers import PolicyController, Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import generate_suite
 from rlcontroller.files import atomic_savefig, atomic_write
+from rlcontroller.lqg import LQGController, design_lqg
 from rlcontroller.metrics import j_metrics, peak
 
-CURVE_COLUMNS = ("steps", "wall_time_s", "episode_reward", "eval_reward", "eval_peak_drift_m", "eval_J1", "eval_J2")
+CURVE_COLUMNS = (
+    "steps",
+    "wall_time_s",
+    "episode_reward",
+    "eval_reward",
+    "eval_peak_drift_m",
+    "eval_J1",
+    "eval_J2",
+    "lqg_J1",
+    "lqg_J2",
+)
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
 RESERVED_KWARGS = {
     "policy",
@@ -259,9 +270,17 @@ class Validator:
         self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
         bare = Uncontrolled(self.env.building.n_actuators)
         self.uncontrolled = [rollout(self.env, motion, bare)[0] for motion in self.motions]
+        try:
+            lqg = self.run(LQGController(design_lqg(experiment), self.env))
+            self.reference = {"lqg_J1": lqg["eval_J1"], "lqg_J2": lqg["eval_J2"]}
+        except ValueError:  # a reward LQG cannot be designed for
+            self.reference = {"lqg_J1": float("nan"), "lqg_J2": float("nan")}
 
     def __call__(self, model) -> dict[str, float]:
-        controller = PolicyController(model, self.env.force_limits, model.get_vec_normalize_env())
+        policy = PolicyController(model, self.env.force_limits, model.get_vec_normalize_env())
+        return self.run(policy) | self.reference
+
+    def run(self, controller) -> dict[str, float]:
         rewards, peaks, j1, j2 = [], [], [], []
         for index, motion in enumerate(self.motions):
             result, reward = rollout(self.env, motion, controller, seed=index)
@@ -346,7 +365,8 @@ class TrainingSummary:
         if self.best:
             text += (
                 f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
-                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f})"
+                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; "
+                f"LQG J1 {self.best['lqg_J1']:.3f}, J2 {self.best['lqg_J2']:.3f})"
             )
         return text + f"; run folder: {self.run_dir}"
 
@@ -461,6 +481,9 @@ def plot_learning_curve(run: RunFolder) -> Path:
     metric_axis.plot(steps, [r["eval_J1"] for r in rows], "o-", label="J1 (peak drift ratio)")
     metric_axis.plot(steps, [r["eval_J2"] for r in rows], "s-", label="J2 (peak acceleration ratio)")
     metric_axis.axhline(1.0, color="grey", linewidth=0.8, linestyle="--")
+    if rows:
+        metric_axis.axhline(rows[-1]["lqg_J1"], color="tab:blue", linewidth=1.0, linestyle=":", label="LQG J1")
+        metric_axis.axhline(rows[-1]["lqg_J2"], color="tab:orange", linewidth=1.0, linestyle=":", label="LQG J2")
     metric_axis.set(
         xlabel="environment steps", ylabel="controlled / uncontrolled", title="Validation (generated motions)"
     )

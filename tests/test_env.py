@@ -151,3 +151,24 @@ def test_step_after_the_end_is_refused():
     assert env.step(np.zeros(3))[3]
     with pytest.raises(RuntimeError, match="reset"):
         env.step(np.zeros(3))
+
+
+def test_higher_power_and_force_change_terms():
+    terms = [
+        {"quantity": "drift", "weight": 2.0, "scale": 0.01, "power": 4},
+        {"quantity": "force_change", "weight": 0.5, "scale": 2e4},
+        {"quantity": "force", "weight": 1.0, "scale": 1e5},
+    ]
+    env = BuildingEnv(Experiment(reward={"terms": terms}))
+    env.reset(seed=1)
+    previous = np.zeros(3)
+    for action in ([0.2, -0.4, 1.0], [0.5, 0.1, -0.3], [0.5, 0.1, -0.3]):
+        _, reward, _, _, info = env.step(np.array(action))
+        drift = 2.0 * np.sum((info["drift"] / 0.01) ** 4)
+        change = 0.5 * np.sum(((np.array(action) - previous) * 1e5 / 2e4) ** 2)
+        force = np.sum((info["force"] / 1e5) ** 2)
+        assert info["reward_drift_p4"] == pytest.approx(drift)
+        assert info["reward_force_change"] == pytest.approx(change)
+        assert reward == pytest.approx(-(drift + change + force))
+        previous = np.array(action)
+    assert info["reward_force_change"] == 0.0

@@ -162,3 +162,19 @@ def test_generated_suites_are_reproducible():
     for a, b in zip(first, second, strict=True):
         np.testing.assert_array_equal(a.acceleration, b.acceleration)
     assert not np.array_equal(first[0].acceleration[:100], first[1].acceleration[:100])
+
+
+def test_a_mixture_draws_from_its_components_by_weight():
+    from rlcontroller.config import MixtureConfig
+    from rlcontroller.excitation import generate
+
+    mixture = MixtureConfig(
+        components=[
+            {"weight": 3.0, "generator": {"kind": "kanai_tajimi", "duration": [30.0, 30.0]}},
+            {"weight": 1.0, "generator": {"kind": "noise_impulses", "duration": [10.0, 10.0]}},
+        ]
+    )
+    rng = np.random.default_rng(0)
+    durations = [generate(mixture, rng).duration for _ in range(400)]
+    share = np.mean(np.isclose(durations, 30.0))
+    assert 0.68 < share < 0.82

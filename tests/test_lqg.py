@@ -109,3 +109,17 @@ def test_a_reward_that_leaves_forces_free_is_refused():
     experiment = Experiment(reward={"terms": [{"quantity": "base_shear", "weight": 1.0, "scale": 1e5}]})  # rank 1 < 3
     with pytest.raises(ValueError, match="R is singular"):
         design_lqg(experiment)
+
+
+def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
+    base = Experiment()
+    extended = Experiment(
+        reward={
+            "terms": [t.model_dump() for t in base.reward.terms]
+            + [
+                {"quantity": "drift", "weight": 5.0, "scale": 0.02, "power": 6},
+                {"quantity": "force_change", "weight": 1.0, "scale": 1e4},
+            ]
+        }
+    )
+    np.testing.assert_allclose(design_lqg(extended).feedback, design_lqg(base).feedback)
