@@ -83,6 +83,7 @@ def train(
     run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
     resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
     device: Annotated[str, typer.Option(help="cpu, cuda or auto.")] = "auto",
+    time_limit: Annotated[float | None, typer.Option(min=0.0, help="Stop after this many minutes (resumable).")] = None,
     progress: Annotated[
         bool, typer.Option(help="Show a progress bar (default: when on a terminal).")
     ] = sys.stdout.isatty(),
@@ -92,10 +93,11 @@ def train(
 
     if device not in ("cpu", "cuda", "auto"):
         raise ConfigError(f"--device: expected cpu, cuda or auto, got {device!r}")
+    limit = None if time_limit is None else 60.0 * time_limit
     if resume is not None:
         if config is not None or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
-        summary = run_training(resume=resume, device=device, progress_bar=progress)
+        summary = run_training(resume=resume, device=device, progress_bar=progress, time_limit_s=limit)
     else:
         experiment = load(config)
         if total_steps is not None:
@@ -104,7 +106,7 @@ def train(
             )
         if seed is not None:
             experiment = experiment.model_copy(update={"seed": seed})
-        summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress)
+        summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress, time_limit_s=limit)
     typer.echo(summary.line())
     if summary.interrupted:
         typer.echo(f"resume with: rlc train --resume {summary.run_dir}")

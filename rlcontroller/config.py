@@ -134,7 +134,9 @@ class MeasurementConfig(StrictModel):
 
 class SensorConfig(StrictModel):
     """Observation: the measurements and the ground acceleration over the last `history` control
-    steps, plus the last action."""
+    steps, plus the last action. With `state_estimate`, a steady-state Kalman estimate of the
+    floor displacements and velocities computed from those same noisy readings (and the measured
+    ground acceleration) is added, divided by `displacement_scale` (m) and `velocity_scale` (m/s)."""
 
     history: PositiveInt = 5
     measurements: list[MeasurementConfig] = Field(
@@ -143,6 +145,9 @@ class SensorConfig(StrictModel):
     )
     ground_scale: PositiveFloat = 5.0
     ground_noise_std: NonNegativeFloat = 0.05
+    state_estimate: bool = False
+    displacement_scale: PositiveFloat = 0.02
+    velocity_scale: PositiveFloat = 0.2
 
 
 class RewardTerm(StrictModel):

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.linalg
 from numpy.lib.stride_tricks import sliding_window_view
 
-from rlcontroller.config import Quantity, SimulationConfig
+from rlcontroller.config import Quantity, RewardTerm, SensorConfig, SimulationConfig
 from rlcontroller.structure import Building
 
 QUANTITIES: tuple[str, ...] = (
@@ -193,6 +193,41 @@ def output_matrices(building: Building, quantity: Quantity) -> tuple[np.ndarray,
     if quantity == "force":
         return np.zeros((m, 2 * n)), np.eye(m)
     raise ValueError(f"unknown quantity {quantity!r}, expected one of {QUANTITIES}")
+
+
+def sensor_matrices(building: Building, sensors: SensorConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(C, D, scale, noise_std) of the measurement vector y = C z + D u, one row per reading."""
+    rows_c, rows_d, scales, noises = [], [], [], []
+    for measurement in sensors.measurements:
+        c, d = output_matrices(building, measurement.quantity)
+        if measurement.floors is not None:
+            index = [floor - 1 for floor in measurement.floors]
+            c, d = c[index], d[index]
+        rows_c.append(c)
+        rows_d.append(d)
+        scales.append(np.full(c.shape[0], measurement.scale))
+        noises.append(np.full(c.shape[0], measurement.noise_std))
+    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises)
+
+
+def reward_matrices(
+    building: Building, terms: list[RewardTerm]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
+    """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
+    so that a term's value is the sum over its rows of |factor * (C z + D u)|^power."""
+    rows_c, rows_d, factors, slices = [], [], [], []
+    start = 0
+    for term in terms:
+        c, d = output_matrices(building, term.quantity)
+        rows_c.append(c)
+        rows_d.append(d)
+        factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
+        slices.append(slice(start, start + c.shape[0]))
+        start += c.shape[0]
+    if not terms:
+        n_state = 2 * building.n_floors
+        return np.zeros((0, n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
+    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,11 @@
 """Gymnasium environment: a shear building under one ground motion per episode.
 
 Observation (float32, scaled to order one): H blocks, newest first, then the last action:
-    [readings(t_k), a_g(t_k), readings(t_{k-1}), a_g(t_{k-1}), ..., last action]
+    [readings(t_k), a_g(t_k), readings(t_{k-1}), a_g(t_{k-1}), ..., (estimate), last action]
 where readings are the configured sensors divided by their scales (with noise), a_g is the
 ground acceleration divided by `ground_scale`, and the last action has m values in [-1, 1].
-Before the motion starts the history is zero.
+With `sensors.state_estimate` a Kalman estimate of [x; x'] from those same readings (scaled)
+comes before the last action. Before the motion starts the history is zero.
 
 Action: one value per actuator in [-1, 1], clipped, times the actuator's force limit (N);
 the force is held constant over the control step.
@@ -27,45 +28,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from rlcontroller.config import Experiment, RewardTerm, SensorConfig, load_experiment
-from rlcontroller.dynamics import StepMap, output_matrices, step_map
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.dynamics import StepMap, output_matrices, reward_matrices, sensor_matrices, step_map
+from rlcontroller.estimation import design_kalman
 from rlcontroller.excitation import GroundMotion, for_control_step, generate
-from rlcontroller.structure import Building, build
-
-
-def sensor_matrices(building: Building, sensors: SensorConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(C, D, scale, noise_std) of the measurement vector y = C z + D u, one row per reading."""
-    rows_c, rows_d, scales, noises = [], [], [], []
-    for measurement in sensors.measurements:
-        c, d = output_matrices(building, measurement.quantity)
-        if measurement.floors is not None:
-            index = [floor - 1 for floor in measurement.floors]
-            c, d = c[index], d[index]
-        rows_c.append(c)
-        rows_d.append(d)
-        scales.append(np.full(c.shape[0], measurement.scale))
-        noises.append(np.full(c.shape[0], measurement.noise_std))
-    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises)
-
-
-def reward_matrices(
-    building: Building, terms: list[RewardTerm]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
-    """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
-    so that a term's value is the sum over its rows of |factor * (C z + D u)|^power."""
-    rows_c, rows_d, factors, slices = [], [], [], []
-    start = 0
-    for term in terms:
-        c, d = output_matrices(building, term.quantity)
-        rows_c.append(c)
-        rows_d.append(d)
-        factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
-        slices.append(slice(start, start + c.shape[0]))
-        start += c.shape[0]
-    if not terms:
-        n_state = 2 * building.n_floors
-        return np.zeros((0, n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
-    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
+from rlcontroller.structure import build
 
 
 class BuildingEnv(gym.Env):
@@ -152,9 +119,17 @@ class BuildingEnv(gym.Env):
         self._ground_scale = config.sensors.ground_scale
         self._ground_noise = config.sensors.ground_noise_std
 
-        # Observation layout: H blocks of (p readings, 1 ground reading), then the last action.
+        # Observation layout: H blocks of (p readings, 1 ground reading), the state estimate if
+        # configured, then the last action.
         self._block = p + 1
-        self._action_start = self.history * self._block
+        self._estimate_start = self.history * self._block
+        self._sensor_scale = sensor_scale
+        self.kalman = None
+        if config.sensors.state_estimate:
+            self.kalman = design_kalman(self.building, config.sensors, config.simulation, known_ground=True)
+            scales = [config.sensors.displacement_scale] * n + [config.sensors.velocity_scale] * n
+            self._estimate_scale = np.array(scales)
+        self._action_start = self._estimate_start + (2 * n if self.kalman is not None else 0)
         observation_size = self._action_start + m
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
@@ -215,6 +190,13 @@ class BuildingEnv(gym.Env):
         self._previous_action = np.zeros(self.building.n_actuators)
         self._observation[:] = 0.0
         self._observation[: p + 1] = readings[0]
+        if self.kalman is not None:
+            self.kalman.reset()
+            estimate = self.kalman.update(
+                readings[0, :p] * self._sensor_scale, np.zeros(self.building.n_actuators), 0.0
+            )
+            self._previous_ground = readings[0, p] * self._ground_scale
+            self._observation[self._estimate_start : self._action_start] = estimate / self._estimate_scale
         return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -234,6 +216,12 @@ class BuildingEnv(gym.Env):
         observation, block, last = self._observation, self._block, self._action_start
         observation[block:last] = observation[: last - block]
         observation[:block] = outputs[self._reading_slice]
+        if self.kalman is not None:
+            readings = outputs[self._reading_slice]
+            ground = readings[-1] * self._ground_scale
+            estimate = self.kalman.update(readings[:-1] * self._sensor_scale, clipped, self._previous_ground)
+            self._previous_ground = ground
+            observation[self._estimate_start : last] = estimate / self._estimate_scale
         observation[last:] = clipped
 
         weighted = outputs[self._reward_slice]

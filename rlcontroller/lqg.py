@@ -10,9 +10,9 @@ so Q = H_z' H_z, R = H_u' H_u, N = H_z' H_u: the discrete-time LQR of exactly th
 (python-control's Riccati solvers, method='scipy'). Everything is designed in action units
 a = u / force_limit, which keeps the Riccati equations well scaled.
 
-The steady-state Kalman filter estimates z from the same noisy sensors the agent sees,
-y_k = C_s z_k + D_s u_{k-1} + v_k (feed-through of the held force included), with the ground
-acceleration as process noise; optionally the measured ground acceleration is a known input.
+The steady-state Kalman filter (`estimation`) estimates z from the same noisy sensors the agent
+sees, with the feed-through of the held force; optionally the measured ground acceleration is a
+known input.
 """
 
 from __future__ import annotations
@@ -23,10 +23,11 @@ import control
 import numpy as np
 
 from rlcontroller.config import Experiment, RewardConfig
-from rlcontroller.dynamics import Response, StepMap, response, step_map
-from rlcontroller.env import BuildingEnv, reward_matrices, sensor_matrices
+from rlcontroller.dynamics import Response, StepMap, response, reward_matrices, sensor_matrices, step_map
+from rlcontroller.env import BuildingEnv
+from rlcontroller.estimation import KalmanFilter, design_kalman
 from rlcontroller.excitation import GroundMotion, for_control_step
-from rlcontroller.structure import Building
+from rlcontroller.structure import Building, build
 
 
 @dataclass(frozen=True)
@@ -62,20 +63,14 @@ def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tu
 
 @dataclass
 class LQGDesign:
-    """Gains of the LQG controller, in action units a = u / force_limit."""
+    """LQR gains in action units a = u / force_limit, and the Kalman filter."""
 
-    phi: np.ndarray
-    action_gain: np.ndarray  # Gamma * limits
-    ground_gain: np.ndarray  # response of z to a unit ground acceleration held over a step
-    sensor_c: np.ndarray
-    sensor_d: np.ndarray  # per unit action
     feedback: np.ndarray  # K
-    feedforward: np.ndarray  # K_g (known-input variant), zero otherwise
-    kalman: np.ndarray  # L (measurement update)
-    known_ground: bool
+    feedforward: np.ndarray  # K_g on the measured ground acceleration (known-input variant), else zero
+    filter: KalmanFilter
 
     def closed_loop_eigenvalues(self) -> np.ndarray:
-        return np.linalg.eigvals(self.phi - self.action_gain @ self.feedback)
+        return np.linalg.eigvals(self.filter.phi - self.filter.action_gain @ self.feedback)
 
 
 def design_lqg(
@@ -86,43 +81,22 @@ def design_lqg(
 ) -> LQGDesign:
     """LQG for the experiment's building, sensors and reward (or another `reward` for sweeps).
 
-    `ground_std` (m/s^2) is the process-noise level of the ground acceleration per step; the
-    sensors' `noise_std` sets the measurement noise (floored at 1e-3 of each sensor's scale).
-    With `known_ground` the measured ground acceleration enters the filter and the control law.
+    With `known_ground` the measured ground acceleration enters the filter and, through the
+    optimal one-step feed-forward, the control law.
     """
-    building = BuildingEnv(experiment).building
+    building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation, substeps=1)
     cost = quadratic_cost(building, reward or experiment.reward, step)
     feedback, riccati = lqr_gain(step, cost, building.force_limits)
-    action_gain = step.force_gain * building.force_limits
-    ground_gain = step.ground_gain.sum(axis=1)
-    c, d, scale, noise = sensor_matrices(building, experiment.sensors)
-    noise = np.maximum(noise, 1e-3 * scale)
+    kalman = design_kalman(building, experiment.sensors, experiment.simulation, known_ground, ground_std)
+    feedforward = np.zeros(building.n_actuators)
     if known_ground:
-        # The ground at t_k is measured; only its change over the step is unknown.
-        process_std = ground_std * 0.5
-        solve = cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain
-        feedforward = np.linalg.solve(solve, (cost.action.T @ cost.ground + action_gain.T @ riccati) @ ground_gain)[
-            :, None
-        ]
-    else:
-        process_std = ground_std
-        feedforward = np.zeros((building.n_actuators, 1))
-    process = process_std**2 * np.outer(ground_gain, ground_gain)
-    process += 1e-12 * np.eye(process.shape[0])  # keeps the filter Riccati equation well posed
-    prior, _, _ = control.dare(step.phi.T, c.T, process, np.diag(noise**2), method="scipy")
-    kalman = prior @ c.T @ np.linalg.inv(c @ prior @ c.T + np.diag(noise**2))
-    return LQGDesign(
-        phi=step.phi,
-        action_gain=action_gain,
-        ground_gain=ground_gain,
-        sensor_c=c,
-        sensor_d=d * building.force_limits,
-        feedback=feedback,
-        feedforward=feedforward,
-        kalman=kalman,
-        known_ground=known_ground,
-    )
+        action_gain = kalman.action_gain
+        curvature = cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain
+        feedforward = np.linalg.solve(
+            curvature, (cost.action.T @ cost.ground + action_gain.T @ riccati) @ kalman.ground_gain
+        )
+    return LQGDesign(feedback=feedback, feedforward=feedforward, filter=kalman)
 
 
 class LQGController:
@@ -141,24 +115,16 @@ class LQGController:
         self.reset()
 
     def reset(self) -> None:
-        self.estimate = np.zeros(self.design.phi.shape[0])
+        self.design.filter.reset()
         self._previous_ground = 0.0
-        self._first = True
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        design = self.design
         readings = observation[self._readings] * self._reading_scale
         ground = float(observation[self._ground_index]) * self._ground_scale
         held = np.asarray(observation[self._action], dtype=float)  # the clipped action just applied
-        if not self._first:
-            self.estimate = design.phi @ self.estimate + design.action_gain @ held
-            if design.known_ground:
-                self.estimate += design.ground_gain * self._previous_ground
-        self._first = False
-        innovation = readings - design.sensor_c @ self.estimate - design.sensor_d @ held
-        self.estimate = self.estimate + design.kalman @ innovation
-        action = -design.feedback @ self.estimate - design.feedforward[:, 0] * ground
+        estimate = self.design.filter.update(readings, held, self._previous_ground)
         self._previous_ground = ground
+        action = -self.design.feedback @ estimate - self.design.feedforward * ground
         return np.clip(action, -1.0, 1.0) * self.force_limits
 
 
@@ -168,7 +134,7 @@ def optimal_response(experiment: Experiment, motion: GroundMotion, reward: Rewar
     Stationary Riccati gain plus a backward feed-forward recursion over the record for the same
     quadratic cost, forces clipped to the limits. No causal controller can do better on that cost.
     """
-    building = BuildingEnv(experiment).building
+    building = build(experiment.building, experiment.actuators)
     samples, substeps = for_control_step(motion, experiment.simulation.control_dt)
     step = step_map(building, experiment.simulation, substeps)
     cost = quadratic_cost(building, reward or experiment.reward, step)

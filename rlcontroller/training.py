@@ -310,7 +310,14 @@ class StopRequest:
         print("\nstopping: saving a checkpoint (Ctrl-C again to abort without saving)", file=sys.stderr)
 
 
-def _callback(run: RunFolder, experiment: Experiment, validator: Validator, stop: StopRequest, state: dict[str, Any]):
+def _callback(
+    run: RunFolder,
+    experiment: Experiment,
+    validator: Validator,
+    stop: StopRequest,
+    state: dict[str, Any],
+    time_limit_s: float | None,
+):
     from stable_baselines3.common.callbacks import BaseCallback
 
     algorithm = experiment.algorithm
@@ -328,6 +335,9 @@ def _callback(run: RunFolder, experiment: Experiment, validator: Validator, stop
                 self.validate()
             if steps // algorithm.checkpoint_every > previous // algorithm.checkpoint_every:
                 self.checkpoint()
+            if time_limit_s is not None and self.wall_time() >= time_limit_s:
+                state["time_limit_reached"] = True
+                return False
             return not stop.requested
 
         def validate(self) -> None:
@@ -357,11 +367,18 @@ class TrainingSummary:
     best: dict[str, float] | None
     best_steps: int | None
     interrupted: bool
+    time_limit_reached: bool = False
+    beat_lqg_at: dict[str, float] | None = None
 
     def line(self) -> str:
         rate = self.steps / self.wall_time_s if self.wall_time_s > 0 else float("nan")
-        verb = "interrupted" if self.interrupted else "trained"
-        text = f"{verb} {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
+        verb = (
+            "interrupted" if self.interrupted else "stopped at the time limit" if self.time_limit_reached else "trained"
+        )
+        text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
+        if self.beat_lqg_at:
+            first = self.beat_lqg_at
+            text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
         if self.best:
             text += (
                 f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
@@ -382,8 +399,13 @@ def train(
     resume: Path | None = None,
     device: str = "auto",
     progress_bar: bool = False,
+    time_limit_s: float | None = None,
 ) -> TrainingSummary:
-    """Train a new run (from `experiment`) or resume one (`resume` = its run folder)."""
+    """Train a new run (from `experiment`) or resume one (`resume` = its run folder).
+
+    With `time_limit_s`, training stops (as finished, and resumable) once the run's wall time
+    reaches it.
+    """
     import torch
 
     if resume is not None:
@@ -408,6 +430,7 @@ def train(
         model = _load_checkpoint(experiment, checkpoints[-1], vec_env, device)
         state.update(json.loads((checkpoints[-1] / "state.json").read_text()))
         state.pop("steps", None)
+        state.pop("time_limit_reached", None)
         run.truncate_curve(model.num_timesteps)
     else:
         model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
@@ -417,7 +440,7 @@ def train(
             run.truncate_curve(0)
     stop = StopRequest()
     previous_handlers = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    callback = _callback(run, experiment, Validator(experiment), stop, state)
+    callback = _callback(run, experiment, Validator(experiment), stop, state, time_limit_s)
     remaining = experiment.algorithm.total_steps - model.num_timesteps
     try:
         if remaining > 0:
@@ -433,8 +456,16 @@ def train(
             callback.validate()
         plot_learning_curve(run)
     vec_env.close()
+    beat = [row for row in run.read_curve() if row["eval_J1"] < row["lqg_J1"]]
     return TrainingSummary(
-        run.path, int(model.num_timesteps), state["wall_time_s"], state["best"], state["best_steps"], stop.requested
+        run.path,
+        int(model.num_timesteps),
+        state["wall_time_s"],
+        state["best"],
+        state["best_steps"],
+        stop.requested,
+        bool(state.get("time_limit_reached")),
+        beat[0] if beat else None,
     )
 
 

@@ -172,3 +172,20 @@ def test_higher_power_and_force_change_terms():
         assert reward == pytest.approx(-(drift + change + force))
         previous = np.array(action)
     assert info["reward_force_change"] == 0.0
+
+
+def test_state_estimate_in_the_observation_tracks_the_true_state():
+    sensors = SensorConfig(state_estimate=True)
+    env = BuildingEnv(Experiment(sensors=sensors))
+    observation, _ = env.reset(seed=3)
+    assert observation.shape == (5 * 6 + 10 + 3,)
+    errors, sizes = [], []
+    for _ in range(400):
+        observation, _, _, truncated, _ = env.step(np.array([0.3, -0.2, 0.1]))
+        estimate = observation[30:40].astype(float) * np.repeat([0.02, 0.2], 5)
+        errors.append(np.abs(estimate[:5] - env.state[:5]).max())
+        sizes.append(np.abs(env.state[:5]).max())
+        if truncated:
+            break
+    assert np.mean(errors[50:]) < 0.1 * np.mean(sizes[50:])
+    np.testing.assert_allclose(observation[-3:], [0.3, -0.2, 0.1], rtol=1e-6)

@@ -100,7 +100,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     assert steps_at_kill < 2000
     result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
     assert result.exit_code == 0, result.output
-    assert "trained 2000 steps" in result.output
+    assert "trained: 2000 steps" in result.output
     steps = [int(r["steps"]) for r in curve(run)]
     assert steps == list(range(250, 2001, 250))  # continuous: no gap, no duplicate
     wall = [float(r["wall_time_s"]) for r in curve(run)]
@@ -185,3 +185,12 @@ def test_bad_algorithm_settings_exit_2_naming_the_key(tmp_path, algorithm, expec
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and expected in lines[0] and "bad.yaml" in lines[0]
     assert not (tmp_path / "run").exists()
+
+
+def test_time_limit_stops_cleanly_and_the_run_resumes(tmp_path):
+    summary = train(
+        smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run", time_limit_s=0.0
+    )
+    assert summary.time_limit_reached and summary.steps < 600 and "time limit" in summary.line()
+    assert (tmp_path / "run" / "final_model.zip").is_file()
+    assert train(resume=tmp_path / "run").steps == 600
