@@ -245,8 +245,11 @@ class SimulationConfig(StrictModel):
 
 
 class PolicyConfig(StrictModel):
+    """The MLP; `log_std_init` sets the initial exploration noise of Gaussian policies (log of std)."""
+
     net_arch: list[PositiveInt] = [128, 128, 128]
     activation: Literal["relu", "tanh", "elu", "leaky_relu", "gelu"] = "relu"
+    log_std_init: float | None = None
 
 
 class AlgorithmConfig(StrictModel):
@@ -255,7 +258,10 @@ class AlgorithmConfig(StrictModel):
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
     gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run in a dummy
     (same process) or subprocess vector env. `normalize_observations` adds a VecNormalize whose
-    statistics are checkpointed. `checkpoint_every` and `eval_every` count environment steps.
+    statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
+    LQG (+ measured ground) computed from the observation's state estimate (needs
+    `sensors.state_estimate`): the agent learns a correction to LQG. `checkpoint_every` and
+    `eval_every` count environment steps.
     """
 
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
@@ -265,6 +271,7 @@ class AlgorithmConfig(StrictModel):
     policy: PolicyConfig = PolicyConfig()
     kwargs: dict[str, Any] = Field(default_factory=lambda: {"gamma": 0.999})
     normalize_observations: bool = False
+    residual_lqg: bool = False
     torch_threads: PositiveInt = 1
     checkpoint_every: PositiveInt = 50_000
     eval_every: PositiveInt = 25_000
@@ -284,7 +291,7 @@ PARTS: dict[str, Any] = {
 class Experiment(StrictModel):
     """A whole experiment. `Experiment()` is the paper's five-story case."""
 
-    name: str = "five_story"
+    name: str = "paper_sac"
     seed: int = 0
     building: BuildingConfig = BuildingConfig()
     actuators: list[ActuatorConfig] = Field(default_factory=_paper_actuators, min_length=1)
@@ -390,6 +397,9 @@ def build_experiment(
 
 
 def _check_cross_references(experiment: Experiment) -> None:
+    if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
+        file, prefix = experiment.origin("algorithm")
+        raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}residual_lqg: needs sensors.state_estimate: true")
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     for index, actuator in enumerate(experiment.actuators):

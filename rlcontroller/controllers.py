@@ -44,30 +44,36 @@ class Uncontrolled:
 class PolicyController:
     """A trained stable-baselines3 policy, deterministic actions scaled to the force limits.
 
-    `normalize` is the run's observation normaliser (a VecNormalize), if it used one.
+    `normalize` is the run's observation normaliser (a VecNormalize), if it used one; `prior`
+    maps an observation to the action the policy's output is added to (residual policies).
     """
 
-    def __init__(self, model, force_limits: np.ndarray, normalize=None, name: str = "RL") -> None:
+    def __init__(self, model, force_limits: np.ndarray, normalize=None, name: str = "RL", prior=None) -> None:
         self.model = model
         self.force_limits = force_limits
         self.normalize = normalize
         self.name = name
+        self.prior = prior
 
     @classmethod
     def load(cls, model_path: Path, force_limits: np.ndarray, name: str = "RL") -> PolicyController:
         from rlcontroller.training import load_policy
 
-        model, normalize = load_policy(model_path)
-        return cls(model, force_limits, normalize, name)
+        model, normalize, prior = load_policy(model_path)
+        return cls(model, force_limits, normalize, name, prior)
 
     def reset(self) -> None:
         pass
 
     def act(self, observation: np.ndarray) -> np.ndarray:
+        raw = observation
         if self.normalize is not None:
             observation = self.normalize.normalize_obs(observation)
         action, _ = self.model.predict(observation, deterministic=True)
-        return np.clip(action, -1.0, 1.0) * self.force_limits
+        action = np.clip(action, -1.0, 1.0)
+        if self.prior is not None:
+            action = np.clip(action + self.prior(raw), -1.0, 1.0)
+        return action * self.force_limits
 
 
 def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed: int = 0) -> tuple[Response, float]:

@@ -128,6 +128,28 @@ class LQGController:
         return np.clip(action, -1.0, 1.0) * self.force_limits
 
 
+class LQGPrior:
+    """The action of LQG + measured ground (action units, unclipped) from an observation that holds
+    the env's own Kalman estimate (`sensors.state_estimate`), for residual policies."""
+
+    def __init__(self, experiment: Experiment) -> None:
+        env = BuildingEnv(experiment)
+        if env.kalman is None:
+            raise ValueError("a residual on LQG needs sensors.state_estimate: true")
+        design = design_lqg(experiment, known_ground=True)
+        self._feedback = design.feedback * env._estimate_scale  # acts on the scaled estimate
+        self._feedforward = design.feedforward * experiment.sensors.ground_scale  # on the scaled ground reading
+        self._estimate = slice(env._estimate_start, env._action_start)
+        self._ground = env._block - 1
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        observation = np.asarray(observation, dtype=float)
+        return (
+            -(observation[..., self._estimate] @ self._feedback.T)
+            - observation[..., self._ground, None] * self._feedforward
+        )
+
+
 def optimal_response(experiment: Experiment, motion: GroundMotion, reward: RewardConfig | None = None) -> Response:
     """The clairvoyant reference: full state and the whole ground motion known in advance.
 

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment, load_experiment
@@ -43,7 +44,7 @@ from rlcontroller.controllers import PolicyController, Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import generate_suite
 from rlcontroller.files import atomic_savefig, atomic_write
-from rlcontroller.lqg import LQGController, design_lqg
+from rlcontroller.lqg import LQGController, LQGPrior, design_lqg
 from rlcontroller.metrics import j_metrics, peak
 
 CURVE_COLUMNS = (
@@ -56,6 +57,8 @@ CURVE_COLUMNS = (
     "eval_J2",
     "lqg_J1",
     "lqg_J2",
+    "lqg_ground_J1",
+    "lqg_ground_J2",
 )
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
 RESERVED_KWARGS = {
@@ -112,11 +115,39 @@ def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
     return low <= value <= high
 
 
+class ResidualAction(gym.ActionWrapper):
+    """The agent's action is added to a prior controller's action computed from the observation."""
+
+    def __init__(self, env: gym.Env, prior) -> None:
+        super().__init__(env)
+        self.prior = prior
+        self._observation = None
+
+    def reset(self, **kwargs):
+        observation, info = self.env.reset(**kwargs)
+        self._observation = observation
+        return observation, info
+
+    def step(self, action):
+        observation, reward, terminated, truncated, info = self.env.step(self.action(action))
+        self._observation = observation
+        return observation, reward, terminated, truncated, info
+
+    def action(self, action):
+        return np.clip(np.clip(action, -1.0, 1.0) + self.prior(self._observation), -1.0, 1.0)
+
+
+def make_env(experiment: Experiment) -> gym.Env:
+    """One training env: a BuildingEnv, wrapped as a residual on LQG if configured."""
+    env = BuildingEnv(experiment)
+    return ResidualAction(env, LQGPrior(experiment)) if experiment.algorithm.residual_lqg else env
+
+
 def make_vec_env(experiment: Experiment, seed: int):
     """The training vector env: `n_envs` BuildingEnvs (dummy or subprocess) with episode statistics."""
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor, VecNormalize
 
-    factories = [functools.partial(BuildingEnv, experiment) for _ in range(experiment.algorithm.n_envs)]
+    factories = [functools.partial(make_env, experiment) for _ in range(experiment.algorithm.n_envs)]
     if experiment.algorithm.vec_env == "subproc" and len(factories) > 1:
         vec_env = SubprocVecEnv(factories)
     else:
@@ -137,6 +168,8 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
         "net_arch": list(algorithm.policy.net_arch),
         "activation_fn": getattr(torch.nn, ACTIVATIONS[algorithm.policy.activation]),
     }
+    if algorithm.policy.log_std_init is not None:
+        policy_kwargs["log_std_init"] = algorithm.policy.log_std_init
     try:
         return algorithm_class(algorithm.name)(
             "MlpPolicy",
@@ -268,16 +301,19 @@ class Validator:
         self.env = BuildingEnv(experiment)
         excitation = experiment.excitation
         self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
+        self.prior = LQGPrior(experiment) if experiment.algorithm.residual_lqg else None
         bare = Uncontrolled(self.env.building.n_actuators)
         self.uncontrolled = [rollout(self.env, motion, bare)[0] for motion in self.motions]
-        try:
-            lqg = self.run(LQGController(design_lqg(experiment), self.env))
-            self.reference = {"lqg_J1": lqg["eval_J1"], "lqg_J2": lqg["eval_J2"]}
-        except ValueError:  # a reward LQG cannot be designed for
-            self.reference = {"lqg_J1": float("nan"), "lqg_J2": float("nan")}
+        self.reference = {}
+        for prefix, known_ground in (("lqg", False), ("lqg_ground", True)):
+            try:
+                lqg = self.run(LQGController(design_lqg(experiment, known_ground=known_ground), self.env))
+            except ValueError:  # a reward LQG cannot be designed for
+                lqg = {"eval_J1": float("nan"), "eval_J2": float("nan")}
+            self.reference |= {f"{prefix}_J1": lqg["eval_J1"], f"{prefix}_J2": lqg["eval_J2"]}
 
     def __call__(self, model) -> dict[str, float]:
-        policy = PolicyController(model, self.env.force_limits, model.get_vec_normalize_env())
+        policy = PolicyController(model, self.env.force_limits, model.get_vec_normalize_env(), prior=self.prior)
         return self.run(policy) | self.reference
 
     def run(self, controller) -> dict[str, float]:
@@ -378,12 +414,14 @@ class TrainingSummary:
         text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
         if self.beat_lqg_at:
             first = self.beat_lqg_at
-            text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
+            text += (
+                f"; validation J1 first below both LQGs' at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
+            )
         if self.best:
             text += (
                 f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
-                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; "
-                f"LQG J1 {self.best['lqg_J1']:.3f}, J2 {self.best['lqg_J2']:.3f})"
+                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; LQG J1 {self.best['lqg_J1']:.3f}, "
+                f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f})"
             )
         return text + f"; run folder: {self.run_dir}"
 
@@ -456,7 +494,7 @@ def train(
             callback.validate()
         plot_learning_curve(run)
     vec_env.close()
-    beat = [row for row in run.read_curve() if row["eval_J1"] < row["lqg_J1"]]
+    beat = [row for row in run.read_curve() if row["eval_J1"] < min(row["lqg_J1"], row["lqg_ground_J1"])]
     return TrainingSummary(
         run.path,
         int(model.num_timesteps),
@@ -482,7 +520,7 @@ def _load_checkpoint(experiment: Experiment, checkpoint: Path, vec_env, device: 
 
 
 def load_policy(model_path: Path):
-    """A saved model of a run folder and its observation normaliser (or None), on the CPU."""
+    """A saved model of a run folder, its observation normaliser and its prior (or None), on the CPU."""
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
     model_path = Path(model_path)
@@ -493,7 +531,8 @@ def load_policy(model_path: Path):
     if statistics.is_file():
         normalize = VecNormalize.load(str(statistics), DummyVecEnv([functools.partial(BuildingEnv, experiment)]))
         normalize.training = False
-    return model, normalize
+    prior = LQGPrior(experiment) if experiment.algorithm.residual_lqg else None
+    return model, normalize, prior
 
 
 def plot_learning_curve(run: RunFolder) -> Path:
@@ -515,6 +554,9 @@ def plot_learning_curve(run: RunFolder) -> Path:
     if rows:
         metric_axis.axhline(rows[-1]["lqg_J1"], color="tab:blue", linewidth=1.0, linestyle=":", label="LQG J1")
         metric_axis.axhline(rows[-1]["lqg_J2"], color="tab:orange", linewidth=1.0, linestyle=":", label="LQG J2")
+        metric_axis.axhline(
+            rows[-1]["lqg_ground_J1"], color="tab:blue", linewidth=1.0, linestyle="-.", label="LQG + ground J1"
+        )
     metric_axis.set(
         xlabel="environment steps", ylabel="controlled / uncontrolled", title="Validation (generated motions)"
     )

@@ -1,27 +1,34 @@
-"""Benchmark: environment steps per second while training, SAC (paper settings) and PPO (8 envs).
+"""Benchmark: training throughput and time-to-quality, plain paper SAC against the new default.
 
-Usage: python scripts/bench_train.py [--sac-steps N] [--ppo-steps N]
-Measures model.learn() wall time after the replay buffer's warm-up (SAC) on the paper's
-five-story env, with torch threads 1 and 2, and projects the paper's 1.5 M SAC steps.
+Usage: python scripts/bench_train.py [--minutes 15] [--skip-quality]
+
+1. Environment steps per second inside model.learn(): the paper's SAC (MLP 3x128, batch 256,
+   one gradient step per env step) and PPO with 8 envs, torch threads 1 and 2.
+2. Time-to-quality, side by side in this one run: configs/paper_sac.yaml (the plain recipe) and
+   configs/five_story.yaml (the new default) are each trained for at most --minutes of wall time;
+   quality is reached when the validation J1 (generated motions, never the records) falls below
+   that of both LQG controllers on the same motions.
 """
 
 from __future__ import annotations
 
 import argparse
 import platform
+import tempfile
 import time
+from pathlib import Path
 
 import torch
 
-from rlcontroller.config import AlgorithmConfig, Experiment
-from rlcontroller.training import build_model, make_vec_env
+from rlcontroller.config import AlgorithmConfig, Experiment, load_experiment
+from rlcontroller.training import build_model, make_vec_env, train
 
 PAPER_STEPS = 1_500_000
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 
-def steps_per_second(algorithm: AlgorithmConfig, steps: int, warmup: int, threads: int) -> float:
+def steps_per_second(experiment: Experiment, steps: int, warmup: int, threads: int) -> float:
     torch.set_num_threads(threads)
-    experiment = Experiment(algorithm=algorithm)
     vec_env = make_vec_env(experiment, seed=0)
     model = build_model(experiment, vec_env, seed=0, device="cpu", tensorboard=None)
     model.learn(warmup)
@@ -32,22 +39,52 @@ def steps_per_second(algorithm: AlgorithmConfig, steps: int, warmup: int, thread
     return rate
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sac-steps", type=int, default=2000)
-    parser.add_argument("--ppo-steps", type=int, default=16384)
-    arguments = parser.parse_args()
-    sac = AlgorithmConfig(name="SAC", kwargs={"gamma": 0.999, "learning_starts": 100})
-    ppo = AlgorithmConfig(name="PPO", n_envs=8, kwargs={"gamma": 0.999, "n_steps": 256})
-    print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
+def throughput(default: Experiment) -> float:
+    sac = Experiment(algorithm=AlgorithmConfig(name="SAC", kwargs={"gamma": 0.999, "learning_starts": 100}))
+    ppo = Experiment(algorithm=AlgorithmConfig(name="PPO", n_envs=8, kwargs={"gamma": 0.999, "n_steps": 256}))
+    sac_rate = 0.0
     for threads in (1, 2):
-        sac_rate = steps_per_second(sac, arguments.sac_steps, warmup=100, threads=threads)
-        ppo_rate = steps_per_second(ppo, arguments.ppo_steps, warmup=2048, threads=threads)
+        sac_rate = steps_per_second(sac, 2000, warmup=100, threads=threads)
+        ppo_rate = steps_per_second(ppo, 16384, warmup=2048, threads=threads)
+        default_rate = steps_per_second(default, 32768, warmup=4096, threads=threads)
         hours = PAPER_STEPS / sac_rate / 3600
         print(
-            f"torch threads {threads}: SAC 3x128 batch 256 {sac_rate:,.0f} steps/s "
-            f"(1.5 M steps = {hours:.1f} h); PPO 8 envs {ppo_rate:,.0f} steps/s ({ppo_rate / sac_rate:.0f}x SAC)"
+            f"torch threads {threads}: paper SAC {sac_rate:,.0f} steps/s (1.5 M steps = {hours:.1f} h); "
+            f"PPO 8 envs {ppo_rate:,.0f} steps/s; "
+            f"new default {default_rate:,.0f} steps/s ({default_rate / sac_rate:.0f}x paper SAC)"
         )
+    return sac_rate
+
+
+def time_to_quality(name: str, experiment: Experiment, minutes: float, folder: Path) -> float | None:
+    summary = train(experiment, run_dir=folder / name, time_limit_s=60.0 * minutes)
+    print(f"{name}: {summary.line()}")
+    return None if summary.beat_lqg_at is None else summary.beat_lqg_at["wall_time_s"]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=15.0, help="wall-time budget of each training run")
+    parser.add_argument("--skip-quality", action="store_true", help="measure throughput only")
+    arguments = parser.parse_args()
+    paper = load_experiment(CONFIGS / "paper_sac.yaml")
+    default = load_experiment(CONFIGS / "five_story.yaml")
+    print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
+    throughput(default)
+    if arguments.skip_quality:
+        return
+    with tempfile.TemporaryDirectory() as folder:
+        paper_time = time_to_quality("paper SAC", paper, arguments.minutes, Path(folder))
+        default_time = time_to_quality("new default", default, arguments.minutes, Path(folder))
+    budget = 60.0 * arguments.minutes
+    shown = {
+        k: "not reached" if t is None else f"{t:.0f} s" for k, t in (("paper", paper_time), ("default", default_time))
+    }
+    print(f"time to beat both LQGs on validation J1: paper SAC {shown['paper']}, new default {shown['default']}")
+    if default_time is not None:
+        reference = paper_time if paper_time is not None else budget
+        relation = "=" if paper_time is not None else ">="
+        print(f"time-to-quality ratio (paper / new default) {relation} {reference / default_time:.1f}")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import REPOSITORY
 from typer.testing import CliRunner
@@ -10,11 +11,17 @@ from rlcontroller.config import ConfigError, Experiment, load_experiment
 CONFIGS = REPOSITORY / "configs"
 
 
-def test_the_five_story_config_is_the_embedded_default():
-    experiment = load_experiment(CONFIGS / "five_story.yaml")
-    default = Experiment()
-    for part in ("building", "actuators", "sensors", "reward", "excitation", "simulation", "algorithm"):
-        assert getattr(experiment, part) == getattr(default, part), part
+def test_the_paper_config_is_the_embedded_default():
+    assert load_experiment(CONFIGS / "paper_sac.yaml").model_dump() == Experiment().model_dump()
+
+
+def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
+    from rlcontroller.lqg import design_lqg
+
+    benchmark, paper = load_experiment(CONFIGS / "five_story.yaml"), Experiment()
+    assert benchmark.building == paper.building and benchmark.actuators == paper.actuators
+    assert benchmark.sensors.measurements == paper.sensors.measurements
+    np.testing.assert_allclose(design_lqg(benchmark).feedback, design_lqg(paper).feedback, rtol=1e-6)
 
 
 @pytest.mark.parametrize("path", sorted(p for p in CONFIGS.glob("*.yaml")), ids=lambda p: p.name)

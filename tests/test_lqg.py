@@ -122,3 +122,32 @@ def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
         }
     )
     np.testing.assert_allclose(design_lqg(extended).feedback, design_lqg(base).feedback)
+
+
+def test_a_zero_residual_on_the_lqg_prior_is_lqg_with_ground():
+    from rlcontroller.controllers import PolicyController
+    from rlcontroller.lqg import LQGPrior
+
+    class ZeroPolicy:
+        def predict(self, observation, deterministic=True):
+            return np.zeros(3), None
+
+    experiment = Experiment(sensors={"state_estimate": True}, algorithm={"residual_lqg": True})
+    env = BuildingEnv(experiment)
+    motion = read_at2_or_synthetic()
+    residual, _ = rollout(env, motion, PolicyController(ZeroPolicy(), env.force_limits, prior=LQGPrior(experiment)))
+    lqg, _ = rollout(env, motion, LQGController(design_lqg(experiment, known_ground=True), env))
+    np.testing.assert_allclose(residual.force, lqg.force, rtol=1e-3, atol=1.0)
+
+
+def read_at2_or_synthetic() -> GroundMotion:
+    from rlcontroller.evaluation import synthetic_suite
+
+    return synthetic_suite(count=1)[0]
+
+
+def test_residual_needs_the_state_estimate():
+    from rlcontroller.config import ConfigError, build_experiment
+
+    with pytest.raises(ConfigError, match="residual_lqg: needs sensors.state_estimate"):
+        build_experiment({"algorithm": {"residual_lqg": True}})

@@ -53,8 +53,8 @@ def test_a_run_folder_has_every_file(tmp_path):
     )
     assert load_experiment(run / "config.yaml").algorithm.total_steps == 600
     assert summary.steps == 600 and "run folder" in summary.line()
-    model, normalize = load_policy(run / "best_model.zip")
-    assert normalize is None and model.num_timesteps in (300, 600)
+    model, normalize, prior = load_policy(run / "best_model.zip")
+    assert normalize is None and prior is None and model.num_timesteps in (300, 600)
 
 
 def test_runs_are_never_overwritten(tmp_path):
@@ -69,8 +69,8 @@ def test_same_seed_gives_identical_parameters(tmp_path):
     settings = {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
     train(smoke(**settings), run_dir=tmp_path / "a")
     train(smoke(**settings), run_dir=tmp_path / "b")
-    first, _ = load_policy(tmp_path / "a" / "final_model.zip")
-    second, _ = load_policy(tmp_path / "b" / "final_model.zip")
+    first, _, _ = load_policy(tmp_path / "a" / "final_model.zip")
+    second, _, _ = load_policy(tmp_path / "b" / "final_model.zip")
     for (name, a), b in zip(first.policy.state_dict().items(), second.policy.state_dict().values(), strict=True):
         assert np.array_equal(a.numpy(), b.numpy()), name
 
@@ -161,7 +161,7 @@ def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
         run_dir=tmp_path / "run",
     )
     assert (RunFolder(tmp_path / "run").checkpoints()[-1] / "vecnormalize.pkl").is_file()
-    _, normalize = load_policy(tmp_path / "run" / "final_model.zip")
+    _, normalize, _ = load_policy(tmp_path / "run" / "final_model.zip")
     assert normalize is not None and not normalize.training and normalize.obs_rms.count > 300
 
 
