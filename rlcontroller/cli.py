@@ -113,7 +113,7 @@ def train(
         raise typer.Exit(130)
 
 
-DEFAULT_MODEL = Path("models") / "five_story"
+DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "five_story"
 SMOKE_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "smoke.yaml"
 
 

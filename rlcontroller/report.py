@@ -38,7 +38,8 @@ def markdown_table(frame: pd.DataFrame, digits: int = 3) -> str:
     lines = [header, rule]
     for index, row in frame.iterrows():
         cells = [f"{v:.{digits}f}" if isinstance(v, float | np.floating) else str(v) for v in row]
-        lines.append("| " + " | ".join([str(index)] + cells) + " |")
+        label = f"{index:g}" if isinstance(index, float | np.floating) else str(index)
+        lines.append("| " + " | ".join([label] + cells) + " |")
     return "\n".join(lines)
 
 
@@ -201,7 +202,7 @@ def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tu
     axis.plot(sweep["J3"], sweep["J1"], "o-", color=COLOURS["LQG"], label="LQG, force weight × multiplier")
     for _, row in sweep.iterrows():
         axis.annotate(
-            f"×{row['force_weight_multiplier']:g}",
+            f"×{row['force_weight_multiplier']:.2g}",
             (row["J3"], row["J1"]),
             fontsize=7,
             xytext=(3, 3),

@@ -494,7 +494,7 @@ def train(
             callback.validate()
         plot_learning_curve(run)
     vec_env.close()
-    beat = [row for row in run.read_curve() if row["eval_J1"] < min(row["lqg_J1"], row["lqg_ground_J1"])]
+    beat = [row for row in run.read_curve() if row["eval_J1"] < row["lqg_J1"]]
     return TrainingSummary(
         run.path,
         int(model.num_timesteps),

@@ -7,7 +7,7 @@ Usage: python scripts/bench_train.py [--minutes 15] [--skip-quality]
 2. Time-to-quality, side by side in this one run: configs/paper_sac.yaml (the plain recipe) and
    configs/five_story.yaml (the new default) are each trained for at most --minutes of wall time;
    quality is reached when the validation J1 (generated motions, never the records) falls below
-   that of both LQG controllers on the same motions.
+   that of LQG with the same cost on the same motions.
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def main() -> None:
     shown = {
         k: "not reached" if t is None else f"{t:.0f} s" for k, t in (("paper", paper_time), ("default", default_time))
     }
-    print(f"time to beat both LQGs on validation J1: paper SAC {shown['paper']}, new default {shown['default']}")
+    print(f"time to beat LQG's validation J1: paper SAC {shown['paper']}, new default {shown['default']}")
     if default_time is not None:
         reference = paper_time if paper_time is not None else budget
         relation = "=" if paper_time is not None else ">="

@@ -76,3 +76,12 @@ def test_missing_records_exit_2_with_one_line(smoke_run, tmp_path):
 def test_evaluate_refuses_a_folder_that_is_not_a_run(tmp_path):
     result = CliRunner().invoke(app, ["evaluate", str(tmp_path)])
     assert result.exit_code == 2 and "not a run folder" in result.output
+
+
+def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
+    """`rlc evaluate` without RUN_DIR uses models/five_story: a residual PPO policy on LQG."""
+    result = CliRunner().invoke(app, ["evaluate", "--records", str(records), "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
+    assert summary.loc["RL", "J1"] < 0.5 and summary.loc["RL", "J2"] < 1.0
+    assert summary.loc["RL", "J1"] < summary.loc["LQG", "J1"] + 0.02
