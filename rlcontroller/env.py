@@ -22,6 +22,7 @@ constructor, or passed as `reset(options={"motion": GroundMotion})`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,20 @@ from rlcontroller.dynamics import StepMap, output_matrices, reward_matrices, sen
 from rlcontroller.estimation import design_kalman
 from rlcontroller.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.structure import build
+
+
+@dataclass(frozen=True)
+class ObservationLayout:
+    """Where the newest readings, ground reading, state estimate and last action sit in an
+    observation, and the scales that turn them back into SI units."""
+
+    readings: slice
+    ground: int
+    estimate: slice  # empty without `sensors.state_estimate`
+    action: slice
+    reading_scale: np.ndarray
+    ground_scale: float
+    estimate_scale: np.ndarray
 
 
 class BuildingEnv(gym.Env):
@@ -125,11 +140,21 @@ class BuildingEnv(gym.Env):
         self._estimate_start = self.history * self._block
         self._sensor_scale = sensor_scale
         self.kalman = None
+        self._estimate_scale = np.zeros(0)
         if config.sensors.state_estimate:
             self.kalman = design_kalman(self.building, config.sensors, config.simulation, known_ground=True)
             scales = [config.sensors.displacement_scale] * n + [config.sensors.velocity_scale] * n
             self._estimate_scale = np.array(scales)
-        self._action_start = self._estimate_start + (2 * n if self.kalman is not None else 0)
+        self._action_start = self._estimate_start + self._estimate_scale.size
+        self.layout = ObservationLayout(
+            readings=slice(0, p),
+            ground=p,
+            estimate=slice(self._estimate_start, self._action_start),
+            action=slice(self._action_start, self._action_start + m),
+            reading_scale=sensor_scale,
+            ground_scale=config.sensors.ground_scale,
+            estimate_scale=self._estimate_scale,
+        )
         observation_size = self._action_start + m
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)

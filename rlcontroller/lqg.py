@@ -23,7 +23,7 @@ import control
 import numpy as np
 
 from rlcontroller.config import Experiment, RewardConfig
-from rlcontroller.dynamics import Response, StepMap, response, reward_matrices, sensor_matrices, step_map
+from rlcontroller.dynamics import Response, StepMap, response, reward_matrices, step_map
 from rlcontroller.env import BuildingEnv
 from rlcontroller.estimation import KalmanFilter, design_kalman
 from rlcontroller.excitation import GroundMotion, for_control_step
@@ -106,12 +106,7 @@ class LQGController:
         self.design = design
         self.name = name
         self.force_limits = env.force_limits
-        scale = sensor_matrices(env.building, env.experiment.sensors)[2]
-        self._readings = slice(0, scale.size)
-        self._reading_scale = scale
-        self._ground_index = scale.size
-        self._ground_scale = env.experiment.sensors.ground_scale
-        self._action = slice(env.observation_space.shape[0] - env.building.n_actuators, None)
+        self.layout = env.layout
         self.reset()
 
     def reset(self) -> None:
@@ -119,9 +114,10 @@ class LQGController:
         self._previous_ground = 0.0
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        readings = observation[self._readings] * self._reading_scale
-        ground = float(observation[self._ground_index]) * self._ground_scale
-        held = np.asarray(observation[self._action], dtype=float)  # the clipped action just applied
+        layout = self.layout
+        readings = observation[layout.readings] * layout.reading_scale
+        ground = float(observation[layout.ground]) * layout.ground_scale
+        held = np.asarray(observation[layout.action], dtype=float)  # the clipped action just applied
         estimate = self.design.filter.update(readings, held, self._previous_ground)
         self._previous_ground = ground
         action = -self.design.feedback @ estimate - self.design.feedforward * ground
@@ -137,10 +133,11 @@ class LQGPrior:
         if env.kalman is None:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
         design = design_lqg(experiment, known_ground=True)
-        self._feedback = design.feedback * env._estimate_scale  # acts on the scaled estimate
-        self._feedforward = design.feedforward * experiment.sensors.ground_scale  # on the scaled ground reading
-        self._estimate = slice(env._estimate_start, env._action_start)
-        self._ground = env._block - 1
+        layout = env.layout
+        self._feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
+        self._feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading
+        self._estimate = layout.estimate
+        self._ground = layout.ground
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation, dtype=float)
