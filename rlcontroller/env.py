@@ -98,7 +98,7 @@ class BuildingEnv(gym.Env):
         acceleration_c, acceleration_d = output_matrices(self.building, "absolute_acceleration")
         shear_c, shear_d = output_matrices(self.building, "base_shear")
         # Every output of a step is one matrix product of the new state z and the force u:
-        # [scaled readings | ground reading | sqrt(weight)/scale * reward quantities | drift | acceleration |
+        # [scaled readings | ground reading | weight^(1/power)/scale * reward quantities | drift | acceleration |
         # base shear]; the ground reading row is zero here and comes in through the forcing.
         no_state, no_force = np.zeros((1, 2 * n)), np.zeros((1, m))
         self._output_c = np.vstack(

@@ -7,7 +7,8 @@ A run folder is never overwritten. It holds:
                            state.json (steps, wall time, best validation reward); written to a
                            temporary folder and renamed, so the newest complete one is always valid
     learning_curve.csv     steps, wall_time_s, episode_reward, eval_reward, eval_peak_drift_m,
-                           eval_J1, eval_J2 (validation on held-out generated motions)
+                           eval_J1, eval_J2 (validation on held-out generated motions), and the
+                           references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2 on the same motions
     best_model.zip         the best validation reward so far; final_model.zip at the end
     learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
 

@@ -194,3 +194,17 @@ def test_time_limit_stops_cleanly_and_the_run_resumes(tmp_path):
     assert summary.time_limit_reached and summary.steps < 600 and "time limit" in summary.line()
     assert (tmp_path / "run" / "final_model.zip").is_file()
     assert train(resume=tmp_path / "run").steps == 600
+
+
+def test_a_residual_policy_trains_and_starts_at_lqg(tmp_path):
+    experiment = smoke(
+        name="PPO", kwargs={"n_steps": 64, "batch_size": 64}, n_envs=2, total_steps=128, residual_lqg=True
+    )
+    experiment = experiment.model_copy(
+        update={"sensors": experiment.sensors.model_copy(update={"state_estimate": True})}
+    )
+    summary = train(experiment, run_dir=tmp_path / "run")
+    _, _, prior = load_policy(tmp_path / "run" / "final_model.zip")
+    assert prior is not None
+    # Barely trained, the residual is close to zero: validation J1 is near LQG + ground's.
+    assert abs(summary.best["eval_J1"] - summary.best["lqg_ground_J1"]) < 0.1
