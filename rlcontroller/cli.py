@@ -218,6 +218,7 @@ def demo(
     out = summary.run_dir / "evaluation"
     write_report(evaluation, out)
     print_summary(evaluation, out)
+    typer.echo("the smoke policy is barely trained; 'rlc evaluate' shows the committed benchmark policy")
 
 
 compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers.")
