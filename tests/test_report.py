@@ -85,3 +85,23 @@ def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
     summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
     assert summary.loc["RL", "J1"] < 0.5 and summary.loc["RL", "J2"] < 1.0
     assert summary.loc["RL", "J1"] < summary.loc["LQG", "J1"] + 0.02
+
+
+def test_evaluate_scaled_records_with_the_final_model(smoke_run, records, tmp_path):
+    args = [
+        "evaluate",
+        str(smoke_run),
+        "--records",
+        str(records),
+        "--out",
+        str(tmp_path),
+        "--scale-pga",
+        "0.3",
+        "--model",
+        "final",
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "scaled to PGA 0.3 g" in (tmp_path / "summary.md").read_text()
+    bad = CliRunner().invoke(app, ["evaluate", str(smoke_run), "--model", "newest"])
+    assert bad.exit_code == 2 and "--model: expected best or final" in bad.output
