@@ -131,21 +131,18 @@ class BuildingEnv(gym.Env):
         self._acceleration_slice = slice(first + p + 1 + r + n, first + p + 1 + r + 2 * n)
         self._base_shear_index = first + p + 1 + r + 2 * n
         self._noise_scaled = sensor_noise / sensor_scale
-        self._ground_scale = config.sensors.ground_scale
         self._ground_noise = config.sensors.ground_noise_std
 
         # Observation layout: H blocks of (p readings, 1 ground reading), the state estimate if
         # configured, then the last action.
         self._block = p + 1
         self._estimate_start = self.history * self._block
-        self._sensor_scale = sensor_scale
         self.kalman = None
-        self._estimate_scale = np.zeros(0)
+        estimate_scale = np.zeros(0)
         if config.sensors.state_estimate:
             self.kalman = design_kalman(self.building, config.sensors, config.simulation, known_ground=True)
-            scales = [config.sensors.displacement_scale] * n + [config.sensors.velocity_scale] * n
-            self._estimate_scale = np.array(scales)
-        self._action_start = self._estimate_start + self._estimate_scale.size
+            estimate_scale = np.array([config.sensors.displacement_scale] * n + [config.sensors.velocity_scale] * n)
+        self._action_start = self._estimate_start + estimate_scale.size
         self.layout = ObservationLayout(
             readings=slice(0, p),
             ground=p,
@@ -153,7 +150,7 @@ class BuildingEnv(gym.Env):
             action=slice(self._action_start, self._action_start + m),
             reading_scale=sensor_scale,
             ground_scale=config.sensors.ground_scale,
-            estimate_scale=self._estimate_scale,
+            estimate_scale=estimate_scale,
         )
         observation_size = self._action_start + m
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float32)
@@ -208,7 +205,7 @@ class BuildingEnv(gym.Env):
         self.ground_samples = ground
         readings = np.empty((self._n_steps + 1, p + 1))
         readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled
-        readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self._ground_scale
+        readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self.layout.ground_scale
         self._forcing[:, self._reading_slice] += readings[1:]
         self._k = 0
         self._state_action[:] = 0.0
@@ -218,10 +215,10 @@ class BuildingEnv(gym.Env):
         if self.kalman is not None:
             self.kalman.reset()
             estimate = self.kalman.update(
-                readings[0, :p] * self._sensor_scale, np.zeros(self.building.n_actuators), 0.0
+                readings[0, :p] * self.layout.reading_scale, np.zeros(self.building.n_actuators), 0.0
             )
-            self._previous_ground = readings[0, p] * self._ground_scale
-            self._observation[self._estimate_start : self._action_start] = estimate / self._estimate_scale
+            self._previous_ground = readings[0, p] * self.layout.ground_scale
+            self._observation[self._estimate_start : self._action_start] = estimate / self.layout.estimate_scale
         return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -243,10 +240,10 @@ class BuildingEnv(gym.Env):
         observation[:block] = outputs[self._reading_slice]
         if self.kalman is not None:
             readings = outputs[self._reading_slice]
-            ground = readings[-1] * self._ground_scale
-            estimate = self.kalman.update(readings[:-1] * self._sensor_scale, clipped, self._previous_ground)
+            ground = readings[-1] * self.layout.ground_scale
+            estimate = self.kalman.update(readings[:-1] * self.layout.reading_scale, clipped, self._previous_ground)
             self._previous_ground = ground
-            observation[self._estimate_start : last] = estimate / self._estimate_scale
+            observation[self._estimate_start : last] = estimate / self.layout.estimate_scale
         observation[last:] = clipped
 
         weighted = outputs[self._reward_slice]
