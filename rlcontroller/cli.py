@@ -136,11 +136,12 @@ def model_file(folder: Path, model: str) -> Path:
 def run_comparison(
     experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None
 ):
-    """Uncontrolled, LQG (accelerations only), LQG + measured ground, RL (if a run) and the optimal reference."""
+    """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), RL (if a run)
+    and the optimal reference."""
     from rlcontroller.controllers import PolicyController
     from rlcontroller.env import BuildingEnv
     from rlcontroller.evaluation import RECORDS_VARIABLE, choose_motions, evaluate
-    from rlcontroller.lqg import LQGController, design_lqg
+    from rlcontroller.lqg import LQGController, design_lqg, design_lqg_ground_model
 
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
@@ -151,6 +152,7 @@ def run_comparison(
     controllers = [
         LQGController(design_lqg(experiment), env, name="LQG"),
         LQGController(design_lqg(experiment, known_ground=True), env, name="LQG + ground"),
+        LQGController(design_lqg_ground_model(experiment), env, name="LQG + ground model"),
     ]
     if run_dir is not None:
         controllers.append(PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL"))
@@ -238,13 +240,16 @@ def compare_lqg(
     ] = None,
     scale_pga: ScaleOption = None,
     sweep: Annotated[bool, typer.Option(help="Trace LQG's J1-J3 trade-off over force weights.")] = False,
+    preview: Annotated[
+        bool, typer.Option(help="Full-state LQR knowing the ground 0-1 s ahead: what prediction could buy.")
+    ] = False,
     model: ModelOption = "best",
 ) -> None:
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
     import numpy as np
 
-    from rlcontroller.evaluation import OPTIMAL, lqg_sweep, mean_metric
-    from rlcontroller.report import write_report, write_sweep
+    from rlcontroller.evaluation import OPTIMAL, lqg_sweep, mean_metric, preview_study
+    from rlcontroller.report import write_preview, write_report, write_sweep
 
     if run_dir is not None:
         run_dir = model_folder(run_dir)
@@ -257,10 +262,19 @@ def compare_lqg(
     print_summary(evaluation, out)
     if sweep:
         table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
-        names = [name for name in ("RL", "LQG + ground", OPTIMAL) if name in evaluation.controllers]
+        names = [
+            name for name in ("RL", "LQG + ground", "LQG + ground model", OPTIMAL) if name in evaluation.controllers
+        ]
         points = {name: (mean_metric(evaluation, name, "J3"), mean_metric(evaluation, name, "J1")) for name in names}
         write_sweep(table, out, label, points)
         typer.echo((out / "lqg_sweep.md").read_text())
+    if preview:
+        names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
+        references = {
+            name: (mean_metric(evaluation, name, "J1"), mean_metric(evaluation, name, "J2")) for name in names
+        }
+        write_preview(preview_study(experiment, motions), out, label, references)
+        typer.echo((out / "preview.md").read_text())
 
 
 def main() -> None:

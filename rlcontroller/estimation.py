@@ -48,6 +48,12 @@ class KalmanFilter:
         return self.estimate
 
 
+def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
+    """Steady-state measurement-update gain L for x+ = phi x + w (cov process), y = c x + v (cov measurement)."""
+    prior, _, _ = control.dare(phi.T, c.T, process, measurement, method="scipy")
+    return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
+
+
 def design_kalman(
     building: Building,
     sensors: SensorConfig,
@@ -64,14 +70,12 @@ def design_kalman(
     measurement = np.diag(np.maximum(noise, 1e-3 * scale) ** 2)
     process_std = ground_std * (0.5 if known_ground else 1.0)
     process = process_std**2 * np.outer(ground_gain, ground_gain) + 1e-12 * np.eye(step.phi.shape[0])
-    prior, _, _ = control.dare(step.phi.T, c.T, process, measurement, method="scipy")
-    gain = prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
     return KalmanFilter(
         phi=step.phi,
         action_gain=step.force_gain * building.force_limits,
         ground_gain=ground_gain,
         sensor_c=c,
         sensor_d=d * building.force_limits,
-        gain=gain,
+        gain=kalman_gain(step.phi, c, process, measurement),
         known_ground=known_ground,
     )

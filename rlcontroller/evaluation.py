@@ -22,11 +22,12 @@ from rlcontroller.dynamics import Response, simulate
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import GroundMotion, MotionError, for_control_step, generate_suite, read_at2, scale_to_pga
 from rlcontroller.lqg import optimal_response
-from rlcontroller.metrics import j_metrics
+from rlcontroller.metrics import METRICS, j_metrics
 
 PROJECT_MANIFEST = Path(__file__).resolve().parents[1] / "records" / "manifest.csv"
 RECORDS_VARIABLE = "RLC_RECORDS"
 OPTIMAL = "optimal (clairvoyant)"
+PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 SYNTHETIC_LABEL = "SYNTHETIC suite (7 seeded Kanai-Tajimi motions), not the paper's records"
 RECORDS_LABEL = "PEER NGA-West2 records (7)"
 SYNTHETIC_SEED = 2024
@@ -175,5 +176,35 @@ def lqg_sweep(
         summary = result.summary().loc["LQG"]
         rows.append(
             {"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in ("J1", "J2", "J3", "J4")}}
+        )
+    return pd.DataFrame(rows)
+
+
+def preview_study(
+    experiment: Experiment,
+    motions: list[GroundMotion],
+    seconds: tuple[float | None, ...] = PREVIEW_SECONDS,
+) -> pd.DataFrame:
+    """How much knowing the coming ground motion is worth: mean J1..J4 of full-state LQR with the
+    optimal feed-forward on the next `s` seconds of ground motion (None: the whole record).
+
+    Preview 0 is full-state LQR without ground knowledge; a causal controller has no preview, so
+    the rows bound what better sensing (full state) and prediction of the ground can buy.
+    """
+    env = BuildingEnv(experiment)
+    dt = experiment.simulation.control_dt
+    rows = []
+    for horizon in seconds:
+        steps = None if horizon is None else round(horizon / dt)
+        values = {metric: [] for metric in METRICS}
+        for motion in motions:
+            metrics = j_metrics(optimal_response(experiment, motion, preview=steps), uncontrolled_response(env, motion))
+            for metric in METRICS:
+                values[metric].append(metrics[metric])
+        rows.append(
+            {
+                "preview_s": float("inf") if steps is None else steps * dt,
+                **{metric: float(np.mean(np.mean(values[metric], axis=0))) for metric in METRICS},
+            }
         )
     return pd.DataFrame(rows)

@@ -11,8 +11,12 @@ so Q = H_z' H_z, R = H_u' H_u, N = H_z' H_u: the discrete-time LQR of exactly th
 a = u / force_limit, which keeps the Riccati equations well scaled.
 
 The steady-state Kalman filter (`estimation`) estimates z from the same noisy sensors the agent
-sees, with the feed-through of the held force; optionally the measured ground acceleration is a
-known input.
+sees, with the feed-through of the held force. Three variants: the ground acceleration unknown
+(process noise), measured and used as a known input, or measured and predicted through a
+Kanai-Tajimi ground model in the state (`design_lqg_ground_model`).
+
+`optimal_response` is the reference with the state known and the ground known `preview` steps
+ahead (the whole record: the clairvoyant optimum).
 """
 
 from __future__ import annotations
@@ -21,13 +25,28 @@ from dataclasses import dataclass
 
 import control
 import numpy as np
+import scipy.linalg
 
 from rlcontroller.config import Experiment, RewardConfig
-from rlcontroller.dynamics import Response, StepMap, response, reward_matrices, step_map
+from rlcontroller.dynamics import (
+    Response,
+    StateSpace,
+    StepMap,
+    compose,
+    exact_substep,
+    response,
+    reward_matrices,
+    sensor_matrices,
+    state_space,
+    step_map,
+)
 from rlcontroller.env import BuildingEnv
-from rlcontroller.estimation import KalmanFilter, design_kalman
+from rlcontroller.estimation import KalmanFilter, design_kalman, kalman_gain
 from rlcontroller.excitation import GroundMotion, for_control_step
 from rlcontroller.structure import Building, build
+
+FIRM_SOIL_FREQUENCY = 15.6  # rad/s, Kanai-Tajimi ground filter for firm soil (Tajimi 1960)
+FIRM_SOIL_DAMPING = 0.6
 
 
 @dataclass(frozen=True)
@@ -42,6 +61,8 @@ class QuadraticCost:
 def quadratic_cost(building: Building, reward: RewardConfig, step: StepMap) -> QuadraticCost:
     c, d, factor, _ = reward_matrices(building, [term for term in reward.terms if term.quadratic])
     weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
+    # states beyond the building's (a ground model's) reach the outputs only through the dynamics
+    weighted_c = np.pad(weighted_c, ((0, 0), (0, step.phi.shape[0] - weighted_c.shape[1])))
     action_gain = step.force_gain * building.force_limits
     return QuadraticCost(
         state=weighted_c @ step.phi,
@@ -68,6 +89,7 @@ class LQGDesign:
     feedback: np.ndarray  # K
     feedforward: np.ndarray  # K_g on the measured ground acceleration (known-input variant), else zero
     filter: KalmanFilter
+    measures_ground: bool = False  # the ground reading is one of the filter's measurements
 
     def closed_loop_eigenvalues(self) -> np.ndarray:
         return np.linalg.eigvals(self.filter.phi - self.filter.action_gain @ self.feedback)
@@ -99,6 +121,58 @@ def design_lqg(
     return LQGDesign(feedback=feedback, feedforward=feedforward, filter=kalman)
 
 
+def design_lqg_ground_model(
+    experiment: Experiment,
+    frequency: float = FIRM_SOIL_FREQUENCY,
+    damping: float = FIRM_SOIL_DAMPING,
+    ground_std: float = 1.0,
+) -> LQGDesign:
+    """LQG whose model includes a Kanai-Tajimi filter for the ground acceleration, which is measured.
+
+    The filter  x_f'' + 2 damping frequency x_f' + frequency^2 x_f = -w  (w white) gives
+    a_g = -frequency^2 x_f - 2 damping frequency x_f'; the Kalman filter estimates building and
+    filter states from the floor sensors plus the ground reading, and the LQR on the augmented
+    state (same cost) acts on the predicted ground. The defaults are Kanai-Tajimi's firm-soil
+    values (Tajimi 1960), not fitted to any record; w is scaled so that a_g has std `ground_std`
+    (m/s^2). The design uses the exact discretisation whatever the simulation method.
+    """
+    building = build(experiment.building, experiment.actuators)
+    system = state_space(building)
+    size = system.a.shape[0]
+    ground_output = np.array([-(frequency**2), -2.0 * damping * frequency])
+    filter_a = np.array([[0.0, 1.0], [-(frequency**2), -2.0 * damping * frequency]])
+    augmented = StateSpace(
+        a=np.block([[system.a, np.outer(system.b_ground, ground_output)], [np.zeros((2, size)), filter_a]]),
+        b_force=np.vstack([system.b_force, np.zeros((2, building.n_actuators))]),
+        b_ground=np.concatenate([np.zeros(size), [0.0, -1.0]]),  # here: the white noise w
+    )
+    step = compose(exact_substep(augmented, experiment.simulation.control_dt), 1, experiment.simulation.control_dt)
+    cost = quadratic_cost(building, experiment.reward, step)
+    feedback, _ = lqr_gain(step, cost, building.force_limits)
+    noise_gain = step.ground_gain.sum(axis=1)
+    filter_phi, filter_noise = step.phi[size:, size:], noise_gain[size:]
+    stationary = scipy.linalg.solve_discrete_lyapunov(filter_phi, np.outer(filter_noise, filter_noise))
+    intensity = ground_std**2 / float(ground_output @ stationary @ ground_output)
+    c, d, scale, noise = sensor_matrices(building, experiment.sensors)
+    sensors = experiment.sensors
+    sensor_c = np.vstack([np.pad(c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), ground_output])])
+    sensor_d = np.vstack([d * building.force_limits, np.zeros((1, building.n_actuators))])
+    measurement_std = np.maximum(
+        np.append(noise, sensors.ground_noise_std), 1e-3 * np.append(scale, sensors.ground_scale)
+    )
+    process = intensity * np.outer(noise_gain, noise_gain) + 1e-12 * np.eye(size + 2)
+    kalman = KalmanFilter(
+        phi=step.phi,
+        action_gain=step.force_gain * building.force_limits,
+        ground_gain=np.zeros(size + 2),
+        sensor_c=sensor_c,
+        sensor_d=sensor_d,
+        gain=kalman_gain(step.phi, sensor_c, process, np.diag(measurement_std**2)),
+        known_ground=False,
+    )
+    return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman, measures_ground=True)
+
+
 class LQGController:
     """Kalman filter + LQR on the env's observation (the same readings the agent gets)."""
 
@@ -118,6 +192,8 @@ class LQGController:
         readings = observation[layout.readings] * layout.reading_scale
         ground = float(observation[layout.ground]) * layout.ground_scale
         held = np.asarray(observation[layout.action], dtype=float)  # the clipped action just applied
+        if self.design.measures_ground:
+            readings = np.append(readings, ground)
         estimate = self.design.filter.update(readings, held, self._previous_ground)
         self._previous_ground = ground
         action = -self.design.feedback @ estimate - self.design.feedforward * ground
@@ -147,30 +223,55 @@ class LQGPrior:
         )
 
 
-def optimal_response(experiment: Experiment, motion: GroundMotion, reward: RewardConfig | None = None) -> Response:
-    """The clairvoyant reference: full state and the whole ground motion known in advance.
+def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, length: int) -> np.ndarray:
+    """W_0..W_{length-1}: the optimal feed-forward a_ff,k = sum_j W_j g_{k+j} on known ground terms.
 
-    Stationary Riccati gain plus a backward feed-forward recursion over the record for the same
-    quadratic cost, forces clipped to the limits. No causal controller can do better on that cost.
+    For the stationary LQR (gain K, Riccati P, closed loop Phi_c = Phi - B K) the feed-forward on
+    the ground terms g_k, g_{k+1}, ... of the coming steps is
+
+        W_0 = S^-1 (H_u' F C_r + B' P),   W_j = S^-1 B' (Phi_c')^(j-1) (C_c' F C_r + Phi_c' P),
+
+    with S = H_u' H_u + B' P B and C_c = H_z - H_u K (a test checks it against brute-force least
+    squares). Unknown ground terms are zero in expectation, so knowing `length` steps ahead means
+    using the first `length` kernels. Shape (length, actions, states).
+    """
+    feedback, riccati = lqr_gain(step, cost, force_limits)
+    action_gain = step.force_gain * force_limits
+    curvature_inverse = np.linalg.inv(cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain)
+    closed_phi = step.phi - action_gain @ feedback
+    closed_cost = cost.state - cost.action @ feedback
+    kernels = np.zeros((length, *feedback.shape))
+    if length:
+        kernels[0] = curvature_inverse @ (cost.action.T @ cost.ground + action_gain.T @ riccati)
+    costate = closed_cost.T @ cost.ground + closed_phi.T @ riccati
+    for lag in range(1, length):
+        kernels[lag] = curvature_inverse @ action_gain.T @ costate
+        costate = closed_phi.T @ costate
+    return kernels
+
+
+def optimal_response(
+    experiment: Experiment, motion: GroundMotion, reward: RewardConfig | None = None, preview: int | None = None
+) -> Response:
+    """Full-state LQR plus the optimal feed-forward on the next `preview` control steps of the
+    ground motion (None: the whole record), forces clipped to the limits.
+
+    With preview=None this is the clairvoyant reference: no causal controller can do better on
+    the quadratic cost. preview=0 is full-state LQR that knows nothing of the ground; preview=p
+    knows the ground up to p control steps ahead, the sequence between the two.
     """
     building = build(experiment.building, experiment.actuators)
     samples, substeps = for_control_step(motion, experiment.simulation.control_dt)
     step = step_map(building, experiment.simulation, substeps)
     cost = quadratic_cost(building, reward or experiment.reward, step)
-    feedback, riccati = lqr_gain(step, cost, building.force_limits)
+    feedback, _ = lqr_gain(step, cost, building.force_limits)
     action_gain = step.force_gain * building.force_limits
     ground_terms = step.ground_terms(samples)
     n_steps = ground_terms.shape[0]
-    solve = cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain
-    closed_state = cost.state - cost.action @ feedback
-    closed_phi = step.phi - action_gain @ feedback
+    length = n_steps if preview is None else min(preview, n_steps)
     feedforward = np.zeros((n_steps, building.n_actuators))
-    linear = np.zeros(step.phi.shape[0])  # b_{k+1}, zero after the record
-    for k in range(n_steps - 1, -1, -1):
-        g, h = ground_terms[k], cost.ground @ ground_terms[k]
-        f = np.linalg.solve(solve, cost.action.T @ h + action_gain.T @ (riccati @ g + linear))
-        feedforward[k] = f
-        linear = closed_state.T @ (h - cost.action @ f) + closed_phi.T @ (riccati @ (g - action_gain @ f) + linear)
+    for lag, kernel in enumerate(preview_kernel(cost, step, building.force_limits, length)):
+        feedforward[: n_steps - lag] += ground_terms[lag:] @ kernel.T
     states = np.zeros((n_steps + 1, step.phi.shape[0]))
     actions = np.zeros((n_steps, building.n_actuators))
     for k in range(n_steps):

@@ -19,7 +19,14 @@ from matplotlib.lines import Line2D  # noqa: E402
 from rlcontroller.evaluation import OPTIMAL, Evaluation, percent_better  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
 
-COLOURS = {"uncontrolled": "0.55", "LQG": "tab:blue", "LQG + ground": "tab:cyan", "RL": "tab:red", OPTIMAL: "black"}
+COLOURS = {
+    "uncontrolled": "0.55",
+    "LQG": "tab:blue",
+    "LQG + ground": "tab:cyan",
+    "LQG + ground model": "tab:green",
+    "RL": "tab:red",
+    OPTIMAL: "black",
+}
 METRIC_NAMES = {
     "J1": "J1 peak drift",
     "J2": "J2 peak abs. acceleration",
@@ -55,7 +62,7 @@ def summary_table(evaluation: Evaluation) -> pd.DataFrame:
 def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataFrame | None:
     """Percent by which `candidate`'s mean J's are below each LQG variant's (positive = better)."""
     table = evaluation.summary()
-    references = [r for r in ("LQG", "LQG + ground") if r in table.index]
+    references = [r for r in ("LQG", "LQG + ground", "LQG + ground model") if r in table.index]
     if candidate not in table.index or not references:
         return None
     rows = {
@@ -227,3 +234,52 @@ def lqg_j1_at(sweep: pd.DataFrame, j3: float) -> float:
     """LQG's J1 at the given J3, interpolated in log J3 along the sweep (clamped at the ends)."""
     ordered = sweep.sort_values("J3")
     return float(np.interp(np.log(j3), np.log(ordered["J3"]), ordered["J1"]))
+
+
+def equivalent_preview(preview: pd.DataFrame, j1: float) -> float | None:
+    """The preview (s) at which full-state LQR reaches this J1, interpolated; None if it needs none."""
+    finite = preview[np.isfinite(preview["preview_s"])].sort_values("preview_s")
+    if j1 >= finite["J1"].iloc[0]:
+        return None
+    return float(np.interp(-j1, -finite["J1"].to_numpy(), finite["preview_s"].to_numpy()))
+
+
+def write_preview(
+    preview: pd.DataFrame, out: Path, label: str, references: dict[str, tuple[float, float]]
+) -> list[Path]:
+    """J1/J2 of full-state LQR against how far ahead it knows the ground, other controllers as lines."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = [atomic_write(out / "preview.csv", preview.assign(suite=label).to_csv(index=False))]
+    lines = [
+        f"# What knowing the coming ground motion is worth: {label}",
+        "",
+        "Full-state LQR (same cost) plus the optimal feed-forward on the next `preview_s` seconds of",
+        "ground motion; inf = the whole record (the clairvoyant optimum). A causal controller has no preview.",
+        "",
+        markdown_table(preview.set_index("preview_s")),
+        "",
+    ]
+    for name, (j1, _) in references.items():
+        seconds = equivalent_preview(preview, j1)
+        reach = "no preview" if seconds is None else f"{seconds:.3f} s of preview"
+        lines.append(f"- {name}: J1 = {j1:.3f}, which full-state LQR reaches with {reach}")
+    atomic_write(out / "preview.md", "\n".join(lines) + "\n")
+    finite = preview[np.isfinite(preview["preview_s"])]
+    clairvoyant = preview[~np.isfinite(preview["preview_s"])]
+    figure, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    for axis, metric in zip(axes, ("J1", "J2"), strict=True):
+        axis.plot(finite["preview_s"], finite[metric], "o-", color="black", label="full-state LQR with preview")
+        for _, row in clairvoyant.iterrows():
+            axis.axhline(row[metric], color="black", linestyle=":", label="whole record known (clairvoyant)")
+        for index, (name, values) in enumerate(references.items()):
+            axis.axhline(
+                values[0 if metric == "J1" else 1], color=COLOURS.get(name, f"C{index}"), linestyle="--", label=name
+            )
+        axis.set(xlabel="ground motion known ahead (s)", ylabel=METRIC_NAMES[metric] + " (mean)")
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    figure.suptitle(f"Value of ground-motion preview — {label}", fontsize=9)
+    figure.tight_layout()
+    written += [out / "preview.md", atomic_savefig(figure, out / "preview.png")]
+    plt.close(figure)
+    return written

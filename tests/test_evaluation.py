@@ -14,6 +14,8 @@ from rlcontroller.evaluation import (
     evaluate,
     load_records,
     lqg_sweep,
+    mean_metric,
+    preview_study,
     synthetic_suite,
     uncontrolled_response,
 )
@@ -68,6 +70,15 @@ def test_without_records_the_suite_is_synthetic_and_labelled(monkeypatch):
     assert len(motions) == 7 and all(m.synthetic for m in motions)
     again, _ = choose_motions(None)
     np.testing.assert_array_equal(motions[3].acceleration, again[3].acceleration)
+
+
+def test_preview_study_improves_with_preview_and_ends_at_the_clairvoyant():
+    experiment, motions = Experiment(), synthetic_suite(count=2)
+    table = preview_study(experiment, motions, seconds=(0.0, 0.1, 0.5, None))
+    assert list(table["preview_s"]) == [0.0, 0.1, 0.5, float("inf")]
+    assert table["J1"].is_monotonic_decreasing and table["J1"].iloc[0] > table["J1"].iloc[-1] + 0.02
+    clairvoyant = evaluate(experiment, motions, [], SYNTHETIC_LABEL)
+    assert table["J1"].iloc[-1] == pytest.approx(mean_metric(clairvoyant, OPTIMAL, "J1"), rel=1e-9)
 
 
 def test_sweep_trades_force_energy_for_drift():

@@ -2,13 +2,23 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
+from rlcontroller.config import Experiment, KanaiTajimiConfig, MeasurementConfig, SensorConfig
 from rlcontroller.controllers import Uncontrolled, rollout
-from rlcontroller.dynamics import Response
+from rlcontroller.dynamics import Response, step_map
 from rlcontroller.env import BuildingEnv
-from rlcontroller.excitation import GroundMotion, read_at2, scale_to_pga
-from rlcontroller.lqg import LQGController, design_lqg, lqr_gain, optimal_response, quadratic_cost
+from rlcontroller.excitation import GroundMotion, kanai_tajimi, read_at2, scale_to_pga
+from rlcontroller.lqg import (
+    FIRM_SOIL_DAMPING,
+    FIRM_SOIL_FREQUENCY,
+    LQGController,
+    design_lqg,
+    design_lqg_ground_model,
+    lqr_gain,
+    optimal_response,
+    quadratic_cost,
+)
 from rlcontroller.metrics import j_metrics
+from rlcontroller.structure import build
 
 NOISE_FREE = Experiment(
     sensors=SensorConfig(
@@ -151,3 +161,90 @@ def test_residual_needs_the_state_estimate():
 
     with pytest.raises(ConfigError, match="residual_lqg: needs sensors.state_estimate"):
         build_experiment({"algorithm": {"residual_lqg": True}})
+
+
+def weak_motion(steps: int, seed: int = 3) -> GroundMotion:
+    """Small enough that no force reaches its limit, so the optimal control is the unclipped one."""
+    return GroundMotion("weak", 0.02, 0.05 * np.random.default_rng(seed).standard_normal(steps + 1))
+
+
+def test_clairvoyant_actions_solve_the_finite_least_squares_problem():
+    """Independent check of the preview kernel: with the whole record known, the optimal actions
+    minimise sum_k |H_z z_k + H_u a_k + F C_r g_k|^2 + z_n' P z_n (the stationary tail), a linear
+    least-squares problem in the stacked actions solved here by brute force."""
+    experiment, motion = Experiment(), weak_motion(60)
+    building = build(experiment.building, experiment.actuators)
+    step = step_map(building, experiment.simulation)
+    cost = quadratic_cost(building, experiment.reward, step)
+    _, riccati = lqr_gain(step, cost, building.force_limits)
+    action_gain = step.force_gain * building.force_limits
+    ground = step.ground_terms(motion.acceleration)
+    n, m, size = ground.shape[0], building.n_actuators, step.phi.shape[0]
+    tail = np.linalg.cholesky(riccati).T  # z' P z = |tail z|^2
+
+    def residuals(actions: np.ndarray) -> np.ndarray:
+        state, rows = np.zeros(size), []
+        for k in range(n):
+            rows.append(cost.state @ state + cost.action @ actions[k] + cost.ground @ ground[k])
+            state = step.phi @ state + action_gain @ actions[k] + ground[k]
+        return np.concatenate(rows + [tail @ state])
+
+    offset = residuals(np.zeros((n, m)))
+    columns = [residuals(np.eye(n * m)[i].reshape(n, m)) - offset for i in range(n * m)]
+    best = np.linalg.lstsq(np.array(columns).T, -offset, rcond=None)[0].reshape(n, m)
+    optimal = optimal_response(experiment, motion)
+    assert np.max(np.abs(optimal.force)) < 0.5e5
+    np.testing.assert_allclose(optimal.force[1:], best * building.force_limits, rtol=1e-6, atol=1e-6 * 1e5)
+
+
+def test_more_preview_never_costs_more_and_zero_preview_is_full_state_lqr():
+    experiment, motion = Experiment(), weak_motion(400)
+    costs = [episode_cost(optimal_response(experiment, motion, preview=p), experiment) for p in (0, 1, 5, 25, None)]
+    assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
+    assert optimal_response(experiment, motion, preview=10_000).force == pytest.approx(
+        optimal_response(experiment, motion).force
+    )
+    building = build(experiment.building, experiment.actuators)
+    step = step_map(building, experiment.simulation)
+    feedback, _ = lqr_gain(step, quadratic_cost(building, experiment.reward, step), building.force_limits)
+    blind = optimal_response(experiment, motion, preview=0)
+    actions = -np.hstack([blind.displacement, blind.velocity]) @ feedback.T
+    np.testing.assert_allclose(blind.force[1:], actions[:-1] * building.force_limits, atol=1e-6)
+
+
+def test_ground_model_keeps_the_building_gain_and_is_stable():
+    """The ground filter's states are uncontrollable and not driven by the building, so the optimal
+    feedback on the building state is plain LQR's; the ground model only adds a feed-forward."""
+    experiment = Experiment()
+    design = design_lqg_ground_model(experiment)
+    np.testing.assert_allclose(design.feedback[:, :10], design_lqg(experiment).feedback, rtol=1e-6, atol=1e-9)
+    assert np.abs(design.feedback[:, 10:]).max() > 1e-3
+    assert np.max(np.abs(design.closed_loop_eigenvalues())) < 1.0
+    kalman = design.filter
+    assert np.max(np.abs(np.linalg.eigvals(kalman.phi - kalman.gain @ kalman.sensor_c @ kalman.phi))) < 1.0
+
+
+def test_ground_model_lqg_wins_on_the_motions_it_models():
+    """On stationary Kanai-Tajimi ground motion with the model's own parameters, weak enough that no
+    force saturates, the LQG that predicts the ground has the better reward of the three LQGs."""
+    fixed = (FIRM_SOIL_FREQUENCY, FIRM_SOIL_FREQUENCY), (FIRM_SOIL_DAMPING, FIRM_SOIL_DAMPING)
+    generator = KanaiTajimiConfig(
+        duration=(120.0, 120.0),
+        ground_frequency=fixed[0],
+        ground_damping=fixed[1],
+        pga=(0.3, 0.3),
+        rise_time=(0.1, 0.1),
+        strong_duration=(200.0, 200.0),
+    )
+    motion = kanai_tajimi(generator, np.random.default_rng(5))
+    env = BuildingEnv(NOISE_FREE)
+    designs = {
+        "plain": design_lqg(NOISE_FREE),
+        "ground": design_lqg(NOISE_FREE, known_ground=True),
+        "model": design_lqg_ground_model(NOISE_FREE),
+    }
+    rewards = {}
+    for name, design in designs.items():
+        result, rewards[name] = rollout(env, motion, LQGController(design, env))
+        assert np.max(np.abs(result.force)) < 0.9e5
+    assert rewards["model"] > rewards["ground"] > rewards["plain"]

@@ -36,7 +36,14 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
     ):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     metrics = pd.read_csv(out / "metrics.csv")
-    assert set(metrics["controller"]) == {"uncontrolled", "LQG", "LQG + ground", "RL", "optimal (clairvoyant)"}
+    assert set(metrics["controller"]) == {
+        "uncontrolled",
+        "LQG",
+        "LQG + ground",
+        "LQG + ground model",
+        "RL",
+        "optimal (clairvoyant)",
+    }
     assert metrics["value"].notna().all() and (metrics["value"] >= 0).all()
     assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {"PEER NGA-West2 records (7), as recorded"}
     summary = (out / "summary.md").read_text()
@@ -44,16 +51,20 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
     assert "RL better than LQG" in result.output
 
 
-def test_compare_lqg_sweep_marks_the_policy(smoke_run, records, tmp_path):
+def test_compare_lqg_sweep_and_preview_mark_the_policy(smoke_run, records, tmp_path):
     out = tmp_path / "compare"
     result = CliRunner().invoke(
-        app, ["compare", "lqg", str(smoke_run), "--records", str(records), "--out", str(out), "--sweep"]
+        app, ["compare", "lqg", str(smoke_run), "--records", str(records), "--out", str(out), "--sweep", "--preview"]
     )
     assert result.exit_code == 0, result.output
     sweep = pd.read_csv(out / "lqg_sweep.csv")
     assert len(sweep) == 9 and sweep[["J1", "J2", "J3", "J4"]].notna().all().all()
     assert (out / "lqg_sweep.png").is_file()
     assert "- RL: J3 =" in (out / "lqg_sweep.md").read_text()
+    preview = pd.read_csv(out / "preview.csv")
+    assert list(preview["preview_s"])[:2] == [0.0, 0.02] and preview["J1"].is_monotonic_decreasing
+    assert (out / "preview.png").is_file()
+    assert "- LQG + ground: J1 =" in (out / "preview.md").read_text()
 
 
 def test_compare_lqg_without_a_run_on_the_synthetic_suite(tmp_path, monkeypatch):
