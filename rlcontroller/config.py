@@ -136,7 +136,10 @@ class SensorConfig(StrictModel):
     """Observation: the measurements and the ground acceleration over the last `history` control
     steps, plus the last action. With `state_estimate`, a steady-state Kalman estimate of the
     floor displacements and velocities computed from those same noisy readings (and the measured
-    ground acceleration) is added, divided by `displacement_scale` (m) and `velocity_scale` (m/s)."""
+    ground acceleration) is added, divided by `displacement_scale` (m) and `velocity_scale` (m/s).
+    With `ground_model` that estimate also holds the two states of a Kanai-Tajimi ground filter
+    (firm soil), i.e. a prediction of the coming ground motion, and a residual policy's prior is
+    LQG + ground model."""
 
     history: PositiveInt = 5
     measurements: list[MeasurementConfig] = Field(
@@ -146,6 +149,7 @@ class SensorConfig(StrictModel):
     ground_scale: PositiveFloat = 5.0
     ground_noise_std: NonNegativeFloat = 0.05
     state_estimate: bool = False
+    ground_model: bool = False
     displacement_scale: PositiveFloat = 0.02
     velocity_scale: PositiveFloat = 0.2
 
@@ -400,6 +404,9 @@ def _check_cross_references(experiment: Experiment) -> None:
     if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
         file, prefix = experiment.origin("algorithm")
         raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}residual_lqg: needs sensors.state_estimate: true")
+    if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
+        file, prefix = experiment.origin("sensors")
+        raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}ground_model: needs state_estimate: true")
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     for index, actuator in enumerate(experiment.actuators):

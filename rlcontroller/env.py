@@ -5,7 +5,8 @@ Observation (float32, scaled to order one): H blocks, newest first, then the las
 where readings are the configured sensors divided by their scales (with noise), a_g is the
 ground acceleration divided by `ground_scale`, and the last action has m values in [-1, 1].
 With `sensors.state_estimate` a Kalman estimate of [x; x'] from those same readings (scaled)
-comes before the last action. Before the motion starts the history is zero.
+comes before the last action, followed, with `sensors.ground_model`, by the two estimated states
+of a Kanai-Tajimi ground filter. Before the motion starts the history is zero.
 
 Action: one value per actuator in [-1, 1], clipped, times the actuator's force limit (N);
 the force is held constant over the control step.
@@ -31,7 +32,7 @@ import numpy as np
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.dynamics import StepMap, output_matrices, reward_matrices, sensor_matrices, step_map
-from rlcontroller.estimation import design_kalman
+from rlcontroller.estimation import GroundModel, design_kalman, design_kalman_ground_model
 from rlcontroller.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.structure import build
 
@@ -139,9 +140,15 @@ class BuildingEnv(gym.Env):
         self._estimate_start = self.history * self._block
         self.kalman = None
         estimate_scale = np.zeros(0)
-        if config.sensors.state_estimate:
-            self.kalman = design_kalman(self.building, config.sensors, config.simulation, known_ground=True)
-            estimate_scale = np.array([config.sensors.displacement_scale] * n + [config.sensors.velocity_scale] * n)
+        sensors = config.sensors
+        if sensors.state_estimate:
+            estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
+            if sensors.ground_model:
+                model = GroundModel()
+                self.kalman = design_kalman_ground_model(self.building, sensors, config.simulation, model)
+                estimate_scale = np.append(estimate_scale, model.state_scale(sensors.ground_scale))
+            else:
+                self.kalman = design_kalman(self.building, sensors, config.simulation, known_ground=True)
         self._action_start = self._estimate_start + estimate_scale.size
         self.layout = ObservationLayout(
             readings=slice(0, p),
@@ -214,10 +221,11 @@ class BuildingEnv(gym.Env):
         self._observation[: p + 1] = readings[0]
         if self.kalman is not None:
             self.kalman.reset()
+            ground = readings[0, p] * self.layout.ground_scale
             estimate = self.kalman.update(
-                readings[0, :p] * self.layout.reading_scale, np.zeros(self.building.n_actuators), 0.0
+                readings[0, :p] * self.layout.reading_scale, np.zeros(self.building.n_actuators), ground, 0.0
             )
-            self._previous_ground = readings[0, p] * self.layout.ground_scale
+            self._previous_ground = ground
             self._observation[self._estimate_start : self._action_start] = estimate / self.layout.estimate_scale
         return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
 
@@ -241,7 +249,9 @@ class BuildingEnv(gym.Env):
         if self.kalman is not None:
             readings = outputs[self._reading_slice]
             ground = readings[-1] * self.layout.ground_scale
-            estimate = self.kalman.update(readings[:-1] * self.layout.reading_scale, clipped, self._previous_ground)
+            estimate = self.kalman.update(
+                readings[:-1] * self.layout.reading_scale, clipped, ground, self._previous_ground
+            )
             self._previous_ground = ground
             observation[self._estimate_start : last] = estimate / self.layout.estimate_scale
         observation[last:] = clipped

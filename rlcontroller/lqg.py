@@ -25,28 +25,19 @@ from dataclasses import dataclass
 
 import control
 import numpy as np
-import scipy.linalg
 
 from rlcontroller.config import Experiment, RewardConfig
-from rlcontroller.dynamics import (
-    Response,
-    StateSpace,
-    StepMap,
-    compose,
-    exact_substep,
-    response,
-    reward_matrices,
-    sensor_matrices,
-    state_space,
-    step_map,
-)
+from rlcontroller.dynamics import Response, StepMap, response, reward_matrices, step_map
 from rlcontroller.env import BuildingEnv
-from rlcontroller.estimation import KalmanFilter, design_kalman, kalman_gain
+from rlcontroller.estimation import (
+    GroundModel,
+    KalmanFilter,
+    design_kalman,
+    design_kalman_ground_model,
+    ground_model_step,
+)
 from rlcontroller.excitation import GroundMotion, for_control_step
 from rlcontroller.structure import Building, build
-
-FIRM_SOIL_FREQUENCY = 15.6  # rad/s, Kanai-Tajimi ground filter for firm soil (Tajimi 1960)
-FIRM_SOIL_DAMPING = 0.6
 
 
 @dataclass(frozen=True)
@@ -89,7 +80,6 @@ class LQGDesign:
     feedback: np.ndarray  # K
     feedforward: np.ndarray  # K_g on the measured ground acceleration (known-input variant), else zero
     filter: KalmanFilter
-    measures_ground: bool = False  # the ground reading is one of the filter's measurements
 
     def closed_loop_eigenvalues(self) -> np.ndarray:
         return np.linalg.eigvals(self.filter.phi - self.filter.action_gain @ self.feedback)
@@ -122,55 +112,19 @@ def design_lqg(
 
 
 def design_lqg_ground_model(
-    experiment: Experiment,
-    frequency: float = FIRM_SOIL_FREQUENCY,
-    damping: float = FIRM_SOIL_DAMPING,
-    ground_std: float = 1.0,
+    experiment: Experiment, model: GroundModel | None = None, ground_std: float = 1.0
 ) -> LQGDesign:
-    """LQG whose model includes a Kanai-Tajimi filter for the ground acceleration, which is measured.
+    """LQG whose model includes a Kanai-Tajimi filter for the (measured) ground acceleration.
 
-    The filter  x_f'' + 2 damping frequency x_f' + frequency^2 x_f = -w  (w white) gives
-    a_g = -frequency^2 x_f - 2 damping frequency x_f'; the Kalman filter estimates building and
-    filter states from the floor sensors plus the ground reading, and the LQR on the augmented
-    state (same cost) acts on the predicted ground. The defaults are Kanai-Tajimi's firm-soil
-    values (Tajimi 1960), not fitted to any record; w is scaled so that a_g has std `ground_std`
-    (m/s^2). The design uses the exact discretisation whatever the simulation method.
+    The Kalman filter estimates the building and filter states from the floor sensors plus the
+    ground reading; the LQR on the augmented state (same cost) acts on the predicted ground.
     """
     building = build(experiment.building, experiment.actuators)
-    system = state_space(building)
-    size = system.a.shape[0]
-    ground_output = np.array([-(frequency**2), -2.0 * damping * frequency])
-    filter_a = np.array([[0.0, 1.0], [-(frequency**2), -2.0 * damping * frequency]])
-    augmented = StateSpace(
-        a=np.block([[system.a, np.outer(system.b_ground, ground_output)], [np.zeros((2, size)), filter_a]]),
-        b_force=np.vstack([system.b_force, np.zeros((2, building.n_actuators))]),
-        b_ground=np.concatenate([np.zeros(size), [0.0, -1.0]]),  # here: the white noise w
-    )
-    step = compose(exact_substep(augmented, experiment.simulation.control_dt), 1, experiment.simulation.control_dt)
-    cost = quadratic_cost(building, experiment.reward, step)
-    feedback, _ = lqr_gain(step, cost, building.force_limits)
-    noise_gain = step.ground_gain.sum(axis=1)
-    filter_phi, filter_noise = step.phi[size:, size:], noise_gain[size:]
-    stationary = scipy.linalg.solve_discrete_lyapunov(filter_phi, np.outer(filter_noise, filter_noise))
-    intensity = ground_std**2 / float(ground_output @ stationary @ ground_output)
-    c, d, scale, noise = sensor_matrices(building, experiment.sensors)
-    sensors = experiment.sensors
-    sensor_c = np.vstack([np.pad(c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), ground_output])])
-    sensor_d = np.vstack([d * building.force_limits, np.zeros((1, building.n_actuators))])
-    measurement_std = np.maximum(
-        np.append(noise, sensors.ground_noise_std), 1e-3 * np.append(scale, sensors.ground_scale)
-    )
-    process = intensity * np.outer(noise_gain, noise_gain) + 1e-12 * np.eye(size + 2)
-    kalman = KalmanFilter(
-        phi=step.phi,
-        action_gain=step.force_gain * building.force_limits,
-        ground_gain=np.zeros(size + 2),
-        sensor_c=sensor_c,
-        sensor_d=sensor_d,
-        gain=kalman_gain(step.phi, sensor_c, process, np.diag(measurement_std**2)),
-        known_ground=False,
-    )
-    return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman, measures_ground=True)
+    model = model or GroundModel()
+    step = ground_model_step(building, experiment.simulation.control_dt, model)
+    feedback, _ = lqr_gain(step, quadratic_cost(building, experiment.reward, step), building.force_limits)
+    kalman = design_kalman_ground_model(building, experiment.sensors, experiment.simulation, model, ground_std)
+    return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman)
 
 
 class LQGController:
@@ -192,23 +146,25 @@ class LQGController:
         readings = observation[layout.readings] * layout.reading_scale
         ground = float(observation[layout.ground]) * layout.ground_scale
         held = np.asarray(observation[layout.action], dtype=float)  # the clipped action just applied
-        if self.design.measures_ground:
-            readings = np.append(readings, ground)
-        estimate = self.design.filter.update(readings, held, self._previous_ground)
+        estimate = self.design.filter.update(readings, held, ground, self._previous_ground)
         self._previous_ground = ground
         action = -self.design.feedback @ estimate - self.design.feedforward * ground
         return np.clip(action, -1.0, 1.0) * self.force_limits
 
 
 class LQGPrior:
-    """The action of LQG + measured ground (action units, unclipped) from an observation that holds
-    the env's own Kalman estimate (`sensors.state_estimate`), for residual policies."""
+    """The action of LQG + measured ground, or of LQG + ground model with `sensors.ground_model`
+    (action units, unclipped), from an observation that holds the env's own Kalman estimate
+    (`sensors.state_estimate`), for residual policies."""
 
     def __init__(self, experiment: Experiment) -> None:
         env = BuildingEnv(experiment)
         if env.kalman is None:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
-        design = design_lqg(experiment, known_ground=True)
+        if experiment.sensors.ground_model:
+            design = design_lqg_ground_model(experiment)
+        else:
+            design = design_lqg(experiment, known_ground=True)
         layout = env.layout
         self._feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
         self._feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading

@@ -8,7 +8,8 @@ A run folder is never overwritten. It holds:
                            temporary folder and renamed, so the newest complete one is always valid
     learning_curve.csv     steps, wall_time_s, episode_reward, eval_reward, eval_peak_drift_m,
                            eval_J1, eval_J2 (validation on held-out generated motions), and the
-                           references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2 on the same motions
+                           references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2,
+                           lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
     best_model.zip         the best validation reward so far; final_model.zip at the end
     learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
 
@@ -45,7 +46,7 @@ from rlcontroller.controllers import PolicyController, Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import generate_suite
 from rlcontroller.files import atomic_savefig, atomic_write
-from rlcontroller.lqg import LQGController, LQGPrior, design_lqg
+from rlcontroller.lqg import LQGController, LQGPrior, design_lqg, design_lqg_ground_model
 from rlcontroller.metrics import j_metrics, peak
 
 CURVE_COLUMNS = (
@@ -60,6 +61,8 @@ CURVE_COLUMNS = (
     "lqg_J2",
     "lqg_ground_J1",
     "lqg_ground_J2",
+    "lqg_ground_model_J1",
+    "lqg_ground_model_J2",
 )
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
 RESERVED_KWARGS = {
@@ -269,10 +272,13 @@ class RunFolder:
             csv.writer(handle).writerow([row[c] for c in CURVE_COLUMNS])
 
     def truncate_curve(self, steps: int) -> None:
-        """Drop rows logged after the checkpoint being resumed (they will be logged again)."""
+        """Drop rows logged after the checkpoint being resumed (they will be logged again); columns
+        added since the run started are filled with nan."""
         with open(self.curve_path, newline="") as handle:
-            rows = list(csv.reader(handle))
-        kept = [rows[0]] + [row for row in rows[1:] if int(float(row[0])) <= steps]
+            rows = list(csv.DictReader(handle))
+        kept = [list(CURVE_COLUMNS)] + [
+            [row.get(column, "nan") for column in CURVE_COLUMNS] for row in rows if int(float(row["steps"])) <= steps
+        ]
         temporary = self.curve_path.with_name(self.curve_path.name + ".tmp")
         with open(temporary, "w", newline="") as handle:
             csv.writer(handle).writerows(kept)
@@ -306,9 +312,14 @@ class Validator:
         bare = Uncontrolled(self.env.building.n_actuators)
         self.uncontrolled = [rollout(self.env, motion, bare)[0] for motion in self.motions]
         self.reference = {}
-        for prefix, known_ground in (("lqg", False), ("lqg_ground", True)):
+        designs = {
+            "lqg": lambda: design_lqg(experiment),
+            "lqg_ground": lambda: design_lqg(experiment, known_ground=True),
+            "lqg_ground_model": lambda: design_lqg_ground_model(experiment),
+        }
+        for prefix, design in designs.items():
             try:
-                lqg = self.run(LQGController(design_lqg(experiment, known_ground=known_ground), self.env))
+                lqg = self.run(LQGController(design(), self.env))
             except ValueError:  # a reward LQG cannot be designed for
                 lqg = {"eval_J1": float("nan"), "eval_J2": float("nan")}
             self.reference |= {f"{prefix}_J1": lqg["eval_J1"], f"{prefix}_J2": lqg["eval_J2"]}
@@ -415,14 +426,13 @@ class TrainingSummary:
         text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
         if self.beat_lqg_at:
             first = self.beat_lqg_at
-            text += (
-                f"; validation J1 first below both LQGs' at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
-            )
+            text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
         if self.best:
             text += (
                 f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
                 f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; LQG J1 {self.best['lqg_J1']:.3f}, "
-                f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f})"
+                f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f}; "
+                f"LQG + ground model J1 {self.best['lqg_ground_model_J1']:.3f})"
             )
         return text + f"; run folder: {self.run_dir}"
 
@@ -557,6 +567,13 @@ def plot_learning_curve(run: RunFolder) -> Path:
         metric_axis.axhline(rows[-1]["lqg_J2"], color="tab:orange", linewidth=1.0, linestyle=":", label="LQG J2")
         metric_axis.axhline(
             rows[-1]["lqg_ground_J1"], color="tab:blue", linewidth=1.0, linestyle="-.", label="LQG + ground J1"
+        )
+        metric_axis.axhline(
+            rows[-1]["lqg_ground_model_J1"],
+            color="tab:green",
+            linewidth=1.0,
+            linestyle="-.",
+            label="LQG + ground model J1",
         )
     metric_axis.set(
         xlabel="environment steps", ylabel="controlled / uncontrolled", title="Validation (generated motions)"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reproduce the README's Results from a fresh clone: train configs/five_story.yaml with three
 # seeds, evaluate each against the uncontrolled building, LQG and the clairvoyant optimum on the
-# seven records, aggregate mean +- std over seeds, and trace LQG's trade-off.
+# seven records, aggregate mean +- std over seeds, trace LQG's trade-off and the value of preview.
 #   bash scripts/reproduce.sh [OUT_DIR]        (records from $RLC_RECORDS, else ../shared/records)
 # An interrupted run is resumed from its newest checkpoint when the script is started again.
 set -euo pipefail
@@ -21,5 +21,5 @@ for seed in 0 1 2; do
   rlc evaluate "$run" --records "$records" --out "$run/evaluation" > /dev/null
 done
 python scripts/aggregate.py "$out"/seed* | tee "$out/results.md"
-rlc compare lqg "$out/seed0" --records "$records" --sweep --out "$out/compare_lqg" > /dev/null
+rlc compare lqg "$out/seed0" --records "$records" --sweep --preview --out "$out/compare_lqg" > /dev/null
 echo "tables and plots: $out/seed*/evaluation, $out/compare_lqg, summary: $out/results.md"

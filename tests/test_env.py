@@ -189,3 +189,22 @@ def test_state_estimate_in_the_observation_tracks_the_true_state():
             break
     assert np.mean(errors[50:]) < 0.1 * np.mean(sizes[50:])
     np.testing.assert_allclose(observation[-3:], [0.3, -0.2, 0.1], rtol=1e-6)
+
+
+def test_ground_model_estimate_predicts_the_ground_reading():
+    """With `ground_model` the estimate ends with the Kanai-Tajimi filter states; their output
+    tracks the measured ground acceleration."""
+    from rlcontroller.estimation import GroundModel
+
+    env = BuildingEnv(Experiment(sensors=SensorConfig(state_estimate=True, ground_model=True)))
+    observation, _ = env.reset(seed=3)
+    assert observation.shape == (5 * 6 + 12 + 3,)
+    model, predicted, measured = GroundModel(), [], []
+    for _ in range(300):
+        observation, _, _, truncated, _ = env.step(np.zeros(3))
+        filter_states = observation[40:42].astype(float) * model.state_scale(env.layout.ground_scale)
+        predicted.append(model.output @ filter_states)
+        measured.append(observation[env.layout.ground] * env.layout.ground_scale)
+        if truncated:
+            break
+    assert np.corrcoef(predicted, measured)[0, 1] > 0.95

@@ -6,10 +6,9 @@ from rlcontroller.config import Experiment, KanaiTajimiConfig, MeasurementConfig
 from rlcontroller.controllers import Uncontrolled, rollout
 from rlcontroller.dynamics import Response, step_map
 from rlcontroller.env import BuildingEnv
+from rlcontroller.estimation import GroundModel
 from rlcontroller.excitation import GroundMotion, kanai_tajimi, read_at2, scale_to_pga
 from rlcontroller.lqg import (
-    FIRM_SOIL_DAMPING,
-    FIRM_SOIL_FREQUENCY,
     LQGController,
     design_lqg,
     design_lqg_ground_model,
@@ -80,7 +79,7 @@ def test_kalman_estimate_converges_on_a_noise_free_free_vibration():
     errors = []
     for _ in range(300):
         state = kalman.phi @ state
-        estimate = kalman.update(kalman.sensor_c @ state, np.zeros(3), 0.0)
+        estimate = kalman.update(kalman.sensor_c @ state, np.zeros(3), 0.0, 0.0)
         errors.append(np.linalg.norm(estimate - state) / np.linalg.norm(state))
     assert errors[-1] < 1e-3 * errors[0] and errors[-1] < 1e-4
 
@@ -134,7 +133,8 @@ def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
     np.testing.assert_allclose(design_lqg(extended).feedback, design_lqg(base).feedback)
 
 
-def test_a_zero_residual_on_the_lqg_prior_is_lqg_with_ground():
+@pytest.mark.parametrize("ground_model", [False, True])
+def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
     from rlcontroller.controllers import PolicyController
     from rlcontroller.lqg import LQGPrior
 
@@ -142,12 +142,15 @@ def test_a_zero_residual_on_the_lqg_prior_is_lqg_with_ground():
         def predict(self, observation, deterministic=True):
             return np.zeros(3), None
 
-    experiment = Experiment(sensors={"state_estimate": True}, algorithm={"residual_lqg": True})
+    sensors = {"state_estimate": True, "ground_model": ground_model}
+    experiment = Experiment(sensors=sensors, algorithm={"residual_lqg": True})
     env = BuildingEnv(experiment)
     motion = read_at2_or_synthetic()
     residual, _ = rollout(env, motion, PolicyController(ZeroPolicy(), env.force_limits, prior=LQGPrior(experiment)))
-    lqg, _ = rollout(env, motion, LQGController(design_lqg(experiment, known_ground=True), env))
+    design = design_lqg_ground_model(experiment) if ground_model else design_lqg(experiment, known_ground=True)
+    lqg, _ = rollout(env, motion, LQGController(design, env))
     np.testing.assert_allclose(residual.force, lqg.force, rtol=1e-3, atol=1.0)
+    assert np.abs(lqg.force).max() > 1e4
 
 
 def read_at2_or_synthetic() -> GroundMotion:
@@ -161,6 +164,8 @@ def test_residual_needs_the_state_estimate():
 
     with pytest.raises(ConfigError, match="residual_lqg: needs sensors.state_estimate"):
         build_experiment({"algorithm": {"residual_lqg": True}})
+    with pytest.raises(ConfigError, match="ground_model: needs state_estimate"):
+        build_experiment({"sensors": {"ground_model": True}})
 
 
 def weak_motion(steps: int, seed: int = 3) -> GroundMotion:
@@ -227,7 +232,8 @@ def test_ground_model_keeps_the_building_gain_and_is_stable():
 def test_ground_model_lqg_wins_on_the_motions_it_models():
     """On stationary Kanai-Tajimi ground motion with the model's own parameters, weak enough that no
     force saturates, the LQG that predicts the ground has the better reward of the three LQGs."""
-    fixed = (FIRM_SOIL_FREQUENCY, FIRM_SOIL_FREQUENCY), (FIRM_SOIL_DAMPING, FIRM_SOIL_DAMPING)
+    model = GroundModel()
+    fixed = (model.frequency, model.frequency), (model.damping, model.damping)
     generator = KanaiTajimiConfig(
         duration=(120.0, 120.0),
         ground_frequency=fixed[0],

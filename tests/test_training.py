@@ -208,3 +208,13 @@ def test_a_residual_policy_trains_and_starts_at_lqg(tmp_path):
     assert prior is not None
     # Barely trained, the residual is close to zero: validation J1 is near LQG + ground's.
     assert abs(summary.best["eval_J1"] - summary.best["lqg_ground_J1"]) < 0.1
+
+
+def test_resuming_a_curve_written_before_new_columns_fills_them_with_nan(tmp_path):
+    run = RunFolder(tmp_path)
+    old_columns = ["steps", "wall_time_s", "eval_J1"]
+    run.curve_path.write_text(",".join(old_columns) + "\n1000,10,0.7\n2000,20,0.6\n3000,30,0.5\n")
+    run.truncate_curve(2000)
+    rows = run.read_curve()
+    assert [row["steps"] for row in rows] == [1000.0, 2000.0] and rows[1]["eval_J1"] == 0.6
+    assert np.isnan(rows[0]["lqg_ground_model_J1"])
