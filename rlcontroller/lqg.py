@@ -99,15 +99,11 @@ def design_lqg(
     building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation, substeps=1)
     cost = quadratic_cost(building, reward or experiment.reward, step)
-    feedback, riccati = lqr_gain(step, cost, building.force_limits)
+    feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman(building, experiment.sensors, experiment.simulation, known_ground, ground_std)
     feedforward = np.zeros(building.n_actuators)
-    if known_ground:
-        action_gain = kalman.action_gain
-        curvature = cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain
-        feedforward = np.linalg.solve(
-            curvature, (cost.action.T @ cost.ground + action_gain.T @ riccati) @ kalman.ground_gain
-        )
+    if known_ground:  # the ground held over the coming step: the first preview kernel
+        feedforward = preview_kernel(cost, step, building.force_limits, 1)[0] @ kalman.ground_gain
     return LQGDesign(feedback=feedback, feedforward=feedforward, filter=kalman)
 
 
