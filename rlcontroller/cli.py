@@ -140,7 +140,7 @@ def run_comparison(
     and the optimal reference."""
     from rlcontroller.controllers import PolicyController
     from rlcontroller.env import BuildingEnv
-    from rlcontroller.evaluation import RECORDS_VARIABLE, choose_motions, evaluate
+    from rlcontroller.evaluation import LQG_VARIANTS, RECORDS_VARIABLE, choose_motions, evaluate
     from rlcontroller.lqg import LQGController, design_lqg, design_lqg_ground_model
 
     if records is None and not os.environ.get(RECORDS_VARIABLE):
@@ -149,11 +149,8 @@ def run_comparison(
         )
     motions, label = choose_motions(records, scale_pga)
     env = BuildingEnv(experiment)
-    controllers = [
-        LQGController(design_lqg(experiment), env, name="LQG"),
-        LQGController(design_lqg(experiment, known_ground=True), env, name="LQG + ground"),
-        LQGController(design_lqg_ground_model(experiment), env, name="LQG + ground model"),
-    ]
+    designs = [design_lqg(experiment), design_lqg(experiment, known_ground=True), design_lqg_ground_model(experiment)]
+    controllers = [LQGController(design, env, name) for design, name in zip(designs, LQG_VARIANTS, strict=True)]
     if run_dir is not None:
         controllers.append(PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL"))
     return evaluate(experiment, motions, controllers, label), motions, label
@@ -248,7 +245,7 @@ def compare_lqg(
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
     import numpy as np
 
-    from rlcontroller.evaluation import OPTIMAL, lqg_sweep, mean_metric, preview_study
+    from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
     from rlcontroller.report import write_preview, write_report, write_sweep
 
     if run_dir is not None:
@@ -262,9 +259,7 @@ def compare_lqg(
     print_summary(evaluation, out)
     if sweep:
         table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
-        names = [
-            name for name in ("RL", "LQG + ground", "LQG + ground model", OPTIMAL) if name in evaluation.controllers
-        ]
+        names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
         points = {name: (mean_metric(evaluation, name, "J3"), mean_metric(evaluation, name, "J1")) for name in names}
         write_sweep(table, out, label, points)
         typer.echo((out / "lqg_sweep.md").read_text())

@@ -27,6 +27,7 @@ from rlcontroller.metrics import METRICS, j_metrics
 PROJECT_MANIFEST = Path(__file__).resolve().parents[1] / "records" / "manifest.csv"
 RECORDS_VARIABLE = "RLC_RECORDS"
 OPTIMAL = "optimal (clairvoyant)"
+LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 SYNTHETIC_LABEL = "SYNTHETIC suite (7 seeded Kanai-Tajimi motions), not the paper's records"
 RECORDS_LABEL = "PEER NGA-West2 records (7)"
@@ -193,12 +194,13 @@ def preview_study(
     """
     env = BuildingEnv(experiment)
     dt = experiment.simulation.control_dt
+    bare = [uncontrolled_response(env, motion) for motion in motions]
     rows = []
     for horizon in seconds:
         steps = None if horizon is None else round(horizon / dt)
         values = {metric: [] for metric in METRICS}
-        for motion in motions:
-            metrics = j_metrics(optimal_response(experiment, motion, preview=steps), uncontrolled_response(env, motion))
+        for motion, uncontrolled in zip(motions, bare, strict=True):
+            metrics = j_metrics(optimal_response(experiment, motion, preview=steps), uncontrolled)
             for metric in METRICS:
                 values[metric].append(metrics[metric])
         rows.append(

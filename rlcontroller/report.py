@@ -16,7 +16,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
-from rlcontroller.evaluation import OPTIMAL, Evaluation, percent_better  # noqa: E402
+from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, Evaluation, percent_better  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
 
 COLOURS = {
@@ -62,7 +62,7 @@ def summary_table(evaluation: Evaluation) -> pd.DataFrame:
 def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataFrame | None:
     """Percent by which `candidate`'s mean J's are below each LQG variant's (positive = better)."""
     table = evaluation.summary()
-    references = [r for r in ("LQG", "LQG + ground", "LQG + ground model") if r in table.index]
+    references = [r for r in LQG_VARIANTS if r in table.index]
     if candidate not in table.index or not references:
         return None
     rows = {

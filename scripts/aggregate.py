@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from rlcontroller.evaluation import LQG_VARIANTS
 from rlcontroller.training import RunFolder
 
 METRICS = ["J1", "J2", "J3", "J4"]
@@ -29,7 +30,7 @@ def main(runs: list[Path]) -> None:
         reductions = [f"{100 * (1 - mean.loc[controller, m]):.1f}" for m in ("J1", "J2")]
         print(f"| {controller} | " + " | ".join(cells + reductions) + " |")
     print()
-    for reference in ("LQG", "LQG + ground", "LQG + ground model"):
+    for reference in LQG_VARIANTS:
         better = [100 * (1 - s.loc["RL", METRICS] / s.loc[reference, METRICS]) for s in summaries]
         frame = pd.DataFrame(better)
         cells = [f"{frame[m].mean():.1f} ± {frame[m].std(ddof=0):.1f}" for m in METRICS]
