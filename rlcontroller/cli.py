@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import datetime as dt
+import importlib.metadata
+import math
 import os
 import sys
 from collections.abc import Callable
@@ -11,23 +14,38 @@ from typing import Annotated, Any
 
 import typer
 
-from rlcontroller.config import ConfigError, Experiment, load_experiment
+from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, display_path, load_experiment
 from rlcontroller.excitation import MotionError
+from rlcontroller.files import check_new_folder, new_folder
 
 app = typer.Typer(
-    add_completion=False, no_args_is_help=True, help="Reinforcement-learning active control of buildings."
+    add_completion=False,
+    no_args_is_help=True,
+    rich_markup_mode=None,
+    help="Reinforcement-learning active control of buildings.",
 )
 
 USER_ERRORS = (ConfigError, MotionError)
 
 
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"rlc {importlib.metadata.version('rlcontroller')}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _commands() -> None:
+def _commands(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
+    ] = False,
+) -> None:
     """Reinforcement-learning active control of buildings under earthquakes."""
 
 
 def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
-    """Print a user mistake as one line on stderr and exit with code 2, without a traceback."""
+    """Print a user mistake as one line on stderr and exit with code 2 (1 for a file system
+    error such as a full disk or a folder without write permission), without a traceback."""
 
     @wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -36,8 +54,47 @@ def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
         except USER_ERRORS as error:
             typer.echo(f"error: {error}", err=True)
             raise typer.Exit(2) from None
+        except OSError as error:
+            where = f"{error.filename}: " if error.filename else ""
+            typer.echo(f"error: {where}{error.strerror or error}", err=True)
+            raise typer.Exit(1) from None
 
     return wrapper
+
+
+def _positive_finite(high: float) -> Callable[[float | None], float | None]:
+    def check(value: float | None) -> float | None:
+        if value is not None and not (math.isfinite(value) and 0.0 < value <= high):
+            raise typer.BadParameter(f"expected a finite number in (0, {high:g}], got {value!r}")
+        return value
+
+    return check
+
+
+def stamp() -> str:
+    return dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+
+
+RecordsOption = Annotated[
+    Path | None,
+    typer.Option(
+        help="A folder of .AT2/.csv records (with an optional manifest.csv) or one record file "
+        "(default $RLC_RECORDS, else a synthetic suite)."
+    ),
+]
+ScaleOption = Annotated[
+    float | None, typer.Option(callback=_positive_finite(10.0), help="Scale every record to this PGA (g).")
+]
+ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: best or final.")]
+OutOption = Annotated[
+    Path | None, typer.Option(help="Output folder, new or empty (default: a new folder under results/).")
+]
+ProgressOption = Annotated[
+    bool | None,
+    typer.Option(
+        "--progress/--no-progress", show_default="on a terminal", help="Show a progress bar with steps/s and ETA."
+    ),
+]
 
 
 def load(config: Path | None) -> Experiment:
@@ -78,15 +135,20 @@ def info(
 @user_errors
 def train(
     config: Annotated[Path | None, typer.Argument(help="Experiment YAML (not needed with --resume).")] = None,
-    total_steps: Annotated[int | None, typer.Option(min=1, help="Override algorithm.total_steps.")] = None,
-    seed: Annotated[int | None, typer.Option(help="Override the experiment's seed.")] = None,
+    total_steps: Annotated[
+        int | None, typer.Option(min=1, max=MAX_TOTAL_STEPS, help="Override algorithm.total_steps.")
+    ] = None,
+    seed: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help="Override the experiment's seed.")] = None,
     run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
     resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
     device: Annotated[str, typer.Option(help="cpu, cuda or auto.")] = "auto",
-    time_limit: Annotated[float | None, typer.Option(min=0.0, help="Stop after this many minutes (resumable).")] = None,
-    progress: Annotated[
-        bool, typer.Option(help="Show a progress bar (default: when on a terminal).")
-    ] = sys.stdout.isatty(),
+    time_limit: Annotated[
+        float | None,
+        typer.Option(
+            callback=_positive_finite(1.0e6), help="Stop after this many minutes of this invocation (resumable)."
+        ),
+    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Train SAC, PPO, TD3, DDPG or A2C on generated ground motions; checkpoints resume."""
     from rlcontroller.training import train as run_training
@@ -94,6 +156,7 @@ def train(
     if device not in ("cpu", "cuda", "auto"):
         raise ConfigError(f"--device: expected cpu, cuda or auto, got {device!r}")
     limit = None if time_limit is None else 60.0 * time_limit
+    progress = show_progress(progress)
     if resume is not None:
         if config is not None or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
@@ -108,8 +171,9 @@ def train(
             experiment = experiment.model_copy(update={"seed": seed})
         summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress, time_limit_s=limit)
     typer.echo(summary.line())
-    if summary.interrupted:
+    if summary.interrupted or summary.time_limit_reached:
         typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
+    if summary.interrupted:
         raise typer.Exit(130)
 
 
@@ -126,6 +190,23 @@ def model_folder(run_dir: Path | None) -> Path:
     return folder
 
 
+def show_progress(progress: bool | None) -> bool:
+    """The progress bar is on by default when the output is a terminal."""
+    return sys.stdout.isatty() if progress is None else progress
+
+
+def output_folder(out: Path | None, default_name: str) -> Path:
+    """`out`, or a new folder results/NAME-TIME (never an existing one, never a tracked folder)."""
+    if out is not None:
+        return out
+    base = Path("results") / f"{default_name}-{stamp()}"
+    path, number = base, 1
+    while path.exists():
+        number += 1
+        path = base.with_name(f"{base.name}-{number}")
+    return path
+
+
 def model_file(folder: Path, model: str) -> Path:
     path = folder / f"{model}_model.zip"
     if not path.is_file():
@@ -140,8 +221,9 @@ def run_comparison(
     and the optimal reference."""
     from rlcontroller.controllers import PolicyController
     from rlcontroller.env import BuildingEnv
-    from rlcontroller.evaluation import LQG_VARIANTS, RECORDS_VARIABLE, choose_motions, evaluate
+    from rlcontroller.evaluation import LQG_VARIANTS, evaluate
     from rlcontroller.lqg import LQGController, design_lqg, design_lqg_ground_model
+    from rlcontroller.records import RECORDS_VARIABLE, choose_motions
 
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
@@ -151,27 +233,27 @@ def run_comparison(
     env = BuildingEnv(experiment)
     designs = [design_lqg(experiment), design_lqg(experiment, known_ground=True), design_lqg_ground_model(experiment)]
     controllers = [LQGController(design, env, name) for design, name in zip(designs, LQG_VARIANTS, strict=True)]
+    sources = {}
     if run_dir is not None:
-        controllers.append(PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL"))
-    return evaluate(experiment, motions, controllers, label), motions, label
+        policy = PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL")
+        controllers.append(policy)
+        sources["RL"] = f"{display_path(policy.source)} ({policy.model.num_timesteps:,} training steps)"
+    evaluation = evaluate(experiment, motions, controllers, label)
+    evaluation.sources.update(sources)
+    return evaluation, motions, label
 
 
 def print_summary(evaluation, out: Path) -> None:
     from rlcontroller.report import improvement_table, markdown_table, summary_table
 
     typer.echo(f"# {evaluation.label}")
+    for name, source in evaluation.sources.items():
+        typer.echo(f"{name}: {source}")
     typer.echo(markdown_table(summary_table(evaluation)))
     improvement = improvement_table(evaluation)
     if improvement is not None:
         typer.echo(markdown_table(improvement, digits=1))
     typer.echo(f"evaluated {len(evaluation.records)} motions in {evaluation.seconds:.1f} s; tables and plots in {out}")
-
-
-RecordsOption = Annotated[
-    Path | None, typer.Option(help="Folder with the seven .AT2 records (default $RLC_RECORDS, else a synthetic suite).")
-]
-ScaleOption = Annotated[float | None, typer.Option(min=0.0, help="Scale every record to this PGA (g).")]
-ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: best or final.")]
 
 
 @app.command()
@@ -181,7 +263,7 @@ def evaluate(
         Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
     ] = None,
     records: RecordsOption = None,
-    out: Annotated[Path | None, typer.Option(help="Output folder (default RUN_DIR/evaluation).")] = None,
+    out: OutOption = None,
     scale_pga: ScaleOption = None,
     model: ModelOption = "best",
 ) -> None:
@@ -191,31 +273,31 @@ def evaluate(
     if model not in ("best", "final"):
         raise ConfigError(f"--model: expected best or final, got {model!r}")
     folder = model_folder(run_dir)
+    out = output_folder(out, f"evaluate-{folder.resolve().name}")
+    check_new_folder(out)
     evaluation, _, _ = run_comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
-    out = out or folder / "evaluation"
-    write_report(evaluation, out)
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
     print_summary(evaluation, out)
 
 
 @app.command()
 @user_errors
-def demo(
-    records: RecordsOption = None,
-    progress: Annotated[
-        bool, typer.Option(help="Show a progress bar (default: when on a terminal).")
-    ] = sys.stdout.isatty(),
-) -> None:
+def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
     """The main job end to end: train the small smoke experiment, then evaluate it against LQG."""
+    from rlcontroller.records import choose_motions
     from rlcontroller.report import write_report
     from rlcontroller.training import train as run_training
 
-    summary = run_training(load_experiment(SMOKE_CONFIG), progress_bar=progress)
+    choose_motions(records)  # a bad --records stops here, before training
+    summary = run_training(load_experiment(SMOKE_CONFIG), progress_bar=show_progress(progress))
     typer.echo(summary.line())
     evaluation, _, _ = run_comparison(
         load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
     )
     out = summary.run_dir / "evaluation"
-    write_report(evaluation, out)
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
     print_summary(evaluation, out)
     typer.echo("the smoke policy is barely trained; 'rlc evaluate' shows the committed benchmark policy")
 
@@ -232,9 +314,7 @@ def compare_lqg(
         Path | None, typer.Option(help="Experiment YAML when no run is given (default: embedded).")
     ] = None,
     records: RecordsOption = None,
-    out: Annotated[
-        Path | None, typer.Option(help="Output folder (default RUN_DIR/compare_lqg or results/compare_lqg).")
-    ] = None,
+    out: OutOption = None,
     scale_pga: ScaleOption = None,
     sweep: Annotated[bool, typer.Option(help="Trace LQG's J1-J3 trade-off over force weights.")] = False,
     preview: Annotated[
@@ -248,34 +328,32 @@ def compare_lqg(
     from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
     from rlcontroller.report import write_preview, write_report, write_sweep
 
+    if model not in ("best", "final"):
+        raise ConfigError(f"--model: expected best or final, got {model!r}")
     if run_dir is not None:
         run_dir = model_folder(run_dir)
         experiment = load_experiment(run_dir / "config.yaml")
     else:
         experiment = load(config)
+    out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
+    check_new_folder(out)
     evaluation, motions, label = run_comparison(experiment, run_dir, model, records, scale_pga)
-    out = out or (run_dir / "compare_lqg" if run_dir else Path("results") / "compare_lqg")
-    write_report(evaluation, out)
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
+        if sweep:
+            table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
+            names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
+            points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
+            write_sweep(table, staging, label, points)
+        if preview:
+            names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
+            references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
+            write_preview(preview_study(experiment, motions), staging, label, references)
     print_summary(evaluation, out)
-    if sweep:
-        table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
-        names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
-        points = {name: (mean_metric(evaluation, name, "J3"), mean_metric(evaluation, name, "J1")) for name in names}
-        write_sweep(table, out, label, points)
-        typer.echo((out / "lqg_sweep.md").read_text())
-    if preview:
-        names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
-        references = {
-            name: (mean_metric(evaluation, name, "J1"), mean_metric(evaluation, name, "J2")) for name in names
-        }
-        write_preview(preview_study(experiment, motions), out, label, references)
-        typer.echo((out / "preview.md").read_text())
+    for name, wanted in (("lqg_sweep.md", sweep), ("preview.md", preview)):
+        if wanted:
+            typer.echo((out / name).read_text())
 
 
 def main() -> None:
     app(prog_name="rlc")
-
-
-if __name__ == "__main__":
-    main()
-    sys.exit(0)

@@ -7,22 +7,23 @@ rejects unknown keys, wrong types and impossible values; `load_experiment` turns
 problem into a one-line `ConfigError` naming the file, the key path and what was expected.
 
 All values are SI: kg, N/m, N, m, s, m/s^2. The defaults are the paper's five-story case, so
-`Experiment()` is the embedded default experiment.
+`Experiment()` is the embedded default experiment. Every number must be finite and inside a
+physically sane bound (the `MAX_*` constants below); the message names the bound.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 import yaml
 from pydantic import (
     AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
-    NonNegativeFloat,
-    PositiveFloat,
     PositiveInt,
     PrivateAttr,
     TypeAdapter,
@@ -35,14 +36,41 @@ class ConfigError(ValueError):
     """A user mistake in a configuration file; `str()` is the one-line message to print."""
 
 
+# Sane bounds: beyond them a value is a typo or a unit mistake, not a building.
+MAX_FLOORS = 100
+MAX_MASS = 1.0e9  # kg per floor
+MAX_STIFFNESS = 1.0e12  # N/m per story
+MAX_FORCE = 1.0e9  # N
+MAX_GROUND_ACCELERATION = 100.0  # m/s^2, about 10 g
+MIN_TIME_STEP, MAX_TIME_STEP = 1.0e-4, 1.0  # s
+MAX_DURATION = 3600.0  # s, one motion
+MAX_HISTORY = 500  # control steps in the observation
+MAX_SEED = 2**32 - 1
+MAX_TOTAL_STEPS = 10**9
+MAX_ENVS = 256
+Scale = Annotated[float, Field(ge=1.0e-9, le=1.0e12)]  # a quantity's scale, in its SI unit
+NoiseStd = Annotated[float, Field(ge=0.0, le=1.0e6)]
+Seed = Annotated[int, Field(ge=0, le=MAX_SEED)]
+TimeStep = Annotated[float, Field(ge=MIN_TIME_STEP, le=MAX_TIME_STEP)]
+
+
 def _ordered_range(value: tuple[float, float]) -> tuple[float, float]:
     if value[0] > value[1]:
         raise ValueError(f"expected [low, high] with low <= high, got {list(value)}")
     return value
 
 
-Range = Annotated[tuple[NonNegativeFloat, NonNegativeFloat], AfterValidator(_ordered_range)]
-IntRange = Annotated[tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]], AfterValidator(_ordered_range)]
+def _range(low: float, high: float, low_open: bool = False) -> Any:
+    bound = Annotated[float, Field(gt=low) if low_open else Field(ge=low), Field(le=high)]
+    return Annotated[tuple[bound, bound], AfterValidator(_ordered_range)]
+
+
+Range = _range(0.0, 1.0e6)
+AccelerationRange = _range(0.0, MAX_GROUND_ACCELERATION)  # m/s^2
+DurationRange = _range(0.0, MAX_DURATION, low_open=True)  # s
+IntRange = Annotated[
+    tuple[Annotated[int, Field(ge=0, le=1000)], Annotated[int, Field(ge=0, le=1000)]], AfterValidator(_ordered_range)
+]
 
 Quantity = Literal[
     "displacement",  # floor displacement relative to the ground (m), one per floor
@@ -56,7 +84,7 @@ Quantity = Literal[
 
 
 class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class RayleighPair(StrictModel):
@@ -83,12 +111,16 @@ class BuildingConfig(StrictModel):
     """Floor masses (kg) and story stiffnesses (N/m), floor/story 1 first."""
 
     name: str = "paper five-story"
-    masses: list[PositiveFloat] = Field([25.0e3, 20.0e3, 20.0e3, 18.0e3, 15.0e3], min_length=1)
-    stiffnesses: list[PositiveFloat] = Field([5.0e6, 4.0e6, 4.0e6, 3.0e6, 3.0e6], min_length=1)
+    masses: list[Annotated[float, Field(ge=1.0, le=MAX_MASS)]] = Field(
+        [25.0e3, 20.0e3, 20.0e3, 18.0e3, 15.0e3], min_length=1, max_length=MAX_FLOORS
+    )
+    stiffnesses: list[Annotated[float, Field(ge=1.0, le=MAX_STIFFNESS)]] = Field(
+        [5.0e6, 4.0e6, 4.0e6, 3.0e6, 3.0e6], min_length=1, max_length=MAX_FLOORS
+    )
     damping: DampingConfig = DampingConfig(
         rayleigh=(RayleighPair(mode=1, ratio=0.01), RayleighPair(mode=5, ratio=0.05))
     )
-    story_heights: list[PositiveFloat] | None = None
+    story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]] | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> BuildingConfig:
@@ -105,15 +137,45 @@ class BuildingConfig(StrictModel):
             shape_ok = len(self.damping.matrix) == n and all(len(row) == n for row in self.damping.matrix)
             if not shape_ok:
                 raise ValueError(f"damping 'matrix' must be {n} x {n}")
+            _check_damping_matrix(np.array(self.damping.matrix, dtype=float))
         return self
+
+
+def _check_damping_matrix(matrix: np.ndarray) -> None:
+    """A damping matrix (N*s/m) must be symmetric and positive semi-definite (it dissipates energy)."""
+    size = float(np.max(np.abs(matrix))) if matrix.size else 0.0
+    if size > MAX_STIFFNESS:
+        raise ValueError(f"damping 'matrix' has entries up to {size:g} N*s/m, expected at most {MAX_STIFFNESS:g}")
+    if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=1e-12 * max(size, 1.0)):
+        raise ValueError("damping 'matrix' must be symmetric")
+    lowest = float(np.min(np.linalg.eigvalsh(matrix)))
+    if lowest < -1e-9 * max(size, 1.0):
+        raise ValueError(f"damping 'matrix' must be positive semi-definite (an eigenvalue is {lowest:g})")
 
 
 class ActuatorConfig(StrictModel):
     """An actuator on `story` with a force limit (N); inter-story mount pushes floors j and j-1."""
 
     story: PositiveInt
-    force_limit: PositiveFloat = 1.0e5
+    force_limit: Annotated[float, Field(gt=0.0, le=MAX_FORCE)] = 1.0e5
     mount: Literal["inter_story", "floor"] = "inter_story"
+
+
+def _one_per_story(actuators: list[ActuatorConfig]) -> list[ActuatorConfig]:
+    stories = [actuator.story for actuator in actuators]
+    for index, story in enumerate(stories):
+        if story in stories[:index]:
+            raise ValueError(f"story {story} is listed twice (entries {stories.index(story)} and {index})")
+    return actuators
+
+
+def _unique(values: list[int]) -> list[int]:
+    if len(set(values)) != len(values):
+        raise ValueError(f"each number once, got {values}")
+    return values
+
+
+Actuators = Annotated[list[ActuatorConfig], Field(min_length=1), AfterValidator(_one_per_story)]
 
 
 def _paper_actuators() -> list[ActuatorConfig]:
@@ -127,9 +189,9 @@ class MeasurementConfig(StrictModel):
     """
 
     quantity: Quantity
-    floors: list[PositiveInt] | None = None
-    scale: PositiveFloat
-    noise_std: NonNegativeFloat = 0.0
+    floors: Annotated[list[PositiveInt], Field(min_length=1), AfterValidator(_unique)] | None = None
+    scale: Scale
+    noise_std: NoiseStd = 0.0
 
 
 class SensorConfig(StrictModel):
@@ -141,17 +203,18 @@ class SensorConfig(StrictModel):
     (firm soil), i.e. a prediction of the coming ground motion, and a residual policy's prior is
     LQG + ground model."""
 
-    history: PositiveInt = 5
+    history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 5
     measurements: list[MeasurementConfig] = Field(
         default_factory=lambda: [MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.05)],
         min_length=1,
+        max_length=50,
     )
-    ground_scale: PositiveFloat = 5.0
-    ground_noise_std: NonNegativeFloat = 0.05
+    ground_scale: Scale = 5.0
+    ground_noise_std: NoiseStd = 0.05
     state_estimate: bool = False
     ground_model: bool = False
-    displacement_scale: PositiveFloat = 0.02
-    velocity_scale: PositiveFloat = 0.2
+    displacement_scale: Scale = 0.02
+    velocity_scale: Scale = 0.2
 
 
 class RewardTerm(StrictModel):
@@ -162,8 +225,8 @@ class RewardTerm(StrictModel):
     """
 
     quantity: Quantity | Literal["force_change"]
-    weight: NonNegativeFloat
-    scale: PositiveFloat
+    weight: Annotated[float, Field(ge=0.0, le=1.0e6)]
+    scale: Scale
     power: float = Field(2.0, ge=2.0, le=16.0)
 
     @property
@@ -183,31 +246,38 @@ class RewardConfig(StrictModel):
             RewardTerm(quantity="force", weight=1.0, scale=1.0e5),
         ],
         min_length=1,
+        max_length=50,
     )
+
+    @model_validator(mode="after")
+    def _something_to_learn(self) -> RewardConfig:
+        if all(term.weight == 0.0 for term in self.terms):
+            raise ValueError("every weight is zero: the reward would be constant; give one term a positive weight")
+        return self
 
 
 class NoiseImpulsesConfig(StrictModel):
     """The paper's training motions: white noise plus random half-sine impulses (m/s^2, s)."""
 
     kind: Literal["noise_impulses"] = "noise_impulses"
-    dt: PositiveFloat = 0.02
-    duration: Range = (10.0, 20.0)
-    noise_std: Range = (0.2, 1.5)
+    dt: TimeStep = 0.02
+    duration: DurationRange = (10.0, 20.0)
+    noise_std: AccelerationRange = (0.2, 1.5)
     impulses: IntRange = (0, 4)
-    impulse_amplitude: Range = (1.0, 5.0)
-    impulse_duration: Range = (0.05, 0.5)
+    impulse_amplitude: AccelerationRange = (1.0, 5.0)
+    impulse_duration: DurationRange = (0.05, 0.5)
 
 
 class KanaiTajimiConfig(StrictModel):
     """Kanai-Tajimi filtered white noise with a rise-plateau-decay envelope, scaled to a PGA."""
 
     kind: Literal["kanai_tajimi"] = "kanai_tajimi"
-    dt: PositiveFloat = 0.02
-    duration: Range = (15.0, 30.0)
-    ground_frequency: Range = (8.0, 25.0)
-    ground_damping: Range = (0.3, 0.7)
-    pga: Range = (1.0, 6.0)
-    rise_time: Range = (1.0, 3.0)
+    dt: TimeStep = 0.02
+    duration: DurationRange = (15.0, 30.0)
+    ground_frequency: _range(0.0, 1000.0, low_open=True) = (8.0, 25.0)  # rad/s
+    ground_damping: _range(0.0, 10.0, low_open=True) = (0.3, 0.7)
+    pga: AccelerationRange = (1.0, 6.0)
+    rise_time: DurationRange = (1.0, 3.0)
     strong_duration: Range = (4.0, 12.0)
     decay_rate: Range = (0.2, 0.6)
 
@@ -216,7 +286,7 @@ SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig, Field(discrimi
 
 
 class MixtureComponent(StrictModel):
-    weight: PositiveFloat
+    weight: Annotated[float, Field(gt=0.0, le=1.0e6)]
     generator: SourceConfig
 
 
@@ -224,7 +294,7 @@ class MixtureConfig(StrictModel):
     """Each motion comes from one component, drawn with probability proportional to its weight."""
 
     kind: Literal["mixture"] = "mixture"
-    components: list[MixtureComponent] = Field(min_length=1)
+    components: list[MixtureComponent] = Field(min_length=1, max_length=50)
 
 
 GeneratorConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | MixtureConfig, Field(discriminator="kind")]
@@ -235,14 +305,20 @@ class ExcitationConfig(StrictModel):
     of the same generator with the fixed `validation_seed`."""
 
     generator: GeneratorConfig = NoiseImpulsesConfig()
-    validation_motions: PositiveInt = 8
-    validation_seed: int = 10_000
+    validation_motions: Annotated[int, Field(ge=1, le=1000)] = 8
+    validation_seed: Seed = 10_000
+
+    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig]:
+        """The generators motions can come from (the components of a mixture)."""
+        if isinstance(self.generator, MixtureConfig):
+            return [component.generator for component in self.generator.components]
+        return [self.generator]
 
 
 class SimulationConfig(StrictModel):
     """Control step (s) and the discretisation: exact (ZOH force, FOH ground) or Newmark-beta."""
 
-    control_dt: PositiveFloat = 0.02
+    control_dt: TimeStep = 0.02
     method: Literal["exact", "newmark"] = "exact"
     newmark_beta: float = Field(0.25, gt=0.0, le=0.5)
     newmark_gamma: float = Field(0.5, ge=0.5, le=1.0)
@@ -251,9 +327,9 @@ class SimulationConfig(StrictModel):
 class PolicyConfig(StrictModel):
     """The MLP; `log_std_init` sets the initial exploration noise of Gaussian policies (log of std)."""
 
-    net_arch: list[PositiveInt] = [128, 128, 128]
+    net_arch: list[Annotated[int, Field(ge=1, le=4096)]] = Field([128, 128, 128], min_length=1, max_length=16)
     activation: Literal["relu", "tanh", "elu", "leaky_relu", "gelu"] = "relu"
-    log_std_init: float | None = None
+    log_std_init: Annotated[float, Field(ge=-20.0, le=5.0)] | None = None
 
 
 class AlgorithmConfig(StrictModel):
@@ -269,21 +345,21 @@ class AlgorithmConfig(StrictModel):
     """
 
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
-    total_steps: PositiveInt = 1_500_000
-    n_envs: PositiveInt = 1
+    total_steps: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 1_500_000
+    n_envs: Annotated[int, Field(ge=1, le=MAX_ENVS)] = 1
     vec_env: Literal["dummy", "subproc"] = "dummy"
     policy: PolicyConfig = PolicyConfig()
     kwargs: dict[str, Any] = Field(default_factory=lambda: {"gamma": 0.999})
     normalize_observations: bool = False
     residual_lqg: bool = False
-    torch_threads: PositiveInt = 1
-    checkpoint_every: PositiveInt = 50_000
-    eval_every: PositiveInt = 25_000
+    torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
+    checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
+    eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
 
 
 PARTS: dict[str, Any] = {
     "building": BuildingConfig,
-    "actuators": list[ActuatorConfig],
+    "actuators": Actuators,
     "sensors": SensorConfig,
     "reward": RewardConfig,
     "excitation": ExcitationConfig,
@@ -295,10 +371,10 @@ PARTS: dict[str, Any] = {
 class Experiment(StrictModel):
     """A whole experiment. `Experiment()` is the paper's five-story case."""
 
-    name: str = "paper_sac"
-    seed: int = 0
+    name: Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z0-9_.+-]+$")] = "paper_sac"
+    seed: Seed = 0
     building: BuildingConfig = BuildingConfig()
-    actuators: list[ActuatorConfig] = Field(default_factory=_paper_actuators, min_length=1)
+    actuators: Actuators = Field(default_factory=_paper_actuators)
     sensors: SensorConfig = SensorConfig()
     reward: RewardConfig = RewardConfig()
     excitation: ExcitationConfig = ExcitationConfig()
@@ -315,6 +391,13 @@ class Experiment(StrictModel):
 
 
 GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "mixture")
+MAX_NESTING = 50  # levels of YAML nesting; deeper is not a configuration
+
+
+def location(file: str, prefix: str, key: str = "") -> str:
+    """'file: prefix.key' as every configuration message starts."""
+    path = ".".join(part for part in (prefix, key) if part)
+    return f"{file}: {path}" if path else file
 
 
 def _format_location(location: tuple[Any, ...], prefix: str) -> str:
@@ -327,6 +410,11 @@ def _format_location(location: tuple[Any, ...], prefix: str) -> str:
     return text or "(top level)"
 
 
+def _short(value: Any, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _first_error(error: ValidationError, file: str, prefix: str) -> ConfigError:
     detail = error.errors(include_url=False)[0]
     key = _format_location(tuple(detail["loc"]), prefix)
@@ -334,34 +422,74 @@ def _first_error(error: ValidationError, file: str, prefix: str) -> ConfigError:
     if detail["type"] == "extra_forbidden":
         message = "unknown key"
     elif detail["type"] != "value_error" and not isinstance(detail.get("input"), dict | type(None)):
-        message += f" (got {detail['input']!r})"
+        message += f" (got {_short(detail['input'])})"
     return ConfigError(f"{file}: {key}: {message}")
 
 
+def _depth(value: Any) -> int:
+    """Nesting depth of lists and mappings, without recursion."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, level = stack.pop()
+        if isinstance(item, dict | list):
+            deepest = max(deepest, level)
+            if level <= MAX_NESTING:
+                stack.extend((child, level + 1) for child in (item.values() if isinstance(item, dict) else item))
+    return deepest
+
+
 def read_yaml(path: Path) -> Any:
-    """Read a YAML file; a missing file or a syntax error becomes a one-line ConfigError."""
+    """Read a YAML file; an unreadable file, a syntax error, non-text bytes, an empty file or
+    absurd nesting becomes a one-line ConfigError."""
+    if path.is_dir():
+        raise ConfigError(f"{path}: is a folder, expected a YAML file")
     try:
-        text = path.read_text()
+        text = path.read_bytes().decode("utf-8")
     except OSError as error:
         raise ConfigError(f"{path}: cannot read the file ({error.strerror})") from None
+    except UnicodeDecodeError as error:
+        raise ConfigError(f"{path}: not a text (UTF-8) file: byte {error.start} is {text_byte(error)}") from None
     try:
-        return yaml.safe_load(text)
+        value = yaml.safe_load(text)
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
         problem = getattr(error, "problem", None) or str(error).splitlines()[0]
         raise ConfigError(f"{where}: invalid YAML: {problem}") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: nested too deeply to be a configuration") from None
+    if value is None:
+        raise ConfigError(f"{path}: the file is empty, expected YAML keys")
+    if _depth(value) > MAX_NESTING:
+        raise ConfigError(f"{path}: nested more than {MAX_NESTING} levels deep, expected a configuration")
+    return value
 
 
-def _display(path: Path) -> str:
-    return str(path.relative_to(Path.cwd())) if path.is_relative_to(Path.cwd()) else str(path)
+def text_byte(error: UnicodeDecodeError) -> str:
+    return f"0x{error.object[error.start]:02x}"
+
+
+def display_path(path: Path) -> str:
+    """`path` relative to the working folder when it lies inside it (for messages and reports)."""
+    path = Path(path)
+    absolute = path.resolve() if path.is_absolute() else None
+    if absolute is not None and absolute.is_relative_to(Path.cwd()):
+        return str(absolute.relative_to(Path.cwd()))
+    return str(path)
+
+
+def _check_part_type(part: str, value: Any, where: str) -> None:
+    expected = list if part == "actuators" else dict
+    if not isinstance(value, expected):
+        what = "a list of actuators" if expected is list else f"a mapping of {part} keys"
+        got = "text" if isinstance(value, str) else type(value).__name__
+        raise ConfigError(f"{where}: expected {what}, got {got}")
 
 
 def load_experiment(path: str | Path) -> Experiment:
     """Load an experiment YAML and the part files it names; raise ConfigError on any problem."""
     path = Path(path)
     raw = read_yaml(path)
-    raw = {} if raw is None else raw
     if not isinstance(raw, dict):
         raise ConfigError(f"{path}: expected a mapping of experiment keys, got {type(raw).__name__}")
     origins: dict[str, tuple[str, str]] = {}
@@ -369,12 +497,15 @@ def load_experiment(path: str | Path) -> Experiment:
         value = raw.get(part)
         if isinstance(value, str):
             part_path = (path.parent / value).resolve()
-            if not part_path.is_file():
+            if not part_path.exists():
                 raise ConfigError(f"{path}: {part}: file not found: {value} (relative to {path.parent})")
             raw[part] = read_yaml(part_path)
-            origins[part] = (_display(part_path), "")
+            origins[part] = (display_path(part_path), "")
+            _check_part_type(part, raw[part], display_path(part_path))
         else:
             origins[part] = (str(path), part)
+            if part in raw:
+                _check_part_type(part, value, f"{path}: {part}")
     return build_experiment(raw, origins, str(path))
 
 
@@ -402,11 +533,11 @@ def build_experiment(
 
 def _check_cross_references(experiment: Experiment) -> None:
     if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
-        file, prefix = experiment.origin("algorithm")
-        raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}residual_lqg: needs sensors.state_estimate: true")
+        raise ConfigError(
+            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
+        )
     if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
-        file, prefix = experiment.origin("sensors")
-        raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}ground_model: needs state_estimate: true")
+        raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     for index, actuator in enumerate(experiment.actuators):
@@ -422,3 +553,40 @@ def _check_cross_references(experiment: Experiment) -> None:
             if floor > count:
                 what = "actuator" if measurement.quantity == "force" else "floor"
                 raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
+    _check_time_steps(experiment)
+
+
+def _check_time_steps(experiment: Experiment) -> None:
+    """The control step must hold a whole number of generated samples, and every generated motion
+    at least one control step: otherwise what is simulated is not what was configured."""
+    control_dt = experiment.simulation.control_dt
+    file, prefix = experiment.origin("excitation")
+    for source in experiment.excitation.sources():
+        ratio = control_dt / source.dt
+        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
+            where = location(*experiment.origin("simulation"), "control_dt")
+            raise ConfigError(
+                f"{where}: {control_dt:g} s is not a whole multiple of the {source.kind} generator's "
+                f"dt = {source.dt:g} s; choose control_dt = r * dt"
+            )
+        if source.duration[0] < control_dt:
+            raise ConfigError(
+                f"{location(file, prefix, 'generator.duration')}: {source.duration[0]:g} s is shorter than one "
+                f"control step ({control_dt:g} s)"
+            )
+
+
+def check_seed(seed: int, where: str = "--seed") -> int:
+    """A seed must be a whole number in [0, 2^32 - 1] (what numpy and torch accept)."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise ConfigError(f"{where}: expected a whole number in [0, {MAX_SEED}], got {seed!r}")
+    return seed
+
+
+def finite(value: float, where: str, low: float = 0.0, high: float = math.inf, low_open: bool = True) -> float:
+    """A finite number in (low, high] (or [low, high] with low_open=False), else a ConfigError."""
+    ok = math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        bracket = "(" if low_open else "["
+        raise ConfigError(f"{where}: expected a finite number in {bracket}{low:g}, {high:g}], got {value!r}")
+    return value

@@ -48,8 +48,11 @@ class PolicyController:
     maps an observation to the action the policy's output is added to (residual policies).
     """
 
-    def __init__(self, model, force_limits: np.ndarray, normalize=None, name: str = "RL", prior=None) -> None:
+    def __init__(
+        self, model, force_limits: np.ndarray, normalize=None, name: str = "RL", prior=None, source: str = ""
+    ) -> None:
         self.model = model
+        self.source = source  # the saved model file, for reports
         self.force_limits = force_limits
         self.normalize = normalize
         self.name = name
@@ -60,7 +63,7 @@ class PolicyController:
         from rlcontroller.training import load_policy
 
         model, normalize, prior = load_policy(model_path)
-        return cls(model, force_limits, normalize, name, prior)
+        return cls(model, force_limits, normalize, name, prior, source=str(model_path))
 
     def reset(self) -> None:
         pass

@@ -7,77 +7,23 @@ clipping); the clairvoyant optimal controller is the reference no causal control
 
 from __future__ import annotations
 
-import csv
-import os
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from rlcontroller.config import Experiment, KanaiTajimiConfig
+from rlcontroller.config import Experiment
 from rlcontroller.controllers import Controller, rollout
 from rlcontroller.dynamics import Response, simulate
 from rlcontroller.env import BuildingEnv
-from rlcontroller.excitation import GroundMotion, MotionError, for_control_step, generate_suite, read_at2, scale_to_pga
+from rlcontroller.excitation import GroundMotion, for_control_step
 from rlcontroller.lqg import optimal_response
 from rlcontroller.metrics import METRICS, j_metrics
 
-PROJECT_MANIFEST = Path(__file__).resolve().parents[1] / "records" / "manifest.csv"
-RECORDS_VARIABLE = "RLC_RECORDS"
 OPTIMAL = "optimal (clairvoyant)"
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
-SYNTHETIC_LABEL = "SYNTHETIC suite (7 seeded Kanai-Tajimi motions), not the paper's records"
-RECORDS_LABEL = "PEER NGA-West2 records (7)"
-SYNTHETIC_SEED = 2024
-
-
-def read_manifest(folder: Path | None = None) -> list[dict[str, str]]:
-    """Rows of the project's record manifest (or of `folder`/manifest.csv when that is the only one)."""
-    path = PROJECT_MANIFEST if PROJECT_MANIFEST.is_file() else (folder or Path(".")) / "manifest.csv"
-    if not path.is_file():
-        raise MotionError(f"{path}: record manifest not found")
-    with open(path, newline="") as handle:
-        return list(csv.DictReader(handle))
-
-
-def load_records(folder: Path, scale_pga_g: float | None = None) -> list[GroundMotion]:
-    """The seven records from `folder`, as recorded or scaled to a PGA (in g)."""
-    folder = Path(folder)
-    rows = read_manifest(folder)
-    missing = [row for row in rows if not (folder / row["file"]).is_file()]
-    if missing:
-        names = ", ".join(row["file"] for row in missing)
-        rsns = ", ".join(row["rsn"] for row in missing)
-        raise MotionError(
-            f"{folder}: {len(missing)} of {len(rows)} records missing: {names}; download them from "
-            f"https://ngawest2.berkeley.edu (RSN {rsns}) into that folder, see records/README.md"
-        )
-    motions = [read_at2(folder / row["file"]) for row in rows]
-    if scale_pga_g is not None:
-        motions = [scale_to_pga(m, scale_pga_g * 9.80665) for m in motions]
-    return motions
-
-
-def synthetic_suite(count: int = 7, seed: int = SYNTHETIC_SEED) -> list[GroundMotion]:
-    """The embedded default: seeded Kanai-Tajimi motions, strong enough to matter (PGA 2-6 m/s^2)."""
-    config = KanaiTajimiConfig(duration=(25.0, 40.0), pga=(2.0, 6.0), strong_duration=(6.0, 15.0))
-    motions = generate_suite(config, count, seed)
-    return [GroundMotion(f"synthetic_KT_{i + 1}", m.dt, m.acceleration, synthetic=True) for i, m in enumerate(motions)]
-
-
-def choose_motions(records: Path | None, scale_pga_g: float | None = None) -> tuple[list[GroundMotion], str]:
-    """The records in `records` (or $RLC_RECORDS); without either, the labelled synthetic suite."""
-    folder = records or (Path(os.environ[RECORDS_VARIABLE]) if os.environ.get(RECORDS_VARIABLE) else None)
-    if folder is None:
-        motions = synthetic_suite()
-        if scale_pga_g is not None:
-            motions = [scale_to_pga(m, scale_pga_g * 9.80665) for m in motions]
-        return motions, SYNTHETIC_LABEL
-    label = RECORDS_LABEL + (f", scaled to PGA {scale_pga_g:g} g" if scale_pga_g is not None else ", as recorded")
-    return load_records(folder, scale_pga_g), label
 
 
 def uncontrolled_response(env: BuildingEnv, motion: GroundMotion) -> Response:
@@ -95,6 +41,8 @@ class Evaluation:
     metrics: pd.DataFrame
     responses: dict[tuple[str, str], Response] = field(repr=False)
     seconds: float = 0.0
+    sources: dict[str, str] = field(default_factory=dict)  # controller -> what was evaluated (a model file)
+    descriptions: dict[str, str] = field(default_factory=dict)  # record -> event, station ... (may be empty)
 
     @property
     def controllers(self) -> list[str]:
@@ -138,7 +86,9 @@ def evaluate(
                     {"controller": name, "record": motion.name, "metric": metric, "index": i + 1, "value": float(v)}
                     for i, v in enumerate(values)
                 )
-    return Evaluation(label, experiment, pd.DataFrame(rows), responses, time.perf_counter() - start)
+    descriptions = {motion.name: motion.description for motion in motions}
+    seconds = time.perf_counter() - start
+    return Evaluation(label, experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions)
 
 
 def percent_better(candidate: float, reference: float) -> float:

@@ -9,13 +9,22 @@ from __future__ import annotations
 import csv
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import scipy.signal
 
-from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, MixtureConfig, NoiseImpulsesConfig
+from rlcontroller.config import (
+    MAX_DURATION,
+    MAX_GROUND_ACCELERATION,
+    MAX_TIME_STEP,
+    MIN_TIME_STEP,
+    GeneratorConfig,
+    KanaiTajimiConfig,
+    MixtureConfig,
+    NoiseImpulsesConfig,
+)
 
 STANDARD_GRAVITY = 9.80665  # m/s^2
 UNITS_TO_SI = {"g": STANDARD_GRAVITY, "m/s2": 1.0, "m/s^2": 1.0, "cm/s2": 0.01, "cm/s^2": 0.01, "gal": 0.01}
@@ -33,6 +42,7 @@ class GroundMotion:
     dt: float
     acceleration: np.ndarray = field(repr=False)
     synthetic: bool = False
+    description: str = ""  # e.g. event and station, from a manifest
 
     @property
     def duration(self) -> float:
@@ -52,6 +62,29 @@ _WEST2_HEADER = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.Ee+-]+)", re
 _WEST1_HEADER = re.compile(r"^\s*(\d+)\s+([0-9.Ee+-]+)\s+NPTS", re.IGNORECASE)
 
 
+def checked(motion: GroundMotion, where: str) -> GroundMotion:
+    """The motion if it is one a building can be judged on, else a MotionError naming `where`:
+    at least two samples, a time step in [1e-4, 1] s, at most an hour, finite, not all zero,
+    and a PGA of at most about 10 g (more is a unit mistake)."""
+    count = motion.acceleration.size
+    if count < 2:
+        raise MotionError(f"{where}: {count} samples, expected at least 2")
+    if not (math.isfinite(motion.dt) and MIN_TIME_STEP <= motion.dt <= MAX_TIME_STEP):
+        raise MotionError(f"{where}: time step {motion.dt!r} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
+    if motion.duration > MAX_DURATION:
+        raise MotionError(f"{where}: lasts {motion.duration:.0f} s, expected at most {MAX_DURATION:.0f} s")
+    if not np.all(np.isfinite(motion.acceleration)):
+        raise MotionError(f"{where}: the record holds non-finite values")
+    if motion.pga == 0.0:
+        raise MotionError(f"{where}: every sample is zero; there is nothing to control")
+    if motion.pga > MAX_GROUND_ACCELERATION:
+        raise MotionError(
+            f"{where}: PGA {motion.pga / STANDARD_GRAVITY:.3g} g, expected at most "
+            f"{MAX_GROUND_ACCELERATION / STANDARD_GRAVITY:.3g} g (wrong unit?)"
+        )
+    return motion
+
+
 def read_at2(path: str | Path) -> GroundMotion:
     """Read a PEER NGA (West1 or West2) .AT2 acceleration file in units of g."""
     path = Path(path)
@@ -66,9 +99,17 @@ def read_at2(path: str | Path) -> GroundMotion:
     header = _WEST2_HEADER.search(lines[3]) or _WEST1_HEADER.search(lines[3])
     if header is None:
         raise MotionError(f"{path}:4: expected 'NPTS=..., DT=...' (NGA-West2) or 'n dt NPTS, DT' (NGA-West1)")
-    npts, dt = int(header.group(1)), float(header.group(2))
-    if dt <= 0:
-        raise MotionError(f"{path}:4: DT must be positive, got {dt}")
+    npts = int(header.group(1))
+    try:
+        dt = float(header.group(2))
+    except ValueError:
+        raise MotionError(f"{path}:4: DT must be a number, got {header.group(2)!r}") from None
+    if not (math.isfinite(dt) and MIN_TIME_STEP <= dt <= MAX_TIME_STEP):
+        raise MotionError(f"{path}:4: DT = {header.group(2)} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
+    if npts < 2 or npts * dt > MAX_DURATION:
+        raise MotionError(
+            f"{path}:4: NPTS = {npts}, expected at least 2 samples and at most {MAX_DURATION:.0f} s of record"
+        )
     values: list[float] = []
     for number, line in enumerate(lines[4:], start=5):
         for token in line.split():
@@ -79,10 +120,7 @@ def read_at2(path: str | Path) -> GroundMotion:
     if len(values) != npts:
         what = "truncated?" if len(values) < npts else "extra values?"
         raise MotionError(f"{path}: header says NPTS={npts} but the file holds {len(values)} values ({what})")
-    acceleration = np.asarray(values) * STANDARD_GRAVITY
-    if not np.all(np.isfinite(acceleration)):
-        raise MotionError(f"{path}: the record holds non-finite values")
-    return GroundMotion(name=path.stem, dt=dt, acceleration=acceleration)
+    return checked(GroundMotion(name=path.stem, dt=dt, acceleration=np.asarray(values) * STANDARD_GRAVITY), str(path))
 
 
 def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
@@ -96,6 +134,8 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
         rows = list(csv.reader(path.read_text().splitlines()))
     except OSError as error:
         raise MotionError(f"{path}: cannot read the file ({error.strerror})") from None
+    except UnicodeDecodeError:
+        raise MotionError(f"{path}: not a text (UTF-8) file") from None
     if len(rows) < 3:
         raise MotionError(f"{path}: expected a header row and at least two samples")
     header = [cell.strip().lower() for cell in rows[0]]
@@ -120,17 +160,26 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
         except ValueError:
             raise MotionError(f"{path}:{number}: expected two numbers, got {row!r}") from None
     times = np.asarray(time)
+    if times.size < 2:
+        raise MotionError(f"{path}: {times.size} samples, expected at least 2")
+    if not np.all(np.isfinite(times)):
+        raise MotionError(f"{path}:{int(np.argmax(~np.isfinite(times))) + 2}: time must be a finite number")
     steps = np.diff(times)
     if np.any(steps <= 0):
         bad = int(np.argmax(steps <= 0)) + 3
         raise MotionError(f"{path}:{bad}: time must increase strictly")
     values = np.asarray(acceleration) * UNITS_TO_SI[unit]
     dt = float(np.median(steps))
-    motion = GroundMotion(name=path.stem, dt=dt, acceleration=values)
+    motion = checked(GroundMotion(name=path.stem, dt=dt, acceleration=values), str(path))
+    if times[-1] - times[0] > MAX_DURATION:
+        raise MotionError(f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s")
     if np.allclose(steps, dt, rtol=1e-6, atol=0.0):
         return motion
     uniform = np.arange(0.0, times[-1] - times[0] + 0.5 * dt, dt)
     return GroundMotion(name=path.stem, dt=dt, acceleration=np.interp(uniform, times - times[0], values))
+
+
+MOTION_SUFFIXES = (".at2", ".csv")
 
 
 def read_motion(path: str | Path) -> GroundMotion:
@@ -140,7 +189,7 @@ def read_motion(path: str | Path) -> GroundMotion:
         return read_at2(path)
     if path.suffix.lower() == ".csv":
         return read_csv(path)
-    raise MotionError(f"{path}: unknown ground-motion format, expected .AT2 or .csv")
+    raise MotionError(f"{path}: unknown ground-motion format {path.suffix!r}, expected .AT2 or .csv")
 
 
 def resample(motion: GroundMotion, dt: float) -> GroundMotion:
@@ -150,12 +199,12 @@ def resample(motion: GroundMotion, dt: float) -> GroundMotion:
         return motion
     count = int(math.floor(motion.duration / dt + 1e-9)) + 1
     grid = np.arange(count) * dt
-    return GroundMotion(motion.name, dt, np.interp(grid, motion.time, motion.acceleration), motion.synthetic)
+    return replace(motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration))
 
 
 def scale_to_pga(motion: GroundMotion, pga: float) -> GroundMotion:
     """The motion scaled to a peak ground acceleration `pga` (m/s^2)."""
-    return GroundMotion(motion.name, motion.dt, motion.acceleration * (pga / motion.pga), motion.synthetic)
+    return replace(motion, acceleration=motion.acceleration * (pga / motion.pga))
 
 
 def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarray, int]:
@@ -163,6 +212,10 @@ def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarra
 
     Returns (samples, r); the motion is resampled only if its step does not divide control_dt.
     """
+    if motion.duration < control_dt:
+        raise MotionError(
+            f"{motion.name}: lasts {motion.duration:g} s, shorter than one control step ({control_dt:g} s)"
+        )
     substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
     return resample(motion, control_dt / substeps).acceleration, substeps
 

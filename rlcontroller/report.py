@@ -20,13 +20,14 @@ from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, Evaluation, percent_b
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
 
 COLOURS = {
-    "uncontrolled": "0.55",
+    "uncontrolled": "0.6",
     "LQG": "tab:blue",
-    "LQG + ground": "tab:cyan",
+    "LQG + ground": "tab:purple",
     "LQG + ground model": "tab:green",
     "RL": "tab:red",
     OPTIMAL: "black",
 }
+LINE_STYLES = {"LQG + ground": (0, (5, 2)), "LQG + ground model": (0, (1, 1)), OPTIMAL: "--"}
 METRIC_NAMES = {
     "J1": "J1 peak drift",
     "J2": "J2 peak abs. acceleration",
@@ -40,11 +41,15 @@ FAIRNESS = (
 
 
 def markdown_table(frame: pd.DataFrame, digits: int = 3) -> str:
+    """A Markdown table; numbers with `digits` decimals, percentages (columns named '... %') with one."""
     header = "| " + " | ".join([str(frame.index.name or "")] + [str(c) for c in frame.columns]) + " |"
     rule = "|" + "---|" * (len(frame.columns) + 1)
     lines = [header, rule]
+    places = [1 if str(column).endswith("%") else digits for column in frame.columns]
     for index, row in frame.iterrows():
-        cells = [f"{v:.{digits}f}" if isinstance(v, float | np.floating) else str(v) for v in row]
+        cells = [
+            f"{v:.{d}f}" if isinstance(v, float | np.floating) else str(v) for v, d in zip(row, places, strict=True)
+        ]
         label = f"{index:g}" if isinstance(index, float | np.floating) else str(index)
         lines.append("| " + " | ".join([label] + cells) + " |")
     return "\n".join(lines)
@@ -92,13 +97,19 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
         atomic_write(out / "per_record.csv", per_record.assign(suite=evaluation.label).to_csv(index=False)),
         atomic_write(out / "summary.csv", summary.assign(suite=evaluation.label).to_csv()),
     ]
-    text = [f"# Summary: {evaluation.label}", "", f"Mean over records and stories (J3: over actuators). {FAIRNESS}", ""]
+    text = [f"# Summary: {evaluation.label}", ""]
+    text += [f"Experiment: {evaluation.experiment.name} (seed {evaluation.experiment.seed})."]
+    text += [f"Evaluated {name}: {source}." for name, source in evaluation.sources.items()]
+    text += ["", f"Mean over records and stories (J3: over actuators). {FAIRNESS}", ""]
     text += [markdown_table(summary), ""]
     if improvement is not None:
         text += [markdown_table(improvement, digits=1), ""]
     text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
     atomic_write(out / "summary.md", "\n".join(text))
-    detail = [f"# J1-J4 per record and story: {evaluation.label}", "", "Columns: story (J3: actuator).", ""]
+    stories = ", ".join(str(a.story) for a in evaluation.experiment.actuators)
+    detail = [f"# J1-J4 per record and story: {evaluation.label}", ""]
+    detail += [f"Columns: story (J3: actuator, on stories {stories}).", ""]
+    detail += [f"- {name}: {text}" for name, text in evaluation.descriptions.items() if text] + [""]
     for metric in ("J1", "J2", "J3", "J4"):
         for controller in evaluation.controllers:
             if controller == "uncontrolled":
@@ -122,19 +133,43 @@ def time_history_record(evaluation: Evaluation) -> str:
     return evaluation.records[0]
 
 
+def strong_part(ground: np.ndarray, time: np.ndarray, low: float = 0.05, high: float = 0.95) -> tuple[float, float]:
+    """The strong shaking: the significant duration D5-95 of the ground motion (where its Arias
+    intensity, the integral of a_g^2, goes from 5 % to 95 %), padded by 1 s before and 4 s after,
+    at least 10 s long (s)."""
+    energy = np.cumsum(ground**2)
+    if energy[-1] <= 0.0:
+        return float(time[0]), float(time[-1])
+    start = time[np.searchsorted(energy, low * energy[-1])] - 1.0
+    end = time[min(np.searchsorted(energy, high * energy[-1]), time.size - 1)] + 4.0
+    end = max(end, start + 10.0)
+    return float(max(time[0], start)), float(min(time[-1], end))
+
+
 def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Path:
+    """Drift of one story and base shear on one record, zoomed on the strong part of the response."""
     record = time_history_record(evaluation)
+    story = min(story, len(evaluation.experiment.building.masses))
+    bare = evaluation.responses["uncontrolled", record]
+    start, end = strong_part(bare.ground, bare.time)
     figure, (drift_axis, shear_axis) = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
     for controller in evaluation.controllers:
         result = evaluation.responses[controller, record]
-        style = {"color": COLOURS.get(controller), "linewidth": 1.0 if controller != OPTIMAL else 0.8}
-        if controller == OPTIMAL:
-            style["linestyle"] = "--"
+        style = {
+            "color": COLOURS.get(controller),
+            "linestyle": LINE_STYLES.get(controller, "-"),
+            "linewidth": 1.6 if controller == "RL" else 1.0,
+        }
         drift_axis.plot(result.time, 100 * result.drift[:, story - 1], label=controller, **style)
         shear_axis.plot(result.time, result.base_shear / 1e3, label=controller, **style)
-    drift_axis.set(ylabel=f"story-{story} drift (cm)", title=f"{record} — {evaluation.label}")
+    description = evaluation.descriptions.get(record, "")
+    source = "SYNTHETIC motion" if "SYNTHETIC" in evaluation.label else "as recorded"
+    if "scaled to PGA" in evaluation.label:
+        source = evaluation.label[evaluation.label.index("scaled to PGA") :]
+    title = f"{record}" + (f" ({description})" if description else "") + f", {source}; strong part shown"
+    drift_axis.set(ylabel=f"story-{story} drift (cm)", title=title, xlim=(start, end))
     shear_axis.set(xlabel="time (s)", ylabel="base shear (kN)")
-    drift_axis.legend(loc="upper right", ncol=4, fontsize=9)
+    drift_axis.legend(loc="upper right", ncol=3, fontsize=9)
     for axis in (drift_axis, shear_axis):
         axis.grid(alpha=0.3)
     figure.tight_layout()
@@ -160,6 +195,8 @@ def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
                 table.index, table.mean(axis=1), color=COLOURS.get(controller, "tab:green"), linewidth=2.5, label="mean"
             )
             axis.set_xticks(table.index)
+            if metric == "J3":
+                axis.set_xticklabels([str(evaluation.experiment.actuators[i - 1].story) for i in table.index])
             if metric != "J3":
                 axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
             axis.grid(alpha=0.3)
@@ -168,7 +205,7 @@ def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
             if column == 0:
                 axis.set_ylabel(METRIC_NAMES[metric] + (" (C/UC)" if metric != "J3" else " (E_u / E_Vb,UC)"))
             if row == 3 or metric == "J3":
-                axis.set_xlabel("actuator" if metric == "J3" else "story")
+                axis.set_xlabel("story of the actuator" if metric == "J3" else "story")
     legend = [Line2D([], [], color="0.4", alpha=0.5, linewidth=0.8), Line2D([], [], color="0.2", linewidth=2.5)]
     axes[0, 0].legend(legend, ["one record", "mean over records"], loc="upper right", fontsize=8)
     figure.suptitle(f"J1–J4 per story: thin lines one record each, bold the mean — {evaluation.label}", fontsize=11)

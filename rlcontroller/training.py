@@ -45,7 +45,7 @@ from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.controllers import PolicyController, Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.excitation import generate_suite
-from rlcontroller.files import atomic_savefig, atomic_write
+from rlcontroller.files import atomic_savefig, atomic_write, check_new_folder
 from rlcontroller.lqg import LQGController, LQGPrior, design_lqg, design_lqg_ground_model
 from rlcontroller.metrics import j_metrics, peak
 
@@ -214,8 +214,8 @@ class RunFolder:
 
     @classmethod
     def create(cls, path: Path, experiment: Experiment, device: str) -> RunFolder:
-        if path.exists() and any(path.iterdir()):
-            raise ConfigError(f"{path}: run folder exists and is not empty; runs are never overwritten (use --resume)")
+        """A new run folder with the resolved config and run.json (`device`: the one the model is on)."""
+        check_new_folder(path, "run")
         path.mkdir(parents=True, exist_ok=True)
         run = cls(path)
         atomic_write(path / "config.yaml", experiment.to_yaml())
@@ -255,14 +255,18 @@ class RunFolder:
         temporary = self.checkpoint_root / f".incomplete_step_{steps:010d}"
         shutil.rmtree(temporary, ignore_errors=True)
         temporary.mkdir(parents=True)
-        model.save(temporary / "model.zip")
-        if hasattr(model, "replay_buffer") and model.replay_buffer is not None:
-            model.save_replay_buffer(temporary / "replay_buffer.pkl")
-        normalize = model.get_vec_normalize_env()
-        if normalize is not None:
-            normalize.save(str(temporary / "vecnormalize.pkl"))
-        (temporary / "state.json").write_text(json.dumps({**state, "steps": steps}) + "\n")
-        os.rename(temporary, final)
+        try:
+            model.save(temporary / "model.zip")
+            if hasattr(model, "replay_buffer") and model.replay_buffer is not None:
+                model.save_replay_buffer(temporary / "replay_buffer.pkl")
+            normalize = model.get_vec_normalize_env()
+            if normalize is not None:
+                normalize.save(str(temporary / "vecnormalize.pkl"))
+            (temporary / "state.json").write_text(json.dumps({**state, "steps": steps}) + "\n")
+            os.rename(temporary, final)
+        except BaseException:
+            shutil.rmtree(temporary, ignore_errors=True)  # the newest complete checkpoint stays the newest
+            raise
         for old in self.checkpoints()[:-KEPT_CHECKPOINTS]:
             shutil.rmtree(old, ignore_errors=True)
         return final
@@ -372,7 +376,7 @@ def _callback(
 
     class TrainingCallback(BaseCallback):
         def _on_training_start(self) -> None:
-            self.session_start = time.perf_counter()
+            self.started = self.session_start = time.perf_counter()
 
         def wall_time(self) -> float:
             return state["wall_time_s"] + time.perf_counter() - self.session_start
@@ -383,7 +387,7 @@ def _callback(
                 self.validate()
             if steps // algorithm.checkpoint_every > previous // algorithm.checkpoint_every:
                 self.checkpoint()
-            if time_limit_s is not None and self.wall_time() >= time_limit_s:
+            if time_limit_s is not None and time.perf_counter() - self.started >= time_limit_s:
                 state["time_limit_reached"] = True
                 return False
             return not stop.requested
@@ -452,8 +456,8 @@ def train(
 ) -> TrainingSummary:
     """Train a new run (from `experiment`) or resume one (`resume` = its run folder).
 
-    With `time_limit_s`, training stops (as finished, and resumable) once the run's wall time
-    reaches it.
+    With `time_limit_s`, training stops (as finished, and resumable) once this call has trained
+    that long; a new run that fails before its first checkpoint leaves no run folder.
     """
     import torch
 
@@ -466,37 +470,27 @@ def train(
         assert experiment is not None
         check_algorithm(experiment)
         run = RunFolder(run_dir or default_run_dir(experiment))
-        if run.path.exists() and any(run.path.iterdir()):
-            raise ConfigError(
-                f"{run.path}: run folder exists and is not empty; runs are never overwritten (use --resume)"
-            )
+        check_new_folder(run.path, "run", " (use --resume)")
     torch.set_num_threads(experiment.algorithm.torch_threads)
     vec_env = make_vec_env(experiment, experiment.seed)
-    tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None
-    state: dict[str, Any] = {"wall_time_s": 0.0, "best_eval_reward": -float("inf"), "best_steps": None, "best": None}
-    checkpoints = run.checkpoints()
-    if resume is not None and checkpoints:
-        model = _load_checkpoint(experiment, checkpoints[-1], vec_env, device)
-        state.update(json.loads((checkpoints[-1] / "state.json").read_text()))
-        state.pop("steps", None)
-        state.pop("time_limit_reached", None)
-        run.truncate_curve(model.num_timesteps)
-    else:
-        model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
-        if resume is None:
-            RunFolder.create(run.path, experiment, device)
-        else:
-            run.truncate_curve(0)
-    stop = StopRequest()
-    previous_handlers = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    callback = _callback(run, experiment, Validator(experiment), stop, state, time_limit_s)
-    remaining = experiment.algorithm.total_steps - model.num_timesteps
+    created = False
     try:
-        if remaining > 0:
-            model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
-    finally:
-        for number, handler in previous_handlers.items():
-            signal.signal(number, handler)
+        model, state = _start(run, experiment, vec_env, device, resume is not None)
+        created = resume is None
+        stop = StopRequest()
+        previous_handlers = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
+        callback = _callback(run, experiment, Validator(experiment), stop, state, time_limit_s)
+        remaining = experiment.algorithm.total_steps - model.num_timesteps
+        try:
+            if remaining > 0:
+                model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
+        finally:
+            for number, handler in previous_handlers.items():
+                signal.signal(number, handler)
+    except BaseException:
+        if created and not run.checkpoints() and not (run.path / "best_model.zip").exists():
+            shutil.rmtree(run.path, ignore_errors=True)  # nothing trained: leave no half-made run folder
+        raise
     if remaining > 0:
         callback.checkpoint()
     if not stop.requested:
@@ -518,15 +512,60 @@ def train(
     )
 
 
-def _load_checkpoint(experiment: Experiment, checkpoint: Path, vec_env, device: str):
+def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, dict[str, Any]]:
+    """The model and training state: from the newest checkpoint when resuming, else new (and the
+    run folder is created, recording the device the model is on)."""
+    state: dict[str, Any] = {"wall_time_s": 0.0, "best_eval_reward": -float("inf"), "best_steps": None, "best": None}
+    checkpoints = run.checkpoints()
+    if resume and checkpoints:
+        model = _load_checkpoint(experiment, checkpoints, vec_env, device)
+        state.update(_read_state(checkpoints))
+        state.pop("steps", None)
+        state.pop("time_limit_reached", None)
+        run.truncate_curve(model.num_timesteps)
+        return model, state
+    tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None
+    model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
+    if resume:
+        run.truncate_curve(0)
+    else:
+        RunFolder.create(run.path, experiment, str(model.device))
+    return model, state
+
+
+def _unreadable(checkpoints: list[Path], path: Path, error: Exception) -> ConfigError:
+    detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+    hint = f"; delete {checkpoints[-1]} to resume from {checkpoints[-2].name}" if len(checkpoints) > 1 else ""
+    return ConfigError(f"{path}: unreadable checkpoint file ({type(error).__name__}: {detail}){hint}")
+
+
+def _read_state(checkpoints: list[Path]) -> dict[str, Any]:
+    path = checkpoints[-1] / "state.json"
+    try:
+        state = json.loads(path.read_text())
+        if not isinstance(state, dict) or not isinstance(state.get("wall_time_s"), int | float):
+            raise ValueError("expected a mapping with wall_time_s")
+        return state
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise _unreadable(checkpoints, path, error) from None
+
+
+def _load_checkpoint(experiment: Experiment, checkpoints: list[Path], vec_env, device: str):
     from stable_baselines3.common.vec_env import VecNormalize
 
-    if (checkpoint / "vecnormalize.pkl").is_file():
-        statistics = VecNormalize.load(str(checkpoint / "vecnormalize.pkl"), vec_env.venv)
-        vec_env.obs_rms, vec_env.ret_rms = statistics.obs_rms, statistics.ret_rms
-    model = algorithm_class(experiment.algorithm.name).load(checkpoint / "model.zip", env=vec_env, device=device)
-    if (checkpoint / "replay_buffer.pkl").is_file():
-        model.load_replay_buffer(checkpoint / "replay_buffer.pkl")
+    checkpoint = checkpoints[-1]
+    path = checkpoint / "vecnormalize.pkl"
+    try:
+        if path.is_file():
+            statistics = VecNormalize.load(str(path), vec_env.venv)
+            vec_env.obs_rms, vec_env.ret_rms = statistics.obs_rms, statistics.ret_rms
+        path = checkpoint / "model.zip"
+        model = algorithm_class(experiment.algorithm.name).load(path, env=vec_env, device=device)
+        path = checkpoint / "replay_buffer.pkl"
+        if path.is_file():
+            model.load_replay_buffer(path)
+    except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
+        raise _unreadable(checkpoints, path, error) from None
     return model
 
 
@@ -536,12 +575,18 @@ def load_policy(model_path: Path):
 
     model_path = Path(model_path)
     experiment = load_experiment(model_path.parent / "config.yaml")
-    model = algorithm_class(experiment.algorithm.name).load(model_path, device="cpu")
     statistics = model_path.with_name(model_path.stem + ".vecnormalize.pkl")
     normalize = None
-    if statistics.is_file():
-        normalize = VecNormalize.load(str(statistics), DummyVecEnv([functools.partial(BuildingEnv, experiment)]))
-        normalize.training = False
+    path = model_path
+    try:
+        model = algorithm_class(experiment.algorithm.name).load(model_path, device="cpu")
+        if statistics.is_file():
+            path = statistics
+            normalize = VecNormalize.load(str(statistics), DummyVecEnv([functools.partial(BuildingEnv, experiment)]))
+            normalize.training = False
+    except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
+        detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+        raise ConfigError(f"{path}: cannot load the saved model ({type(error).__name__}: {detail})") from None
     prior = LQGPrior(experiment) if experiment.algorithm.residual_lqg else None
     return model, normalize, prior
 
@@ -554,31 +599,32 @@ def plot_learning_curve(run: RunFolder) -> Path:
 
     rows = run.read_curve()
     steps = [r["steps"] for r in rows]
-    figure, (reward_axis, metric_axis) = plt.subplots(1, 2, figsize=(11, 4))
+    figure, (reward_axis, metric_axis) = plt.subplots(1, 2, figsize=(13, 4))
     reward_axis.plot(steps, [r["episode_reward"] for r in rows], label="training episodes (mean of last 100)")
     reward_axis.plot(steps, [r["eval_reward"] for r in rows], "o-", label="validation motions")
     reward_axis.set(xlabel="environment steps", ylabel="episode reward", title="Reward")
-    reward_axis.legend()
-    metric_axis.plot(steps, [r["eval_J1"] for r in rows], "o-", label="J1 (peak drift ratio)")
-    metric_axis.plot(steps, [r["eval_J2"] for r in rows], "s-", label="J2 (peak acceleration ratio)")
+    reward_axis.legend(fontsize=8)
+    j1, j2 = [r["eval_J1"] for r in rows], [r["eval_J2"] for r in rows]
+    metric_axis.plot(steps, j1, "o-", label="J1 (peak drift ratio)")
+    metric_axis.plot(steps, j2, "s-", label="J2 (peak acceleration ratio)")
     metric_axis.axhline(1.0, color="grey", linewidth=0.8, linestyle="--")
-    if rows:
-        metric_axis.axhline(rows[-1]["lqg_J1"], color="tab:blue", linewidth=1.0, linestyle=":", label="LQG J1")
-        metric_axis.axhline(rows[-1]["lqg_J2"], color="tab:orange", linewidth=1.0, linestyle=":", label="LQG J2")
-        metric_axis.axhline(
-            rows[-1]["lqg_ground_J1"], color="tab:blue", linewidth=1.0, linestyle="-.", label="LQG + ground J1"
-        )
-        metric_axis.axhline(
-            rows[-1]["lqg_ground_model_J1"],
-            color="tab:green",
-            linewidth=1.0,
-            linestyle="-.",
-            label="LQG + ground model J1",
-        )
+    references = [
+        ("lqg_J1", "LQG J1", "tab:blue", ":"),
+        ("lqg_J2", "LQG J2", "tab:orange", ":"),
+        ("lqg_ground_J1", "LQG + ground J1", "tab:blue", "-."),
+        ("lqg_ground_model_J1", "LQG + ground model J1", "tab:green", "-."),
+    ]
+    shown = [1.0, *j1, *j2]
+    for key, label, colour, style in references if rows else []:
+        metric_axis.axhline(rows[-1][key], color=colour, linewidth=1.0, linestyle=style, label=label)
+        shown.append(rows[-1][key])
+    finite = [value for value in shown if np.isfinite(value)]
+    margin = 0.05 * (max(finite) - min(finite) or 1.0)
+    metric_axis.set_ylim(min(finite) - margin, max(finite) + margin)  # every reference line inside
     metric_axis.set(
         xlabel="environment steps", ylabel="controlled / uncontrolled", title="Validation (generated motions)"
     )
-    metric_axis.legend()
+    metric_axis.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     figure.tight_layout()
     path = atomic_savefig(figure, run.path / "learning_curve.png", dpi=110)
     plt.close(figure)

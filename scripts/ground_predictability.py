@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.evaluation import load_records
 from rlcontroller.excitation import for_control_step
+from rlcontroller.records import load_records
 
 HISTORY = 20
 HORIZONS = (1, 2, 5, 10)
@@ -38,7 +38,7 @@ def main(folder: Path) -> None:
     print("| record | " + " | ".join(f"{h * control_dt:.2f} s ahead" for h in HORIZONS) + " |")
     print("|---|" + "---|" * len(HORIZONS))
     scores = []
-    for motion in load_records(folder):
+    for motion in load_records(folder)[0]:
         samples, substeps = for_control_step(motion, control_dt)
         scores.append([prediction_r2(samples[::substeps], horizon) for horizon in HORIZONS])
         print(f"| {motion.name} | " + " | ".join(f"{s:.2f}" for s in scores[-1]) + " |")

@@ -42,11 +42,11 @@ def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:
         ("seed: zero\n", "seed: Input should be a valid integer"),
         (
             "building:\n  masses: [1.0, -2.0, 3.0, 4.0, 5.0]\n",
-            "building.masses[1]: Input should be greater than 0 (got -2.0)",
+            "building.masses[1]: Input should be greater than or equal to 1 (got -2.0)",
         ),
         (
             "building:\n  stiffnesses: [1.0, 0, 3.0, 4.0, 5.0]\n",
-            "building.stiffnesses[1]: Input should be greater than 0",
+            "building.stiffnesses[1]: Input should be greater than or equal to 1",
         ),
         ("actuators:\n  - {story: 7}\n", "actuators[0].story: story 7 does not exist, expected 1..5"),
         (
@@ -82,7 +82,7 @@ def test_bad_configs_give_one_line_naming_file_and_key(tmp_path, text, expected)
 def test_errors_in_a_part_file_name_that_file(tmp_path):
     write(tmp_path, "masses: [1.0]\nstiffnesses: [-1.0]\ndamping: {matrix: [[0.0]]}\n", "building.yaml")
     path = write(tmp_path, "building: building.yaml\nactuators: [{story: 1}]\n")
-    with pytest.raises(ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than 0"):
+    with pytest.raises(ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than or equal"):
         load_experiment(path)
     with pytest.raises(ConfigError, match="building: file not found: nowhere.yaml"):
         load_experiment(write(tmp_path, "building: nowhere.yaml\n"))

@@ -1,5 +1,3 @@
-import shutil
-
 import numpy as np
 import pytest
 
@@ -8,19 +6,15 @@ from rlcontroller.controllers import Uncontrolled, rollout
 from rlcontroller.env import BuildingEnv
 from rlcontroller.evaluation import (
     OPTIMAL,
-    RECORDS_VARIABLE,
-    SYNTHETIC_LABEL,
-    choose_motions,
     evaluate,
-    load_records,
     lqg_sweep,
     mean_metric,
     preview_study,
-    synthetic_suite,
     uncontrolled_response,
 )
-from rlcontroller.excitation import MotionError, read_at2
+from rlcontroller.excitation import read_at2
 from rlcontroller.lqg import LQGController, design_lqg
+from rlcontroller.records import SYNTHETIC_LABEL, synthetic_suite
 
 
 def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
@@ -44,32 +38,6 @@ def test_uncontrolled_rows_are_one_and_lqg_helps():
     assert list(summary.index) == ["uncontrolled", "LQG", OPTIMAL]
     assert summary.loc["LQG", "J1"] < 0.8 and summary.loc[OPTIMAL, "J1"] < summary.loc["LQG", "J1"]
     assert len(frame[(frame["controller"] == "LQG") & (frame["metric"] == "J3")]) == 2 * 3  # per actuator
-
-
-def test_missing_records_are_listed_with_where_to_get_them(records, tmp_path):
-    shutil.copy(records / "RSN1086_NORTHR_SYL090.AT2", tmp_path)
-    with pytest.raises(MotionError) as error:
-        load_records(tmp_path)
-    message = str(error.value)
-    assert "6 of 7 records missing" in message and "RSN1106_KOBE_KJM000.AT2" in message
-    assert "RSN1086" not in message.split("missing:")[1].split(";")[0]
-    assert "ngawest2.berkeley.edu" in message and "\n" not in message
-
-
-def test_records_as_recorded_or_scaled(records):
-    motions = load_records(records)
-    assert len(motions) == 7
-    scaled = load_records(records, scale_pga_g=0.3)
-    assert all(m.pga == pytest.approx(0.3 * 9.80665) for m in scaled)
-
-
-def test_without_records_the_suite_is_synthetic_and_labelled(monkeypatch):
-    monkeypatch.delenv(RECORDS_VARIABLE, raising=False)
-    motions, label = choose_motions(None)
-    assert label == SYNTHETIC_LABEL and "SYNTHETIC" in label
-    assert len(motions) == 7 and all(m.synthetic for m in motions)
-    again, _ = choose_motions(None)
-    np.testing.assert_array_equal(motions[3].acceleration, again[3].acceleration)
 
 
 def test_preview_study_improves_with_preview_and_ends_at_the_clairvoyant():

@@ -55,6 +55,16 @@ def test_at2_header_variants_and_line_endings(tmp_path, header, newline):
         ("NPTS=      3, DT=   .0100 SEC\n .1 .2 .3\n .4\n", "NPTS=3 but the file holds 4 values (extra values?)"),
         ("NPTS=      4, DT=   .0100 SEC\n .1 .2\n .3 abc\n", "r.AT2:6: expected a number, got 'abc'"),
         ("GARBAGE\n .1 .2\n", "r.AT2:4: expected 'NPTS=..., DT=...'"),
+        ("NPTS=      0, DT=   .0100 SEC\n", "r.AT2:4: NPTS = 0, expected at least 2 samples"),
+        ("NPTS=      1, DT=   .0100 SEC\n .1\n", "r.AT2:4: NPTS = 1, expected at least 2 samples"),
+        ("NPTS=      2, DT=   1e999 SEC\n .1 .2\n", "r.AT2:4: DT = 1e999 s, expected 0.0001 to 1 s"),
+        ("NPTS=      2, DT=   1.2.3 SEC\n .1 .2\n", "r.AT2:4: DT must be a number, got '1.2.3'"),
+        ("NPTS=      2, DT=   1e-300 SEC\n .1 .2\n", "r.AT2:4: DT = 1e-300 s, expected 0.0001 to 1 s"),
+        ("NPTS=      2, DT=   1000 SEC\n .1 .2\n", "r.AT2:4: DT = 1000 s, expected 0.0001 to 1 s"),
+        ("NPTS= 400000, DT=   .0100 SEC\n .1 .2\n", "r.AT2:4: NPTS = 400000, expected at least 2 samples and at most"),
+        ("NPTS=      3, DT=   .0100 SEC\n 0 0 0\n", "every sample is zero"),
+        ("NPTS=      3, DT=   .0100 SEC\n 0 1e6 0\n", "PGA 1e+06 g, expected at most 10.2 g (wrong unit?)"),
+        ("NPTS=      3, DT=   .0100 SEC\n 0 nan 0\n", "non-finite values"),
     ],
 )
 def test_broken_at2_files_give_clear_errors(tmp_path, body, expected):
@@ -69,6 +79,19 @@ def test_at2_in_other_units_is_refused(tmp_path):
     path = write(tmp_path / "r.AT2", WEST2.replace("UNITS OF G", "UNITS OF CM/S/S") + "NPTS= 1, DT= .01 SEC\n .1\n")
     with pytest.raises(MotionError, match=r"r.AT2:3: expected"):
         read_at2(path)
+
+
+def test_binary_bytes_are_not_a_record(tmp_path):
+    path = tmp_path / "r.AT2"
+    path.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(MotionError, match=r"r.AT2:3: expected 'ACCELERATION"):
+        read_at2(path)
+
+
+def test_a_motion_shorter_than_one_control_step_is_refused():
+    motion = GroundMotion("short", 0.005, np.array([0.0, 1.0, 0.0]))
+    with pytest.raises(MotionError, match="short: lasts 0.01 s, shorter than one control step"):
+        for_control_step(motion, 0.02)
 
 
 def test_truncated_header(tmp_path):

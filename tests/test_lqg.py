@@ -154,7 +154,7 @@ def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
 
 
 def read_at2_or_synthetic() -> GroundMotion:
-    from rlcontroller.evaluation import synthetic_suite
+    from rlcontroller.records import synthetic_suite
 
     return synthetic_suite(count=1)[0]
 

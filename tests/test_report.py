@@ -1,10 +1,15 @@
 """End to end: a smoke run's policy through `rlc evaluate` and `rlc compare lqg` on the records."""
 
+import errno
+import os
+import shutil
+
 import pandas as pd
 import pytest
 from conftest import REPOSITORY
 from typer.testing import CliRunner
 
+from rlcontroller import report
 from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
 from rlcontroller.training import train
@@ -45,10 +50,13 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
         "optimal (clairvoyant)",
     }
     assert metrics["value"].notna().all() and (metrics["value"] >= 0).all()
-    assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {"PEER NGA-West2 records (7), as recorded"}
+    assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {f"7 records from {records}, as recorded"}
     summary = (out / "summary.md").read_text()
-    assert "RL better than LQG (%)" in summary and "PEER NGA-West2" in summary
+    assert "RL better than LQG (%)" in summary and f"7 records from {records}" in summary
+    assert f"Evaluated RL: {smoke_run / 'best_model.zip'} (" in summary and "training steps)" in summary
     assert "RL better than LQG" in result.output
+    reductions = [line for line in summary.splitlines() if line.startswith("| LQG |")][0].split("|")[2:-1]
+    assert [len(cell.strip().split(".")[1]) for cell in reductions] == [3, 3, 3, 3, 1, 1, 1]
 
 
 def test_compare_lqg_sweep_and_preview_mark_the_policy(smoke_run, records, tmp_path):
@@ -75,13 +83,55 @@ def test_compare_lqg_without_a_run_on_the_synthetic_suite(tmp_path, monkeypatch)
     assert "SYNTHETIC" in pd.read_csv(tmp_path / "metrics.csv")["suite"].iloc[0]
 
 
-def test_missing_records_exit_2_with_one_line(smoke_run, tmp_path):
+def test_missing_records_exit_2_with_one_line(smoke_run, records, tmp_path):
+    shutil.copy(records / "manifest.csv", tmp_path)
     result = CliRunner().invoke(
         app, ["evaluate", str(smoke_run), "--records", str(tmp_path), "--out", str(tmp_path / "o")]
     )
     assert result.exit_code == 2
     lines = result.output.strip().splitlines()
-    assert lines[-1].startswith("error: ") and "7 of 7 records missing" in lines[-1]
+    assert lines[-1].startswith("error: ") and "7 of 7 records of manifest.csv missing" in lines[-1]
+    assert "$RLC_RECORDS" in lines[-1] and not (tmp_path / "o").exists()
+
+
+def test_default_outputs_go_to_new_folders_under_results_never_into_the_model(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    committed = {p.name for p in (REPOSITORY / "models" / "five_story").iterdir()}
+    first = CliRunner().invoke(app, ["compare", "lqg"])
+    second = CliRunner().invoke(app, ["compare", "lqg"])
+    evaluated = CliRunner().invoke(app, ["evaluate"])
+    for result in (first, second, evaluated):
+        assert result.exit_code == 0, result.output
+    folders = sorted(p.name for p in (tmp_path / "results").iterdir())
+    assert len(folders) == 3 and sum(name.startswith("compare_lqg-paper_sac-") for name in folders) == 2
+    assert any(name.startswith("evaluate-five_story-") for name in folders)
+    assert f"tables and plots in results{os.sep}evaluate-five_story-" in evaluated.output
+    assert {p.name for p in (REPOSITORY / "models" / "five_story").iterdir()} == committed
+
+
+def test_an_output_folder_is_never_overwritten_and_never_half_written(tmp_path, monkeypatch):
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "mine.txt").write_text("keep")
+    (tmp_path / "a_file").write_text("keep")
+    for out, expected in ((tmp_path / "full", "exists and is not empty"), (tmp_path / "a_file", "is a file")):
+        result = CliRunner().invoke(app, ["compare", "lqg", "--out", str(out)])
+        assert result.exit_code == 2 and expected in result.output and "Traceback" not in result.output
+    assert (tmp_path / "full" / "mine.txt").read_text() == "keep" and (tmp_path / "a_file").read_text() == "keep"
+    nested = CliRunner().invoke(app, ["compare", "lqg", "--out", str(tmp_path / "a_file" / "sub")])
+    assert nested.exit_code == 2 and nested.output.strip().splitlines()[-1].endswith(
+        "a_file is a file, so it cannot hold the output folder"
+    )
+
+    def disk_full(path, text):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(report, "atomic_write", disk_full)
+    result = CliRunner().invoke(app, ["compare", "lqg", "--out", str(tmp_path / "new")])
+    assert result.exit_code == 1 and "No space left on device" in result.output
+    assert result.output.strip().splitlines()[-1].startswith("error: ") and "Traceback" not in result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "full"]  # nothing half-written
 
 
 def test_evaluate_refuses_a_folder_that_is_not_a_run(tmp_path):
@@ -116,3 +166,13 @@ def test_evaluate_scaled_records_with_the_final_model(smoke_run, records, tmp_pa
     assert "scaled to PGA 0.3 g" in (tmp_path / "summary.md").read_text()
     bad = CliRunner().invoke(app, ["evaluate", str(smoke_run), "--model", "newest"])
     assert bad.exit_code == 2 and "--model: expected best or final" in bad.output
+
+
+def test_the_same_inputs_give_byte_identical_j_tables(smoke_run, tmp_path, monkeypatch):
+    """Sensor noise is seeded per record: two evaluations of the same run write the same bytes."""
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    for out in ("a", "b"):
+        result = CliRunner().invoke(app, ["compare", "lqg", str(smoke_run), "--out", str(tmp_path / out)])
+        assert result.exit_code == 0, result.output
+    for name in ("metrics.csv", "per_record.csv", "summary.csv"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name

@@ -1,5 +1,7 @@
 import csv
+import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -52,6 +54,7 @@ def test_a_run_folder_has_every_file(tmp_path):
         np.isfinite(float(r[k])) for r in rows for k in ("eval_reward", "eval_J1", "eval_J2", "eval_peak_drift_m")
     )
     assert load_experiment(run / "config.yaml").algorithm.total_steps == 600
+    assert json.loads((run / "run.json").read_text())["device"] == "cpu"  # the device used, not "auto"
     assert summary.steps == 600 and "run folder" in summary.line()
     model, normalize, prior = load_policy(run / "best_model.zip")
     assert normalize is None and prior is None and model.num_timesteps in (300, 600)
@@ -218,3 +221,73 @@ def test_resuming_a_curve_written_before_new_columns_fills_them_with_nan(tmp_pat
     rows = run.read_curve()
     assert [row["steps"] for row in rows] == [1000.0, 2000.0] and rows[1]["eval_J1"] == 0.6
     assert np.isnan(rows[0]["lqg_ground_model_J1"])
+
+
+def test_a_run_that_fails_to_start_leaves_no_run_folder(tmp_path, monkeypatch):
+    """As when the progress bar's packages were missing: the error must not leave a half-made run."""
+    from stable_baselines3.common import callbacks
+
+    def missing(self):
+        raise ImportError("You must install tqdm and rich in order to use the progress bar callback.")
+
+    monkeypatch.setattr(callbacks.ProgressBarCallback, "__init__", missing)
+    with pytest.raises(ImportError):
+        train(smoke(total_steps=300), run_dir=tmp_path / "run", progress_bar=True)
+    assert not (tmp_path / "run").exists()
+
+
+def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
+    run = tmp_path / "run"
+    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0)
+    state = RunFolder(run).checkpoints()[-1] / "state.json"
+    state.write_text(json.dumps({**json.loads(state.read_text()), "wall_time_s": 1.0e6}))  # a long first session
+    summary = train(resume=run, time_limit_s=1.0e5)
+    assert summary.steps == 600 and not summary.time_limit_reached
+
+
+def test_a_stop_at_the_time_limit_prints_the_resume_command(tmp_path):
+    run = tmp_path / "run"
+    arguments = ["train", str(SMOKE), "--run-dir", str(run), "--total-steps", "3000", "--time-limit", "0.0001"]
+    result = CliRunner().invoke(app, arguments)
+    assert result.exit_code == 0, result.output
+    assert "stopped at the time limit" in result.output and f"resume with: rlc train --resume {run}" in result.output
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    run = tmp_path_factory.mktemp("finished") / "run"
+    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run)
+    return run
+
+
+@pytest.mark.parametrize(
+    ("damaged", "expected"),
+    [
+        ("model.zip", "model.zip: unreadable checkpoint file (ValueError: Error: the file"),
+        ("state.json", "state.json: unreadable checkpoint file (JSONDecodeError"),
+    ],
+)
+def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finished_run, tmp_path, damaged, expected):
+    run = tmp_path / "run"
+    shutil.copytree(finished_run, run)
+    config = run / "config.yaml"
+    config.write_text(config.read_text().replace("total_steps: 600", "total_steps: 900"))
+    previous, newest = RunFolder(run).checkpoints()[-2:]
+    (newest / damaged).write_bytes(b"\x00garbage")
+    result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    line = result.output.strip().splitlines()[-1]
+    assert expected in line and line.endswith(f"delete {newest} to resume from {previous.name}")
+    shutil.rmtree(newest)
+    assert train(resume=run).steps == 900
+
+
+def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_path):
+    run = tmp_path / "run"
+    shutil.copytree(finished_run, run)
+    (run / "best_model.zip").write_bytes(b"PK\x03\x04 truncated")
+    result = CliRunner().invoke(app, ["evaluate", str(run), "--out", str(tmp_path / "out")])
+    lines = result.output.strip().splitlines()
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert lines[-1].startswith(f"error: {run / 'best_model.zip'}: cannot load the saved model")
+    assert not (tmp_path / "out").exists()

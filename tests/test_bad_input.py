@@ -1,0 +1,165 @@
+"""Bad input, as fuzzing found it: each class ends in one clear line and a non-zero exit code.
+
+Never a traceback, never a hang, never silent acceptance of nonsense, never a half-made folder.
+"""
+
+from pathlib import Path
+
+import pytest
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+
+SMOKE = REPOSITORY / "configs" / "smoke.yaml"
+DAMPING = "building:\n  damping: {{matrix: {matrix}}}\n"
+ZEROS = [[0.0] * 5 for _ in range(5)]
+
+
+def matrix(change: dict[tuple[int, int], str]) -> str:
+    rows = [[str(v) for v in row] for row in ZEROS]
+    for (i, j), value in change.items():
+        rows[i][j] = value
+    return "[" + ", ".join("[" + ", ".join(row) + "]" for row in rows) + "]"
+
+
+def one_error_line(result) -> str:
+    """The result's error line; asserts it is the only line on exit 2 and there is no traceback."""
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output and result.exception is None or isinstance(result.exception, SystemExit)
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.output
+    return lines[0]
+
+
+CONFIG_CASES = {
+    "masses_inf": ("building:\n  masses: [1e4, .inf, 1e4, 1e4, 1e4]\n", "building.masses[1]: Input should be a finite"),
+    "masses_1e308": ("building:\n  masses: [1e4, 1.0e308, 1e4, 1e4, 1e4]\n", "less than or equal to 1000000000"),
+    "stiffness_1e308": ("building:\n  stiffnesses: [1.0e308, 1e6, 1e6, 1e6, 1e6]\n", "building.stiffnesses[0]: Input"),
+    "control_dt_inf": ("simulation: {control_dt: .inf}\n", "simulation.control_dt: Input should be a finite number"),
+    "control_dt_1e308": ("simulation: {control_dt: 1.0e308}\n", "simulation.control_dt: Input should be less than"),
+    "control_dt_1e-12": ("simulation: {control_dt: 1.0e-12}\n", "simulation.control_dt: Input should be greater"),
+    "control_dt_0.013": ("simulation: {control_dt: 0.013}\n", "0.013 s is not a whole multiple of the noise_impulses"),
+    "control_dt_0.03": ("simulation: {control_dt: 0.03}\n", "0.03 s is not a whole multiple"),
+    "damping_not_symmetric": (DAMPING.format(matrix=matrix({(0, 1): "5.0"})), "must be symmetric"),
+    "damping_not_psd": (DAMPING.format(matrix=matrix({(0, 0): "-5.0"})), "must be positive semi-definite"),
+    "damping_nan": (DAMPING.format(matrix=matrix({(2, 2): ".nan"})), "building.damping.matrix[2][2]: Input should be"),
+    "actuator_twice": ("actuators: [{story: 1}, {story: 3}, {story: 1}]\n", "actuators: story 1 is listed twice"),
+    "force_limit_inf": ("actuators: [{story: 1, force_limit: .inf}]\n", "actuators[0].force_limit: Input should be a"),
+    "no_actuators": ("actuators: []\n", "actuators: List should have at least 1 item"),
+    "history_1e9": ("sensors: {history: 1000000000}\n", "sensors.history: Input should be less than or equal to 500"),
+    "floors_empty": (
+        "sensors:\n  measurements: [{quantity: drift, floors: [], scale: 1}]\n",
+        "sensors.measurements[0].floors: List should have at least 1 item",
+    ),
+    "floors_twice": (
+        "sensors:\n  measurements: [{quantity: drift, floors: [1, 1], scale: 1}]\n",
+        "sensors.measurements[0].floors: each number once",
+    ),
+    "scale_inf": ("sensors: {ground_scale: .inf}\n", "sensors.ground_scale: Input should be a finite number"),
+    "noise_inf": ("sensors: {ground_noise_std: .inf}\n", "sensors.ground_noise_std: Input should be a finite"),
+    "weight_inf": (
+        "reward: {terms: [{quantity: drift, weight: .inf, scale: 0.01}]}\n",
+        "reward.terms[0].weight: Input should be a finite number",
+    ),
+    "weights_all_zero": (
+        "reward: {terms: [{quantity: drift, weight: 0, scale: 0.01}, {quantity: force, weight: 0, scale: 1}]}\n",
+        "reward: every weight is zero",
+    ),
+    "duration_0_0": (
+        "excitation: {generator: {kind: noise_impulses, duration: [0, 0]}}\n",
+        "excitation.generator.duration[0]: Input should be greater than 0",
+    ),
+    "duration_1_inf": (
+        "excitation: {generator: {kind: noise_impulses, duration: [1, .inf]}}\n",
+        "excitation.generator.duration[1]: Input should be a finite number",
+    ),
+    "duration_shorter_than_a_step": (
+        "excitation: {generator: {kind: noise_impulses, duration: [0.01, 0.02]}}\n",
+        "excitation.generator.duration: 0.01 s is shorter than one control step",
+    ),
+    "n_envs_1e6": ("algorithm: {n_envs: 1000000}\n", "algorithm.n_envs: Input should be less than or equal to 256"),
+    "net_arch_empty": ("algorithm: {policy: {net_arch: []}}\n", "algorithm.policy.net_arch: List should have at least"),
+    "log_std_nan": ("algorithm: {policy: {log_std_init: .nan}}\n", "algorithm.policy.log_std_init: Input should be"),
+    "total_steps_1e30": (
+        "algorithm: {total_steps: 1000000000000000000000000000000}\n",
+        "algorithm.total_steps: Input should be less than or equal to 1000000000",
+    ),
+    "seed_negative": ("seed: -1\n", "seed: Input should be greater than or equal to 0"),
+    "seed_1e30": ("seed: 1000000000000000000000000000000\n", "seed: Input should be less than or equal to 4294967295"),
+    "name_with_path": ("name: ../../elsewhere\n", "name: String should match pattern"),
+    "empty_file": ("", "the file is empty, expected YAML keys"),
+    "deep_nesting": ("seed: " + "[" * 5000 + "]" * 5000 + "\n", "nested"),
+}
+
+
+@pytest.mark.parametrize(("text", "expected"), list(CONFIG_CASES.values()), ids=list(CONFIG_CASES))
+def test_bad_experiment_files_give_one_line_naming_file_and_key(tmp_path, text, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    line = one_error_line(CliRunner().invoke(app, ["info", str(path)]))
+    assert line.startswith(f"error: {path}") and expected in line and len(line) < 300
+
+
+def test_binary_bytes_in_a_yaml_file(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_bytes(b"seed: 1\n\xff\xfe\x00\x81binary")
+    line = one_error_line(CliRunner().invoke(app, ["info", str(path)]))
+    assert f"{path}: not a text (UTF-8) file: byte 8 is 0xff" in line
+
+
+def test_a_part_file_that_is_a_folder_or_not_yaml_keys_says_so_without_dumping_it(tmp_path):
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "passwd").write_text("root:x:0:0:root:/root:/bin/bash\n" * 40)
+    (tmp_path / "a.yaml").write_text("building: parts\n")
+    (tmp_path / "b.yaml").write_text("building: passwd\n")
+    folder = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "a.yaml")]))
+    assert folder.endswith("parts: is a folder, expected a YAML file")
+    text = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "b.yaml")]))
+    assert text.endswith("passwd: expected a mapping of building keys, got text") and "root:x" not in text
+
+
+def test_an_empty_actuator_list_in_its_own_file_blames_that_file(tmp_path):
+    (tmp_path / "actuators.yaml").write_text("[]\n")
+    (tmp_path / "bad.yaml").write_text("actuators: actuators.yaml\n")
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert "actuators.yaml: (top level): List should have at least 1 item" in line and "bad.yaml" not in line
+
+
+@pytest.mark.parametrize(
+    ("arguments", "option"),
+    [
+        (["train", str(SMOKE), "--seed", "-1"], "'--seed'"),
+        (["train", str(SMOKE), "--seed", "10000000000000"], "'--seed'"),
+        (["train", str(SMOKE), "--time-limit", "nan"], "'--time-limit'"),
+        (["train", str(SMOKE), "--time-limit", "-1"], "'--time-limit'"),
+        (["train", str(SMOKE), "--total-steps", "1e30"], "'--total-steps'"),
+        (["train", str(SMOKE), "--total-steps", "100000000000"], "'--total-steps'"),
+        (["compare", "lqg", "--scale-pga", "inf"], "'--scale-pga'"),
+        (["compare", "lqg", "--scale-pga", "0"], "'--scale-pga'"),
+        (["compare", "lqg", "--scale-pga", "nan"], "'--scale-pga'"),
+    ],
+)
+def test_bad_arguments_are_usage_errors_naming_the_option(tmp_path, monkeypatch, arguments, option):
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, arguments)
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+    error = [line for line in result.output.splitlines() if line.startswith("Error:")]
+    assert len(error) == 1 and f"Invalid value for {option}" in error[0]
+    assert list(Path(tmp_path).iterdir()) == []  # nothing started, nothing written
+
+
+def test_a_run_folder_that_is_a_file(tmp_path):
+    (tmp_path / "run").write_text("mine")
+    line = one_error_line(CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run")]))
+    assert line.endswith("run: is a file, expected a new run folder")
+    assert (tmp_path / "run").read_text() == "mine"
+
+
+def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "records").mkdir()
+    (tmp_path / "records" / "readme.txt").write_text("nothing here")
+    line = CliRunner().invoke(app, ["compare", "lqg", "--records", "records"]).output.strip().splitlines()[-1]
+    assert line.startswith("error: records: no records: expected .AT2 or .csv files")
+    assert not (tmp_path / "results").exists()

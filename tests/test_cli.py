@@ -1,0 +1,87 @@
+"""The command line as a user meets it: at a real terminal (a pseudo-terminal), with help and version."""
+
+import importlib.metadata
+import os
+import pty
+import re
+import select
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+
+ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+
+
+def run_at_a_terminal(arguments: list[str], cwd: Path, timeout_s: float = 300.0) -> tuple[int, str]:
+    """Run `python -m rlcontroller ARGUMENTS` with a pseudo-terminal as stdin, stdout and stderr,
+    as a user's shell does; return the exit code and everything it printed (colours removed)."""
+    primary, secondary = pty.openpty()
+    environment = {**os.environ, "COLUMNS": "100", "LINES": "40", "TERM": "xterm-256color"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rlcontroller", *arguments],
+        stdin=secondary,
+        stdout=secondary,
+        stderr=secondary,
+        cwd=cwd,
+        env=environment,
+        close_fds=True,
+    )
+    os.close(secondary)
+    chunks, deadline = [], time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([primary], [], [], 1.0)
+        if ready:
+            try:
+                data = os.read(primary, 65536)
+            except OSError:  # the terminal closed: the program ended
+                break
+            if not data:
+                break
+            chunks.append(data)
+        elif process.poll() is not None:
+            break
+    else:
+        process.kill()
+        raise AssertionError(f"rlc {' '.join(arguments)} did not finish in {timeout_s} s")
+    os.close(primary)
+    code = process.wait(timeout=30)
+    return code, ANSI.sub("", b"".join(chunks).decode(errors="replace"))
+
+
+def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
+    """`rlc demo` at a terminal shows the progress bar (tqdm and rich) and ends with the tables."""
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    code, output = run_at_a_terminal(["demo"], tmp_path)
+    assert code == 0, output
+    assert "Traceback" not in output and "Error" not in output
+    assert "1,500/1,500" in output  # the progress bar was drawn
+    assert "tables and plots in runs" in output and "| RL |" in output
+    (run,) = (tmp_path / "runs").iterdir()
+    assert (run / "evaluation" / "summary.md").is_file() and (run / "final_model.zip").is_file()
+
+
+def test_a_user_mistake_at_a_terminal_is_one_line(tmp_path):
+    (tmp_path / "bad.yaml").write_text("building: {masses: [1.0e4, .inf]}\n")
+    code, output = run_at_a_terminal(["train", "bad.yaml"], tmp_path, timeout_s=120)
+    assert code == 2 and output.strip().splitlines() == [
+        "error: bad.yaml: building.masses[1]: Input should be a finite number (got inf)"
+    ]
+    assert list(tmp_path.iterdir()) == [tmp_path / "bad.yaml"]
+
+
+def test_version():
+    result = CliRunner().invoke(app, ["--version"])
+    assert result.exit_code == 0 and result.output == f"rlc {importlib.metadata.version('rlcontroller')}\n"
+
+
+def test_help_is_wrapped_not_cut_and_shows_the_real_progress_default():
+    result = CliRunner().invoke(app, ["train", "--help"], terminal_width=80)
+    assert result.exit_code == 0
+    assert "…" not in result.output and "<bool>" not in result.output
+    assert "--progress / --no-progress" in result.output and "[default: (on a terminal)]" in result.output
+    assert "runs/NAME-seedS-TIME" in result.output.replace("\n", "").replace(" ", "")
