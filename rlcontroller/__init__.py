@@ -7,4 +7,4 @@ __version__ = "0.1.0"
 ENV_ID = "rlcontroller/Building-v0"
 
 if ENV_ID not in gymnasium.registry:
-    gymnasium.register(id=ENV_ID, entry_point="rlcontroller.env:BuildingEnv")
+    gymnasium.register(id=ENV_ID, entry_point="rlcontroller.learning.env:BuildingEnv")

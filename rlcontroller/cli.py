@@ -14,9 +14,9 @@ from typing import Annotated, Any
 
 import typer
 
-from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, display_path, load_experiment
-from rlcontroller.excitation import MotionError
+from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment
 from rlcontroller.files import check_new_folder, new_folder
+from rlcontroller.physics.excitation import MotionError
 
 app = typer.Typer(
     add_completion=False,
@@ -109,10 +109,10 @@ def info(
     ] = None,
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios and actuator layout."""
-    from rlcontroller.structure import build
+    from rlcontroller.physics.plant import Plant
 
     experiment = load(config)
-    building = build(experiment.building, experiment.actuators)
+    building = Plant(experiment).building
     typer.echo("# resolved configuration")
     typer.echo(experiment.to_yaml())
     typer.echo("# modes")
@@ -151,7 +151,7 @@ def train(
     progress: ProgressOption = None,
 ) -> None:
     """Train SAC, PPO, TD3, DDPG or A2C on generated ground motions; checkpoints resume."""
-    from rlcontroller.training import train as run_training
+    from rlcontroller.learning.training import train as run_training
 
     if device not in ("cpu", "cuda", "auto"):
         raise ConfigError(f"--device: expected cpu, cuda or auto, got {device!r}")
@@ -207,44 +207,25 @@ def output_folder(out: Path | None, default_name: str) -> Path:
     return path
 
 
-def model_file(folder: Path, model: str) -> Path:
-    path = folder / f"{model}_model.zip"
-    if not path.is_file():
-        raise ConfigError(f"{folder}: no {path.name}; expected a run folder written by 'rlc train'")
-    return path
-
-
-def run_comparison(
-    experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None
-):
-    """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), RL (if a run)
-    and the optimal reference."""
-    from rlcontroller.controllers import PolicyController
-    from rlcontroller.env import BuildingEnv
-    from rlcontroller.evaluation import LQG_VARIANTS, evaluate
-    from rlcontroller.lqg import LQGController, design_lqg, design_lqg_ground_model
-    from rlcontroller.records import RECORDS_VARIABLE, choose_motions
+def comparison(experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None):
+    """The plant, the motions and the evaluation of every controller (the run's policy if given)."""
+    from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.learning.run_folder import model_file
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
             "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
         )
+    policy = model_file(run_dir, model) if run_dir is not None else None
     motions, label = choose_motions(records, scale_pga)
-    env = BuildingEnv(experiment)
-    designs = [design_lqg(experiment), design_lqg(experiment, known_ground=True), design_lqg_ground_model(experiment)]
-    controllers = [LQGController(design, env, name) for design, name in zip(designs, LQG_VARIANTS, strict=True)]
-    sources = {}
-    if run_dir is not None:
-        policy = PolicyController.load(model_file(run_dir, model), env.force_limits, name="RL")
-        controllers.append(policy)
-        sources["RL"] = f"{display_path(policy.source)} ({policy.model.num_timesteps:,} training steps)"
-    evaluation = evaluate(experiment, motions, controllers, label)
-    evaluation.sources.update(sources)
-    return evaluation, motions, label
+    plant = Plant(experiment)
+    return plant, motions, compare(plant, motions, label, policy)
 
 
 def print_summary(evaluation, out: Path) -> None:
-    from rlcontroller.report import improvement_table, markdown_table, summary_table
+    from rlcontroller.evaluation.report import improvement_table, markdown_table, summary_table
 
     typer.echo(f"# {evaluation.label}")
     for name, source in evaluation.sources.items():
@@ -268,14 +249,12 @@ def evaluate(
     model: ModelOption = "best",
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
-    from rlcontroller.report import write_report
+    from rlcontroller.evaluation.report import write_report
 
-    if model not in ("best", "final"):
-        raise ConfigError(f"--model: expected best or final, got {model!r}")
     folder = model_folder(run_dir)
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
-    evaluation, _, _ = run_comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
+    _, _, evaluation = comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     print_summary(evaluation, out)
@@ -285,14 +264,14 @@ def evaluate(
 @user_errors
 def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
     """The main job end to end: train the small smoke experiment, then evaluate it against LQG."""
-    from rlcontroller.records import choose_motions
-    from rlcontroller.report import write_report
-    from rlcontroller.training import train as run_training
+    from rlcontroller.evaluation.report import write_report
+    from rlcontroller.learning.training import train as run_training
+    from rlcontroller.physics.records import choose_motions
 
     choose_motions(records)  # a bad --records stops here, before training
     summary = run_training(load_experiment(SMOKE_CONFIG), progress_bar=show_progress(progress))
     typer.echo(summary.line())
-    evaluation, _, _ = run_comparison(
+    _, _, evaluation = comparison(
         load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
     )
     out = summary.run_dir / "evaluation"
@@ -325,11 +304,9 @@ def compare_lqg(
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
     import numpy as np
 
-    from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
-    from rlcontroller.report import write_preview, write_report, write_sweep
+    from rlcontroller.evaluation.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
+    from rlcontroller.evaluation.report import write_preview, write_report, write_sweep
 
-    if model not in ("best", "final"):
-        raise ConfigError(f"--model: expected best or final, got {model!r}")
     if run_dir is not None:
         run_dir = model_folder(run_dir)
         experiment = load_experiment(run_dir / "config.yaml")
@@ -337,18 +314,19 @@ def compare_lqg(
         experiment = load(config)
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
-    evaluation, motions, label = run_comparison(experiment, run_dir, model, records, scale_pga)
+    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga)
+    label = evaluation.label
     with new_folder(out) as staging:
         write_report(evaluation, staging)
         if sweep:
-            table = lqg_sweep(experiment, motions, label, np.logspace(-2, 2, 9))
+            table = lqg_sweep(plant, motions, label, np.logspace(-2, 2, 9))
             names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
             points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
             write_sweep(table, staging, label, points)
         if preview:
             names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
             references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
-            write_preview(preview_study(experiment, motions), staging, label, references)
+            write_preview(preview_study(plant, motions), staging, label, references)
     print_summary(evaluation, out)
     for name, wanted in (("lqg_sweep.md", sweep), ("preview.md", preview)):
         if wanted:

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from rlcontroller.evaluation import LQG_VARIANTS
-from rlcontroller.training import RunFolder
+from rlcontroller.evaluation.evaluation import LQG_VARIANTS
+from rlcontroller.learning.run_folder import RunFolder
 
 METRICS = ["J1", "J2", "J3", "J4"]
 

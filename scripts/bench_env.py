@@ -16,9 +16,9 @@ import numpy as np
 
 import rlcontroller
 from rlcontroller.config import Experiment
-from rlcontroller.dynamics import simulate, step_map
-from rlcontroller.excitation import generate_suite
-from rlcontroller.structure import build
+from rlcontroller.physics.dynamics import simulate, step_map
+from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.structure import build
 
 
 def steps_per_second(env: gym.Env, steps: int, seed: int = 0) -> float:

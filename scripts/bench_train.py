@@ -21,7 +21,9 @@ from pathlib import Path
 import torch
 
 from rlcontroller.config import AlgorithmConfig, Experiment, load_experiment
-from rlcontroller.training import build_model, make_vec_env, train
+from rlcontroller.learning.algorithms import build_model, make_vec_env
+from rlcontroller.learning.training import train
+from rlcontroller.physics.plant import Plant
 
 PAPER_STEPS = 1_500_000
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -29,7 +31,7 @@ CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 def steps_per_second(experiment: Experiment, steps: int, warmup: int, threads: int) -> float:
     torch.set_num_threads(threads)
-    vec_env = make_vec_env(experiment, seed=0)
+    vec_env = make_vec_env(Plant(experiment), seed=0)
     model = build_model(experiment, vec_env, seed=0, device="cpu", tensorboard=None)
     model.learn(warmup)
     start = time.perf_counter()

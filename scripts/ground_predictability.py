@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.excitation import for_control_step
-from rlcontroller.records import load_records
+from rlcontroller.physics.excitation import for_control_step
+from rlcontroller.physics.records import load_records
 
 HISTORY = 20
 HORIZONS = (1, 2, 5, 10)

@@ -4,7 +4,7 @@ from pathlib import Path
 import pytest
 
 from rlcontroller.config import BuildingConfig, Experiment
-from rlcontroller.structure import Building, build
+from rlcontroller.physics.structure import Building, build
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 

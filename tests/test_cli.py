@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
@@ -53,6 +54,7 @@ def run_at_a_terminal(arguments: list[str], cwd: Path, timeout_s: float = 300.0)
     return code, ANSI.sub("", b"".join(chunks).decode(errors="replace"))
 
 
+@pytest.mark.slow
 def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
     """`rlc demo` at a terminal shows the progress bar (tqdm and rich) and ends with the tables."""
     monkeypatch.delenv("RLC_RECORDS", raising=False)

@@ -16,17 +16,21 @@ def test_the_paper_config_is_the_embedded_default():
 
 
 def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
-    from rlcontroller.lqg import design_lqg
+    from rlcontroller.control.lqg import design_lqg
+    from rlcontroller.physics.plant import Plant
 
     benchmark, paper = load_experiment(CONFIGS / "five_story.yaml"), Experiment()
     assert benchmark.building == paper.building and benchmark.actuators == paper.actuators
     assert benchmark.sensors.measurements == paper.sensors.measurements
-    np.testing.assert_allclose(design_lqg(benchmark).feedback, design_lqg(paper).feedback, rtol=1e-6)
+    np.testing.assert_allclose(design_lqg(Plant(benchmark)).feedback, design_lqg(Plant(paper)).feedback, rtol=1e-6)
 
 
 @pytest.mark.parametrize("path", sorted(p for p in CONFIGS.glob("*.yaml")), ids=lambda p: p.name)
-def test_every_experiment_config_loads(path: Path):
-    load_experiment(path)
+def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(path: Path):
+    experiment = load_experiment(path)
+    assert experiment.name == path.stem
+    assert experiment.building == Experiment().building and [a.story for a in experiment.actuators] == [1, 3, 5]
+    assert experiment.to_yaml() == load_experiment(path).to_yaml()  # loading is deterministic
 
 
 def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.dynamics import Response
+from rlcontroller.physics.dynamics import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
 

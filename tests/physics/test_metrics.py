@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from rlcontroller.dynamics import Response
-from rlcontroller.metrics import energy, j_metrics, peak
+from rlcontroller.physics.dynamics import Response
+from rlcontroller.physics.metrics import energy, j_metrics, peak
 
 
 def response(scale: float, force: float, steps: int = 4) -> Response:

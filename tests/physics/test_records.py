@@ -9,8 +9,8 @@ import pytest
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
-from rlcontroller.excitation import STANDARD_GRAVITY, MotionError
-from rlcontroller.records import RECORDS_VARIABLE, SYNTHETIC_LABEL, choose_motions, load_records
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, MotionError
+from rlcontroller.physics.records import RECORDS_VARIABLE, SYNTHETIC_LABEL, choose_motions, load_records
 
 HEADER = "PEER NGA STRONG MOTION DATABASE RECORD\n{title}\nACCELERATION TIME SERIES IN UNITS OF G\n"
 
@@ -142,6 +142,7 @@ def test_rlc_compares_on_a_users_folder_and_on_one_file(my_records, tmp_path):
     assert set(pd.read_csv(tmp_path / "one" / "metrics.csv")["record"]) == {"c_array"}
 
 
+@pytest.mark.slow
 def test_rlc_evaluate_on_a_users_folder(my_records, tmp_path):
     """The committed policy on the user's records; the summary names the model it evaluated."""
     out = tmp_path / "out"

@@ -4,8 +4,15 @@ import scipy.signal
 from conftest import sdof
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.dynamics import exact_substep, newmark_substep, output_matrices, simulate, state_space, step_map
-from rlcontroller.excitation import GroundMotion, for_control_step, read_at2
+from rlcontroller.physics.dynamics import (
+    exact_substep,
+    newmark_substep,
+    output_matrices,
+    simulate,
+    state_space,
+    step_map,
+)
+from rlcontroller.physics.excitation import GroundMotion, for_control_step, read_at2
 
 MASS, STIFFNESS = 2.0e4, 8.0e5  # kg, N/m -> omega = 6.32 rad/s
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import KanaiTajimiConfig, NoiseImpulsesConfig
-from rlcontroller.excitation import (
+from rlcontroller.physics.excitation import (
     STANDARD_GRAVITY,
     GroundMotion,
     MotionError,
@@ -189,7 +189,7 @@ def test_generated_suites_are_reproducible():
 
 def test_a_mixture_draws_from_its_components_by_weight():
     from rlcontroller.config import MixtureConfig
-    from rlcontroller.excitation import generate
+    from rlcontroller.physics.excitation import generate
 
     mixture = MixtureConfig(
         components=[

@@ -19,24 +19,18 @@ absolute acceleration sensor never sees a force that has not been applied yet.
 
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 from numpy.lib.stride_tricks import sliding_window_view
 
-from rlcontroller.config import Quantity, RewardTerm, SensorConfig, SimulationConfig
-from rlcontroller.structure import Building
+from rlcontroller.config import Quantity, SimulationConfig
+from rlcontroller.physics.excitation import GroundModel
+from rlcontroller.physics.structure import Building
 
-QUANTITIES: tuple[str, ...] = (
-    "displacement",
-    "velocity",
-    "drift",
-    "absolute_acceleration",
-    "story_shear",
-    "base_shear",
-    "force",
-)
+QUANTITIES: tuple[str, ...] = typing.get_args(Quantity)
 
 
 @dataclass(frozen=True)
@@ -170,6 +164,21 @@ def step_map(building: Building, simulation: SimulationConfig, substeps: int = 1
     return compose(substep, substeps, simulation.control_dt)
 
 
+def ground_model_step(building: Building, control_dt: float, model: GroundModel) -> StepMap:
+    """Exact control-step map of the state [z; x_f; x_f'] of the building and a Kanai-Tajimi ground
+    filter, driven by the forces and the filter's white noise w (held over the step; `ground_gain`
+    holds its two first-order-hold columns)."""
+    system = state_space(building)
+    size = system.a.shape[0]
+    filter_a = np.array([[0.0, 1.0], model.output])
+    augmented = StateSpace(
+        a=np.block([[system.a, np.outer(system.b_ground, model.output)], [np.zeros((2, size)), filter_a]]),
+        b_force=np.vstack([system.b_force, np.zeros((2, building.n_actuators))]),
+        b_ground=np.concatenate([np.zeros(size), [0.0, -1.0]]),
+    )
+    return compose(exact_substep(augmented, control_dt), 1, control_dt)
+
+
 def output_matrices(building: Building, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
     """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] and actuator forces u."""
     n, m = building.n_floors, building.n_actuators
@@ -193,41 +202,6 @@ def output_matrices(building: Building, quantity: Quantity) -> tuple[np.ndarray,
     if quantity == "force":
         return np.zeros((m, 2 * n)), np.eye(m)
     raise ValueError(f"unknown quantity {quantity!r}, expected one of {QUANTITIES}")
-
-
-def sensor_matrices(building: Building, sensors: SensorConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(C, D, scale, noise_std) of the measurement vector y = C z + D u, one row per reading."""
-    rows_c, rows_d, scales, noises = [], [], [], []
-    for measurement in sensors.measurements:
-        c, d = output_matrices(building, measurement.quantity)
-        if measurement.floors is not None:
-            index = [floor - 1 for floor in measurement.floors]
-            c, d = c[index], d[index]
-        rows_c.append(c)
-        rows_d.append(d)
-        scales.append(np.full(c.shape[0], measurement.scale))
-        noises.append(np.full(c.shape[0], measurement.noise_std))
-    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises)
-
-
-def reward_matrices(
-    building: Building, terms: list[RewardTerm]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
-    """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
-    so that a term's value is the sum over its rows of |factor * (C z + D u)|^power."""
-    rows_c, rows_d, factors, slices = [], [], [], []
-    start = 0
-    for term in terms:
-        c, d = output_matrices(building, term.quantity)
-        rows_c.append(c)
-        rows_d.append(d)
-        factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
-        slices.append(slice(start, start + c.shape[0]))
-        start += c.shape[0]
-    if not terms:
-        n_state = 2 * building.n_floors
-        return np.zeros((0, n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
-    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,9 @@
 Measurements y_k = C z_k + D a_{k-1} + v_k include the feed-through of the action held over the
 step that ended at t_k (absolute accelerations). The ground acceleration is either process noise,
 or, with `known_ground`, a measured input whose change over a step is the process noise, or
-(`design_kalman_ground_model`) the output of a Kanai-Tajimi filter whose two states join the
-estimate and whose output is measured. Everything is in action units a = u / force_limit at the
-control step.
+(`design_kalman_ground_model`) the output of a Kanai-Tajimi filter (the plant's `ground_model`)
+whose two states join the estimate and whose output is measured. Everything is in action units
+a = u / force_limit at the control step.
 """
 
 from __future__ import annotations
@@ -16,42 +16,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from rlcontroller.config import SensorConfig, SimulationConfig
-from rlcontroller.dynamics import StateSpace, StepMap, compose, exact_substep, sensor_matrices, state_space, step_map
-from rlcontroller.structure import Building
-
-
-@dataclass(frozen=True)
-class GroundModel:
-    """Kanai-Tajimi ground filter  x_f'' + 2 damping frequency x_f' + frequency^2 x_f = -w  (w white),
-    a_g = -frequency^2 x_f - 2 damping frequency x_f'. The defaults are the firm-soil values of
-    Kanai-Tajimi (Tajimi 1960), not fitted to any record."""
-
-    frequency: float = 15.6  # rad/s
-    damping: float = 0.6
-
-    @property
-    def output(self) -> np.ndarray:
-        """a_g = output @ [x_f, x_f']."""
-        return np.array([-(self.frequency**2), -2.0 * self.damping * self.frequency])
-
-    def state_scale(self, ground_scale: float) -> np.ndarray:
-        """Typical sizes of x_f (m) and x_f' (m/s) for a ground acceleration of `ground_scale`."""
-        return np.array([ground_scale / self.frequency**2, ground_scale / self.frequency])
-
-
-def ground_model_step(building: Building, control_dt: float, model: GroundModel) -> StepMap:
-    """Exact control-step map of the state [z; x_f; x_f'] driven by the forces and the white noise
-    w (held over the step; `ground_gain` holds its two FOH columns)."""
-    system = state_space(building)
-    size = system.a.shape[0]
-    filter_a = np.array([[0.0, 1.0], model.output])
-    augmented = StateSpace(
-        a=np.block([[system.a, np.outer(system.b_ground, model.output)], [np.zeros((2, size)), filter_a]]),
-        b_force=np.vstack([system.b_force, np.zeros((2, building.n_actuators))]),
-        b_ground=np.concatenate([np.zeros(size), [0.0, -1.0]]),
-    )
-    return compose(exact_substep(augmented, control_dt), 1, control_dt)
+from rlcontroller.physics.plant import Plant
 
 
 @dataclass
@@ -96,20 +61,14 @@ def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement
     return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
 
 
-def design_kalman(
-    building: Building,
-    sensors: SensorConfig,
-    simulation: SimulationConfig,
-    known_ground: bool = False,
-    ground_std: float = 1.0,
-) -> KalmanFilter:
-    """Filter for `sensors`; `ground_std` (m/s^2) is the ground's process-noise level per step
-    (halved when the ground is measured: only its change over the step is unknown). The sensors'
-    noise_std is the measurement noise, floored at 1e-3 of each sensor's scale."""
-    step = step_map(building, simulation, substeps=1)
+def design_kalman(plant: Plant, known_ground: bool = False, ground_std: float = 1.0) -> KalmanFilter:
+    """Filter for the plant's sensors; `ground_std` (m/s^2) is the ground's process-noise level per
+    step (halved when the ground is measured: only its change over the step is unknown). The
+    sensors' noise_std is the measurement noise, floored at 1e-3 of each sensor's scale."""
+    step, building, sensors = plant.step_map(1), plant.building, plant.sensors
     ground_gain = step.ground_gain.sum(axis=1)
-    c, d, scale, noise = sensor_matrices(building, sensors)
-    measurement = np.diag(np.maximum(noise, 1e-3 * scale) ** 2)
+    c, d = sensors.c, sensors.d
+    measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
     process_std = ground_std * (0.5 if known_ground else 1.0)
     process = process_std**2 * np.outer(ground_gain, ground_gain) + 1e-12 * np.eye(step.phi.shape[0])
     return KalmanFilter(
@@ -123,27 +82,24 @@ def design_kalman(
     )
 
 
-def design_kalman_ground_model(
-    building: Building,
-    sensors: SensorConfig,
-    simulation: SimulationConfig,
-    model: GroundModel,
-    ground_std: float = 1.0,
-) -> KalmanFilter:
-    """Filter of [z; x_f; x_f'] from the sensors plus the measured ground acceleration; w is scaled
-    so that the modelled a_g has a stationary std of `ground_std` (m/s^2). Exact discretisation
-    whatever the simulation method."""
-    step = ground_model_step(building, simulation.control_dt, model)
+def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanFilter:
+    """Filter of [z; x_f; x_f'] (the plant's Kanai-Tajimi ground model) from the sensors plus the
+    measured ground acceleration; w is scaled so that the modelled a_g has a stationary std of
+    `ground_std` (m/s^2). Exact discretisation whatever the simulation method."""
+    step, building, model = plant.ground_model_step(), plant.building, plant.ground_model
+    config = plant.experiment.sensors
     size = 2 * building.n_floors
     noise_gain = step.ground_gain.sum(axis=1)
     stationary = scipy.linalg.solve_discrete_lyapunov(
         step.phi[size:, size:], np.outer(noise_gain, noise_gain)[size:, size:]
     )
     intensity = ground_std**2 / float(model.output @ stationary @ model.output)
-    c, d, scale, noise = sensor_matrices(building, sensors)
-    sensor_c = np.vstack([np.pad(c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), model.output])])
-    sensor_d = np.vstack([d * building.force_limits, np.zeros((1, building.n_actuators))])
-    noise = np.maximum(np.append(noise, sensors.ground_noise_std), 1e-3 * np.append(scale, sensors.ground_scale))
+    sensors = plant.sensors
+    sensor_c = np.vstack([np.pad(sensors.c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), model.output])])
+    sensor_d = np.vstack([sensors.d * building.force_limits, np.zeros((1, building.n_actuators))])
+    noise = np.maximum(
+        np.append(sensors.noise_std, config.ground_noise_std), 1e-3 * np.append(sensors.scale, config.ground_scale)
+    )
     process = intensity * np.outer(noise_gain, noise_gain) + 1e-12 * np.eye(size + 2)
     return KalmanFilter(
         phi=step.phi,

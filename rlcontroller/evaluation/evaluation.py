@@ -9,27 +9,31 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from rlcontroller.config import Experiment
-from rlcontroller.controllers import Controller, rollout
-from rlcontroller.dynamics import Response, simulate
-from rlcontroller.env import BuildingEnv
-from rlcontroller.excitation import GroundMotion, for_control_step
-from rlcontroller.lqg import optimal_response
-from rlcontroller.metrics import METRICS, j_metrics
+from rlcontroller.config import Experiment, display_path
+from rlcontroller.control.controllers import Controller, LQGController
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.optimal import optimal_response
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.dynamics import Response, simulate
+from rlcontroller.physics.excitation import GroundMotion, for_control_step
+from rlcontroller.physics.metrics import METRICS, j_metrics
+from rlcontroller.physics.plant import Plant
 
 OPTIMAL = "optimal (clairvoyant)"
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
-def uncontrolled_response(env: BuildingEnv, motion: GroundMotion) -> Response:
-    """Whole-record simulation of the bare building with the env's step map."""
-    samples, substeps = for_control_step(motion, env.control_dt)
-    return simulate(env.building, env.step_map(substeps), samples)
+def uncontrolled_response(plant: Plant, motion: GroundMotion) -> Response:
+    """Whole-record simulation of the bare building with the plant's step map."""
+    samples, substeps = for_control_step(motion, plant.control_dt)
+    return simulate(plant.building, plant.step_map(substeps), samples)
 
 
 @dataclass
@@ -56,11 +60,11 @@ class Evaluation:
         """Mean over records, then over stories (actuators for J3), per controller."""
         per_index = self.metrics.groupby(["controller", "metric", "index"], sort=False)["value"].mean()
         table = per_index.groupby(["controller", "metric"], sort=False).mean().unstack("metric")
-        return table.loc[self.controllers, ["J1", "J2", "J3", "J4"]]
+        return table.loc[self.controllers, list(METRICS)]
 
 
 def evaluate(
-    experiment: Experiment,
+    plant: Plant,
     motions: list[GroundMotion],
     controllers: list[Controller],
     label: str,
@@ -68,17 +72,17 @@ def evaluate(
 ) -> Evaluation:
     """Run the uncontrolled building, every controller and (optionally) the optimal reference."""
     start = time.perf_counter()
-    env = BuildingEnv(experiment)
+    env = BuildingEnv(plant)
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):
-        bare = uncontrolled_response(env, motion)
+        bare = uncontrolled_response(plant, motion)
         responses["uncontrolled", motion.name] = bare
         results = [("uncontrolled", bare)]
         for controller in controllers:
             results.append((controller.name, rollout(env, motion, controller, seed=number)[0]))
         if include_optimal:
-            results.append((OPTIMAL, optimal_response(experiment, motion)))
+            results.append((OPTIMAL, optimal_response(plant, motion)))
         for name, result in results:
             responses[name, motion.name] = result
             for metric, values in j_metrics(result, bare).items():
@@ -88,7 +92,24 @@ def evaluate(
                 )
     descriptions = {motion.name: motion.description for motion in motions}
     seconds = time.perf_counter() - start
-    return Evaluation(label, experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions)
+    return Evaluation(label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions)
+
+
+def compare(plant: Plant, motions: list[GroundMotion], label: str, policy: Path | None = None) -> Evaluation:
+    """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), the
+    saved policy at `policy` (if given) and the optimal reference, on every motion."""
+    designs = [design_lqg(plant), design_lqg(plant, known_ground=True), design_lqg_ground_model(plant)]
+    controllers: list[Controller] = [
+        LQGController(design, plant, name) for design, name in zip(designs, LQG_VARIANTS, strict=True)
+    ]
+    sources = {}
+    if policy is not None:
+        controller = PolicyController.load(policy)
+        controllers.append(controller)
+        sources[controller.name] = f"{display_path(policy)} ({controller.model.num_timesteps:,} training steps)"
+    evaluation = evaluate(plant, motions, controllers, label)
+    evaluation.sources.update(sources)
+    return evaluation
 
 
 def percent_better(candidate: float, reference: float) -> float:
@@ -103,16 +124,14 @@ def mean_metric(evaluation: Evaluation, controller: str, metric: str) -> float:
 
 
 def lqg_sweep(
-    experiment: Experiment,
+    plant: Plant,
     motions: list[GroundMotion],
     label: str,
     multipliers: np.ndarray,
     known_ground: bool = False,
 ) -> pd.DataFrame:
     """LQG's trade-off: mean J1..J4 for the reward's force weights times each multiplier."""
-    from rlcontroller.lqg import LQGController, design_lqg
-
-    env = BuildingEnv(experiment)
+    experiment = plant.experiment
     if not any(term.quantity == "force" for term in experiment.reward.terms):
         raise ValueError("the reward has no force term to sweep")
     rows = []
@@ -122,17 +141,15 @@ def lqg_sweep(
             for term in experiment.reward.terms
         ]
         reward = experiment.reward.model_copy(update={"terms": terms})
-        controller = LQGController(design_lqg(experiment, known_ground=known_ground, reward=reward), env)
-        result = evaluate(experiment, motions, [controller], label, include_optimal=False)
+        controller = LQGController(design_lqg(plant, known_ground=known_ground, reward=reward), plant)
+        result = evaluate(plant, motions, [controller], label, include_optimal=False)
         summary = result.summary().loc["LQG"]
-        rows.append(
-            {"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in ("J1", "J2", "J3", "J4")}}
-        )
+        rows.append({"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in METRICS}})
     return pd.DataFrame(rows)
 
 
 def preview_study(
-    experiment: Experiment,
+    plant: Plant,
     motions: list[GroundMotion],
     seconds: tuple[float | None, ...] = PREVIEW_SECONDS,
 ) -> pd.DataFrame:
@@ -142,15 +159,14 @@ def preview_study(
     Preview 0 is full-state LQR without ground knowledge; a causal controller has no preview, so
     the rows bound what better sensing (full state) and prediction of the ground can buy.
     """
-    env = BuildingEnv(experiment)
-    dt = experiment.simulation.control_dt
-    bare = [uncontrolled_response(env, motion) for motion in motions]
+    dt = plant.control_dt
+    bare = [uncontrolled_response(plant, motion) for motion in motions]
     rows = []
     for horizon in seconds:
         steps = None if horizon is None else round(horizon / dt)
         values = {metric: [] for metric in METRICS}
         for motion, uncontrolled in zip(motions, bare, strict=True):
-            metrics = j_metrics(optimal_response(experiment, motion, preview=steps), uncontrolled)
+            metrics = j_metrics(optimal_response(plant, motion, preview=steps), uncontrolled)
             for metric in METRICS:
                 values[metric].append(metrics[metric])
         rows.append(

@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from rlcontroller.config import KanaiTajimiConfig, display_path
-from rlcontroller.excitation import (
+from rlcontroller.physics.excitation import (
     MOTION_SUFFIXES,
     STANDARD_GRAVITY,
     GroundMotion,

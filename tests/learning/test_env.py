@@ -8,9 +8,9 @@ from gymnasium.utils.env_checker import check_env
 
 from rlcontroller import ENV_ID
 from rlcontroller.config import Experiment, MeasurementConfig, RewardTerm, SensorConfig
-from rlcontroller.dynamics import simulate
-from rlcontroller.env import BuildingEnv
-from rlcontroller.excitation import GroundMotion, read_at2
+from rlcontroller.learning.env import BuildingEnv
+from rlcontroller.physics.dynamics import simulate
+from rlcontroller.physics.excitation import GroundMotion, read_at2
 
 NOISE_FREE = Experiment(
     sensors=SensorConfig(
@@ -74,7 +74,7 @@ def test_steps_match_the_whole_record_simulation(records):
         shears.append(info["base_shear"])
     assert truncated
     forces = np.clip(actions, -1, 1) * 1e5
-    from rlcontroller.excitation import for_control_step
+    from rlcontroller.physics.excitation import for_control_step
 
     samples, substeps = for_control_step(motion, 0.02)
     reference = simulate(env.building, env.step_map(substeps), samples, forces)
@@ -194,7 +194,7 @@ def test_state_estimate_in_the_observation_tracks_the_true_state():
 def test_ground_model_estimate_predicts_the_ground_reading():
     """With `ground_model` the estimate ends with the Kanai-Tajimi filter states; their output
     tracks the measured ground acceleration."""
-    from rlcontroller.estimation import GroundModel
+    from rlcontroller.physics.excitation import GroundModel
 
     env = BuildingEnv(Experiment(sensors=SensorConfig(state_estimate=True, ground_model=True)))
     observation, _ = env.reset(seed=3)

@@ -23,7 +23,6 @@ constructor, or passed as `reset(options={"motion": GroundMotion})`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,24 +30,11 @@ import gymnasium as gym
 import numpy as np
 
 from rlcontroller.config import Experiment, load_experiment
-from rlcontroller.dynamics import StepMap, output_matrices, reward_matrices, sensor_matrices, step_map
-from rlcontroller.estimation import GroundModel, design_kalman, design_kalman_ground_model
-from rlcontroller.excitation import GroundMotion, for_control_step, generate
-from rlcontroller.structure import build
-
-
-@dataclass(frozen=True)
-class ObservationLayout:
-    """Where the newest readings, ground reading, state estimate and last action sit in an
-    observation, and the scales that turn them back into SI units."""
-
-    readings: slice
-    ground: int
-    estimate: slice  # empty without `sensors.state_estimate`
-    action: slice
-    reading_scale: np.ndarray
-    ground_scale: float
-    estimate_scale: np.ndarray
+from rlcontroller.control.controllers import Controller
+from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model
+from rlcontroller.physics.dynamics import Response, output_matrices, response
+from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
+from rlcontroller.physics.plant import Plant, reward_matrices
 
 
 class BuildingEnv(gym.Env):
@@ -56,26 +42,32 @@ class BuildingEnv(gym.Env):
 
     def __init__(
         self,
-        config: Experiment | str | Path | None = None,
+        config: Plant | Experiment | str | Path | None = None,
         motions: list[GroundMotion] | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if config is None:
-            config = Experiment()
-        elif not isinstance(config, Experiment):
-            config = load_experiment(config)
-        self.experiment = config
-        self.building = build(config.building, config.actuators)
+        if isinstance(config, Plant):
+            plant = config
+        else:
+            plant = Plant(
+                config
+                if isinstance(config, Experiment)
+                else Experiment()
+                if config is None
+                else load_experiment(config)
+            )
+        self.plant = plant
+        config = self.experiment = plant.experiment
+        self.building = plant.building
         self.motions = motions
         self.render_mode = render_mode
-        self._maps: dict[int, StepMap] = {}
 
         n = self.building.n_floors
         m = self.building.n_actuators
         self.history = config.sensors.history
-        self.force_limits = self.building.force_limits
-        self.control_dt = config.simulation.control_dt
-        sensor_c, sensor_d, sensor_scale, sensor_noise = sensor_matrices(self.building, config.sensors)
+        self.force_limits = plant.force_limits
+        self.control_dt = plant.control_dt
+        sensors = plant.sensors
         # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
         linear_terms = [t for t in config.reward.terms if t.quantity != "force_change"]
         change_terms = [t for t in config.reward.terms if t.quantity == "force_change"]
@@ -84,7 +76,7 @@ class BuildingEnv(gym.Env):
         starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
         self._reward_starts = np.array(starts, dtype=int)
         self._change_factor = (
-            np.concatenate([self.building.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
+            np.concatenate([self.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
             if change_terms
             else None
         )
@@ -104,7 +96,7 @@ class BuildingEnv(gym.Env):
         no_state, no_force = np.zeros((1, 2 * n)), np.zeros((1, m))
         self._output_c = np.vstack(
             [
-                sensor_c / sensor_scale[:, None],
+                sensors.c / sensors.scale[:, None],
                 no_state,
                 reward_c * reward_factor[:, None],
                 drift_c,
@@ -114,7 +106,7 @@ class BuildingEnv(gym.Env):
         )
         self._output_d = np.vstack(
             [
-                sensor_d / sensor_scale[:, None],
+                sensors.d / sensors.scale[:, None],
                 no_force,
                 reward_d * reward_factor[:, None],
                 drift_d,
@@ -122,7 +114,7 @@ class BuildingEnv(gym.Env):
                 shear_d,
             ]
         )
-        self._n_sensors = p = sensor_c.shape[0]
+        self._n_sensors = p = sensors.c.shape[0]
         r = reward_c.shape[0]
         # Output columns after the state: readings, ground reading, reward rows, drift, acceleration, shear.
         first = 2 * n
@@ -131,49 +123,32 @@ class BuildingEnv(gym.Env):
         self._drift_slice = slice(first + p + 1 + r, first + p + 1 + r + n)
         self._acceleration_slice = slice(first + p + 1 + r + n, first + p + 1 + r + 2 * n)
         self._base_shear_index = first + p + 1 + r + 2 * n
-        self._noise_scaled = sensor_noise / sensor_scale
+        self._noise_scaled = sensors.noise_std / sensors.scale
         self._ground_noise = config.sensors.ground_noise_std
 
-        # Observation layout: H blocks of (p readings, 1 ground reading), the state estimate if
-        # configured, then the last action.
+        self.layout = layout = plant.layout
         self._block = p + 1
-        self._estimate_start = self.history * self._block
+        self._estimate_start = layout.estimate.start
+        self._action_start = layout.action.start
         self.kalman = None
-        estimate_scale = np.zeros(0)
-        sensors = config.sensors
-        if sensors.state_estimate:
-            estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
-            if sensors.ground_model:
-                model = GroundModel()
-                self.kalman = design_kalman_ground_model(self.building, sensors, config.simulation, model)
-                estimate_scale = np.append(estimate_scale, model.state_scale(sensors.ground_scale))
-            else:
-                self.kalman = design_kalman(self.building, sensors, config.simulation, known_ground=True)
-        self._action_start = self._estimate_start + estimate_scale.size
-        self.layout = ObservationLayout(
-            readings=slice(0, p),
-            ground=p,
-            estimate=slice(self._estimate_start, self._action_start),
-            action=slice(self._action_start, self._action_start + m),
-            reading_scale=sensor_scale,
-            ground_scale=config.sensors.ground_scale,
-            estimate_scale=estimate_scale,
-        )
-        observation_size = self._action_start + m
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float32)
+        if config.sensors.state_estimate:
+            self.kalman = (
+                design_kalman_ground_model(plant)
+                if config.sensors.ground_model
+                else design_kalman(plant, known_ground=True)
+            )
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
-        self._observation = np.zeros(observation_size, dtype=np.float32)
+        self._observation = np.zeros(layout.size, dtype=np.float32)
         self._n_state = 2 * n
         self._state_action = np.zeros(2 * n + m)  # [z | clipped action]
         self._k = 0
         self._n_steps = 0
         self.motion: GroundMotion | None = None
 
-    def step_map(self, substeps: int) -> StepMap:
-        """The control-step map for `substeps` ground samples per step (cached)."""
-        if substeps not in self._maps:
-            self._maps[substeps] = step_map(self.building, self.experiment.simulation, substeps)
-        return self._maps[substeps]
+    def step_map(self, substeps: int):
+        """The plant's control-step map for `substeps` ground samples per step."""
+        return self.plant.step_map(substeps)
 
     @property
     def state(self) -> np.ndarray:
@@ -270,3 +245,23 @@ class BuildingEnv(gym.Env):
         info["force"] = clipped * self.force_limits
         info["time"] = k * self.control_dt
         return observation.copy(), -sum(terms), False, k >= self._n_steps, info
+
+
+def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed: int = 0) -> tuple[Response, float]:
+    """Run `controller` on `motion` in `env` (sensor noise seeded by `seed`).
+
+    Returns the whole response and the episode's total reward.
+    """
+    observation, info = env.reset(seed=seed, options={"motion": motion})
+    controller.reset()
+    n_steps = info["steps"]
+    states = np.zeros((n_steps + 1, 2 * env.building.n_floors))
+    held = np.zeros((n_steps + 1, env.building.n_actuators))
+    total_reward = 0.0
+    for k in range(1, n_steps + 1):
+        observation, reward, _, _, _ = env.step(controller.act(observation))
+        total_reward += reward
+        states[k] = env.state
+        held[k] = env.held_force
+    time = np.arange(n_steps + 1) * env.control_dt
+    return response(env.building, states, held, time, env.ground_samples), total_reward

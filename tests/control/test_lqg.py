@@ -3,21 +3,17 @@ import pytest
 import scipy.linalg
 
 from rlcontroller.config import Experiment, KanaiTajimiConfig, MeasurementConfig, SensorConfig
-from rlcontroller.controllers import Uncontrolled, rollout
-from rlcontroller.dynamics import Response, step_map
-from rlcontroller.env import BuildingEnv
-from rlcontroller.estimation import GroundModel
-from rlcontroller.excitation import GroundMotion, kanai_tajimi, read_at2, scale_to_pga
-from rlcontroller.lqg import (
-    LQGController,
-    design_lqg,
-    design_lqg_ground_model,
-    lqr_gain,
-    optimal_response,
-    quadratic_cost,
-)
-from rlcontroller.metrics import j_metrics
-from rlcontroller.structure import build
+from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.lqr import lqr_gain, quadratic_cost
+from rlcontroller.control.optimal import optimal_response
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.dynamics import Response, step_map
+from rlcontroller.physics.excitation import GroundModel, GroundMotion, kanai_tajimi, read_at2, scale_to_pga
+from rlcontroller.physics.metrics import j_metrics
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.structure import build
 
 NOISE_FREE = Experiment(
     sensors=SensorConfig(
@@ -37,7 +33,7 @@ def episode_cost(result: Response, experiment: Experiment) -> float:
 
 @pytest.mark.parametrize("known_ground", [False, True])
 def test_closed_loop_is_stable(known_ground):
-    design = design_lqg(Experiment(), known_ground=known_ground)
+    design = design_lqg(Plant(Experiment()), known_ground=known_ground)
     assert np.max(np.abs(design.closed_loop_eigenvalues())) < 1.0
     kalman = design.filter
     estimator = kalman.phi - kalman.gain @ kalman.sensor_c @ kalman.phi
@@ -74,7 +70,7 @@ def test_the_lqr_cost_is_exactly_the_reward():
 
 
 def test_kalman_estimate_converges_on_a_noise_free_free_vibration():
-    kalman = design_lqg(NOISE_FREE).filter
+    kalman = design_lqg(Plant(NOISE_FREE)).filter
     state = np.concatenate([np.linspace(0.02, 0.06, 5), np.zeros(5)])
     errors = []
     for _ in range(300):
@@ -88,7 +84,7 @@ def test_lqg_reduces_drift_on_a_record_without_saturating(records):
     motion = scale_to_pga(read_at2(records / "RSN1086_NORTHR_SYL090.AT2"), 0.5)  # small: forces stay below 100 kN
     env = BuildingEnv(Experiment())
     bare, _ = rollout(env, motion, Uncontrolled(3))
-    controlled, _ = rollout(env, motion, LQGController(design_lqg(Experiment()), env))
+    controlled, _ = rollout(env, motion, LQGController(design_lqg(Plant(Experiment())), env.plant))
     assert np.max(np.abs(controlled.force)) < 0.99e5
     metrics = j_metrics(controlled, bare)
     assert np.mean(metrics["J1"]) < 0.7 and np.all(metrics["J1"] < 1.0)
@@ -98,9 +94,9 @@ def test_optimal_reference_beats_lqg_and_the_bare_building_on_the_cost(records):
     experiment = Experiment()
     motion = scale_to_pga(read_at2(records / "RSN1086_NORTHR_SYL090.AT2"), 0.5)
     env = BuildingEnv(NOISE_FREE)
-    optimal = optimal_response(experiment, motion)
+    optimal = optimal_response(Plant(experiment), motion)
     assert np.max(np.abs(optimal.force)) < 1e5
-    lqg, _ = rollout(env, motion, LQGController(design_lqg(NOISE_FREE, known_ground=True), env))
+    lqg, _ = rollout(env, motion, LQGController(design_lqg(Plant(NOISE_FREE), known_ground=True), env.plant))
     bare, _ = rollout(env, motion, Uncontrolled(3))
     assert episode_cost(optimal, experiment) < episode_cost(lqg, experiment) < episode_cost(bare, experiment)
 
@@ -108,15 +104,15 @@ def test_optimal_reference_beats_lqg_and_the_bare_building_on_the_cost(records):
 def test_forces_respect_the_limits(records):
     motion = read_at2(records / "RSN1106_KOBE_KJM000.AT2")  # strong: LQG saturates
     env = BuildingEnv(Experiment())
-    controlled, _ = rollout(env, motion, LQGController(design_lqg(Experiment()), env))
+    controlled, _ = rollout(env, motion, LQGController(design_lqg(Plant(Experiment())), env.plant))
     assert np.max(np.abs(controlled.force)) == pytest.approx(1e5)
-    assert np.max(np.abs(optimal_response(Experiment(), motion).force)) <= 1e5 + 1e-6
+    assert np.max(np.abs(optimal_response(Plant(Experiment()), motion).force)) <= 1e5 + 1e-6
 
 
 def test_a_reward_that_leaves_forces_free_is_refused():
     experiment = Experiment(reward={"terms": [{"quantity": "base_shear", "weight": 1.0, "scale": 1e5}]})  # rank 1 < 3
     with pytest.raises(ValueError, match="R is singular"):
-        design_lqg(experiment)
+        design_lqg(Plant(experiment))
 
 
 def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
@@ -130,14 +126,11 @@ def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
             ]
         }
     )
-    np.testing.assert_allclose(design_lqg(extended).feedback, design_lqg(base).feedback)
+    np.testing.assert_allclose(design_lqg(Plant(extended)).feedback, design_lqg(Plant(base)).feedback)
 
 
 @pytest.mark.parametrize("ground_model", [False, True])
 def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
-    from rlcontroller.controllers import PolicyController
-    from rlcontroller.lqg import LQGPrior
-
     class ZeroPolicy:
         def predict(self, observation, deterministic=True):
             return np.zeros(3), None
@@ -146,15 +139,17 @@ def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
     experiment = Experiment(sensors=sensors, algorithm={"residual_lqg": True})
     env = BuildingEnv(experiment)
     motion = read_at2_or_synthetic()
-    residual, _ = rollout(env, motion, PolicyController(ZeroPolicy(), env.force_limits, prior=LQGPrior(experiment)))
-    design = design_lqg_ground_model(experiment) if ground_model else design_lqg(experiment, known_ground=True)
-    lqg, _ = rollout(env, motion, LQGController(design, env))
+    residual, _ = rollout(env, motion, PolicyController(ZeroPolicy(), prior=LQGPrior(Plant(experiment))))
+    design = (
+        design_lqg_ground_model(Plant(experiment)) if ground_model else design_lqg(Plant(experiment), known_ground=True)
+    )
+    lqg, _ = rollout(env, motion, LQGController(design, env.plant))
     np.testing.assert_allclose(residual.force, lqg.force, rtol=1e-3, atol=1.0)
     assert np.abs(lqg.force).max() > 1e4
 
 
 def read_at2_or_synthetic() -> GroundMotion:
-    from rlcontroller.records import synthetic_suite
+    from rlcontroller.physics.records import synthetic_suite
 
     return synthetic_suite(count=1)[0]
 
@@ -197,22 +192,24 @@ def test_clairvoyant_actions_solve_the_finite_least_squares_problem():
     offset = residuals(np.zeros((n, m)))
     columns = [residuals(np.eye(n * m)[i].reshape(n, m)) - offset for i in range(n * m)]
     best = np.linalg.lstsq(np.array(columns).T, -offset, rcond=None)[0].reshape(n, m)
-    optimal = optimal_response(experiment, motion)
+    optimal = optimal_response(Plant(experiment), motion)
     assert np.max(np.abs(optimal.force)) < 0.5e5
     np.testing.assert_allclose(optimal.force[1:], best * building.force_limits, rtol=1e-6, atol=1e-6 * 1e5)
 
 
 def test_more_preview_never_costs_more_and_zero_preview_is_full_state_lqr():
     experiment, motion = Experiment(), weak_motion(400)
-    costs = [episode_cost(optimal_response(experiment, motion, preview=p), experiment) for p in (0, 1, 5, 25, None)]
+    costs = [
+        episode_cost(optimal_response(Plant(experiment), motion, preview=p), experiment) for p in (0, 1, 5, 25, None)
+    ]
     assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
-    assert optimal_response(experiment, motion, preview=10_000).force == pytest.approx(
-        optimal_response(experiment, motion).force
+    assert optimal_response(Plant(experiment), motion, preview=10_000).force == pytest.approx(
+        optimal_response(Plant(experiment), motion).force
     )
     building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation)
     feedback, _ = lqr_gain(step, quadratic_cost(building, experiment.reward, step), building.force_limits)
-    blind = optimal_response(experiment, motion, preview=0)
+    blind = optimal_response(Plant(experiment), motion, preview=0)
     actions = -np.hstack([blind.displacement, blind.velocity]) @ feedback.T
     np.testing.assert_allclose(blind.force[1:], actions[:-1] * building.force_limits, atol=1e-6)
 
@@ -221,8 +218,8 @@ def test_ground_model_keeps_the_building_gain_and_is_stable():
     """The ground filter's states are uncontrollable and not driven by the building, so the optimal
     feedback on the building state is plain LQR's; the ground model only adds a feed-forward."""
     experiment = Experiment()
-    design = design_lqg_ground_model(experiment)
-    np.testing.assert_allclose(design.feedback[:, :10], design_lqg(experiment).feedback, rtol=1e-6, atol=1e-9)
+    design = design_lqg_ground_model(Plant(experiment))
+    np.testing.assert_allclose(design.feedback[:, :10], design_lqg(Plant(experiment)).feedback, rtol=1e-6, atol=1e-9)
     assert np.abs(design.feedback[:, 10:]).max() > 1e-3
     assert np.max(np.abs(design.closed_loop_eigenvalues())) < 1.0
     kalman = design.filter
@@ -245,12 +242,12 @@ def test_ground_model_lqg_wins_on_the_motions_it_models():
     motion = kanai_tajimi(generator, np.random.default_rng(5))
     env = BuildingEnv(NOISE_FREE)
     designs = {
-        "plain": design_lqg(NOISE_FREE),
-        "ground": design_lqg(NOISE_FREE, known_ground=True),
-        "model": design_lqg_ground_model(NOISE_FREE),
+        "plain": design_lqg(Plant(NOISE_FREE)),
+        "ground": design_lqg(Plant(NOISE_FREE), known_ground=True),
+        "model": design_lqg_ground_model(Plant(NOISE_FREE)),
     }
     rewards = {}
     for name, design in designs.items():
-        result, rewards[name] = rollout(env, motion, LQGController(design, env))
+        result, rewards[name] = rollout(env, motion, LQGController(design, env.plant))
         assert np.max(np.abs(result.force)) < 0.9e5
     assert rewards["model"] > rewards["ground"] > rewards["plain"]

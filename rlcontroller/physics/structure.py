@@ -32,7 +32,6 @@ class Building:
     damping: np.ndarray
     actuator_matrix: np.ndarray
     force_limits: np.ndarray
-    actuator_stories: tuple[int, ...]
     story_heights: np.ndarray | None = None
 
     @property
@@ -120,6 +119,5 @@ def build(building: BuildingConfig, actuators: list[ActuatorConfig]) -> Building
         damping=damping,
         actuator_matrix=actuator_matrix(len(building.masses), actuators),
         force_limits=np.array([a.force_limit for a in actuators], dtype=float),
-        actuator_stories=tuple(a.story for a in actuators),
         story_heights=heights,
     )

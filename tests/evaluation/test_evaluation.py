@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import Experiment
-from rlcontroller.controllers import Uncontrolled, rollout
-from rlcontroller.env import BuildingEnv
-from rlcontroller.evaluation import (
+from rlcontroller.control.controllers import LQGController, Uncontrolled
+from rlcontroller.control.lqg import design_lqg
+from rlcontroller.evaluation.evaluation import (
     OPTIMAL,
     evaluate,
     lqg_sweep,
@@ -12,15 +12,16 @@ from rlcontroller.evaluation import (
     preview_study,
     uncontrolled_response,
 )
-from rlcontroller.excitation import read_at2
-from rlcontroller.lqg import LQGController, design_lqg
-from rlcontroller.records import SYNTHETIC_LABEL, synthetic_suite
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.physics.excitation import read_at2
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import SYNTHETIC_LABEL, synthetic_suite
 
 
 def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
     motion = read_at2(records / "RSN753_LOMAP_CLS000.AT2")
     env = BuildingEnv()
-    whole = uncontrolled_response(env, motion)
+    whole = uncontrolled_response(env.plant, motion)
     stepped, _ = rollout(env, motion, Uncontrolled(3))
     for quantity in ("drift", "absolute_acceleration", "story_shear"):
         np.testing.assert_allclose(whole.quantity(quantity), stepped.quantity(quantity), rtol=1e-9, atol=1e-12)
@@ -29,8 +30,8 @@ def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
 def test_uncontrolled_rows_are_one_and_lqg_helps():
     experiment = Experiment()
     motions = synthetic_suite(count=2)
-    env = BuildingEnv(experiment)
-    result = evaluate(experiment, motions, [LQGController(design_lqg(experiment), env)], SYNTHETIC_LABEL)
+    plant = Plant(experiment)
+    result = evaluate(plant, motions, [LQGController(design_lqg(plant), plant)], SYNTHETIC_LABEL)
     frame = result.metrics
     bare = frame[(frame["controller"] == "uncontrolled") & (frame["metric"] != "J3")]
     np.testing.assert_array_equal(bare["value"], 1.0)
@@ -42,16 +43,16 @@ def test_uncontrolled_rows_are_one_and_lqg_helps():
 
 def test_preview_study_improves_with_preview_and_ends_at_the_clairvoyant():
     experiment, motions = Experiment(), synthetic_suite(count=2)
-    table = preview_study(experiment, motions, seconds=(0.0, 0.1, 0.5, None))
+    table = preview_study(Plant(experiment), motions, seconds=(0.0, 0.1, 0.5, None))
     assert list(table["preview_s"]) == [0.0, 0.1, 0.5, float("inf")]
     assert table["J1"].is_monotonic_decreasing and table["J1"].iloc[0] > table["J1"].iloc[-1] + 0.02
-    clairvoyant = evaluate(experiment, motions, [], SYNTHETIC_LABEL)
+    clairvoyant = evaluate(Plant(experiment), motions, [], SYNTHETIC_LABEL)
     assert table["J1"].iloc[-1] == pytest.approx(mean_metric(clairvoyant, OPTIMAL, "J1"), rel=1e-9)
 
 
 def test_sweep_trades_force_energy_for_drift():
     experiment = Experiment()
-    table = lqg_sweep(experiment, synthetic_suite(count=2), SYNTHETIC_LABEL, np.array([0.01, 1.0, 100.0]))
+    table = lqg_sweep(Plant(experiment), synthetic_suite(count=2), SYNTHETIC_LABEL, np.array([0.01, 1.0, 100.0]))
     assert list(table["force_weight_multiplier"]) == [0.01, 1.0, 100.0]
     assert table["J3"].is_monotonic_decreasing
     assert table["J1"].iloc[-1] > table["J1"].iloc[0]

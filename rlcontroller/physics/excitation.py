@@ -220,6 +220,25 @@ def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarra
     return resample(motion, control_dt / substeps).acceleration, substeps
 
 
+@dataclass(frozen=True)
+class GroundModel:
+    """Kanai-Tajimi ground filter  x_f'' + 2 damping frequency x_f' + frequency^2 x_f = -w  (w white),
+    a_g = -frequency^2 x_f - 2 damping frequency x_f'. The defaults are the firm-soil values of
+    Kanai-Tajimi (Tajimi 1960), not fitted to any record."""
+
+    frequency: float = 15.6  # rad/s
+    damping: float = 0.6
+
+    @property
+    def output(self) -> np.ndarray:
+        """a_g = output @ [x_f, x_f']."""
+        return np.array([-(self.frequency**2), -2.0 * self.damping * self.frequency])
+
+    def state_scale(self, ground_scale: float) -> np.ndarray:
+        """Typical sizes of x_f (m) and x_f' (m/s) for a ground acceleration of `ground_scale`."""
+        return np.array([ground_scale / self.frequency**2, ground_scale / self.frequency])
+
+
 def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
     return float(rng.uniform(bounds[0], bounds[1]))
 

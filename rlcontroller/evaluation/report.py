@@ -16,8 +16,9 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
-from rlcontroller.evaluation import LQG_VARIANTS, OPTIMAL, Evaluation, percent_better  # noqa: E402
+from rlcontroller.evaluation.evaluation import LQG_VARIANTS, OPTIMAL, Evaluation, percent_better  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
+from rlcontroller.physics.metrics import METRICS  # noqa: E402
 
 COLOURS = {
     "uncontrolled": "0.6",
@@ -72,7 +73,7 @@ def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataF
         return None
     rows = {
         f"{candidate} better than {reference} (%)": {
-            m: percent_better(table.loc[candidate, m], table.loc[reference, m]) for m in ("J1", "J2", "J3", "J4")
+            m: percent_better(table.loc[candidate, m], table.loc[reference, m]) for m in METRICS
         }
         for reference in references
     }
@@ -110,7 +111,7 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     detail = [f"# J1-J4 per record and story: {evaluation.label}", ""]
     detail += [f"Columns: story (J3: actuator, on stories {stories}).", ""]
     detail += [f"- {name}: {text}" for name, text in evaluation.descriptions.items() if text] + [""]
-    for metric in ("J1", "J2", "J3", "J4"):
+    for metric in METRICS:
         for controller in evaluation.controllers:
             if controller == "uncontrolled":
                 continue
@@ -183,7 +184,7 @@ def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
     figure, axes = plt.subplots(4, len(controllers), figsize=(4.2 * len(controllers), 11), sharey="row", squeeze=False)
     frame = evaluation.metrics
     for column, controller in enumerate(controllers):
-        for row, metric in enumerate(("J1", "J2", "J3", "J4")):
+        for row, metric in enumerate(METRICS):
             axis = axes[row, column]
             chosen = frame[(frame["controller"] == controller) & (frame["metric"] == metric)]
             table = chosen.pivot_table(index="index", columns="record", values="value", sort=False)

@@ -1,0 +1,84 @@
+"""The quadratic cost of the reward and its optimal full-state control: LQR and preview feed-forward.
+
+The reward of a step is -|F y_{k+1}|^2 with y_{k+1} = C_r z_{k+1} + D_r u_k and
+F = diag(sqrt(weight) / scale). With the exact control-step map
+z_{k+1} = Phi z_k + Gamma u_k + g_k (g_k: the ground's contribution) that is
+
+    cost_k = |H_z z_k + H_u u_k + F C_r g_k|^2,   H_z = F C_r Phi,  H_u = F (C_r Gamma + D_r),
+
+so Q = H_z' H_z, R = H_u' H_u, N = H_z' H_u: the discrete-time LQR of exactly the reward
+(python-control's Riccati solvers, method='scipy'). Everything is in action units
+a = u / force_limit, which keeps the Riccati equations well scaled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control
+import numpy as np
+
+from rlcontroller.config import RewardConfig
+from rlcontroller.physics.dynamics import StepMap
+from rlcontroller.physics.plant import reward_matrices
+from rlcontroller.physics.structure import Building
+
+
+@dataclass(frozen=True)
+class QuadraticCost:
+    """cost_k = |state z_k + action a_k + ground g_k|^2 with the matrices below."""
+
+    state: np.ndarray  # H_z
+    action: np.ndarray  # H_u (per unit action)
+    ground: np.ndarray  # F C_r, applied to the ground term g_k
+
+
+def quadratic_cost(building: Building, reward: RewardConfig, step: StepMap) -> QuadraticCost:
+    c, d, factor, _ = reward_matrices(building, [term for term in reward.terms if term.quadratic])
+    weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
+    # states beyond the building's (a ground model's) reach the outputs only through the dynamics
+    weighted_c = np.pad(weighted_c, ((0, 0), (0, step.phi.shape[0] - weighted_c.shape[1])))
+    action_gain = step.force_gain * building.force_limits
+    return QuadraticCost(
+        state=weighted_c @ step.phi,
+        action=weighted_c @ action_gain + weighted_d * building.force_limits,
+        ground=weighted_c,
+    )
+
+
+def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(K, P): a = -K z minimises the summed cost; P is the stationary Riccati solution."""
+    q = cost.state.T @ cost.state
+    r = cost.action.T @ cost.action
+    n = cost.state.T @ cost.action
+    if np.linalg.matrix_rank(r) < r.shape[0]:
+        raise ValueError("the reward does not penalise every actuator force (R is singular); add a force term")
+    gain, riccati, _ = control.dlqr(step.phi, step.force_gain * force_limits, q, r, n, method="scipy")
+    return np.asarray(gain), np.asarray(riccati)
+
+
+def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, length: int) -> np.ndarray:
+    """W_0..W_{length-1}: the optimal feed-forward a_ff,k = sum_j W_j g_{k+j} on known ground terms.
+
+    For the stationary LQR (gain K, Riccati P, closed loop Phi_c = Phi - B K) the feed-forward on
+    the ground terms g_k, g_{k+1}, ... of the coming steps is
+
+        W_0 = S^-1 (H_u' F C_r + B' P),   W_j = S^-1 B' (Phi_c')^(j-1) (C_c' F C_r + Phi_c' P),
+
+    with S = H_u' H_u + B' P B and C_c = H_z - H_u K (a test checks it against brute-force least
+    squares). Unknown ground terms are zero in expectation, so knowing `length` steps ahead means
+    using the first `length` kernels. Shape (length, actions, states).
+    """
+    feedback, riccati = lqr_gain(step, cost, force_limits)
+    action_gain = step.force_gain * force_limits
+    curvature_inverse = np.linalg.inv(cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain)
+    closed_phi = step.phi - action_gain @ feedback
+    closed_cost = cost.state - cost.action @ feedback
+    kernels = np.zeros((length, *feedback.shape))
+    if length:
+        kernels[0] = curvature_inverse @ (cost.action.T @ cost.ground + action_gain.T @ riccati)
+    costate = closed_cost.T @ cost.ground + closed_phi.T @ riccati
+    for lag in range(1, length):
+        kernels[lag] = curvature_inverse @ action_gain.T @ costate
+        costate = closed_phi.T @ costate
+    return kernels

@@ -1,0 +1,2 @@
+"""Learning: the Gymnasium env, the learners, run folders, validation, training and saved policies.
+Depends on `physics` and `control`."""

@@ -1,0 +1,122 @@
+"""The stable-baselines3 learners: keyword-argument checks, the training vector env, the model.
+
+`algorithm.kwargs` of an experiment go to the learner's constructor; keys it does not take, keys
+rlc sets itself and out-of-range values of the common numeric ones are refused with one line.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from rlcontroller.config import ConfigError, Experiment, location
+from rlcontroller.control.controllers import LQGPrior
+from rlcontroller.learning.env import BuildingEnv
+from rlcontroller.learning.policy import ResidualAction, algorithm_class
+from rlcontroller.physics.plant import Plant
+
+ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
+RESERVED_KWARGS = {
+    "policy",
+    "env",
+    "policy_kwargs",
+    "seed",
+    "device",
+    "tensorboard_log",
+    "verbose",
+    "_init_setup_model",
+}
+# (low, high, integer) for the learners' common numeric keyword arguments.
+NUMERIC_KWARGS = {
+    "gamma": (0.0, 1.0, False),
+    "tau": (0.0, 1.0, False),
+    "gae_lambda": (0.0, 1.0, False),
+    "batch_size": (1, 2**31, True),
+    "buffer_size": (1, 2**40, True),
+    "n_steps": (1, 2**31, True),
+    "n_epochs": (1, 2**31, True),
+    "learning_starts": (0, 2**40, True),
+}
+
+
+def check_algorithm(experiment: Experiment) -> None:
+    """Refuse keyword arguments the learner does not take, naming the file and key."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    accepted = set(inspect.signature(algorithm_class(algorithm.name).__init__).parameters) - {"self"}
+    for key, value in algorithm.kwargs.items():
+        where = location(file, prefix, f"kwargs.{key}")
+        if key in RESERVED_KWARGS:
+            raise ConfigError(f"{where}: set by rlc (use 'policy:', 'seed' or --device instead)")
+        if key not in accepted:
+            options = ", ".join(sorted(accepted - RESERVED_KWARGS))
+            raise ConfigError(f"{where}: not a keyword argument of {algorithm.name}; expected one of: {options}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{where}: expected a finite number, got {value!r}")
+        if key in NUMERIC_KWARGS and not _in_range(value, *NUMERIC_KWARGS[key]):
+            low, high, integer = NUMERIC_KWARGS[key]
+            kind = "an integer" if integer else "a number"
+            raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
+
+
+def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
+    if isinstance(value, bool) or not isinstance(value, int | float) or (integer and not isinstance(value, int)):
+        return False
+    return low <= value <= high
+
+
+def make_env(plant: Plant, prior: LQGPrior | None) -> gym.Env:
+    """One training env on the plant, wrapped as a residual on the prior if there is one."""
+    env = BuildingEnv(plant)
+    return env if prior is None else ResidualAction(env, prior)
+
+
+def make_vec_env(plant: Plant, seed: int):
+    """The training vector env: `n_envs` BuildingEnvs (dummy or subprocess) with episode statistics."""
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor, VecNormalize
+
+    experiment = plant.experiment
+    prior = LQGPrior(plant) if experiment.algorithm.residual_lqg else None
+    factories = [functools.partial(make_env, plant, prior) for _ in range(experiment.algorithm.n_envs)]
+    if experiment.algorithm.vec_env == "subproc" and len(factories) > 1:
+        vec_env = SubprocVecEnv(factories)
+    else:
+        vec_env = DummyVecEnv(factories)
+    vec_env.seed(seed)
+    vec_env = VecMonitor(vec_env)
+    if experiment.algorithm.normalize_observations:
+        vec_env = VecNormalize(vec_env, norm_obs=True, norm_reward=False)
+    return vec_env
+
+
+def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorboard: Path | None):
+    import torch
+
+    algorithm = experiment.algorithm
+    check_algorithm(experiment)
+    policy_kwargs = {
+        "net_arch": list(algorithm.policy.net_arch),
+        "activation_fn": getattr(torch.nn, ACTIVATIONS[algorithm.policy.activation]),
+    }
+    if algorithm.policy.log_std_init is not None:
+        policy_kwargs["log_std_init"] = algorithm.policy.log_std_init
+    try:
+        return algorithm_class(algorithm.name)(
+            "MlpPolicy",
+            vec_env,
+            policy_kwargs=policy_kwargs,
+            seed=seed,
+            device=device,
+            tensorboard_log=str(tensorboard) if tensorboard else None,
+            verbose=0,
+            **algorithm.kwargs,
+        )
+    except (TypeError, ValueError, AssertionError) as error:
+        file, prefix = experiment.origin("algorithm")
+        message = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ConfigError(f"{location(file, prefix, 'kwargs')}: {algorithm.name} refused them: {message}") from None

@@ -1,0 +1,243 @@
+"""Training with stable-baselines3: a new run or a resumed one, validation, checkpoints, stopping.
+
+The run folder (`run_folder`) keeps everything; validation (`validation`) runs on held-out
+generated motions. Ctrl-C or SIGTERM stops at the next step with a checkpoint; a time limit stops
+the same way after that many seconds of this call.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+import signal
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.files import check_new_folder
+from rlcontroller.learning.algorithms import algorithm_class, build_model, check_algorithm, make_vec_env
+from rlcontroller.learning.run_folder import RunFolder, default_run_dir, plot_learning_curve
+from rlcontroller.learning.validation import Validator
+from rlcontroller.physics.plant import Plant
+
+
+class StopRequest:
+    """First Ctrl-C (or SIGTERM) asks training to stop at the next step; a second one aborts."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum, frame) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("\nstopping: saving a checkpoint (Ctrl-C again to abort without saving)", file=sys.stderr)
+
+
+def _callback(
+    run: RunFolder,
+    experiment: Experiment,
+    validator: Validator,
+    stop: StopRequest,
+    state: dict[str, Any],
+    time_limit_s: float | None,
+):
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    algorithm = experiment.algorithm
+
+    class TrainingCallback(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.started = self.session_start = time.perf_counter()
+
+        def wall_time(self) -> float:
+            return state["wall_time_s"] + time.perf_counter() - self.session_start
+
+        def _on_step(self) -> bool:
+            steps, previous = self.num_timesteps, self.num_timesteps - self.training_env.num_envs
+            if steps // algorithm.eval_every > previous // algorithm.eval_every:
+                self.validate()
+            if steps // algorithm.checkpoint_every > previous // algorithm.checkpoint_every:
+                self.checkpoint()
+            if time_limit_s is not None and time.perf_counter() - self.started >= time_limit_s:
+                state["time_limit_reached"] = True
+                return False
+            return not stop.requested
+
+        def validate(self) -> None:
+            result = validator(self.model)
+            episodes = [info["r"] for info in self.model.ep_info_buffer]
+            row = {"steps": self.num_timesteps, "wall_time_s": round(self.wall_time(), 2)}
+            row["episode_reward"] = float(np.mean(episodes)) if episodes else float("nan")
+            row.update(result)
+            run.append_curve(row)
+            if result["eval_reward"] > state["best_eval_reward"]:
+                state.update(best_eval_reward=result["eval_reward"], best_steps=self.num_timesteps, best=result)
+                run.save_model(self.model, "best_model")
+
+        def checkpoint(self) -> None:
+            state["wall_time_s"] = self.wall_time()
+            self.session_start = time.perf_counter()
+            run.save_checkpoint(self.model, state)
+
+    return TrainingCallback()
+
+
+@dataclass
+class TrainingSummary:
+    run_dir: Path
+    steps: int
+    wall_time_s: float
+    best: dict[str, float] | None
+    best_steps: int | None
+    interrupted: bool
+    time_limit_reached: bool = False
+    beat_lqg_at: dict[str, float] | None = None
+
+    def line(self) -> str:
+        rate = self.steps / self.wall_time_s if self.wall_time_s > 0 else float("nan")
+        verb = (
+            "interrupted" if self.interrupted else "stopped at the time limit" if self.time_limit_reached else "trained"
+        )
+        text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
+        if self.beat_lqg_at:
+            first = self.beat_lqg_at
+            text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
+        if self.best:
+            text += (
+                f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
+                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; LQG J1 {self.best['lqg_J1']:.3f}, "
+                f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f}; "
+                f"LQG + ground model J1 {self.best['lqg_ground_model_J1']:.3f})"
+            )
+        return text + f"; run folder: {self.run_dir}"
+
+
+def train(
+    experiment: Experiment | None = None,
+    run_dir: Path | None = None,
+    resume: Path | None = None,
+    device: str = "auto",
+    progress_bar: bool = False,
+    time_limit_s: float | None = None,
+) -> TrainingSummary:
+    """Train a new run (from `experiment`) or resume one (`resume` = its run folder).
+
+    With `time_limit_s`, training stops (as finished, and resumable) once this call has trained
+    that long; a new run that fails before its first checkpoint leaves no run folder.
+    """
+    import torch
+
+    if resume is not None:
+        run = RunFolder(resume)
+        if not (resume / "config.yaml").is_file():
+            raise ConfigError(f"{resume}: not a run folder (no config.yaml)")
+        experiment = run.experiment()
+    else:
+        assert experiment is not None
+        check_algorithm(experiment)
+        run = RunFolder(run_dir or default_run_dir(experiment))
+        check_new_folder(run.path, "run", " (use --resume)")
+    torch.set_num_threads(experiment.algorithm.torch_threads)
+    plant = Plant(experiment)
+    vec_env = make_vec_env(plant, experiment.seed)
+    created = False
+    try:
+        model, state = _start(run, experiment, vec_env, device, resume is not None)
+        created = resume is None
+        stop = StopRequest()
+        previous_handlers = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
+        callback = _callback(run, experiment, Validator(plant), stop, state, time_limit_s)
+        remaining = experiment.algorithm.total_steps - model.num_timesteps
+        try:
+            if remaining > 0:
+                model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
+        finally:
+            for number, handler in previous_handlers.items():
+                signal.signal(number, handler)
+    except BaseException:
+        if created and not run.checkpoints() and not (run.path / "best_model.zip").exists():
+            shutil.rmtree(run.path, ignore_errors=True)  # nothing trained: leave no half-made run folder
+        raise
+    if remaining > 0:
+        callback.checkpoint()
+    if not stop.requested:
+        run.save_model(model, "final_model")
+        if state["best"] is None:
+            callback.validate()
+        plot_learning_curve(run)
+    vec_env.close()
+    beat = [row for row in run.read_curve() if row["eval_J1"] < row["lqg_J1"]]
+    return TrainingSummary(
+        run.path,
+        int(model.num_timesteps),
+        state["wall_time_s"],
+        state["best"],
+        state["best_steps"],
+        stop.requested,
+        bool(state.get("time_limit_reached")),
+        beat[0] if beat else None,
+    )
+
+
+def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, dict[str, Any]]:
+    """The model and training state: from the newest checkpoint when resuming, else new (and the
+    run folder is created, recording the device the model is on)."""
+    state: dict[str, Any] = {"wall_time_s": 0.0, "best_eval_reward": -float("inf"), "best_steps": None, "best": None}
+    checkpoints = run.checkpoints()
+    if resume and checkpoints:
+        model = _load_checkpoint(experiment, checkpoints, vec_env, device)
+        state.update(_read_state(checkpoints))
+        state.pop("steps", None)
+        state.pop("time_limit_reached", None)
+        run.truncate_curve(model.num_timesteps)
+        return model, state
+    tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None
+    model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
+    if resume:
+        run.truncate_curve(0)
+    else:
+        RunFolder.create(run.path, experiment, str(model.device))
+    return model, state
+
+
+def _unreadable(checkpoints: list[Path], path: Path, error: Exception) -> ConfigError:
+    detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+    hint = f"; delete {checkpoints[-1]} to resume from {checkpoints[-2].name}" if len(checkpoints) > 1 else ""
+    return ConfigError(f"{path}: unreadable checkpoint file ({type(error).__name__}: {detail}){hint}")
+
+
+def _read_state(checkpoints: list[Path]) -> dict[str, Any]:
+    path = checkpoints[-1] / "state.json"
+    try:
+        state = json.loads(path.read_text())
+        if not isinstance(state, dict) or not isinstance(state.get("wall_time_s"), int | float):
+            raise ValueError("expected a mapping with wall_time_s")
+        return state
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise _unreadable(checkpoints, path, error) from None
+
+
+def _load_checkpoint(experiment: Experiment, checkpoints: list[Path], vec_env, device: str):
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    checkpoint = checkpoints[-1]
+    path = checkpoint / "vecnormalize.pkl"
+    try:
+        if path.is_file():
+            statistics = VecNormalize.load(str(path), vec_env.venv)
+            vec_env.obs_rms, vec_env.ret_rms = statistics.obs_rms, statistics.ret_rms
+        path = checkpoint / "model.zip"
+        model = algorithm_class(experiment.algorithm.name).load(path, env=vec_env, device=device)
+        path = checkpoint / "replay_buffer.pkl"
+        if path.is_file():
+            model.load_replay_buffer(path)
+    except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
+        raise _unreadable(checkpoints, path, error) from None
+    return model

@@ -1,0 +1,62 @@
+"""Validation: a policy on held-out generated motions, never the real records.
+
+The deterministic policy runs on `excitation.validation_motions` motions drawn with
+`excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same
+motions, and the three LQGs are run once on them as references.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.metrics import j_metrics, peak
+from rlcontroller.physics.plant import Plant
+
+
+class Validator:
+    """Runs a policy on the held-out generated validation motions."""
+
+    def __init__(self, plant: Plant) -> None:
+        self.env = BuildingEnv(plant)
+        excitation = plant.experiment.excitation
+        self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
+        self.prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None
+        bare = Uncontrolled(self.env.building.n_actuators)
+        self.uncontrolled = [rollout(self.env, motion, bare)[0] for motion in self.motions]
+        self.reference = {}
+        designs = {
+            "lqg": lambda: design_lqg(plant),
+            "lqg_ground": lambda: design_lqg(plant, known_ground=True),
+            "lqg_ground_model": lambda: design_lqg_ground_model(plant),
+        }
+        for prefix, design in designs.items():
+            try:
+                lqg = self.run(LQGController(design(), plant))
+            except ValueError:  # a reward LQG cannot be designed for
+                lqg = {"eval_J1": float("nan"), "eval_J2": float("nan")}
+            self.reference |= {f"{prefix}_J1": lqg["eval_J1"], f"{prefix}_J2": lqg["eval_J2"]}
+
+    def __call__(self, model) -> dict[str, float]:
+        policy = PolicyController(model, model.get_vec_normalize_env(), prior=self.prior)
+        return self.run(policy) | self.reference
+
+    def run(self, controller) -> dict[str, float]:
+        rewards, peaks, j1, j2 = [], [], [], []
+        for index, motion in enumerate(self.motions):
+            result, reward = rollout(self.env, motion, controller, seed=index)
+            metrics = j_metrics(result, self.uncontrolled[index])
+            rewards.append(reward)
+            peaks.append(float(np.max(peak(result.drift))))
+            j1.append(float(np.mean(metrics["J1"])))
+            j2.append(float(np.mean(metrics["J2"])))
+        return {
+            "eval_reward": float(np.mean(rewards)),
+            "eval_peak_drift_m": float(np.mean(peaks)),
+            "eval_J1": float(np.mean(j1)),
+            "eval_J2": float(np.mean(j2)),
+        }

@@ -1,0 +1,71 @@
+"""Controllers speak action units (force / force limit, in [-1, 1]) and read the observation the
+agent reads."""
+
+import numpy as np
+import pytest
+
+from rlcontroller.config import Experiment
+from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.learning.env import BuildingEnv
+from rlcontroller.learning.policy import residual_action
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import synthetic_suite
+
+
+def test_uncontrolled_is_zero_for_every_actuator():
+    action = Uncontrolled(3).act(np.ones(33))
+    assert action.shape == (3,) and not action.any()
+
+
+def test_lqg_controller_acts_in_action_units_and_the_env_applies_newtons_once():
+    plant = Plant(Experiment())
+    design = design_lqg(plant, known_ground=True)
+    controller = LQGController(design, plant)
+    env = BuildingEnv(plant)
+    observation, _ = env.reset(seed=3, options={"motion": synthetic_suite(count=1)[0]})
+    for _ in range(200):
+        action = controller.act(observation)
+        ground = float(observation[plant.layout.ground]) * plant.layout.ground_scale
+        expected = np.clip(-design.feedback @ design.filter.estimate - design.feedforward * ground, -1.0, 1.0)
+        np.testing.assert_array_equal(action, expected)
+        observation, *_ = env.step(action)
+        np.testing.assert_allclose(env.held_force, action * plant.force_limits, rtol=1e-15)
+    assert 0.05 < np.abs(action).max() <= 1.0  # a real command, not newtons and not zero
+
+
+def test_a_huge_estimate_saturates_at_exactly_one():
+    plant = Plant(Experiment())
+    controller = LQGController(design_lqg(plant), plant)
+    observation = np.zeros(plant.layout.size, dtype=np.float32)
+    observation[plant.layout.readings] = 1.0e4
+    action = controller.act(observation)
+    assert np.all(np.abs(action) == 1.0)
+
+
+@pytest.mark.parametrize("ground_model", [False, True])
+def test_the_residual_prior_reads_the_scaled_estimate_of_the_observation(ground_model):
+    experiment = Experiment(sensors={"state_estimate": True, "ground_model": ground_model})
+    plant = Plant(experiment)
+    env = BuildingEnv(plant)
+    observation, _ = env.reset(seed=1, options={"motion": synthetic_suite(count=1)[0]})
+    for _ in range(60):
+        observation, *_ = env.step(np.zeros(3))
+    layout = plant.layout
+    design = design_lqg_ground_model(plant) if ground_model else design_lqg(plant, known_ground=True)
+    estimate = observation[layout.estimate].astype(float) * layout.estimate_scale
+    ground = float(observation[layout.ground]) * layout.ground_scale
+    expected = -design.feedback @ estimate - design.feedforward * ground
+    np.testing.assert_allclose(LQGPrior(plant)(observation), expected, rtol=1e-6, atol=1e-9)
+
+
+def test_a_prior_needs_the_state_estimate():
+    with pytest.raises(ValueError, match="state_estimate"):
+        LQGPrior(Plant(Experiment()))
+
+
+def test_the_residual_rule_clips_the_policy_then_the_sum():
+    policy = np.array([5.0, -0.5, 0.2])
+    prior = np.array([0.1, -0.8, 3.0])
+    np.testing.assert_allclose(residual_action(policy, prior), [1.0, -1.0, 1.0])
+    np.testing.assert_allclose(residual_action(np.zeros(3), np.array([0.3, -0.2, 0.0])), [0.3, -0.2, 0.0])
