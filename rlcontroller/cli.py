@@ -179,6 +179,7 @@ def train(
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "five_story"
 SMOKE_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "smoke.yaml"
+STANDARD_SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "standard.yaml"
 
 
 def model_folder(run_dir: Path | None) -> Path:
@@ -207,19 +208,25 @@ def output_folder(out: Path | None, default_name: str) -> Path:
     return path
 
 
-def comparison(experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None):
-    """The plant, the motions and the evaluation of every controller (the run's policy if given)."""
-    from rlcontroller.evaluation.evaluation import compare
-    from rlcontroller.learning.run_folder import model_file
-    from rlcontroller.physics.plant import Plant
+def motion_suite(records: Path | None, scale_pga: float | None):
+    """The motions to evaluate on and their label; says so when it falls back to the synthetic suite."""
     from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
             "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
         )
+    return choose_motions(records, scale_pga)
+
+
+def comparison(experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None):
+    """The plant, the motions and the evaluation of every controller (the run's policy if given)."""
+    from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.learning.run_folder import model_file
+    from rlcontroller.physics.plant import Plant
+
     policy = model_file(run_dir, model) if run_dir is not None else None
-    motions, label = choose_motions(records, scale_pga)
+    motions, label = motion_suite(records, scale_pga)
     plant = Plant(experiment)
     return plant, motions, compare(plant, motions, label, policy)
 
@@ -331,6 +338,42 @@ def compare_lqg(
     for name, wanted in (("lqg_sweep.md", sweep), ("preview.md", preview)):
         if wanted:
             typer.echo((out / name).read_text())
+
+
+@app.command()
+@user_errors
+def robustness(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+    ] = None,
+    records: RecordsOption = None,
+    scenarios: Annotated[
+        Path, typer.Option(help="Scenario YAML: named plants that differ from the design model.")
+    ] = STANDARD_SCENARIOS,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+    model: ModelOption = "best",
+) -> None:
+    """Every controller on every scenario's plant and every record: how each copes with model error."""
+    from rlcontroller.config import load_scenarios
+    from rlcontroller.evaluation.report import markdown_table, write_robustness
+    from rlcontroller.evaluation.robustness import robustness as run_robustness
+    from rlcontroller.evaluation.robustness import summary
+    from rlcontroller.learning.run_folder import model_file
+
+    folder = model_folder(run_dir)
+    experiment = load_experiment(folder / "config.yaml")
+    named = load_scenarios(scenarios, experiment)
+    policy = model_file(folder, model)
+    out = output_folder(out, f"robustness-{folder.resolve().name}")
+    check_new_folder(out)
+    motions, label = motion_suite(records, scale_pga)
+    table, seconds = run_robustness(experiment, named, motions, label, policy)
+    with new_folder(out) as staging:
+        write_robustness(table, named, staging, label, seconds)
+    typer.echo(f"# {label}")
+    typer.echo(markdown_table(summary(table)["J1"].unstack("controller").rename_axis("scenario (mean J1)")))
+    typer.echo(f"{len(named)} scenarios evaluated in {seconds:.0f} s; tables and plot in {out}")
 
 
 def main() -> None:

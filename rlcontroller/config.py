@@ -357,6 +357,51 @@ class AlgorithmConfig(StrictModel):
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
 
 
+Factor = Annotated[float, Field(ge=0.05, le=20.0)]
+
+
+class DamageConfig(StrictModel):
+    """A story that lost stiffness: `stiffness` is the relative change, -0.4 = 40 % less."""
+
+    story: PositiveInt
+    stiffness: float = Field(ge=-0.95, le=0.0)
+
+
+class ActuatorDynamicsConfig(StrictModel):
+    """The delivered force follows the command through a pure delay of `delay_steps` control steps,
+    then a first-order lag with `time_constant` (s; 0: none)."""
+
+    time_constant: float = Field(0.0, ge=0.0, le=1.0)
+    delay_steps: int = Field(0, ge=0, le=50)
+
+
+class SensorBias(StrictModel):
+    floor: PositiveInt
+    value: float = Field(ge=-1.0e6, le=1.0e6)  # in the reading's SI unit
+
+
+class SensorFaultConfig(StrictModel):
+    """Noise std times `noise_factor`; a constant `bias` on some floors' readings; `dead_floors`
+    whose readings are zero. A floor is the reading's floor (its story for drifts)."""
+
+    noise_factor: float = Field(1.0, ge=0.0, le=1.0e3)
+    bias: list[SensorBias] = []
+    dead_floors: Annotated[list[PositiveInt], AfterValidator(_unique)] = []
+
+
+class PlantConfig(StrictModel):
+    """How the simulated building differs from the design model (the experiment's building,
+    actuators and sensors, on which every controller is designed). Factors are a scalar or one
+    per story; `damping` scales the damping ratios (a damping matrix is scaled as a whole)."""
+
+    stiffness: Factor | list[Factor] = 1.0
+    mass: Factor | list[Factor] = 1.0
+    damping: Factor = 1.0
+    damage: list[DamageConfig] = []
+    actuators: ActuatorDynamicsConfig = ActuatorDynamicsConfig()
+    sensors: SensorFaultConfig = SensorFaultConfig()
+
+
 PARTS: dict[str, Any] = {
     "building": BuildingConfig,
     "actuators": Actuators,
@@ -365,7 +410,9 @@ PARTS: dict[str, Any] = {
     "excitation": ExcitationConfig,
     "simulation": SimulationConfig,
     "algorithm": AlgorithmConfig,
+    "plant": PlantConfig,
 }
+OPTIONAL_PARTS = ("plant",)  # may be null: the simulated building is the design model
 
 
 class Experiment(StrictModel):
@@ -380,6 +427,7 @@ class Experiment(StrictModel):
     excitation: ExcitationConfig = ExcitationConfig()
     simulation: SimulationConfig = SimulationConfig()
     algorithm: AlgorithmConfig = AlgorithmConfig()
+    plant: PlantConfig | None = None  # None: the simulated building is the design model
     _origins: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
 
     def origin(self, part: str) -> tuple[str, str]:
@@ -504,7 +552,7 @@ def load_experiment(path: str | Path) -> Experiment:
             _check_part_type(part, raw[part], display_path(part_path))
         else:
             origins[part] = (str(path), part)
-            if part in raw:
+            if part in raw and not (part in OPTIONAL_PARTS and value is None):
                 _check_part_type(part, value, f"{path}: {part}")
     return build_experiment(raw, origins, str(path))
 
@@ -516,7 +564,7 @@ def build_experiment(
     from and the key prefix to show in messages (empty when the part has a file of its own)."""
     origins = origins or {}
     for part, model in PARTS.items():
-        if part in raw:
+        if part in raw and not (part in OPTIONAL_PARTS and raw[part] is None):
             part_file, prefix = origins.get(part, (file, part))
             try:
                 TypeAdapter(model).validate_python(raw[part])
@@ -554,6 +602,8 @@ def _check_cross_references(experiment: Experiment) -> None:
                 what = "actuator" if measurement.quantity == "force" else "floor"
                 raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
     _check_time_steps(experiment)
+    if experiment.plant is not None:
+        check_plant(experiment.plant, experiment, *experiment.origin("plant"))
 
 
 def _check_time_steps(experiment: Experiment) -> None:
@@ -574,6 +624,58 @@ def _check_time_steps(experiment: Experiment) -> None:
                 f"{location(file, prefix, 'generator.duration')}: {source.duration[0]:g} s is shorter than one "
                 f"control step ({control_dt:g} s)"
             )
+
+
+def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
+    """Per-story lists and floor numbers of a plant part must fit the building."""
+    n_floors = len(experiment.building.masses)
+    for key in ("stiffness", "mass"):
+        value = getattr(plant, key)
+        if isinstance(value, list) and len(value) != n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {len(value)} factors, expected 1 or {n_floors}")
+    stories = [(f"damage[{i}].story", d.story) for i, d in enumerate(plant.damage)]
+    stories += [(f"sensors.bias[{i}].floor", b.floor) for i, b in enumerate(plant.sensors.bias)]
+    stories += [("sensors.dead_floors", floor) for floor in plant.sensors.dead_floors]
+    for key, number in stories:
+        if number > n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if plant.actuators.time_constant > 0 and experiment.simulation.method != "exact":
+        raise ConfigError(f"{location(file, prefix, 'actuators.time_constant')}: an actuator lag needs method: exact")
+
+
+class Scenario(StrictModel):
+    """A named plant: how the simulated building differs from the design model (none: nominal)."""
+
+    name: Annotated[str, Field(min_length=1, max_length=60)]
+    plant: PlantConfig | None = None
+
+
+def _unique_names(scenarios: list[Scenario]) -> list[Scenario]:
+    names = [scenario.name for scenario in scenarios]
+    for index, name in enumerate(names):
+        if name in names[:index]:
+            raise ValueError(f"scenario name {name!r} is used twice")
+    return scenarios
+
+
+class ScenarioFile(StrictModel):
+    scenarios: Annotated[list[Scenario], Field(min_length=1, max_length=200), AfterValidator(_unique_names)]
+
+
+def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
+    """The named scenarios of a YAML file, checked against the experiment's building."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with 'scenarios', got {type(raw).__name__}")
+    try:
+        scenarios = ScenarioFile.model_validate(raw).scenarios
+    except ValidationError as error:
+        raise _first_error(error, str(path), "") from None
+    for index, scenario in enumerate(scenarios):
+        if scenario.plant is not None:
+            check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
+    return scenarios
 
 
 def check_seed(seed: int, where: str = "--seed") -> int:

@@ -42,7 +42,7 @@ def design_lqg(
     optimal one-step feed-forward, the control law.
     """
     building, step = plant.building, plant.step_map(1)
-    cost = quadratic_cost(building, reward or plant.experiment.reward, step)
+    cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman(plant, known_ground, ground_std)
     feedforward = np.zeros(building.n_actuators)
@@ -58,6 +58,6 @@ def design_lqg_ground_model(plant: Plant, ground_std: float = 1.0) -> LQGDesign:
     ground reading; the LQR on the augmented state (same cost) acts on the predicted ground.
     """
     building, step = plant.building, plant.ground_model_step()
-    feedback, _ = lqr_gain(step, quadratic_cost(building, plant.experiment.reward, step), building.force_limits)
+    feedback, _ = lqr_gain(step, quadratic_cost(plant, plant.experiment.reward, step), building.force_limits)
     kalman = design_kalman_ground_model(plant, ground_std)
     return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman)

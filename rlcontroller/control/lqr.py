@@ -20,8 +20,9 @@ import numpy as np
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.physics.dynamics import StepMap
-from rlcontroller.physics.plant import reward_matrices
-from rlcontroller.physics.structure import Building
+from rlcontroller.physics.plant import Plant, reward_matrices
+
+DELAYED_ACTION_WEIGHT = 1.0e-4  # sqrt of the vanishing direct weight of a delayed command
 
 
 @dataclass(frozen=True)
@@ -33,16 +34,28 @@ class QuadraticCost:
     ground: np.ndarray  # F C_r, applied to the ground term g_k
 
 
-def quadratic_cost(building: Building, reward: RewardConfig, step: StepMap) -> QuadraticCost:
-    c, d, factor, _ = reward_matrices(building, [term for term in reward.terms if term.quadratic])
+def quadratic_cost(plant: Plant, reward: RewardConfig, step: StepMap) -> QuadraticCost:
+    """The reward's quadratic terms as a cost on the plant's state and action, through `step`."""
+    building = plant.building
+    c, d, factor, _ = reward_matrices(plant, [term for term in reward.terms if term.quadratic])
     weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
     # states beyond the building's (a ground model's) reach the outputs only through the dynamics
     weighted_c = np.pad(weighted_c, ((0, 0), (0, step.phi.shape[0] - weighted_c.shape[1])))
     action_gain = step.force_gain * building.force_limits
-    return QuadraticCost(
+    cost = QuadraticCost(
         state=weighted_c @ step.phi,
         action=weighted_c @ action_gain + weighted_d * building.force_limits,
         ground=weighted_c,
+    )
+    if plant.delay_steps == 0:
+        return cost
+    # With a delay, a command's force is paid for d steps later (through the plant's buffer states),
+    # so the direct action weight is zero; a vanishing one (1e-8 per unit action) keeps R regular.
+    m = building.n_actuators
+    return QuadraticCost(
+        state=np.vstack([cost.state, np.zeros((m, cost.state.shape[1]))]),
+        action=np.vstack([cost.action, DELAYED_ACTION_WEIGHT * np.eye(m)]),
+        ground=np.vstack([cost.ground, np.zeros((m, cost.ground.shape[1]))]),
     )
 
 

@@ -28,7 +28,7 @@ def optimal_response(
     building = plant.building
     samples, substeps = for_control_step(motion, plant.control_dt)
     step = plant.step_map(substeps)
-    cost = quadratic_cost(building, reward or plant.experiment.reward, step)
+    cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     feedback, _ = lqr_gain(step, cost, building.force_limits)
     action_gain = step.force_gain * building.force_limits
     ground_terms = step.ground_terms(samples)

@@ -33,7 +33,7 @@ PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 def uncontrolled_response(plant: Plant, motion: GroundMotion) -> Response:
     """Whole-record simulation of the bare building with the plant's step map."""
     samples, substeps = for_control_step(motion, plant.control_dt)
-    return simulate(plant.building, plant.step_map(substeps), samples)
+    return simulate(plant.building, plant.structure_step_map(substeps), samples)
 
 
 @dataclass

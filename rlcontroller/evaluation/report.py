@@ -321,3 +321,70 @@ def write_preview(
     written += [out / "preview.md", atomic_savefig(figure, out / "preview.png")]
     plt.close(figure)
     return written
+
+
+def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str, seconds: float) -> list[Path]:
+    """robustness.csv (long form), robustness.md (scenario x controller means, the worst record's
+    J1, the mean over scenarios) and robustness.png (J1 against the stiffness factor; J1 and J2 per
+    scenario)."""
+    from rlcontroller.evaluation.robustness import mean_over_scenarios, stiffness_curve, summary, worst_record_j1
+
+    out.mkdir(parents=True, exist_ok=True)
+    means = summary(table)
+    worst = worst_record_j1(table)
+    written = [atomic_write(out / "robustness.csv", table.assign(suite=label).to_csv(index=False))]
+    controllers = [c for c in dict.fromkeys(table["controller"]) if c != "uncontrolled"]
+    wide = means["J1"].unstack("controller")[controllers]
+    lines = [
+        f"# Robustness: {label}",
+        "",
+        "Every controller is designed on the design model (the experiment's building, actuators and sensors)",
+        "and run on each scenario's plant; J against the uncontrolled plant, mean over records and stories.",
+        "LQG (re-designed on the plant) is the oracle: LQG designed on the true plant, actuator lag and delay",
+        "included. Worst record: the largest per-record mean J1 (above 1: worse than no control).",
+        "",
+        "## Mean J1 per scenario",
+        "",
+        markdown_table(wide.rename_axis("scenario")),
+        "",
+        "## Worst record's J1 per scenario",
+        "",
+        markdown_table(worst.unstack("controller")[controllers].rename_axis("scenario")),
+        "",
+        "## Mean over the scenarios",
+        "",
+        markdown_table(mean_over_scenarios(means).loc[controllers].rename_axis("controller")),
+        "",
+        "## J1-J4 per scenario and controller",
+        "",
+        markdown_table(means.loc[(slice(None), controllers), :].reset_index().set_index("scenario")),
+        "",
+        f"Evaluated {len(scenarios)} scenarios x {len(controllers)} controllers x "
+        f"{table['record'].nunique()} records in {seconds:.0f} s.",
+        "",
+    ]
+    atomic_write(out / "robustness.md", "\n".join(lines))
+    curve = stiffness_curve(means, scenarios)
+    figure, (curve_axis, bar_axis) = plt.subplots(1, 2, figsize=(14, 5.5), gridspec_kw={"width_ratios": [1, 2]})
+    for name in controllers if not curve.empty else []:
+        colour = COLOURS.get("RL") if name == "RL" else None
+        curve_axis.plot(curve.index, curve[name], "o-", label=name, color=colour)
+    curve_axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
+    curve_axis.set(xlabel="stiffness factor (plant / design)", ylabel="J1 (mean)", title="J1 against stiffness")
+    curve_axis.grid(alpha=0.3)
+    curve_axis.legend(fontsize=8)
+    positions = np.arange(len(wide))
+    width = 0.8 / len(controllers)
+    for index, name in enumerate(controllers):
+        colour = COLOURS.get("RL") if name == "RL" else f"C{index}"
+        bar_axis.bar(positions + index * width, wide[name], width, label=name, color=colour)
+    bar_axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
+    bar_axis.set_xticks(positions + 0.4 - width / 2, wide.index, rotation=35, ha="right", fontsize=8)
+    bar_axis.set(ylabel="J1 (mean)", title="J1 per scenario (dotted: no control)")
+    bar_axis.grid(alpha=0.3, axis="y")
+    bar_axis.legend(fontsize=8)
+    figure.suptitle(f"Robustness — {label}", fontsize=10)
+    figure.tight_layout()
+    written += [out / "robustness.md", atomic_savefig(figure, out / "robustness.png")]
+    plt.close(figure)
+    return written

@@ -32,7 +32,7 @@ import numpy as np
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model
-from rlcontroller.physics.dynamics import Response, output_matrices, response
+from rlcontroller.physics.dynamics import Response, response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.physics.plant import Plant, reward_matrices
 
@@ -46,16 +46,12 @@ class BuildingEnv(gym.Env):
         motions: list[GroundMotion] | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if isinstance(config, Plant):
-            plant = config
-        else:
-            plant = Plant(
-                config
-                if isinstance(config, Experiment)
-                else Experiment()
-                if config is None
-                else load_experiment(config)
-            )
+        if not isinstance(config, Plant):
+            experiment = config if isinstance(config, Experiment) else None
+            if experiment is None:
+                experiment = Experiment() if config is None else load_experiment(config)
+            config = Plant(experiment)
+        plant = config
         self.plant = plant
         config = self.experiment = plant.experiment
         self.building = plant.building
@@ -71,7 +67,7 @@ class BuildingEnv(gym.Env):
         # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
         linear_terms = [t for t in config.reward.terms if t.quantity != "force_change"]
         change_terms = [t for t in config.reward.terms if t.quantity == "force_change"]
-        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(self.building, linear_terms)
+        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(plant, linear_terms)
         self._reward_names = [term.label for term in linear_terms + change_terms]
         starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
         self._reward_starts = np.array(starts, dtype=int)
@@ -87,13 +83,14 @@ class BuildingEnv(gym.Env):
         row_powers += [np.full(m, t.power) for t in change_terms]
         self._row_power = np.concatenate(row_powers)
         self._all_quadratic = bool(np.all(self._row_power == 2.0))
-        drift_c, drift_d = output_matrices(self.building, "drift")
-        acceleration_c, acceleration_d = output_matrices(self.building, "absolute_acceleration")
-        shear_c, shear_d = output_matrices(self.building, "base_shear")
-        # Every output of a step is one matrix product of the new state z and the force u:
+        drift_c, drift_d = plant.outputs("drift")
+        acceleration_c, acceleration_d = plant.outputs("absolute_acceleration")
+        shear_c, shear_d = plant.outputs("base_shear")
+        force_c, force_d = plant.outputs("force")
+        # Every output of a step is one matrix product of the new state x and the command u:
         # [scaled readings | ground reading | weight^(1/power)/scale * reward quantities | drift | acceleration |
-        # base shear]; the ground reading row is zero here and comes in through the forcing.
-        no_state, no_force = np.zeros((1, 2 * n)), np.zeros((1, m))
+        # base shear | delivered force]; the ground reading row is zero here and comes in through the forcing.
+        no_state, no_force = np.zeros((1, plant.n_state)), np.zeros((1, m))
         self._output_c = np.vstack(
             [
                 sensors.c / sensors.scale[:, None],
@@ -102,6 +99,7 @@ class BuildingEnv(gym.Env):
                 drift_c,
                 acceleration_c,
                 shear_c,
+                force_c,
             ]
         )
         self._output_d = np.vstack(
@@ -112,36 +110,41 @@ class BuildingEnv(gym.Env):
                 drift_d,
                 acceleration_d,
                 shear_d,
+                force_d,
             ]
         )
         self._n_sensors = p = sensors.c.shape[0]
         r = reward_c.shape[0]
-        # Output columns after the state: readings, ground reading, reward rows, drift, acceleration, shear.
-        first = 2 * n
+        # Output columns after the state: readings, ground reading, reward rows, drift, acceleration, shear, force.
+        first = plant.n_state
         self._reading_slice = slice(first, first + p + 1)
         self._reward_slice = slice(first + p + 1, first + p + 1 + r)
         self._drift_slice = slice(first + p + 1 + r, first + p + 1 + r + n)
         self._acceleration_slice = slice(first + p + 1 + r + n, first + p + 1 + r + 2 * n)
         self._base_shear_index = first + p + 1 + r + 2 * n
+        self._force_slice = slice(self._base_shear_index + 1, self._base_shear_index + 1 + m)
         self._noise_scaled = sensors.noise_std / sensors.scale
+        self._bias_scaled = sensors.bias / sensors.scale
         self._ground_noise = config.sensors.ground_noise_std
 
         self.layout = layout = plant.layout
         self._block = p + 1
         self._estimate_start = layout.estimate.start
         self._action_start = layout.action.start
-        self.kalman = None
+        self.kalman = None  # the agent's own estimate, designed on the design model like LQG's
         if config.sensors.state_estimate:
+            design = plant.design
             self.kalman = (
-                design_kalman_ground_model(plant)
+                design_kalman_ground_model(design)
                 if config.sensors.ground_model
-                else design_kalman(plant, known_ground=True)
+                else design_kalman(design, known_ground=True)
             )
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
         self._observation = np.zeros(layout.size, dtype=np.float32)
-        self._n_state = 2 * n
-        self._state_action = np.zeros(2 * n + m)  # [z | clipped action]
+        self._n_state = plant.n_state
+        self._state_action = np.zeros(plant.n_state + m)  # [x | clipped action]
+        self._held_force = np.zeros(m)
         self._k = 0
         self._n_steps = 0
         self.motion: GroundMotion | None = None
@@ -152,13 +155,13 @@ class BuildingEnv(gym.Env):
 
     @property
     def state(self) -> np.ndarray:
-        """Current state z = [x; x'] (m, m/s)."""
-        return self._state_action[: self._n_state].copy()
+        """Current building state z = [x; x'] (m, m/s), without actuator states."""
+        return self._state_action[: 2 * self.building.n_floors].copy()
 
     @property
     def held_force(self) -> np.ndarray:
-        """The force (N) held over the step that ended at the current time."""
-        return self._state_action[self._n_state :] * self.force_limits
+        """The force (N) delivered at the current time: held over the step that ended now."""
+        return self._held_force.copy()
 
     def _draw_motion(self) -> GroundMotion:
         if self.motions:
@@ -186,11 +189,12 @@ class BuildingEnv(gym.Env):
         ground = samples[::substeps][: self._n_steps + 1]
         self.ground_samples = ground
         readings = np.empty((self._n_steps + 1, p + 1))
-        readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled
+        readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled + self._bias_scaled
         readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self.layout.ground_scale
         self._forcing[:, self._reading_slice] += readings[1:]
         self._k = 0
         self._state_action[:] = 0.0
+        self._held_force[:] = 0.0
         self._previous_action = np.zeros(self.building.n_actuators)
         self._observation[:] = 0.0
         self._observation[: p + 1] = readings[0]
@@ -242,7 +246,8 @@ class BuildingEnv(gym.Env):
         info["drift"] = outputs[self._drift_slice]
         info["absolute_acceleration"] = outputs[self._acceleration_slice]
         info["base_shear"] = outputs[self._base_shear_index]
-        info["force"] = clipped * self.force_limits
+        self._held_force[:] = outputs[self._force_slice]
+        info["force"] = self._held_force.copy()
         info["time"] = k * self.control_dt
         return observation.copy(), -sum(terms), False, k >= self._n_steps, info
 

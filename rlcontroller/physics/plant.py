@@ -2,10 +2,20 @@
 
 From the experiment's building, actuators, sensors and simulation: the `Building` (M, K, C, Gamma,
 force limits), its control-step maps (cached per number of ground sub-steps), the sensor matrices
-(readings = C z + D u, with their scales and noise) and the observation layout. The env simulates
-a plant; LQG, the Kalman filters, the residual prior and the optimal reference are designed on
-one; none of them rebuilds it. (A later `plant` part of an experiment, the real building differing
-from the design drawings, will make two: the simulated plant and the design model.)
+(readings = C x + D u, with their scales, noise and bias) and the observation layout. The env
+simulates a plant; LQG, the Kalman filters, the residual prior and the optimal reference are
+designed on one; none of them rebuilds it.
+
+Plant and design model: an experiment's building, actuators and sensors are the *design model*,
+what an engineer designs on. Its optional `plant` part says how the simulated building differs:
+factors on stiffness, mass and damping, damaged stories, actuator dynamics, sensor faults.
+`Plant(experiment)` is the simulated plant and `plant.design` the design model (the plant itself
+when there is no `plant` part, bit for bit).
+
+Actuator dynamics make the state x longer than z = [x_floors; v_floors]: with a lag, the delivered
+forces f (N) follow the command u through tau f' = u - f; with a delay of d steps, the commands of
+the last d steps wait in a buffer, and without a lag a register holds the force applied over the
+last step. Every output is then C x (no feed-through), and z is always x[:2n].
 """
 
 from __future__ import annotations
@@ -14,8 +24,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rlcontroller.config import Experiment, RewardTerm, SensorConfig
-from rlcontroller.physics.dynamics import StepMap, ground_model_step, output_matrices, step_map
+from rlcontroller.config import BuildingConfig, Experiment, PlantConfig, Quantity, RewardTerm, SensorConfig
+from rlcontroller.physics.dynamics import (
+    StateSpace,
+    StepMap,
+    compose,
+    exact_substep,
+    ground_model_step,
+    output_matrices,
+    state_space,
+    step_map,
+)
 from rlcontroller.physics.excitation import GroundModel
 from rlcontroller.physics.structure import Building, build
 
@@ -28,6 +47,7 @@ class SensorMatrices:
     d: np.ndarray  # per newton of actuator force
     scale: np.ndarray
     noise_std: np.ndarray
+    bias: np.ndarray  # constant added to each reading (SI), zero without sensor faults
 
 
 @dataclass(frozen=True)
@@ -45,38 +65,46 @@ class ObservationLayout:
     size: int
 
 
-def sensor_matrices(building: Building, sensors: SensorConfig) -> SensorMatrices:
-    """The measurement rows of `sensors`: y = C z + D u, one row per reading."""
-    rows_c, rows_d, scales, noises = [], [], [], []
+def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
+    """The measurement rows of `sensors` on the plant's state: y = C x + D u, one row per reading,
+    with the plant's sensor faults (dead floors read zero, noise times a factor, constant bias)."""
+    rows_c, rows_d, scales, noises, floors = [], [], [], [], []
     for measurement in sensors.measurements:
-        c, d = output_matrices(building, measurement.quantity)
-        if measurement.floors is not None:
-            index = [floor - 1 for floor in measurement.floors]
-            c, d = c[index], d[index]
-        rows_c.append(c)
-        rows_d.append(d)
-        scales.append(np.full(c.shape[0], measurement.scale))
-        noises.append(np.full(c.shape[0], measurement.noise_std))
-    return SensorMatrices(np.vstack(rows_c), np.vstack(rows_d), np.concatenate(scales), np.concatenate(noises))
+        c, d = plant.outputs(measurement.quantity)
+        index = list(range(c.shape[0])) if measurement.floors is None else [f - 1 for f in measurement.floors]
+        rows_c.append(c[index])
+        rows_d.append(d[index])
+        scales.append(np.full(len(index), measurement.scale))
+        noises.append(np.full(len(index), measurement.noise_std))
+        floors.extend(i + 1 for i in index)
+    c, d, noise = np.vstack(rows_c), np.vstack(rows_d), np.concatenate(noises)
+    bias = np.zeros(c.shape[0])
+    faults = plant.config.sensors if plant.config is not None else None
+    if faults is not None:
+        floors_array = np.array(floors)
+        noise = noise * faults.noise_factor
+        for entry in faults.bias:
+            bias[floors_array == entry.floor] += entry.value
+        dead = np.isin(floors_array, faults.dead_floors)
+        c[dead], d[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0
+    return SensorMatrices(c, d, np.concatenate(scales), noise, bias)
 
 
-def reward_matrices(
-    building: Building, terms: list[RewardTerm]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
+def reward_matrices(plant: Plant, terms: list[RewardTerm]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
     """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
-    so that a term's value is the sum over its rows of |factor * (C z + D u)|^power."""
+    so that a term's value is the sum over its rows of |factor * (C x + D u)|^power."""
+    building = plant.building
     rows_c, rows_d, factors, slices = [], [], [], []
     start = 0
     for term in terms:
-        c, d = output_matrices(building, term.quantity)
+        c, d = plant.outputs(term.quantity)
         rows_c.append(c)
         rows_d.append(d)
         factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
         slices.append(slice(start, start + c.shape[0]))
         start += c.shape[0]
     if not terms:
-        n_state = 2 * building.n_floors
-        return np.zeros((0, n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
+        return np.zeros((0, plant.n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
     return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
 
 
@@ -103,29 +131,129 @@ def observation_layout(building: Building, sensors: SensorConfig, n_readings: in
     )
 
 
+def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:
+    """The design building changed by the plant part: factors and damage on stiffness, factors on
+    mass, the damping ratios (or the damping matrix) times the damping factor."""
+    n = len(building.masses)
+    stiffness = np.asarray(building.stiffnesses) * np.broadcast_to(np.asarray(plant.stiffness, dtype=float), n)
+    for damage in plant.damage:
+        stiffness[damage.story - 1] *= 1.0 + damage.stiffness
+    masses = np.asarray(building.masses) * np.broadcast_to(np.asarray(plant.mass, dtype=float), n)
+    damping = building.damping
+    if damping.rayleigh is not None:
+        pairs = tuple(pair.model_copy(update={"ratio": pair.ratio * plant.damping}) for pair in damping.rayleigh)
+        damping = damping.model_copy(update={"rayleigh": pairs})
+    else:
+        damping = damping.model_copy(update={"matrix": (np.asarray(damping.matrix) * plant.damping).tolist()})
+    return building.model_copy(
+        update={"masses": masses.tolist(), "stiffnesses": stiffness.tolist(), "damping": damping}
+    )
+
+
 class Plant:
     """An experiment's building with its actuators, sensors and discretisation, built once.
 
-    Attributes: `experiment`, `building`, `force_limits` (N), `control_dt` (s), `sensors`
-    (`SensorMatrices`), `layout` (`ObservationLayout`), `ground_model` (the Kanai-Tajimi model of
-    LQG + ground model and of `sensors.ground_model`).
+    Attributes: `experiment`, `config` (its `plant` part, or None), `building`, `force_limits` (N),
+    `control_dt` (s), `n_state` (length of x), `sensors` (`SensorMatrices`), `layout`
+    (`ObservationLayout`), `ground_model` (the Kanai-Tajimi model of LQG + ground model and of
+    `sensors.ground_model`), `design` (the design model).
     """
 
     def __init__(self, experiment: Experiment) -> None:
         self.experiment = experiment
-        self.building = build(experiment.building, experiment.actuators)
+        self.config = experiment.plant
+        building = experiment.building if self.config is None else true_building(experiment.building, self.config)
+        self.building = build(building, experiment.actuators)
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
-        self.sensors = sensor_matrices(self.building, experiment.sensors)
+        dynamics = self.config.actuators if self.config is not None else None
+        self.time_constant = dynamics.time_constant if dynamics else 0.0
+        self.delay_steps = dynamics.delay_steps if dynamics else 0
+        n, m = self.building.n_floors, self.building.n_actuators
+        lag = m if self.time_constant > 0 else 0
+        held = m if self.delay_steps > 0 and not lag else 0
+        self.n_state = 2 * n + lag + self.delay_steps * m + held
+        self.sensors = sensor_matrices(self, experiment.sensors)
         self.layout = observation_layout(self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale)
         self.ground_model = GroundModel()
         self._maps: dict[int, StepMap] = {}
+        self._design = self if self.config is None else None
 
-    def step_map(self, substeps: int = 1) -> StepMap:
-        """The configured control-step map for `substeps` ground samples per step (cached)."""
+    @property
+    def design(self) -> Plant:
+        """The design model: the experiment without its plant part."""
+        if self._design is None:
+            self._design = Plant(self.experiment.model_copy(update={"plant": None}))
+        return self._design
+
+    @property
+    def has_actuator_dynamics(self) -> bool:
+        return self.n_state > 2 * self.building.n_floors
+
+    def outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
+        """(C, D) with quantity = C x + D u on this plant's state x and command u (N)."""
+        c, d = output_matrices(self.building, quantity)
+        if not self.has_actuator_dynamics:
+            return c, d
+        n, m = self.building.n_floors, self.building.n_actuators
+        full = np.zeros((c.shape[0], self.n_state))
+        full[:, : 2 * n] = c
+        if self.time_constant > 0:
+            full[:, 2 * n : 2 * n + m] = d  # the delivered force is a state
+        else:
+            full[:, -m:] = d  # the register of the force applied over the last step
+        return full, np.zeros_like(d)
+
+    def structure_step_map(self, substeps: int = 1) -> StepMap:
+        """The building's own control-step map on z (no actuator dynamics), for `substeps` ground
+        samples per step (cached)."""
         if substeps not in self._maps:
             self._maps[substeps] = step_map(self.building, self.experiment.simulation, substeps)
         return self._maps[substeps]
+
+    def step_map(self, substeps: int = 1) -> StepMap:
+        """The control-step map on x (with the actuator dynamics) for `substeps` ground samples per
+        step; the force gain is per newton of command (cached)."""
+        if not self.has_actuator_dynamics:
+            return self.structure_step_map(substeps)
+        key = 1000 + substeps
+        if key not in self._maps:
+            self._maps[key] = self._actuator_step_map(substeps)
+        return self._maps[key]
+
+    def _actuator_step_map(self, substeps: int) -> StepMap:
+        n, m = self.building.n_floors, self.building.n_actuators
+        if self.time_constant > 0:  # [z; f] with tau f' = u - f, exact over each sub-step
+            system = state_space(self.building)
+            a = np.zeros((2 * n + m, 2 * n + m))
+            a[: 2 * n, : 2 * n] = system.a
+            a[: 2 * n, 2 * n :] = system.b_force
+            a[2 * n :, 2 * n :] = -np.eye(m) / self.time_constant
+            lagged = StateSpace(
+                a=a,
+                b_force=np.vstack([np.zeros((2 * n, m)), np.eye(m) / self.time_constant]),
+                b_ground=np.concatenate([system.b_ground, np.zeros(m)]),
+            )
+            core = compose(exact_substep(lagged, self.control_dt / substeps), substeps, self.control_dt)
+        else:
+            core = self.structure_step_map(substeps)
+        d = self.delay_steps
+        if d == 0:
+            return core
+        size, inner = self.n_state, core.phi.shape[0]
+        phi = np.zeros((size, size))
+        phi[:inner, :inner] = core.phi
+        oldest = slice(inner + (d - 1) * m, inner + d * m)  # the command of d steps ago, applied now
+        phi[:inner, oldest] = core.force_gain
+        for j in range(1, d):  # the buffer shifts by one step
+            phi[inner + j * m : inner + (j + 1) * m, inner + (j - 1) * m : inner + j * m] = np.eye(m)
+        if self.time_constant == 0:
+            phi[-m:, oldest] = np.eye(m)  # the register keeps the force applied over this step
+        force_gain = np.zeros((size, m))
+        force_gain[inner : inner + m] = np.eye(m)
+        ground_gain = np.zeros((size, core.ground_gain.shape[1]))
+        ground_gain[:inner] = core.ground_gain
+        return StepMap(phi=phi, force_gain=force_gain, ground_gain=ground_gain, control_dt=self.control_dt)
 
     def ground_model_step(self) -> StepMap:
         """Exact control-step map of the building and its Kanai-Tajimi ground model (cached)."""

@@ -44,7 +44,7 @@ def test_gain_matches_an_independent_riccati_solution():
     experiment = Experiment()
     env = BuildingEnv(experiment)
     step = env.step_map(1)
-    cost = quadratic_cost(env.building, experiment.reward, step)
+    cost = quadratic_cost(env.plant, experiment.reward, step)
     gain, _ = lqr_gain(step, cost, env.force_limits)
     a, b = step.phi, step.force_gain * env.force_limits
     q, r, n = cost.state.T @ cost.state, cost.action.T @ cost.action, cost.state.T @ cost.action
@@ -58,7 +58,7 @@ def test_the_lqr_cost_is_exactly_the_reward():
     motion = GroundMotion("m", 0.02, np.random.default_rng(0).normal(0, 2.0, 60))
     env.reset(seed=0, options={"motion": motion})
     step = env.step_map(1)
-    cost = quadratic_cost(env.building, experiment.reward, step)
+    cost = quadratic_cost(env.plant, experiment.reward, step)
     ground_terms = step.ground_terms(motion.acceleration)
     rng = np.random.default_rng(1)
     for k in range(30):
@@ -175,7 +175,7 @@ def test_clairvoyant_actions_solve_the_finite_least_squares_problem():
     experiment, motion = Experiment(), weak_motion(60)
     building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation)
-    cost = quadratic_cost(building, experiment.reward, step)
+    cost = quadratic_cost(Plant(experiment), experiment.reward, step)
     _, riccati = lqr_gain(step, cost, building.force_limits)
     action_gain = step.force_gain * building.force_limits
     ground = step.ground_terms(motion.acceleration)
@@ -208,7 +208,7 @@ def test_more_preview_never_costs_more_and_zero_preview_is_full_state_lqr():
     )
     building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation)
-    feedback, _ = lqr_gain(step, quadratic_cost(building, experiment.reward, step), building.force_limits)
+    feedback, _ = lqr_gain(step, quadratic_cost(Plant(experiment), experiment.reward, step), building.force_limits)
     blind = optimal_response(Plant(experiment), motion, preview=0)
     actions = -np.hstack([blind.displacement, blind.velocity]) @ feedback.T
     np.testing.assert_allclose(blind.force[1:], actions[:-1] * building.force_limits, atol=1e-6)

@@ -1,0 +1,92 @@
+"""Robustness: every controller on every scenario's plant and every record, through `evaluate`.
+
+Controllers, all run on the scenario's plant (the real building) with the same sensors, noise and
+records: the uncontrolled building; LQG designed on the design model, as deployed in practice;
+LQG re-designed on the true plant (its stiffness, mass, damping, damage, sensor faults, and the
+actuator lag and delay as states of its model) — the oracle, the room a perfect model would give;
+and the RL policy of a run, if given. J1-J4 are taken against the uncontrolled *plant*.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from rlcontroller.config import Experiment, Scenario
+from rlcontroller.control.controllers import Controller, LQGController
+from rlcontroller.control.lqg import design_lqg
+from rlcontroller.evaluation.evaluation import evaluate
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.metrics import METRICS
+from rlcontroller.physics.plant import Plant
+
+NOMINAL_LQG = "LQG (nominal design)"
+ORACLE_LQG = "LQG (re-designed on the plant)"
+
+
+def robustness(
+    experiment: Experiment,
+    scenarios: list[Scenario],
+    motions: list[GroundMotion],
+    label: str,
+    policy: Path | None = None,
+) -> tuple[pd.DataFrame, float]:
+    """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken."""
+    start = time.perf_counter()
+    learned = PolicyController.load(policy) if policy is not None else None
+    frames = []
+    for scenario in scenarios:
+        plant = Plant(experiment.model_copy(update={"plant": scenario.plant}))
+        design = plant.design
+        controllers: list[Controller] = [
+            LQGController(design_lqg(design), design, NOMINAL_LQG),
+            LQGController(design_lqg(plant), plant, ORACLE_LQG),
+        ]
+        if learned is not None:
+            controllers.append(learned)
+        result = evaluate(plant, motions, controllers, label, include_optimal=False)
+        frames.append(result.metrics.assign(scenario=scenario.name))
+    table = pd.concat(frames, ignore_index=True)
+    columns = ["scenario", "controller", "record", "metric", "index", "value"]
+    return table[columns], time.perf_counter() - start
+
+
+def summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Scenario x controller: the mean over records, then over stories (J3: actuators)."""
+    per_index = table.groupby(["scenario", "controller", "metric", "index"], sort=False)["value"].mean()
+    means = per_index.groupby(["scenario", "controller", "metric"], sort=False).mean().unstack("metric")
+    return means[list(METRICS)]
+
+
+def worst_record_j1(table: pd.DataFrame) -> pd.Series:
+    """Scenario x controller: the largest per-record mean J1 (above 1: worse than no control)."""
+    j1 = table[table["metric"] == "J1"].groupby(["scenario", "controller", "record"], sort=False)["value"].mean()
+    return j1.groupby(["scenario", "controller"], sort=False).max()
+
+
+def stiffness_factor(scenario: Scenario) -> float | None:
+    """The scalar stiffness factor of a scenario that changes only that (1 for nominal), else None."""
+    if scenario.plant is None:
+        return 1.0
+    changed = scenario.plant.model_dump(exclude_defaults=True)
+    if set(changed) == {"stiffness"} and not isinstance(scenario.plant.stiffness, list):
+        return float(scenario.plant.stiffness)
+    return None
+
+
+def stiffness_curve(summary_table: pd.DataFrame, scenarios: list[Scenario]) -> pd.DataFrame:
+    """J1 against the stiffness factor (rows sorted by factor), one column per controller."""
+    rows = {}
+    for scenario in scenarios:
+        factor = stiffness_factor(scenario)
+        if factor is not None:
+            rows[factor] = summary_table.loc[scenario.name, "J1"]
+    return pd.DataFrame(rows).T.sort_index().rename_axis("stiffness factor") if rows else pd.DataFrame()
+
+
+def mean_over_scenarios(summary_table: pd.DataFrame) -> pd.DataFrame:
+    """Controller: the mean of each metric over the scenarios."""
+    return summary_table.groupby(level="controller", sort=False).mean()

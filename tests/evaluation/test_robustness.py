@@ -1,0 +1,79 @@
+"""Robustness: the oracle equals the nominal design on the nominal plant, beats it off-design, and
+survives a delay that makes the nominal LQG amplify the response."""
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+from rlcontroller.config import ConfigError, Experiment, Scenario, load_scenarios
+from rlcontroller.evaluation.robustness import NOMINAL_LQG, ORACLE_LQG, robustness, stiffness_curve, summary
+from rlcontroller.physics.records import synthetic_suite
+
+
+@pytest.fixture(scope="module")
+def table():
+    scenarios = [
+        Scenario(name="nominal"),
+        Scenario(name="soft", plant={"stiffness": 0.7}),
+        Scenario(name="late", plant={"actuators": {"delay_steps": 2}}),
+    ]
+    result, _ = robustness(Experiment(), scenarios, synthetic_suite(count=2), "SYNTHETIC test")
+    return summary(result), scenarios
+
+
+def test_on_the_nominal_plant_the_oracle_is_the_nominal_design(table):
+    means, _ = table
+    pd.testing.assert_series_equal(
+        means.loc[("nominal", NOMINAL_LQG)], means.loc[("nominal", ORACLE_LQG)], check_names=False
+    )
+    assert (means.xs("uncontrolled", level="controller")[["J1", "J2", "J4"]] == 1.0).all().all()
+
+
+def test_off_design_the_oracle_wins_and_a_delay_makes_nominal_lqg_amplify(table):
+    means, scenarios = table
+    assert means.loc[("soft", ORACLE_LQG), "J1"] < means.loc[("soft", NOMINAL_LQG), "J1"] - 0.1
+    assert means.loc[("late", NOMINAL_LQG), "J2"] > 1.0 > means.loc[("late", ORACLE_LQG), "J2"]
+    curve = stiffness_curve(means, scenarios)
+    assert list(curve.index) == [0.7, 1.0] and curve.loc[1.0, NOMINAL_LQG] == curve.loc[1.0, ORACLE_LQG]
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("scenarios: [{name: a}, {name: a}]\n", "scenarios: scenario name 'a' is used twice"),
+        ("scenarios: [{name: a, plant: {stifness: 0.7}}]\n", "scenarios[0].plant.stifness: unknown key"),
+        ("scenarios: [{name: a, plant: {stiffness: [1, 2]}}]\n", "scenarios[0].plant.stiffness: 2 factors"),
+        ("scenarios: [{name: a, plant: {sensors: {dead_floors: [9]}}}]\n", "sensors.dead_floors: 9 does not exist"),
+        ("scenarios: [{name: a, plant: {stiffness: .inf}}]\n", "Input should be a finite number"),
+        ("scenarios: []\n", "scenarios: List should have at least 1 item"),
+    ],
+)
+def test_bad_scenario_files_give_one_line(tmp_path, text, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as error:
+        load_scenarios(path, Experiment())
+    assert str(error.value).startswith(str(path)) and expected in str(error.value) and "\n" not in str(error.value)
+
+
+@pytest.mark.slow
+def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path):
+    (tmp_path / "two.yaml").write_text("scenarios:\n  - {name: nominal}\n  - {name: soft, plant: {stiffness: 0.7}}\n")
+    record = tmp_path / "short.csv"
+    motion = synthetic_suite(count=1)[0]
+    record.write_text(
+        "time,acceleration [m/s2]\n"
+        + "\n".join(f"{k * motion.dt:.4f},{a:.6f}" for k, a in enumerate(motion.acceleration))
+    )
+    out = tmp_path / "out"
+    arguments = ["robustness", "--records", str(record), "--scenarios", str(tmp_path / "two.yaml"), "--out", str(out)]
+    result = CliRunner().invoke(app, arguments)
+    assert result.exit_code == 0, result.output
+    assert {p.name for p in out.iterdir()} == {"robustness.csv", "robustness.md", "robustness.png"}
+    table = pd.read_csv(out / "robustness.csv")
+    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, ORACLE_LQG, "RL"}
+    assert (
+        set(table["scenario"]) == {"nominal", "soft"}
+        and "## Mean J1 per scenario" in (out / "robustness.md").read_text()
+    )
