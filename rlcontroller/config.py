@@ -402,6 +402,36 @@ class PlantConfig(StrictModel):
     sensors: SensorFaultConfig = SensorFaultConfig()
 
 
+class RandomRange(StrictModel):
+    """A value drawn per episode, uniformly in [low, high], or log-uniformly with `log: true`."""
+
+    low: float = Field(ge=0.0, le=1.0e3)
+    high: float = Field(ge=0.0, le=1.0e3)
+    log: bool = False
+
+    @model_validator(mode="after")
+    def _ordered(self) -> RandomRange:
+        if self.low > self.high:
+            raise ValueError(f"expected low <= high, got low {self.low:g}, high {self.high:g}")
+        if self.log and self.low <= 0.0:
+            raise ValueError("a log-uniform range needs low > 0")
+        return self
+
+
+class PlantRandomization(StrictModel):
+    """Domain randomisation for training: each episode's plant is the experiment's `plant` part (or
+    the design model) with these fields drawn anew from the env's seed. Factors are scalars on every
+    story; `delay_steps` is a whole number drawn uniformly in [low, high]. Validation draws with the
+    validation motions' fixed seeds, so learning curves stay comparable; evaluation never draws."""
+
+    stiffness: RandomRange | None = None
+    mass: RandomRange | None = None
+    damping: RandomRange | None = None
+    time_constant: RandomRange | None = None  # s
+    delay_steps: IntRange | None = None
+    noise_factor: RandomRange | None = None
+
+
 PARTS: dict[str, Any] = {
     "building": BuildingConfig,
     "actuators": Actuators,
@@ -411,8 +441,9 @@ PARTS: dict[str, Any] = {
     "simulation": SimulationConfig,
     "algorithm": AlgorithmConfig,
     "plant": PlantConfig,
+    "plant_randomization": PlantRandomization,
 }
-OPTIONAL_PARTS = ("plant",)  # may be null: the simulated building is the design model
+OPTIONAL_PARTS = ("plant", "plant_randomization")  # may be null: the simulated building is the design model
 
 
 class Experiment(StrictModel):
@@ -428,6 +459,7 @@ class Experiment(StrictModel):
     simulation: SimulationConfig = SimulationConfig()
     algorithm: AlgorithmConfig = AlgorithmConfig()
     plant: PlantConfig | None = None  # None: the simulated building is the design model
+    plant_randomization: PlantRandomization | None = None  # training and validation only
     _origins: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
 
     def origin(self, part: str) -> tuple[str, str]:
@@ -604,6 +636,8 @@ def _check_cross_references(experiment: Experiment) -> None:
     _check_time_steps(experiment)
     if experiment.plant is not None:
         check_plant(experiment.plant, experiment, *experiment.origin("plant"))
+    if experiment.plant_randomization is not None:
+        _check_randomization(experiment)
 
 
 def _check_time_steps(experiment: Experiment) -> None:
@@ -676,6 +710,45 @@ def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
         if scenario.plant is not None:
             check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
     return scenarios
+
+
+RANDOMIZED_FIELDS = {
+    "stiffness": "stiffness",
+    "mass": "mass",
+    "damping": "damping",
+    "time_constant": "actuators.time_constant",
+    "delay_steps": "actuators.delay_steps",
+    "noise_factor": "sensors.noise_factor",
+}
+
+
+def randomized_plant(base: PlantConfig | None, values: dict[str, float]) -> PlantConfig:
+    """`base` (or the design model's empty plant part) with the drawn `values` put in."""
+    plant = (base or PlantConfig()).model_dump()
+    for key, value in values.items():
+        *path, leaf = RANDOMIZED_FIELDS[key].split(".")
+        target = plant
+        for step in path:
+            target = target[step]
+        target[leaf] = value
+    return PlantConfig.model_validate(plant)
+
+
+def _check_randomization(experiment: Experiment) -> None:
+    """Both ends of every range must make a valid plant for this experiment."""
+    randomization = experiment.plant_randomization
+    file, prefix = experiment.origin("plant_randomization")
+    for key in RANDOMIZED_FIELDS:
+        bounds = getattr(randomization, key)
+        if bounds is None:
+            continue
+        ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
+        for end in ends:
+            try:
+                check_plant(randomized_plant(experiment.plant, {key: end}), experiment, file, prefix)
+            except ValidationError as error:
+                detail = error.errors(include_url=False)[0]["msg"]
+                raise ConfigError(f"{location(file, prefix, key)}: {end:g} gives no valid plant: {detail}") from None
 
 
 def check_seed(seed: int, where: str = "--seed") -> int:

@@ -163,3 +163,37 @@ def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
     line = CliRunner().invoke(app, ["compare", "lqg", "--records", "records"]).output.strip().splitlines()[-1]
     assert line.startswith("error: records: no records: expected .AT2 or .csv files")
     assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("plant: {stiffness: [1, 2]}\n", "plant.stiffness: 2 factors, expected 1 or 5"),
+        ("plant: {damage: [{story: 9, stiffness: -0.4}]}\n", "plant.damage[0].story: 9 does not exist"),
+        ("plant: {damage: [{story: 1, stiffness: -1.5}]}\n", "plant.damage[0].stiffness: Input should be greater"),
+        ("plant: {actuators: {delay_steps: 1000}}\n", "plant.actuators.delay_steps: Input should be less than"),
+        (
+            "plant: {actuators: {time_constant: 0.02}}\nsimulation: {method: newmark}\n",
+            "plant.actuators.time_constant: an actuator lag needs method: exact",
+        ),
+        ("plant: {sensors: {dead_floors: [1, 1]}}\n", "plant.sensors.dead_floors: each number once"),
+        ("plant_randomization: {stiffness: {low: 1.3, high: 0.7}}\n", "expected low <= high"),
+        ("plant_randomization: {stiffness: {low: 0.01, high: 1.0}}\n", "0.01 gives no valid plant"),
+        ("plant_randomization: {mass: {low: 0, high: 1, log: true}}\n", "a log-uniform range needs low > 0"),
+        ("plant_randomization: {delay_steps: [0, 99]}\n", "plant_randomization.delay_steps: 99 gives no valid plant"),
+    ],
+)
+def test_bad_plant_and_randomisation_parts(tmp_path, text, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    line = one_error_line(CliRunner().invoke(app, ["info", str(path)]))
+    assert line.startswith(f"error: {path}") and expected in line
+
+
+def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.yaml").write_text("scenarios: [{name: soft, plant: {stiffness: 0.7, colour: red}}]\n")
+    line = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "s.yaml"]))
+    assert line == "error: s.yaml: scenarios[0].plant.colour: unknown key"
+    missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
+    assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()

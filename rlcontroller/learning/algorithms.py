@@ -71,8 +71,9 @@ def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
 
 
 def make_env(plant: Plant, prior: LQGPrior | None) -> gym.Env:
-    """One training env on the plant, wrapped as a residual on the prior if there is one."""
-    env = BuildingEnv(plant)
+    """One training env on the plant (randomised per episode if configured), wrapped as a residual on
+    the prior if there is one."""
+    env = BuildingEnv(plant, randomize=True)
     return env if prior is None else ResidualAction(env, prior)
 
 

@@ -34,7 +34,7 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model
 from rlcontroller.physics.dynamics import Response, response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
-from rlcontroller.physics.plant import Plant, reward_matrices
+from rlcontroller.physics.plant import Plant, draw_plant, reward_matrices
 
 
 class BuildingEnv(gym.Env):
@@ -45,6 +45,7 @@ class BuildingEnv(gym.Env):
         config: Plant | Experiment | str | Path | None = None,
         motions: list[GroundMotion] | None = None,
         render_mode: str | None = None,
+        randomize: bool = False,
     ) -> None:
         if not isinstance(config, Plant):
             experiment = config if isinstance(config, Experiment) else None
@@ -58,11 +59,38 @@ class BuildingEnv(gym.Env):
         self.motions = motions
         self.render_mode = render_mode
 
-        n = self.building.n_floors
         m = self.building.n_actuators
         self.history = config.sensors.history
         self.force_limits = plant.force_limits
         self.control_dt = plant.control_dt
+        self._randomization = config.plant_randomization if randomize else None
+        self._use_plant(plant)
+        self.layout = layout = plant.layout
+        self._block = self._n_sensors + 1
+        self._estimate_start = layout.estimate.start
+        self._action_start = layout.action.start
+        self.kalman = None  # the agent's own estimate, designed on the design model like LQG's
+        if config.sensors.state_estimate:
+            design = plant.design
+            self.kalman = (
+                design_kalman_ground_model(design)
+                if config.sensors.ground_model
+                else design_kalman(design, known_ground=True)
+            )
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
+        self._observation = np.zeros(layout.size, dtype=np.float32)
+        self._held_force = np.zeros(m)
+        self._k = 0
+        self._n_steps = 0
+        self.motion: GroundMotion | None = None
+
+    def _use_plant(self, plant: Plant) -> None:
+        """Simulate `plant` from the next step on: its output matrices, sensor noise and bias, state."""
+        self.plant, self.building = plant, plant.building
+        config = self.experiment
+        n = self.building.n_floors
+        m = self.building.n_actuators
         sensors = plant.sensors
         # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
         linear_terms = [t for t in config.reward.terms if t.quantity != "force_change"]
@@ -127,27 +155,8 @@ class BuildingEnv(gym.Env):
         self._bias_scaled = sensors.bias / sensors.scale
         self._ground_noise = config.sensors.ground_noise_std
 
-        self.layout = layout = plant.layout
-        self._block = p + 1
-        self._estimate_start = layout.estimate.start
-        self._action_start = layout.action.start
-        self.kalman = None  # the agent's own estimate, designed on the design model like LQG's
-        if config.sensors.state_estimate:
-            design = plant.design
-            self.kalman = (
-                design_kalman_ground_model(design)
-                if config.sensors.ground_model
-                else design_kalman(design, known_ground=True)
-            )
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
-        self._observation = np.zeros(layout.size, dtype=np.float32)
         self._n_state = plant.n_state
         self._state_action = np.zeros(plant.n_state + m)  # [x | clipped action]
-        self._held_force = np.zeros(m)
-        self._k = 0
-        self._n_steps = 0
-        self.motion: GroundMotion | None = None
 
     def step_map(self, substeps: int):
         """The plant's control-step map for `substeps` ground samples per step."""
@@ -170,6 +179,9 @@ class BuildingEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
         super().reset(seed=seed)
+        if self._randomization is not None:
+            drawn = draw_plant(self._randomization, self.experiment.plant, self.np_random)
+            self._use_plant(Plant(self.experiment.model_copy(update={"plant": drawn})))
         motion = (options or {}).get("motion") or self._draw_motion()
         self.motion = motion
         samples, substeps = for_control_step(motion, self.control_dt)

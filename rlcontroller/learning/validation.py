@@ -2,7 +2,8 @@
 
 The deterministic policy runs on `excitation.validation_motions` motions drawn with
 `excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same
-motions, and the three LQGs are run once on them as references.
+motions, and the three LQGs are run once on them as references. With `plant_randomization`, motion i
+runs on the plant drawn with seed i, the same draw for every controller and every validation.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ class Validator:
     """Runs a policy on the held-out generated validation motions."""
 
     def __init__(self, plant: Plant) -> None:
-        self.env = BuildingEnv(plant)
+        self.env = BuildingEnv(plant, randomize=True)  # with randomisation: fixed draws, one per motion
         excitation = plant.experiment.excitation
         self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
         self.prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None

@@ -24,7 +24,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rlcontroller.config import BuildingConfig, Experiment, PlantConfig, Quantity, RewardTerm, SensorConfig
+from rlcontroller.config import (
+    BuildingConfig,
+    Experiment,
+    PlantConfig,
+    PlantRandomization,
+    Quantity,
+    RewardTerm,
+    SensorConfig,
+    randomized_plant,
+)
 from rlcontroller.physics.dynamics import (
     StateSpace,
     StepMap,
@@ -148,6 +157,23 @@ def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfi
     return building.model_copy(
         update={"masses": masses.tolist(), "stiffnesses": stiffness.tolist(), "damping": damping}
     )
+
+
+def draw_plant(randomization: PlantRandomization, base: PlantConfig | None, rng: np.random.Generator) -> PlantConfig:
+    """One random plant part: the ranged fields drawn (uniform, log-uniform or whole numbers) with `rng`,
+    in a fixed order, the rest from `base`."""
+    values: dict[str, float] = {}
+    for key in ("stiffness", "mass", "damping", "time_constant", "delay_steps", "noise_factor"):
+        bounds = getattr(randomization, key)
+        if bounds is None:
+            continue
+        if isinstance(bounds, tuple):
+            values[key] = int(rng.integers(bounds[0], bounds[1] + 1))
+        elif bounds.log:
+            values[key] = float(np.exp(rng.uniform(np.log(bounds.low), np.log(bounds.high))))
+        else:
+            values[key] = float(rng.uniform(bounds.low, bounds.high))
+    return randomized_plant(base, values)
 
 
 class Plant:

@@ -208,3 +208,44 @@ def test_ground_model_estimate_predicts_the_ground_reading():
         if truncated:
             break
     assert np.corrcoef(predicted, measured)[0, 1] > 0.95
+
+
+RANDOMIZED = {
+    "plant_randomization": {
+        "stiffness": {"low": 0.7, "high": 1.3},
+        "mass": {"low": 0.9, "high": 1.1},
+        "time_constant": {"low": 0.005, "high": 0.05, "log": True},
+        "delay_steps": [0, 2],
+    }
+}
+
+
+def test_randomised_plants_are_drawn_per_episode_from_the_seed_within_the_ranges():
+    from rlcontroller.config import build_experiment
+    from rlcontroller.physics.records import synthetic_suite
+
+    env = BuildingEnv(build_experiment(RANDOMIZED), randomize=True)
+    motion = synthetic_suite(count=1)[0]
+    draws = []
+    for seed in range(200):
+        env.reset(seed=seed, options={"motion": motion})
+        config = env.plant.config
+        draws.append((config.stiffness, config.mass, config.actuators.time_constant, config.actuators.delay_steps))
+    stiffness, mass, lag, delay = (np.array(values) for values in zip(*draws, strict=True))
+    assert stiffness.min() >= 0.7 and stiffness.max() <= 1.3 and mass.min() >= 0.9 and mass.max() <= 1.1
+    assert set(delay) == {0, 1, 2} and lag.min() >= 0.005 and lag.max() <= 0.05
+    assert abs(np.median(np.log(lag)) - np.log(np.sqrt(0.005 * 0.05))) < 0.2  # log-uniform: geometric median
+    assert abs(np.mean(stiffness) - 1.0) < 0.03
+    env.reset(seed=7, options={"motion": motion})  # the same seed draws the same plant again
+    again = env.plant.config
+    assert draws[7] == (again.stiffness, again.mass, again.actuators.time_constant, again.actuators.delay_steps)
+
+
+def test_without_randomize_the_env_runs_the_configured_plant():
+    """Evaluation never draws: the env of `rlc evaluate` is built without randomize."""
+    from rlcontroller.config import build_experiment
+
+    env = BuildingEnv(build_experiment(RANDOMIZED))
+    for seed in range(3):
+        env.reset(seed=seed)
+        assert env.plant.config is None and env.plant.n_state == 10

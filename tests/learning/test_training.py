@@ -15,7 +15,7 @@ from conftest import REPOSITORY
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
-from rlcontroller.config import load_experiment
+from rlcontroller.config import PlantRandomization, load_experiment
 from rlcontroller.learning.policy import load_policy
 from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
@@ -297,3 +297,28 @@ def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_pa
     assert result.exit_code == 2 and "Traceback" not in result.output
     assert lines[-1].startswith(f"error: {run / 'best_model.zip'}: cannot load the saved model")
     assert not (tmp_path / "out").exists()
+
+
+def test_training_on_randomised_plants_validates_on_fixed_draws(tmp_path):
+    experiment = smoke(total_steps=600, checkpoint_every=600, eval_every=300)
+    randomization = PlantRandomization(stiffness={"low": 0.7, "high": 1.3}, delay_steps=(0, 1))
+    experiment = experiment.model_copy(update={"plant_randomization": randomization})
+    experiment = load_experiment_from(experiment, tmp_path)
+    train(experiment, run_dir=tmp_path / "run")
+    rows = curve(tmp_path / "run")
+    assert len(rows) == 2 and rows[0]["lqg_J1"] == rows[1]["lqg_J1"]  # the same plants at every validation
+    nominal = curve_of(smoke(total_steps=300, checkpoint_every=300, eval_every=300), tmp_path / "nominal")
+    assert rows[0]["lqg_J1"] != nominal[0]["lqg_J1"]  # and not the nominal plant
+    assert load_experiment(tmp_path / "run" / "config.yaml").plant_randomization is not None
+
+
+def load_experiment_from(experiment, folder: Path):
+    """Round-trip through YAML, so the randomisation is validated as a user's file would be."""
+    path = folder / "randomized.yaml"
+    path.write_text(experiment.to_yaml())
+    return load_experiment(path)
+
+
+def curve_of(experiment, run_dir: Path) -> list[dict[str, str]]:
+    train(experiment, run_dir=run_dir)
+    return curve(run_dir)
