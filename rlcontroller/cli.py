@@ -348,7 +348,11 @@ def robustness(
     ] = None,
     records: RecordsOption = None,
     scenarios: Annotated[
-        Path, typer.Option(help="Scenario YAML: named plants that differ from the design model.")
+        Path,
+        typer.Option(
+            help="Scenario YAML: named plants that differ from the design model.",
+            show_default="configs/scenarios/standard.yaml",
+        ),
     ] = STANDARD_SCENARIOS,
     out: OutOption = None,
     scale_pga: ScaleOption = None,
