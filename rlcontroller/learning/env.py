@@ -19,6 +19,10 @@ force (N) and time (s).
 Termination: never (the building is stable); the episode is truncated when the ground motion
 ends. The motion is drawn from the configured generator, or from `motions` given to the
 constructor, or passed as `reset(options={"motion": GroundMotion})`.
+
+Plant: the env simulates the experiment's plant (its `plant` part, if any); the state estimate
+is designed on the design model, as every controller is. With `randomize=True` (training and
+validation) and a `plant_randomization` part, each reset draws a new plant from the env's seed.
 """
 
 from __future__ import annotations
@@ -47,34 +51,32 @@ class BuildingEnv(gym.Env):
         render_mode: str | None = None,
         randomize: bool = False,
     ) -> None:
-        if not isinstance(config, Plant):
-            experiment = config if isinstance(config, Experiment) else None
-            if experiment is None:
-                experiment = Experiment() if config is None else load_experiment(config)
-            config = Plant(experiment)
-        plant = config
-        self.plant = plant
-        config = self.experiment = plant.experiment
-        self.building = plant.building
+        if isinstance(config, Plant):
+            plant = config
+        elif isinstance(config, Experiment):
+            plant = Plant(config)
+        else:
+            plant = Plant(Experiment() if config is None else load_experiment(config))
+        experiment = self.experiment = plant.experiment
         self.motions = motions
         self.render_mode = render_mode
 
-        m = self.building.n_actuators
-        self.history = config.sensors.history
+        m = plant.building.n_actuators
+        self.history = experiment.sensors.history
         self.force_limits = plant.force_limits
         self.control_dt = plant.control_dt
-        self._randomization = config.plant_randomization if randomize else None
+        self._randomization = experiment.plant_randomization if randomize else None
         self._use_plant(plant)
         self.layout = layout = plant.layout
         self._block = self._n_sensors + 1
         self._estimate_start = layout.estimate.start
         self._action_start = layout.action.start
         self.kalman = None  # the agent's own estimate, designed on the design model like LQG's
-        if config.sensors.state_estimate:
+        if experiment.sensors.state_estimate:
             design = plant.design
             self.kalman = (
                 design_kalman_ground_model(design)
-                if config.sensors.ground_model
+                if experiment.sensors.ground_model
                 else design_kalman(design, known_ground=True)
             )
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
@@ -88,13 +90,13 @@ class BuildingEnv(gym.Env):
     def _use_plant(self, plant: Plant) -> None:
         """Simulate `plant` from the next step on: its output matrices, sensor noise and bias, state."""
         self.plant, self.building = plant, plant.building
-        config = self.experiment
+        experiment = self.experiment
         n = self.building.n_floors
         m = self.building.n_actuators
         sensors = plant.sensors
         # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
-        linear_terms = [t for t in config.reward.terms if t.quantity != "force_change"]
-        change_terms = [t for t in config.reward.terms if t.quantity == "force_change"]
+        linear_terms = [t for t in experiment.reward.terms if t.quantity != "force_change"]
+        change_terms = [t for t in experiment.reward.terms if t.quantity == "force_change"]
         reward_c, reward_d, reward_factor, reward_slices = reward_matrices(plant, linear_terms)
         self._reward_names = [term.label for term in linear_terms + change_terms]
         starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
@@ -153,7 +155,7 @@ class BuildingEnv(gym.Env):
         self._force_slice = slice(self._base_shear_index + 1, self._base_shear_index + 1 + m)
         self._noise_scaled = sensors.noise_std / sensors.scale
         self._bias_scaled = sensors.bias / sensors.scale
-        self._ground_noise = config.sensors.ground_noise_std
+        self._ground_noise = experiment.sensors.ground_noise_std
 
         self._n_state = plant.n_state
         self._state_action = np.zeros(plant.n_state + m)  # [x | clipped action]
