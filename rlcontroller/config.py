@@ -389,6 +389,27 @@ class SensorFaultConfig(StrictModel):
     dead_floors: Annotated[list[PositiveInt], AfterValidator(_unique)] = []
 
 
+class HysteresisConfig(StrictModel):
+    """Yielding stories (Bouc-Wen): story force F = a k d + (1 - a) k d_y z with
+    z' = (d'/d_y) [1 - |z|^n (beta sgn(d' z) + gamma)], beta + gamma = 1 (|z| -> 1 at yield).
+    `yield_drift` d_y (m, scalar or per story), `post_yield_ratio` a (1: linear), `exponent` n
+    (sharper yielding for larger n); `substeps` RK4 steps per ground-sample interval."""
+
+    model: Literal["bouc_wen"] = "bouc_wen"
+    yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
+    post_yield_ratio: float = Field(0.1, ge=0.0, le=1.0)
+    exponent: float = Field(2.0, ge=1.0, le=20.0)
+    beta: float = Field(0.5, ge=0.0, le=1.0)
+    gamma: float = Field(0.5, ge=-1.0, le=1.0)
+    substeps: int = Field(4, ge=1, le=100)
+
+    @model_validator(mode="after")
+    def _yields_at_one(self) -> HysteresisConfig:
+        if abs(self.beta + self.gamma - 1.0) > 1e-9:
+            raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {self.beta + self.gamma:g}")
+        return self
+
+
 class PlantConfig(StrictModel):
     """How the simulated building differs from the design model (the experiment's building,
     actuators and sensors, on which every controller is designed). Factors are a scalar or one
@@ -400,6 +421,7 @@ class PlantConfig(StrictModel):
     damage: list[DamageConfig] = []
     actuators: ActuatorDynamicsConfig = ActuatorDynamicsConfig()
     sensors: SensorFaultConfig = SensorFaultConfig()
+    hysteresis: HysteresisConfig | None = None  # None: linear stories
 
 
 class RandomRange(StrictModel):
@@ -673,6 +695,14 @@ def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: s
     for key, number in stories:
         if number > n_floors:
             raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if plant.hysteresis is not None:
+        drift = plant.hysteresis.yield_drift
+        if isinstance(drift, list) and len(drift) != n_floors:
+            where = location(file, prefix, "hysteresis.yield_drift")
+            raise ConfigError(f"{where}: {len(drift)} values, expected 1 or {n_floors}")
+        if plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0:
+            where = location(file, prefix, "hysteresis")
+            raise ConfigError(f"{where}: yielding stories with actuator dynamics are not supported yet; use one")
     if plant.actuators.time_constant > 0 and experiment.simulation.method != "exact":
         raise ConfigError(f"{location(file, prefix, 'actuators.time_constant')}: an actuator lag needs method: exact")
 

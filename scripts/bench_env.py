@@ -1,14 +1,20 @@
-"""Benchmark: environment step() rate against Gymnasium's Pendulum-v1, and whole-record simulation.
+"""Benchmark: environment step() rate against Gymnasium's Pendulum-v1, whole-record simulation, and
+the five-story building with yielding (Bouc-Wen) stories.
 
 Usage: python scripts/bench_env.py [--steps N]
 Both environments are built with gymnasium.make (the same wrappers) and driven by a random
-policy in the same process, alternately, three rounds; the best round of each is reported.
+policy in the same process, alternately, three rounds; the best round of each is reported. The
+yielding env is measured with its numba-compiled step and, in a child process with
+NUMBA_DISABLE_JIT=1, with the same code run by the interpreter.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
+import subprocess
+import sys
 import time
 
 import gymnasium as gym
@@ -44,10 +50,23 @@ def whole_record_rate(repeats: int = 5) -> float:
     return total / (time.perf_counter() - start)
 
 
+YIELDING = {"hysteresis": {"yield_drift": 0.03, "post_yield_ratio": 0.1, "exponent": 2.0}}  # 4 RK4 sub-steps
+
+
+def yielding_rate(steps: int) -> float:
+    env = gym.make(rlcontroller.ENV_ID, config=Experiment(plant=YIELDING))
+    steps_per_second(env, 100)  # compile (numba caches the machine code on disk)
+    return max(steps_per_second(env, steps) for _ in range(3))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=50_000)
+    parser.add_argument("--yielding-only", action="store_true", help=argparse.SUPPRESS)
     arguments = parser.parse_args()
+    if arguments.yielding_only:
+        print(f"{yielding_rate(arguments.steps):.0f}")
+        return
     ours = gym.make(rlcontroller.ENV_ID)
     pendulum = gym.make("Pendulum-v1")
     rates: dict[str, list[float]] = {"building": [], "pendulum": []}
@@ -62,6 +81,11 @@ def main() -> None:
     print(f"Pendulum-v1 step():              {pendulum_rate:,.0f} steps/s")
     print(f"ratio building / pendulum:       {building_rate / pendulum_rate:.2f}")
     print(f"whole-record simulation:         {whole_record_rate():,.0f} control steps/s")
+    compiled = yielding_rate(arguments.steps)
+    command = [sys.executable, __file__, "--yielding-only", "--steps", str(max(arguments.steps // 50, 200))]
+    interpreted = float(subprocess.check_output(command, env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, text=True))
+    print(f"yielding stories step() (numba):  {compiled:,.0f} steps/s")
+    print(f"yielding stories, interpreted:    {interpreted:,.0f} steps/s ({compiled / interpreted:.0f}x slower)")
 
 
 if __name__ == "__main__":

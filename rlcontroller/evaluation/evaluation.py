@@ -8,21 +8,21 @@ clipping); the clairvoyant optimal controller is the reference no causal control
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from rlcontroller.config import Experiment, display_path
-from rlcontroller.control.controllers import Controller, LQGController
+from rlcontroller.control.controllers import Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_response
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import GroundMotion, for_control_step
-from rlcontroller.physics.metrics import METRICS, j_metrics
+from rlcontroller.physics.metrics import METRICS, SETTLING_TAIL_S, YIELDING_METRICS, j_metrics, yielding_metrics
 from rlcontroller.physics.plant import Plant
 
 OPTIMAL = "optimal (clairvoyant)"
@@ -31,9 +31,18 @@ PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
 def uncontrolled_response(plant: Plant, motion: GroundMotion) -> Response:
-    """Whole-record simulation of the bare building with the plant's step map."""
+    """The bare building: a whole-record simulation with the step map, or through the non-linear
+    step for yielding stories."""
+    if plant.yielding is not None:
+        return rollout(BuildingEnv(plant), motion, Uncontrolled(plant.building.n_actuators))[0]
     samples, substeps = for_control_step(motion, plant.control_dt)
     return simulate(plant.building, plant.structure_step_map(substeps), samples)
+
+
+def with_settling_tail(motion: GroundMotion) -> GroundMotion:
+    """The motion followed by SETTLING_TAIL_S of zero ground motion (for residual drifts)."""
+    tail = np.zeros(round(SETTLING_TAIL_S / motion.dt))
+    return replace(motion, acceleration=np.concatenate([motion.acceleration, tail]))
 
 
 @dataclass
@@ -57,10 +66,11 @@ class Evaluation:
         return list(dict.fromkeys(self.metrics["record"]))
 
     def summary(self) -> pd.DataFrame:
-        """Mean over records, then over stories (actuators for J3), per controller."""
+        """Mean over records, then over stories (actuators for J3), per controller; for yielding
+        plants also the ductility, residual drift and hysteretic energy (means per story)."""
         per_index = self.metrics.groupby(["controller", "metric", "index"], sort=False)["value"].mean()
         table = per_index.groupby(["controller", "metric"], sort=False).mean().unstack("metric")
-        return table.loc[self.controllers, list(METRICS)]
+        return table.loc[self.controllers, [m for m in (*METRICS, *YIELDING_METRICS) if m in table.columns]]
 
 
 def evaluate(
@@ -73,19 +83,25 @@ def evaluate(
     """Run the uncontrolled building, every controller and (optionally) the optimal reference."""
     start = time.perf_counter()
     env = BuildingEnv(plant)
+    yielding = plant.yielding
+    include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):
-        bare = uncontrolled_response(plant, motion)
+        simulated = motion if yielding is None else with_settling_tail(motion)
+        bare = uncontrolled_response(plant, simulated)
         responses["uncontrolled", motion.name] = bare
         results = [("uncontrolled", bare)]
         for controller in controllers:
-            results.append((controller.name, rollout(env, motion, controller, seed=number)[0]))
+            results.append((controller.name, rollout(env, simulated, controller, seed=number)[0]))
         if include_optimal:
-            results.append((OPTIMAL, optimal_response(plant, motion)))
+            results.append((OPTIMAL, optimal_response(plant, simulated)))
         for name, result in results:
             responses[name, motion.name] = result
-            for metric, values in j_metrics(result, bare).items():
+            metrics = j_metrics(result, bare)
+            if yielding is not None:
+                metrics |= yielding_metrics(result, yielding.yield_drift)
+            for metric, values in metrics.items():
                 rows.extend(
                     {"controller": name, "record": motion.name, "metric": metric, "index": i + 1, "value": float(v)}
                     for i, v in enumerate(values)
@@ -97,10 +113,12 @@ def evaluate(
 
 def compare(plant: Plant, motions: list[GroundMotion], label: str, policy: Path | None = None) -> Evaluation:
     """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), the
-    saved policy at `policy` (if given) and the optimal reference, on every motion."""
-    designs = [design_lqg(plant), design_lqg(plant, known_ground=True), design_lqg_ground_model(plant)]
+    saved policy at `policy` (if given) and the optimal reference, on every motion. The LQGs are
+    designed on the design model and run on the plant."""
+    design = plant.design
+    designs = [design_lqg(design), design_lqg(design, known_ground=True), design_lqg_ground_model(design)]
     controllers: list[Controller] = [
-        LQGController(design, plant, name) for design, name in zip(designs, LQG_VARIANTS, strict=True)
+        LQGController(lqg, design, name) for lqg, name in zip(designs, LQG_VARIANTS, strict=True)
     ]
     sources = {}
     if policy is not None:

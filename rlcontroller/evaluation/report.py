@@ -34,6 +34,9 @@ METRIC_NAMES = {
     "J2": "J2 peak abs. acceleration",
     "J3": "J3 force energy",
     "J4": "J4 peak story shear",
+    "ductility": "ductility demand max|drift| / yield drift",
+    "residual_drift_m": "residual drift (m)",
+    "hysteretic_energy_J": "hysteretic energy (J)",
 }
 FAIRNESS = (
     "LQG is designed on the quadratic part of the RL reward (same weights and scales), with a Kalman "
@@ -49,7 +52,8 @@ def markdown_table(frame: pd.DataFrame, digits: int = 3) -> str:
     places = [1 if str(column).endswith("%") else digits for column in frame.columns]
     for index, row in frame.iterrows():
         cells = [
-            f"{v:.{d}f}" if isinstance(v, float | np.floating) else str(v) for v, d in zip(row, places, strict=True)
+            ("–" if np.isnan(v) else f"{v:.{d}f}") if isinstance(v, float | np.floating) else str(v)
+            for v, d in zip(row, places, strict=True)
         ]
         label = f"{index:g}" if isinstance(index, float | np.floating) else str(index)
         lines.append("| " + " | ".join([label] + cells) + " |")
@@ -111,7 +115,7 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     detail = [f"# J1-J4 per record and story: {evaluation.label}", ""]
     detail += [f"Columns: story (J3: actuator, on stories {stories}).", ""]
     detail += [f"- {name}: {text}" for name, text in evaluation.descriptions.items() if text] + [""]
-    for metric in METRICS:
+    for metric in [m for m in METRIC_NAMES if m in set(evaluation.metrics["metric"])]:
         for controller in evaluation.controllers:
             if controller == "uncontrolled":
                 continue
@@ -355,7 +359,7 @@ def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str
         "",
         markdown_table(mean_over_scenarios(means).loc[controllers].rename_axis("controller")),
         "",
-        "## J1-J4 per scenario and controller",
+        "## J1-J4 (and, for yielding stories, ductility, residual drift, hysteretic energy) per scenario",
         "",
         markdown_table(means.loc[(slice(None), controllers), :].reset_index().set_index("scenario")),
         "",

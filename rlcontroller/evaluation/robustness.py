@@ -3,7 +3,8 @@
 Controllers, all run on the scenario's plant (the real building) with the same sensors, noise and
 records: the uncontrolled building; LQG designed on the design model, as deployed in practice;
 LQG re-designed on the true plant (its stiffness, mass, damping, damage, sensor faults, and the
-actuator lag and delay as states of its model) — the oracle, the room a perfect model would give;
+actuator lag and delay as states of its model; for yielding stories, their initial stiffness) — the
+oracle, the room a perfect linear model would give;
 and the RL policy of a run, if given. J1-J4 are taken against the uncontrolled *plant*.
 """
 
@@ -20,7 +21,7 @@ from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import GroundMotion
-from rlcontroller.physics.metrics import METRICS
+from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
 from rlcontroller.physics.plant import Plant
 
 NOMINAL_LQG = "LQG (nominal design)"
@@ -43,7 +44,7 @@ def robustness(
         design = plant.design
         controllers: list[Controller] = [
             LQGController(design_lqg(design), design, NOMINAL_LQG),
-            LQGController(design_lqg(plant), plant, ORACLE_LQG),
+            LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG),
         ]
         if learned is not None:
             controllers.append(learned)
@@ -58,7 +59,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
     """Scenario x controller: the mean over records, then over stories (J3: actuators)."""
     per_index = table.groupby(["scenario", "controller", "metric", "index"], sort=False)["value"].mean()
     means = per_index.groupby(["scenario", "controller", "metric"], sort=False).mean().unstack("metric")
-    return means[list(METRICS)]
+    return means[[m for m in (*METRICS, *YIELDING_METRICS) if m in means.columns]]
 
 
 def worst_record_j1(table: pd.DataFrame) -> pd.Series:

@@ -32,11 +32,12 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model
-from rlcontroller.physics.dynamics import Response, response
+from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant, reward_matrices
 
@@ -170,6 +171,16 @@ class BuildingEnv(gym.Env):
         return self._state_action[: 2 * self.building.n_floors].copy()
 
     @property
+    def plant_state(self) -> np.ndarray:
+        """The plant's whole state x (with actuator or hysteretic states)."""
+        return self._state_action[: self._n_state].copy()
+
+    @property
+    def command(self) -> np.ndarray:
+        """The command (N) of the step that ended now: the clipped action times the force limits."""
+        return self._state_action[self._n_state :] * self.force_limits
+
+    @property
     def held_force(self) -> np.ndarray:
         """The force (N) delivered at the current time: held over the step that ended now."""
         return self._held_force.copy()
@@ -179,18 +190,11 @@ class BuildingEnv(gym.Env):
             return self.motions[int(self.np_random.integers(len(self.motions)))]
         return generate(self.experiment.excitation.generator, self.np_random)
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
-        super().reset(seed=seed)
-        if self._randomization is not None:
-            drawn = draw_plant(self._randomization, self.experiment.plant, self.np_random)
-            self._use_plant(Plant(self.experiment.model_copy(update={"plant": drawn})))
-        motion = (options or {}).get("motion") or self._draw_motion()
-        self.motion = motion
-        samples, substeps = for_control_step(motion, self.control_dt)
+    def _prepare_linear(self, samples: np.ndarray, substeps: int) -> None:
+        """[x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ transition + forcing[k], u = action * limit."""
         step = self.step_map(substeps)
         ground_terms = step.ground_terms(samples)
         self._n_steps = ground_terms.shape[0]
-        # [z_{k+1} | outputs_{k+1}] = [z_k | action_k] @ transition + forcing[k], u = action * limit
         force_gain = step.force_gain * self.force_limits
         self._transition = np.vstack(
             [
@@ -199,6 +203,39 @@ class BuildingEnv(gym.Env):
             ]
         )
         self._forcing = np.hstack([ground_terms, ground_terms @ self._output_c.T])
+        self._advance = self._advance_linear
+
+    def _prepare_yielding(self, samples: np.ndarray, substeps: int) -> None:
+        """The non-linear step: x_{k+1} from the integrator, then the outputs, linear in x_{k+1} and u."""
+        self._windows = sliding_window_view(samples, substeps + 1)[::substeps]
+        self._n_steps = self._windows.shape[0]
+        self._forcing = np.zeros((self._n_steps, self.plant.n_state + self._output_c.shape[0]))
+        self._floor_gain = self.building.actuator_matrix * self.force_limits
+        self._output_ct = self._output_c.T.copy()
+        self._output_dt = (self._output_d * self.force_limits).T.copy()
+        self._advance = self._advance_yielding
+
+    def _advance_linear(self, k: int, clipped: np.ndarray) -> np.ndarray:
+        return self._state_action @ self._transition + self._forcing[k]
+
+    def _advance_yielding(self, k: int, clipped: np.ndarray) -> np.ndarray:
+        state = self.plant.yielding.step(
+            self._state_action[: self._n_state], self._floor_gain @ clipped, self._windows[k], self.control_dt
+        )
+        return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        if self._randomization is not None:
+            drawn = draw_plant(self._randomization, self.experiment.plant, self.np_random)
+            self._use_plant(Plant(self.experiment.model_copy(update={"plant": drawn})))
+        motion = (options or {}).get("motion") or self._draw_motion()
+        self.motion = motion
+        samples, substeps = for_control_step(motion, self.control_dt)
+        if self.plant.yielding is None:
+            self._prepare_linear(samples, substeps)
+        else:
+            self._prepare_yielding(samples, substeps)
         p, rng = self._n_sensors, self.np_random
         ground = samples[::substeps][: self._n_steps + 1]
         self.ground_samples = ground
@@ -231,8 +268,7 @@ class BuildingEnv(gym.Env):
         clipped[:] = action
         np.minimum(clipped, 1.0, out=clipped)
         np.maximum(clipped, -1.0, out=clipped)
-        outputs = state_action @ self._transition
-        outputs += self._forcing[k]
+        outputs = self._advance(k, clipped)
         state_action[:n_state] = outputs[:n_state]
         self._k = k = k + 1
 
@@ -269,18 +305,18 @@ class BuildingEnv(gym.Env):
 def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed: int = 0) -> tuple[Response, float]:
     """Run `controller` on `motion` in `env` (sensor noise seeded by `seed`).
 
-    Returns the whole response and the episode's total reward.
+    Returns the whole response (from the plant's own outputs) and the episode's total reward.
     """
     observation, info = env.reset(seed=seed, options={"motion": motion})
     controller.reset()
     n_steps = info["steps"]
-    states = np.zeros((n_steps + 1, 2 * env.building.n_floors))
-    held = np.zeros((n_steps + 1, env.building.n_actuators))
+    states = np.zeros((n_steps + 1, env.plant.n_state))
+    commands = np.zeros((n_steps + 1, env.building.n_actuators))
     total_reward = 0.0
     for k in range(1, n_steps + 1):
         observation, reward, _, _, _ = env.step(controller.act(observation))
         total_reward += reward
-        states[k] = env.state
-        held[k] = env.held_force
+        states[k] = env.plant_state
+        commands[k] = env.command
     time = np.arange(n_steps + 1) * env.control_dt
-    return response(env.building, states, held, time, env.ground_samples), total_reward
+    return env.plant.response(states, commands, time, env.ground_samples), total_reward

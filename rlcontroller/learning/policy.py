@@ -93,7 +93,7 @@ class PolicyController:
         from stable_baselines3.common.distributions import DiagGaussianDistribution
         from stable_baselines3.common.policies import ActorCriticPolicy
 
-        policy = self.model.policy
+        policy = getattr(self.model, "policy", None)  # anything with predict() works as a model
         if not (isinstance(policy, ActorCriticPolicy) and isinstance(policy.action_dist, DiagGaussianDistribution)):
             return self.model.predict(observation, deterministic=True)[0]
         with torch.no_grad():

@@ -221,6 +221,7 @@ class Response:
     story_shear: np.ndarray
     base_shear: np.ndarray
     force: np.ndarray
+    hysteretic_force: np.ndarray | None = None  # yielding stories: (1 - a) k d_y z per story (N)
 
     def quantity(self, name: str) -> np.ndarray:
         return getattr(self, name)

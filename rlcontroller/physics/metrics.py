@@ -16,6 +16,9 @@ import numpy as np
 from rlcontroller.physics.dynamics import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
+YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J")  # per story, yielding plants
+SETTLING_TAIL_S = 20.0  # s of zero ground motion after a record on a yielding plant
+RESIDUAL_WINDOW_S = 5.0  # the residual drift is the mean drift over the tail's last seconds
 
 
 def peak(history: np.ndarray) -> np.ndarray:
@@ -36,4 +39,19 @@ def j_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndar
         "J2": peak(controlled.absolute_acceleration) / peak(uncontrolled.absolute_acceleration),
         "J3": energy(controlled.force, dt) / energy(uncontrolled.base_shear, dt),
         "J4": peak(controlled.story_shear) / peak(uncontrolled.story_shear),
+    }
+
+
+def yielding_metrics(result: Response, yield_drift: np.ndarray) -> dict[str, np.ndarray]:
+    """Per story of a yielding plant, for a response that ends with the settling tail:
+    ductility demand max|d| / d_y, residual drift |mean d| over the last RESIDUAL_WINDOW_S (m;
+    the mean over several periods removes the free vibration left), and the hysteretic energy
+    sum of the integral of (1 - a) k d_y z dd (J, trapezoid rule on the control steps)."""
+    dt = float(result.time[1] - result.time[0])
+    last = max(1, round(RESIDUAL_WINDOW_S / dt))
+    force = result.hysteretic_force
+    return {
+        "ductility": peak(result.drift) / yield_drift,
+        "residual_drift_m": np.abs(np.mean(result.drift[-last:], axis=0)),
+        "hysteretic_energy_J": np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(result.drift, axis=0), axis=0),
     }

@@ -15,12 +15,14 @@ when there is no `plant` part, bit for bit).
 Actuator dynamics make the state x longer than z = [x_floors; v_floors]: with a lag, the delivered
 forces f (N) follow the command u through tau f' = u - f; with a delay of d steps, the commands of
 the last d steps wait in a buffer, and without a lag a register holds the force applied over the
-last step. Every output is then C x (no feed-through), and z is always x[:2n].
+last step. Every output is then C x (no feed-through), and z is always x[:2n]. Yielding stories
+(Bouc-Wen, `physics.hysteresis`) make the state [x_floors; v_floors; z_stories]: the step is then
+the non-linear integrator, and every output is still linear in that state and the command.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -35,6 +37,7 @@ from rlcontroller.config import (
     randomized_plant,
 )
 from rlcontroller.physics.dynamics import (
+    Response,
     StateSpace,
     StepMap,
     compose,
@@ -45,6 +48,7 @@ from rlcontroller.physics.dynamics import (
     step_map,
 )
 from rlcontroller.physics.excitation import GroundModel
+from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.structure import Building, build
 
 
@@ -190,6 +194,9 @@ class Plant:
         self.config = experiment.plant
         building = experiment.building if self.config is None else true_building(experiment.building, self.config)
         self.building = build(building, experiment.actuators)
+        hysteresis = self.config.hysteresis if self.config is not None else None
+        stiffness = np.asarray(building.stiffnesses, dtype=float)
+        self.yielding = None if hysteresis is None else BoucWen.of(self.building, hysteresis, stiffness)
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
         dynamics = self.config.actuators if self.config is not None else None
@@ -198,12 +205,13 @@ class Plant:
         n, m = self.building.n_floors, self.building.n_actuators
         lag = m if self.time_constant > 0 else 0
         held = m if self.delay_steps > 0 and not lag else 0
-        self.n_state = 2 * n + lag + self.delay_steps * m + held
+        self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
         self.sensors = sensor_matrices(self, experiment.sensors)
         self.layout = observation_layout(self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale)
         self.ground_model = GroundModel()
         self._maps: dict[int, StepMap] = {}
         self._design = self if self.config is None else None
+        self._elastic: Plant | None = None
 
     @property
     def design(self) -> Plant:
@@ -213,11 +221,23 @@ class Plant:
         return self._design
 
     @property
+    def elastic(self) -> Plant:
+        """This plant with linear stories (its initial stiffness): what a linear design can know."""
+        if self.yielding is None:
+            return self
+        if self._elastic is None:
+            part = self.config.model_copy(update={"hysteresis": None})
+            self._elastic = Plant(self.experiment.model_copy(update={"plant": part}))
+        return self._elastic
+
+    @property
     def has_actuator_dynamics(self) -> bool:
-        return self.n_state > 2 * self.building.n_floors
+        return self.time_constant > 0 or self.delay_steps > 0
 
     def outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """(C, D) with quantity = C x + D u on this plant's state x and command u (N)."""
+        if self.yielding is not None:
+            return self._yielding_outputs(quantity)
         c, d = output_matrices(self.building, quantity)
         if not self.has_actuator_dynamics:
             return c, d
@@ -229,6 +249,34 @@ class Plant:
         else:
             full[:, -m:] = d  # the register of the force applied over the last step
         return full, np.zeros_like(d)
+
+    def _yielding_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
+        """Outputs on [x; v; z]: the restoring force is D' (a k d + (1 - a) k d_y z)."""
+        n, yielding = self.building.n_floors, self.yielding
+        drift = np.eye(n) - np.eye(n, k=-1)
+        linear = drift.T @ np.diag(yielding.linear_stiffness) @ drift
+        hysteretic = drift.T @ np.diag(yielding.hysteretic_stiffness)
+        c, d = output_matrices(replace(self.building, stiffness=linear), quantity)
+        z_columns = np.zeros((c.shape[0], n))
+        if quantity == "absolute_acceleration":
+            z_columns = -np.linalg.inv(self.building.mass) @ hysteretic
+        elif quantity in ("story_shear", "base_shear"):
+            z_columns = -(np.triu(np.ones((n, n))) @ hysteretic)[: c.shape[0]]
+        return np.hstack([c, z_columns]), d
+
+    def response(self, states: np.ndarray, held_forces: np.ndarray, time: np.ndarray, ground: np.ndarray) -> Response:
+        """Time histories from this plant's states x (K+1, n_state) and the forces (N) held just before
+        each instant; for yielding plants also the story hysteretic forces (1 - a) k d_y z (N)."""
+        values = {}
+        for quantity in ("displacement", "velocity", "drift", "absolute_acceleration", "story_shear", "force"):
+            c, d = self.outputs(quantity)
+            values[quantity] = states @ c.T + held_forces @ d.T
+        c, d = self.outputs("base_shear")
+        values["base_shear"] = (states @ c.T + held_forces @ d.T)[:, 0]
+        if self.yielding is not None:
+            n = self.building.n_floors
+            values["hysteretic_force"] = states[:, 2 * n :] * self.yielding.hysteretic_stiffness
+        return Response(time=time, ground=ground, **values)
 
     def structure_step_map(self, substeps: int = 1) -> StepMap:
         """The building's own control-step map on z (no actuator dynamics), for `substeps` ground

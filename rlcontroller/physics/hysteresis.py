@@ -1,0 +1,128 @@
+"""Yielding stories: the Bouc-Wen model and its integrator over one control step.
+
+Story i (drift d_i = x_i - x_{i-1}) resists with F_i = a k_i d_i + (1 - a) k_i d_y,i z_i, where
+
+    z_i' = (d_i' / d_y,i) [1 - |z_i|^n (beta sgn(d_i' z_i) + gamma)],   beta + gamma = 1,
+
+so |z| -> 1 once the story yields. With the drift matrix D (d = D x) the floors obey
+
+    M v' = -C v - D' F + Gamma u - M 1 a_g,   x' = v,
+
+on the state s = [x; v; z] (m, m/s, -). The force u is held over the control step and the ground
+acceleration is linear between its samples, as in the linear plant; classical RK4 with `substeps`
+steps per ground-sample interval, compiled with numba (`scripts/bench_env.py` measures it against
+the same code run by the interpreter). a = 1 is the linear shear building.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from rlcontroller.config import HysteresisConfig
+from rlcontroller.physics.structure import Building
+
+
+@dataclass(frozen=True)
+class BoucWen:
+    """Bouc-Wen stories of a building: everything the integrator needs, as arrays (SI)."""
+
+    mass_inverse: np.ndarray  # (n,) 1/m_i
+    damping: np.ndarray  # C (n, n)
+    linear_stiffness: np.ndarray  # a k_i (n,)
+    hysteretic_stiffness: np.ndarray  # (1 - a) k_i d_y,i (n,): the story force at z = 1 beyond a k d
+    yield_drift: np.ndarray  # d_y,i (n,)
+    exponent: float
+    beta: float
+    gamma: float
+    substeps: int
+
+    @classmethod
+    def of(cls, building: Building, config: HysteresisConfig, story_stiffness: np.ndarray) -> BoucWen:
+        n = building.n_floors
+        yield_drift = np.broadcast_to(np.asarray(config.yield_drift, dtype=float), n).copy()
+        alpha = config.post_yield_ratio
+        return cls(
+            mass_inverse=1.0 / np.diag(building.mass),
+            damping=building.damping,
+            linear_stiffness=alpha * story_stiffness,
+            hysteretic_stiffness=(1.0 - alpha) * story_stiffness * yield_drift,
+            yield_drift=yield_drift,
+            exponent=config.exponent,
+            beta=config.beta,
+            gamma=config.gamma,
+            substeps=config.substeps,
+        )
+
+    def step(self, state: np.ndarray, floor_force: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+        """The state after one control step: `floor_force` = Gamma u (N) held, `ground` the r + 1
+        ground samples (m/s^2) spanning the step."""
+        return bouc_wen_step(
+            state,
+            floor_force,
+            ground,
+            control_dt,
+            self.substeps,
+            self.mass_inverse,
+            self.damping,
+            self.linear_stiffness,
+            self.hysteretic_stiffness,
+            self.yield_drift,
+            self.exponent,
+            self.beta,
+            self.gamma,
+        )
+
+
+@numba.njit(cache=True)
+def z_rate(z: float, drift_rate: float, yield_drift: float, exponent: float, beta: float, gamma: float) -> float:
+    """dz/dt of one Bouc-Wen story."""
+    sign = 1.0 if drift_rate * z > 0.0 else (-1.0 if drift_rate * z < 0.0 else 0.0)
+    return drift_rate / yield_drift * (1.0 - abs(z) ** exponent * (beta * sign + gamma))
+
+
+@numba.njit(cache=True)
+def _derivative(
+    state, floor_force, ground, mass_inverse, damping, linear, hysteretic, yield_drift, exponent, beta, gamma
+):
+    n = mass_inverse.size
+    rate = np.empty(3 * n)
+    story_force = np.empty(n)
+    for i in range(n):
+        below_x = state[i - 1] if i > 0 else 0.0
+        below_v = state[n + i - 1] if i > 0 else 0.0
+        drift, drift_rate = state[i] - below_x, state[n + i] - below_v
+        story_force[i] = linear[i] * drift + hysteretic[i] * state[2 * n + i]
+        rate[2 * n + i] = z_rate(state[2 * n + i], drift_rate, yield_drift[i], exponent, beta, gamma)
+    for i in range(n):
+        restoring = story_force[i] - (story_force[i + 1] if i + 1 < n else 0.0)  # D' F
+        damping_force = 0.0
+        for j in range(n):
+            damping_force += damping[i, j] * state[n + j]
+        rate[i] = state[n + i]
+        rate[n + i] = mass_inverse[i] * (floor_force[i] - damping_force - restoring) - ground
+    return rate
+
+
+@numba.njit(cache=True)
+def bouc_wen_step(
+    state, floor_force, ground, control_dt, substeps, mass_inverse, damping, linear, hysteretic, yield_drift, exponent,
+    beta, gamma,
+):  # fmt: skip
+    """RK4 over one control step: `substeps` steps per interval between the ground samples."""
+    intervals = ground.size - 1
+    h = control_dt / (intervals * substeps)
+    s = state.copy()
+    args = (mass_inverse, damping, linear, hysteretic, yield_drift, exponent, beta, gamma)
+    for interval in range(intervals):
+        start, slope = ground[interval], (ground[interval + 1] - ground[interval]) / (h * substeps)
+        for j in range(substeps):
+            a0 = start + slope * h * j
+            k1 = _derivative(s, floor_force, a0, *args)
+            k2 = _derivative(s + 0.5 * h * k1, floor_force, a0 + 0.5 * h * slope, *args)
+            k3 = _derivative(s + 0.5 * h * k2, floor_force, a0 + 0.5 * h * slope, *args)
+            k4 = _derivative(s + h * k3, floor_force, a0 + h * slope, *args)
+            s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return s
