@@ -108,17 +108,23 @@ def info(
         Path | None, typer.Argument(help="Experiment YAML; the embedded paper default if omitted.")
     ] = None,
 ) -> None:
-    """Print the resolved config, natural periods, modal damping ratios and actuator layout."""
+    """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
+    the simulated plant when there is a plant part) and actuator layout."""
     from rlcontroller.physics.plant import Plant
 
     experiment = load(config)
-    building = Plant(experiment).building
+    plant = Plant(experiment)
     typer.echo("# resolved configuration")
     typer.echo(experiment.to_yaml())
-    typer.echo("# modes")
-    typer.echo(f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}")
-    for mode, (period, ratio) in enumerate(zip(building.periods(), building.modal_damping_ratios(), strict=True), 1):
-        typer.echo(f"{mode:>4}  {period:>10.3f}  {1 / period:>14.3f}  {ratio:>13.4f}")
+    buildings = [("design model", plant.design.building)]
+    if experiment.plant is not None:
+        buildings.append(("simulated plant (the plant part, elastic)", plant.elastic.building))
+    for title, building in buildings:
+        typer.echo(f"# modes of the {title}")
+        typer.echo(f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}")
+        ratios = building.modal_damping_ratios()
+        for mode, (period, ratio) in enumerate(zip(building.periods(), ratios, strict=True), 1):
+            typer.echo(f"{mode:>4}  {period:>10.3f}  {1 / period:>14.3f}  {ratio:>13.4f}")
     typer.echo("\n# actuators")
     for index, actuator in enumerate(experiment.actuators):
         floors = f"floor {actuator.story}"

@@ -122,3 +122,13 @@ def test_rlc_info_prints_periods_damping_and_actuators():
     assert "0.0100" in result.output and "0.0500" in result.output
     assert "story 3, inter_story, limit 100 kN (+u on floor 3, -u on floor 2)" in result.output
     assert "masses:" in result.output
+
+
+def test_rlc_info_shows_the_design_model_and_the_simulated_plant(tmp_path):
+    path = tmp_path / "soft.yaml"
+    path.write_text("plant: {stiffness: 0.7}\n")
+    result = CliRunner().invoke(app, ["info", str(path)])
+    assert result.exit_code == 0, result.output
+    design, plant = result.output.split("# modes of the ")[1:]
+    assert design.startswith("design model") and "1.444" in design
+    assert plant.startswith("simulated plant") and f"{1.444 / 0.7**0.5:.3f}" in plant
