@@ -216,7 +216,9 @@ class BuildingEnv(gym.Env):
         self._advance = self._advance_yielding
 
     def _advance_linear(self, k: int, clipped: np.ndarray) -> np.ndarray:
-        return self._state_action @ self._transition + self._forcing[k]
+        outputs = self._state_action @ self._transition
+        outputs += self._forcing[k]
+        return outputs
 
     def _advance_yielding(self, k: int, clipped: np.ndarray) -> np.ndarray:
         state = self.plant.yielding.step(

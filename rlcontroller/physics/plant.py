@@ -209,7 +209,7 @@ class Plant:
         self.sensors = sensor_matrices(self, experiment.sensors)
         self.layout = observation_layout(self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale)
         self.ground_model = GroundModel()
-        self._maps: dict[int, StepMap] = {}
+        self._maps: dict[tuple[str, int], StepMap] = {}  # (which map, sub-steps) -> map
         self._design = self if self.config is None else None
         self._elastic: Plant | None = None
 
@@ -281,16 +281,17 @@ class Plant:
     def structure_step_map(self, substeps: int = 1) -> StepMap:
         """The building's own control-step map on z (no actuator dynamics), for `substeps` ground
         samples per step (cached)."""
-        if substeps not in self._maps:
-            self._maps[substeps] = step_map(self.building, self.experiment.simulation, substeps)
-        return self._maps[substeps]
+        key = ("structure", substeps)
+        if key not in self._maps:
+            self._maps[key] = step_map(self.building, self.experiment.simulation, substeps)
+        return self._maps[key]
 
     def step_map(self, substeps: int = 1) -> StepMap:
         """The control-step map on x (with the actuator dynamics) for `substeps` ground samples per
         step; the force gain is per newton of command (cached)."""
         if not self.has_actuator_dynamics:
             return self.structure_step_map(substeps)
-        key = 1000 + substeps
+        key = ("actuators", substeps)
         if key not in self._maps:
             self._maps[key] = self._actuator_step_map(substeps)
         return self._maps[key]
@@ -331,6 +332,7 @@ class Plant:
 
     def ground_model_step(self) -> StepMap:
         """Exact control-step map of the building and its Kanai-Tajimi ground model (cached)."""
-        if -1 not in self._maps:
-            self._maps[-1] = ground_model_step(self.building, self.control_dt, self.ground_model)
-        return self._maps[-1]
+        key = ("ground_model", 1)
+        if key not in self._maps:
+            self._maps[key] = ground_model_step(self.building, self.control_dt, self.ground_model)
+        return self._maps[key]
