@@ -161,11 +161,19 @@ class ActuatorConfig(StrictModel):
     mount: Literal["inter_story", "floor"] = "inter_story"
 
 
+def _first_repeat(values: list[Any]) -> tuple[int, int] | None:
+    """The indices (first, second) of the first value listed twice, or None."""
+    for index, value in enumerate(values):
+        if value in values[:index]:
+            return values.index(value), index
+    return None
+
+
 def _one_per_story(actuators: list[ActuatorConfig]) -> list[ActuatorConfig]:
     stories = [actuator.story for actuator in actuators]
-    for index, story in enumerate(stories):
-        if story in stories[:index]:
-            raise ValueError(f"story {story} is listed twice (entries {stories.index(story)} and {index})")
+    repeat = _first_repeat(stories)
+    if repeat is not None:
+        raise ValueError(f"story {stories[repeat[1]]} is listed twice (entries {repeat[0]} and {repeat[1]})")
     return actuators
 
 
@@ -716,9 +724,9 @@ class Scenario(StrictModel):
 
 def _unique_names(scenarios: list[Scenario]) -> list[Scenario]:
     names = [scenario.name for scenario in scenarios]
-    for index, name in enumerate(names):
-        if name in names[:index]:
-            raise ValueError(f"scenario name {name!r} is used twice")
+    repeat = _first_repeat(names)
+    if repeat is not None:
+        raise ValueError(f"scenario name {names[repeat[1]]!r} is used twice")
     return scenarios
 
 
