@@ -8,6 +8,7 @@ import math
 import os
 import sys
 from collections.abc import Callable
+from enum import Enum
 from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any
@@ -384,6 +385,33 @@ def robustness(
     typer.echo(f"# {label}")
     typer.echo(markdown_table(summary(table)["J1"].unstack("controller").rename_axis("scenario (mean J1)")))
     typer.echo(f"{len(named)} scenarios evaluated in {seconds:.0f} s; tables and plot in {out}")
+
+
+class ExportFormat(str, Enum):
+    onnx = "onnx"
+
+
+@app.command()
+@user_errors
+def export(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+    ] = None,
+    format: Annotated[ExportFormat, typer.Option("--format", help="File format.")] = ExportFormat.onnx,
+    out: Annotated[Path | None, typer.Option(help="Output file (default: RUN_DIR/MODEL_controller.onnx).")] = None,
+    model: ModelOption = "best",
+) -> None:
+    """The trained controller as one file: sensor readings (SI) and its own state in, forces (N) out."""
+    from rlcontroller.deployment.export import export_onnx
+    from rlcontroller.learning.run_folder import model_file
+
+    folder = model_folder(run_dir)
+    path = model_file(folder, model)
+    out = out or folder / f"{model}_controller.{format.value}"
+    if out.is_dir() or not out.parent.is_dir():
+        raise ConfigError(f"--out {out}: expected a file path in an existing folder")
+    export_onnx(path, out)
+    typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see README 'Deployment'")
 
 
 def main() -> None:

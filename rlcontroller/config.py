@@ -355,7 +355,7 @@ class AlgorithmConfig(StrictModel):
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
     total_steps: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 1_500_000
     n_envs: Annotated[int, Field(ge=1, le=MAX_ENVS)] = 1
-    vec_env: Literal["dummy", "subproc"] = "dummy"
+    vec_env: Literal["batched", "dummy", "subproc"] = "batched"
     policy: PolicyConfig = PolicyConfig()
     kwargs: dict[str, Any] = Field(default_factory=lambda: {"gamma": 0.999})
     normalize_observations: bool = False

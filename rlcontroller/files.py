@@ -11,8 +11,10 @@ from pathlib import Path
 from rlcontroller.config import ConfigError
 
 
-def atomic_write(path: Path, text: str) -> Path:
-    return _replace_with(path, path.with_name(f".{path.name}.tmp"), lambda temporary: temporary.write_text(text))
+def atomic_write(path: Path, content: str | bytes) -> Path:
+    """Write text or bytes to `path` through a temporary beside it."""
+    write = (lambda t: t.write_bytes(content)) if isinstance(content, bytes) else (lambda t: t.write_text(content))
+    return _replace_with(path, path.with_name(f".{path.name}.tmp"), write)
 
 
 def atomic_savefig(figure, path: Path, dpi: int = 120) -> Path:

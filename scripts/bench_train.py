@@ -1,10 +1,14 @@
 """Benchmark: training throughput and time-to-quality, plain paper SAC against the new default.
 
-Usage: python scripts/bench_train.py [--minutes 15] [--skip-quality]
+Usage: python scripts/bench_train.py [--minutes 15] [--skip-quality] [--vec-env-only]
 
-1. Environment steps per second inside model.learn(): the paper's SAC (MLP 3x128, batch 256,
+1. The batched vector env against DummyVecEnv, side by side in this one run, for n_envs 8, 32 and
+   128 on the default experiment (PPO residual on LQG): env steps/s of rollout collection alone
+   (PPO's collect_rollouts: policy forward, env step, buffer) and of whole PPO training (collection
+   plus 10 epochs of updates on 256 steps per env).
+2. Environment steps per second inside model.learn(): the paper's SAC (MLP 3x128, batch 256,
    one gradient step per env step) and PPO with 8 envs, torch threads 1 and 2.
-2. Time-to-quality, side by side in this one run: configs/paper_sac.yaml (the plain recipe) and
+3. Time-to-quality, side by side in this one run: configs/paper_sac.yaml (the plain recipe) and
    configs/five_story.yaml (the new default) are each trained for at most --minutes of wall time;
    quality is reached when the validation J1 (generated motions, never the records) falls below
    that of LQG with the same cost on the same motions.
@@ -18,6 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from rlcontroller.config import AlgorithmConfig, Experiment, load_experiment
@@ -39,6 +44,58 @@ def steps_per_second(experiment: Experiment, steps: int, warmup: int, threads: i
     rate = (model.num_timesteps - warmup) / (time.perf_counter() - start)
     vec_env.close()
     return rate
+
+
+def with_envs(experiment: Experiment, n_envs: int, vec_env: str) -> Experiment:
+    algorithm = experiment.algorithm.model_copy(update={"n_envs": n_envs, "vec_env": vec_env})
+    return experiment.model_copy(update={"algorithm": algorithm})
+
+
+def collection_and_training(experiment: Experiment) -> tuple[float, float]:
+    """(env steps/s of one rollout collection, env steps/s of learn() over two rollouts)."""
+    vec_env = make_vec_env(Plant(experiment), seed=0)
+    model = build_model(experiment, vec_env, seed=0, device="cpu", tensorboard=None)
+    _, callback = model._setup_learn(10**9, None)  # what learn() does before collecting
+    callback.on_training_start(locals(), globals())
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)  # warm-up
+    start = time.perf_counter()
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)
+    collection = model.n_steps * vec_env.num_envs / (time.perf_counter() - start)
+    steps = 2 * model.n_steps * vec_env.num_envs
+    start = time.perf_counter()
+    model.learn(steps, reset_num_timesteps=False)
+    training = steps / (time.perf_counter() - start)
+    vec_env.close()
+    return collection, training
+
+
+def stepping(experiment: Experiment, steps: int = 400) -> float:
+    """Env steps/s of the vector env alone, fed random actions."""
+    vec_env = make_vec_env(Plant(experiment), seed=0)
+    vec_env.reset()
+    actions = np.random.default_rng(0).uniform(-1, 1, (steps, vec_env.num_envs, 3)).astype(np.float32)
+    start = time.perf_counter()
+    for action in actions:
+        vec_env.step(action)
+    return steps * vec_env.num_envs / (time.perf_counter() - start)
+
+
+def vec_env_comparison(default: Experiment) -> None:
+    torch.set_num_threads(1)
+    for n_envs in (1, 8, 32, 128):
+        dummy, batched = (stepping(with_envs(default, n_envs, kind)) for kind in ("dummy", "batched"))
+        print(
+            f"n_envs {n_envs:3d}: env stepping alone {dummy:,.0f} -> {batched:,.0f} env steps/s "
+            f"({batched / dummy:.1f}x)"
+        )
+    for n_envs in (8, 32, 128):
+        dummy = collection_and_training(with_envs(default, n_envs, "dummy"))
+        batched = collection_and_training(with_envs(default, n_envs, "batched"))
+        print(
+            f"n_envs {n_envs:3d}: collection {dummy[0]:,.0f} -> {batched[0]:,.0f} env steps/s "
+            f"({batched[0] / dummy[0]:.1f}x); PPO training {dummy[1]:,.0f} -> {batched[1]:,.0f} env steps/s "
+            f"({batched[1] / dummy[1]:.1f}x)  [DummyVecEnv -> batched]"
+        )
 
 
 def throughput(default: Experiment) -> float:
@@ -68,10 +125,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=15.0, help="wall-time budget of each training run")
     parser.add_argument("--skip-quality", action="store_true", help="measure throughput only")
+    parser.add_argument("--vec-env-only", action="store_true", help="only the vector env comparison")
     arguments = parser.parse_args()
     paper = load_experiment(CONFIGS / "paper_sac.yaml")
     default = load_experiment(CONFIGS / "five_story.yaml")
     print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
+    vec_env_comparison(default)
+    if arguments.vec_env_only:
+        return
     throughput(default)
     if arguments.skip_quality:
         return

@@ -3,6 +3,8 @@
 The action is what the env takes: each actuator's force as a fraction of its force limit, in
 [-1, 1] (force = action * force_limit, N). Every controller reads the same observation the agent
 gets (the plant's `ObservationLayout` says where each reading sits) and runs in the same simulator.
+`act` also takes a batch of observations, one row per building (the same rows from one `reset()`
+to the next), and returns one action row per building.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ class Controller(Protocol):
     def reset(self) -> None: ...
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        """The action for the next control step: forces / force limits, in [-1, 1]."""
+        """The action for the next control step (forces / force limits, in [-1, 1]), shape (..., m)."""
         ...
 
 
@@ -31,13 +33,13 @@ class Uncontrolled:
     name = "uncontrolled"
 
     def __init__(self, n_actuators: int) -> None:
-        self._zero = np.zeros(n_actuators)
+        self.n_actuators = n_actuators
 
     def reset(self) -> None:
         pass
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        return self._zero
+        return np.zeros(np.shape(observation)[:-1] + (self.n_actuators,))
 
 
 class LQGController:
@@ -50,17 +52,20 @@ class LQGController:
         self.reset()
 
     def reset(self) -> None:
-        self.design.filter.reset()
-        self._previous_ground = 0.0
+        self.estimate: np.ndarray | None = None  # the filter's estimate, one row per building
+        self._previous_ground = np.zeros(())
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        layout = self.layout
-        readings = observation[layout.readings] * layout.reading_scale
-        ground = float(observation[layout.ground]) * layout.ground_scale
-        held = np.asarray(observation[layout.action], dtype=float)  # the clipped action just applied
-        estimate = self.design.filter.update(readings, held, ground, self._previous_ground)
+        layout, design = self.layout, self.design
+        observation = np.asarray(observation)
+        readings = observation[..., layout.readings] * layout.reading_scale
+        ground = observation[..., layout.ground].astype(float) * layout.ground_scale
+        held = observation[..., layout.action].astype(float)  # the clipped action just applied
+        if self.estimate is None:
+            self.estimate = np.zeros(observation.shape[:-1] + (design.filter.size,))
+        self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
         self._previous_ground = ground
-        action = -self.design.feedback @ estimate - self.design.feedforward * ground
+        action = -(self.estimate @ design.feedback.T) - ground[..., None] * design.feedforward
         return np.clip(action, -1.0, 1.0)
 
 
@@ -75,14 +80,14 @@ class LQGPrior:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
         design = design_lqg_ground_model(plant) if sensors.ground_model else design_lqg(plant, known_ground=True)
         layout = plant.layout
-        self._feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
-        self._feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading
+        self.feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
+        self.feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading
         self._estimate = layout.estimate
         self._ground = layout.ground
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation, dtype=float)
         return (
-            -(observation[..., self._estimate] @ self._feedback.T)
-            - observation[..., self._ground, None] * self._feedforward
+            -(observation[..., self._estimate] @ self.feedback.T)
+            - observation[..., self._ground, None] * self.feedforward
         )

@@ -10,7 +10,7 @@ a = u / force_limit at the control step.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import control
 import numpy as np
@@ -19,8 +19,11 @@ import scipy.linalg
 from rlcontroller.physics.plant import Plant
 
 
-@dataclass
+@dataclass(frozen=True)
 class KalmanFilter:
+    """The filter's matrices; the estimate is the caller's, so one filter serves a batch of buildings
+    (leading axes of every argument of `update`)."""
+
     phi: np.ndarray
     action_gain: np.ndarray  # Gamma * force limits
     ground_gain: np.ndarray  # z response to a unit ground acceleration held over one step
@@ -29,30 +32,31 @@ class KalmanFilter:
     gain: np.ndarray  # L, measurement update
     known_ground: bool  # the previous ground reading is a known input of the prediction
     measures_ground: bool = False  # the current ground reading is one of the measurements
-    estimate: np.ndarray = field(init=False)
 
-    def __post_init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        self.estimate = np.zeros(self.phi.shape[0])
-        self._started = False
+    @property
+    def size(self) -> int:
+        return self.phi.shape[0]
 
     def update(
-        self, readings: np.ndarray, held_action: np.ndarray, ground: float, previous_ground: float
+        self,
+        estimate: np.ndarray,
+        readings: np.ndarray,
+        held_action: np.ndarray,
+        ground: np.ndarray,
+        previous_ground: np.ndarray,
     ) -> np.ndarray:
-        """Predict over the last step (if any), correct with the new readings (and the ground reading
-        `ground` at the same time, m/s^2); `previous_ground` is the one of the step before."""
+        """The estimate at the new readings: predict `estimate` over the last step, then correct with
+        `readings` (and the ground reading `ground` at the same time, m/s^2); `previous_ground` is the
+        one of the step before. Start from a zero estimate, zero action and zero previous ground: the
+        prediction is then zero and the first update is the correction alone."""
+        ground = np.asarray(ground, dtype=float)
         if self.measures_ground:
-            readings = np.append(readings, ground)
-        if self._started:
-            self.estimate = self.phi @ self.estimate + self.action_gain @ held_action
-            if self.known_ground:
-                self.estimate += self.ground_gain * previous_ground
-        self._started = True
-        innovation = readings - self.sensor_c @ self.estimate - self.sensor_d @ held_action
-        self.estimate = self.estimate + self.gain @ innovation
-        return self.estimate
+            readings = np.concatenate([readings, ground[..., None]], axis=-1)
+        predicted = estimate @ self.phi.T + held_action @ self.action_gain.T
+        if self.known_ground:
+            predicted += np.asarray(previous_ground, dtype=float)[..., None] * self.ground_gain
+        innovation = readings - predicted @ self.sensor_c.T - held_action @ self.sensor_d.T
+        return predicted + innovation @ self.gain.T
 
 
 def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
@@ -111,3 +115,14 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
         known_ground=False,
         measures_ground=True,
     )
+
+
+def observation_filter(plant: Plant) -> KalmanFilter | None:
+    """The filter of the observation's own state estimate (`sensors.state_estimate`), designed on the
+    design model as every controller is: the ground-model filter with `sensors.ground_model`, else
+    the one with the measured ground as a known input; None without a state estimate."""
+    sensors = plant.experiment.sensors
+    if not sensors.state_estimate:
+        return None
+    design = plant.design
+    return design_kalman_ground_model(design) if sensors.ground_model else design_kalman(design, known_ground=True)

@@ -95,3 +95,29 @@ def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray,
         kernels[lag] = curvature_inverse @ action_gain.T @ costate
         costate = closed_phi.T @ costate
     return kernels
+
+
+def preview_feedforward(
+    cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, ground_terms: np.ndarray, length: int
+) -> np.ndarray:
+    """a_ff,k = sum_{j < length} W_j g_{k+j} for ground terms g (..., K, states), without forming the
+    kernels: with W_j = S^-1 B' (Phi_c')^(j-1) X for j >= 1, the tail sum v_k = X g_{k+1} + Phi_c' v_{k+1}
+    runs backwards once, and a finite preview subtracts (Phi_c')^(length-1) v_{k+length-1}. O(K) instead
+    of O(K length); shape (..., K, actions)."""
+    n_steps = ground_terms.shape[-2]
+    if length == 0:
+        return np.zeros((*ground_terms.shape[:-1], force_limits.size))
+    feedback, riccati = lqr_gain(step, cost, force_limits)
+    action_gain = step.force_gain * force_limits
+    curvature_inverse = np.linalg.inv(cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain)
+    closed_phi = step.phi - action_gain @ feedback
+    costate = (cost.state - cost.action @ feedback).T @ cost.ground + closed_phi.T @ riccati
+    first = curvature_inverse @ (cost.action.T @ cost.ground + action_gain.T @ riccati)
+    tails = np.zeros_like(ground_terms)  # v_k
+    projected = ground_terms @ costate.T  # X g_k
+    for k in range(n_steps - 2, -1, -1):
+        tails[..., k, :] = projected[..., k + 1, :] + tails[..., k + 1, :] @ closed_phi
+    if length < n_steps:
+        decay = np.linalg.matrix_power(closed_phi.T, length - 1)
+        tails[..., : n_steps - length + 1, :] -= tails[..., length - 1 :, :] @ decay.T
+    return ground_terms @ first.T + tails @ (curvature_inverse @ action_gain.T).T

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.config import RewardConfig
-from rlcontroller.control.lqr import lqr_gain, preview_kernel, quadratic_cost
+from rlcontroller.control.lqr import lqr_gain, preview_feedforward, quadratic_cost
 from rlcontroller.physics.dynamics import Response, response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step
 from rlcontroller.physics.plant import Plant
@@ -25,23 +25,37 @@ def optimal_response(
     the quadratic cost. preview=0 is full-state LQR that knows nothing of the ground; preview=p
     knows the ground up to p control steps ahead, the sequence between the two.
     """
+    return optimal_responses(plant, [motion], reward, preview)[0]
+
+
+def optimal_responses(
+    plant: Plant, motions: list[GroundMotion], reward: RewardConfig | None = None, preview: int | None = None
+) -> list[Response]:
+    """`optimal_response` of every motion, simulated together (motions of one sampling, padded)."""
     building = plant.building
-    samples, substeps = for_control_step(motion, plant.control_dt)
-    step = plant.step_map(substeps)
-    cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
-    feedback, _ = lqr_gain(step, cost, building.force_limits)
-    action_gain = step.force_gain * building.force_limits
-    ground_terms = step.ground_terms(samples)
-    n_steps = ground_terms.shape[0]
-    length = n_steps if preview is None else min(preview, n_steps)
-    feedforward = np.zeros((n_steps, building.n_actuators))
-    for lag, kernel in enumerate(preview_kernel(cost, step, building.force_limits, length)):
-        feedforward[: n_steps - lag] += ground_terms[lag:] @ kernel.T
-    states = np.zeros((n_steps + 1, step.phi.shape[0]))
-    actions = np.zeros((n_steps, building.n_actuators))
-    for k in range(n_steps):
-        actions[k] = np.clip(-feedback @ states[k] - feedforward[k], -1.0, 1.0)
-        states[k + 1] = step.phi @ states[k] + action_gain @ actions[k] + ground_terms[k]
-    held = np.vstack([np.zeros((1, building.n_actuators)), actions * building.force_limits])
-    time = np.arange(n_steps + 1) * step.control_dt
-    return response(building, states, held, time, samples[::substeps][: n_steps + 1])
+    sampled = [for_control_step(motion, plant.control_dt) for motion in motions]
+    results: list[Response | None] = [None] * len(motions)
+    for substeps in sorted({substeps for _, substeps in sampled}):
+        members = [i for i, (_, r) in enumerate(sampled) if r == substeps]
+        step = plant.step_map(substeps)
+        cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
+        feedback, _ = lqr_gain(step, cost, building.force_limits)
+        action_gain = step.force_gain * building.force_limits
+        terms = [step.ground_terms(sampled[i][0]) for i in members]
+        n_steps = max(t.shape[0] for t in terms)
+        ground_terms = np.zeros((len(members), n_steps, step.phi.shape[0]))
+        for row, t in enumerate(terms):
+            ground_terms[row, : t.shape[0]] = t
+        length = n_steps if preview is None else min(preview, n_steps)
+        feedforward = preview_feedforward(cost, step, building.force_limits, ground_terms, length)
+        states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
+        actions = np.zeros((n_steps, len(members), building.n_actuators))
+        for k in range(n_steps):
+            actions[k] = np.clip(-(states[k] @ feedback.T) - feedforward[:, k], -1.0, 1.0)
+            states[k + 1] = states[k] @ step.phi.T + actions[k] @ action_gain.T + ground_terms[:, k]
+        for row, (i, t) in enumerate(zip(members, terms, strict=True)):
+            k = t.shape[0]
+            held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])
+            time = np.arange(k + 1) * step.control_dt
+            results[i] = response(building, states[: k + 1, row], held, time, sampled[i][0][::substeps][: k + 1])
+    return results

@@ -17,8 +17,8 @@ import pandas as pd
 from rlcontroller.config import Experiment, display_path
 from rlcontroller.control.controllers import Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.control.optimal import optimal_response
-from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.control.optimal import optimal_responses
+from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import GroundMotion, for_control_step
@@ -30,13 +30,18 @@ LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every t
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
-def uncontrolled_response(plant: Plant, motion: GroundMotion) -> Response:
-    """The bare building: a whole-record simulation with the step map, or through the non-linear
-    step for yielding stories."""
+def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Response]:
+    """The bare building: whole-record simulations with the step map, or a batch through the
+    non-linear step for yielding stories."""
     if plant.yielding is not None:
-        return rollout(BuildingEnv(plant), motion, Uncontrolled(plant.building.n_actuators))[0]
-    samples, substeps = for_control_step(motion, plant.control_dt)
-    return simulate(plant.building, plant.structure_step_map(substeps), samples)
+        return [
+            response for response, _ in batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
+        ]
+    responses = []
+    for motion in motions:
+        samples, substeps = for_control_step(motion, plant.control_dt)
+        responses.append(simulate(plant.building, plant.structure_step_map(substeps), samples))
+    return responses
 
 
 def with_settling_tail(motion: GroundMotion) -> GroundMotion:
@@ -82,23 +87,22 @@ def evaluate(
 ) -> Evaluation:
     """Run the uncontrolled building, every controller and (optionally) the optimal reference."""
     start = time.perf_counter()
-    env = BuildingEnv(plant)
     yielding = plant.yielding
     include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
+    simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
+    bare = uncontrolled_responses(plant, simulated)
+    controlled = batch_rollout(plant, simulated, controllers)
+    optimal = optimal_responses(plant, simulated) if include_optimal else []
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):
-        simulated = motion if yielding is None else with_settling_tail(motion)
-        bare = uncontrolled_response(plant, simulated)
-        responses["uncontrolled", motion.name] = bare
-        results = [("uncontrolled", bare)]
-        for controller in controllers:
-            results.append((controller.name, rollout(env, simulated, controller, seed=number)[0]))
+        results = [("uncontrolled", bare[number])]
+        results += [(controller.name, run[number][0]) for controller, run in zip(controllers, controlled, strict=True)]
         if include_optimal:
-            results.append((OPTIMAL, optimal_response(plant, simulated)))
+            results.append((OPTIMAL, optimal[number]))
         for name, result in results:
             responses[name, motion.name] = result
-            metrics = j_metrics(result, bare)
+            metrics = j_metrics(result, bare[number])
             if yielding is not None:
                 metrics |= yielding_metrics(result, yielding.yield_drift)
             for metric, values in metrics.items():
@@ -178,13 +182,13 @@ def preview_study(
     the rows bound what better sensing (full state) and prediction of the ground can buy.
     """
     dt = plant.control_dt
-    bare = [uncontrolled_response(plant, motion) for motion in motions]
+    bare = uncontrolled_responses(plant, motions)
     rows = []
     for horizon in seconds:
         steps = None if horizon is None else round(horizon / dt)
         values = {metric: [] for metric in METRICS}
-        for motion, uncontrolled in zip(motions, bare, strict=True):
-            metrics = j_metrics(optimal_response(plant, motion, preview=steps), uncontrolled)
+        for optimal, uncontrolled in zip(optimal_responses(plant, motions, preview=steps), bare, strict=True):
+            metrics = j_metrics(optimal, uncontrolled)
             for metric in METRICS:
                 values[metric].append(metrics[metric])
         rows.append(

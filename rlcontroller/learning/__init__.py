@@ -1,2 +1,2 @@
-"""Learning: the Gymnasium env, the learners, run folders, validation, training and saved policies.
-Depends on `physics` and `control`."""
+"""Learning: the Gymnasium env and its batched counterpart, the learners and their vector env, run
+folders, validation, training and saved policies. Depends on `physics` and `control`."""

@@ -18,6 +18,7 @@ from rlcontroller.config import ConfigError, Experiment, location
 from rlcontroller.control.controllers import LQGPrior
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.learning.policy import ResidualAction, algorithm_class
+from rlcontroller.learning.vec_env import BatchedVecEnv
 from rlcontroller.physics.plant import Plant
 
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
@@ -78,13 +79,16 @@ def make_env(plant: Plant, prior: LQGPrior | None) -> gym.Env:
 
 
 def make_vec_env(plant: Plant, seed: int):
-    """The training vector env: `n_envs` BuildingEnvs (dummy or subprocess) with episode statistics."""
+    """The training vector env with episode statistics: `n_envs` buildings stepped as one batch
+    (`vec_env: batched`), or BuildingEnvs in a DummyVecEnv or SubprocVecEnv."""
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor, VecNormalize
 
     experiment = plant.experiment
     prior = LQGPrior(plant) if experiment.algorithm.residual_lqg else None
     factories = [functools.partial(make_env, plant, prior) for _ in range(experiment.algorithm.n_envs)]
-    if experiment.algorithm.vec_env == "subproc" and len(factories) > 1:
+    if experiment.algorithm.vec_env == "batched":
+        vec_env = BatchedVecEnv(plant, experiment.algorithm.n_envs, prior)
+    elif experiment.algorithm.vec_env == "subproc" and len(factories) > 1:
         vec_env = SubprocVecEnv(factories)
     else:
         vec_env = DummyVecEnv(factories)

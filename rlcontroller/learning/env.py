@@ -27,6 +27,7 @@ validation) and a `plant_randomization` part, each reset draws a new plant from 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,10 +37,107 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
-from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model
-from rlcontroller.physics.dynamics import Response
+from rlcontroller.control.estimation import observation_filter
+from rlcontroller.physics.dynamics import Response, StepMap
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant, reward_matrices
+
+
+@dataclass(frozen=True)
+class StepOutputs:
+    """Every output of a control step as one matrix product of the new state x and the command u:
+    [scaled readings | ground reading | weight^(1/power)/scale * reward quantities | drift |
+    absolute acceleration | base shear | delivered force] = c x + d u (u in N). The ground reading
+    row is zero here: it comes in, with the sensor noise, through the forcing. The slices index the
+    outputs."""
+
+    c: np.ndarray
+    d: np.ndarray
+    readings: slice  # scaled readings and the ground reading
+    reward: slice
+    drift: slice
+    acceleration: slice
+    base_shear: int
+    force: slice
+    reward_names: list[str]  # linear terms first, then force-change terms
+    reward_starts: np.ndarray  # first row of each term among the reward rows (then the change rows)
+    row_power: np.ndarray
+    quadratic: bool  # every term squared
+    change_factor: np.ndarray | None  # force limit * weight^(1/power) / scale per change row
+
+    def transition(self, step: StepMap, force_limits: np.ndarray) -> np.ndarray:
+        """T with [x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ T + forcing[k]."""
+        force_gain = step.force_gain * force_limits
+        return np.vstack(
+            [
+                np.hstack([step.phi.T, step.phi.T @ self.c.T]),
+                np.hstack([force_gain.T, (self.c @ force_gain + self.d * force_limits).T]),
+            ]
+        )
+
+    def reward_terms(self, outputs: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
+        """Each reward term's value (positive: the reward is minus their sum), shape (..., terms)."""
+        weighted = outputs[..., self.reward]
+        if self.change_factor is not None:
+            repeats = self.change_factor.size // action.shape[-1]
+            change = np.tile(action - previous_action, repeats) * self.change_factor
+            weighted = np.concatenate([weighted, change], axis=-1)
+        values = weighted * weighted if self.quadratic else np.abs(weighted) ** self.row_power
+        return np.add.reduceat(values, self.reward_starts, axis=-1)
+
+
+def step_outputs(plant: Plant) -> StepOutputs:
+    """The output rows of `plant` for its experiment's sensors and reward."""
+    experiment, sensors = plant.experiment, plant.sensors
+    n, m = plant.building.n_floors, plant.building.n_actuators
+    linear_terms = [t for t in experiment.reward.terms if t.quantity != "force_change"]
+    change_terms = [t for t in experiment.reward.terms if t.quantity == "force_change"]
+    reward_c, reward_d, reward_factor, reward_slices = reward_matrices(plant, linear_terms)
+    starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
+    row_powers = [np.full(rows.stop - rows.start, t.power) for t, rows in zip(linear_terms, reward_slices, strict=True)]
+    row_powers += [np.full(m, t.power) for t in change_terms]
+    change_factor = None
+    if change_terms:
+        change_factor = np.concatenate([plant.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
+    blocks = [
+        (sensors.c / sensors.scale[:, None], sensors.d / sensors.scale[:, None]),
+        (np.zeros((1, plant.n_state)), np.zeros((1, m))),
+        (reward_c * reward_factor[:, None], reward_d * reward_factor[:, None]),
+        plant.outputs("drift"),
+        plant.outputs("absolute_acceleration"),
+        plant.outputs("base_shear"),
+        plant.outputs("force"),
+    ]
+    p, r = sensors.c.shape[0], reward_c.shape[0]
+    shear = p + 1 + r + 2 * n
+    return StepOutputs(
+        c=np.vstack([c for c, _ in blocks]),
+        d=np.vstack([d for _, d in blocks]),
+        readings=slice(0, p + 1),
+        reward=slice(p + 1, p + 1 + r),
+        drift=slice(p + 1 + r, p + 1 + r + n),
+        acceleration=slice(p + 1 + r + n, shear),
+        base_shear=shear,
+        force=slice(shear + 1, shear + 1 + m),
+        reward_names=[term.label for term in linear_terms + change_terms],
+        reward_starts=np.array(starts, dtype=int),
+        row_power=np.concatenate(row_powers),
+        quadratic=all(term.power == 2.0 for term in experiment.reward.terms),
+        change_factor=change_factor,
+    )
+
+
+def noisy_readings(plant: Plant, ground: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The noise and bias of every scaled reading at the K + 1 instants of `ground` (the ground
+    samples at the control steps), with the noisy scaled ground reading as the last column:
+    (K + 1, p + 1). The noise is drawn readings first, then ground, as every run draws it."""
+    sensors, config = plant.sensors, plant.experiment.sensors
+    p = sensors.c.shape[0]
+    readings = np.empty((ground.size, p + 1))
+    readings[:, :p] = rng.standard_normal((ground.size, p)) * (sensors.noise_std / sensors.scale)
+    readings[:, :p] += sensors.bias / sensors.scale
+    readings[:, p] = (ground + config.ground_noise_std * rng.standard_normal(ground.size)) / config.ground_scale
+    return readings
 
 
 class BuildingEnv(gym.Env):
@@ -72,14 +170,7 @@ class BuildingEnv(gym.Env):
         self._block = self._n_sensors + 1
         self._estimate_start = layout.estimate.start
         self._action_start = layout.action.start
-        self.kalman = None  # the agent's own estimate, designed on the design model like LQG's
-        if experiment.sensors.state_estimate:
-            design = plant.design
-            self.kalman = (
-                design_kalman_ground_model(design)
-                if experiment.sensors.ground_model
-                else design_kalman(design, known_ground=True)
-            )
+        self.kalman = observation_filter(plant)  # the agent's own estimate, designed like LQG's
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
         self._observation = np.zeros(layout.size, dtype=np.float32)
@@ -91,75 +182,10 @@ class BuildingEnv(gym.Env):
     def _use_plant(self, plant: Plant) -> None:
         """Simulate `plant` from the next step on: its output matrices, sensor noise and bias, state."""
         self.plant, self.building = plant, plant.building
-        experiment = self.experiment
-        n = self.building.n_floors
-        m = self.building.n_actuators
-        sensors = plant.sensors
-        # Reward rows: terms on linear outputs first, then force-change terms (one row per actuator).
-        linear_terms = [t for t in experiment.reward.terms if t.quantity != "force_change"]
-        change_terms = [t for t in experiment.reward.terms if t.quantity == "force_change"]
-        reward_c, reward_d, reward_factor, reward_slices = reward_matrices(plant, linear_terms)
-        self._reward_names = [term.label for term in linear_terms + change_terms]
-        starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
-        self._reward_starts = np.array(starts, dtype=int)
-        self._change_factor = (
-            np.concatenate([self.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
-            if change_terms
-            else None
-        )
-        self._change_terms = len(change_terms)
-        row_powers = [
-            np.full(rows.stop - rows.start, t.power) for t, rows in zip(linear_terms, reward_slices, strict=True)
-        ]
-        row_powers += [np.full(m, t.power) for t in change_terms]
-        self._row_power = np.concatenate(row_powers)
-        self._all_quadratic = bool(np.all(self._row_power == 2.0))
-        drift_c, drift_d = plant.outputs("drift")
-        acceleration_c, acceleration_d = plant.outputs("absolute_acceleration")
-        shear_c, shear_d = plant.outputs("base_shear")
-        force_c, force_d = plant.outputs("force")
-        # Every output of a step is one matrix product of the new state x and the command u:
-        # [scaled readings | ground reading | weight^(1/power)/scale * reward quantities | drift | acceleration |
-        # base shear | delivered force]; the ground reading row is zero here and comes in through the forcing.
-        no_state, no_force = np.zeros((1, plant.n_state)), np.zeros((1, m))
-        self._output_c = np.vstack(
-            [
-                sensors.c / sensors.scale[:, None],
-                no_state,
-                reward_c * reward_factor[:, None],
-                drift_c,
-                acceleration_c,
-                shear_c,
-                force_c,
-            ]
-        )
-        self._output_d = np.vstack(
-            [
-                sensors.d / sensors.scale[:, None],
-                no_force,
-                reward_d * reward_factor[:, None],
-                drift_d,
-                acceleration_d,
-                shear_d,
-                force_d,
-            ]
-        )
-        self._n_sensors = p = sensors.c.shape[0]
-        r = reward_c.shape[0]
-        # Output columns after the state: readings, ground reading, reward rows, drift, acceleration, shear, force.
-        first = plant.n_state
-        self._reading_slice = slice(first, first + p + 1)
-        self._reward_slice = slice(first + p + 1, first + p + 1 + r)
-        self._drift_slice = slice(first + p + 1 + r, first + p + 1 + r + n)
-        self._acceleration_slice = slice(first + p + 1 + r + n, first + p + 1 + r + 2 * n)
-        self._base_shear_index = first + p + 1 + r + 2 * n
-        self._force_slice = slice(self._base_shear_index + 1, self._base_shear_index + 1 + m)
-        self._noise_scaled = sensors.noise_std / sensors.scale
-        self._bias_scaled = sensors.bias / sensors.scale
-        self._ground_noise = experiment.sensors.ground_noise_std
-
+        self._outputs = step_outputs(plant)
+        self._n_sensors = plant.sensors.c.shape[0]
         self._n_state = plant.n_state
-        self._state_action = np.zeros(plant.n_state + m)  # [x | clipped action]
+        self._state_action = np.zeros(plant.n_state + self.building.n_actuators)  # [x | clipped action]
 
     def step_map(self, substeps: int):
         """The plant's control-step map for `substeps` ground samples per step."""
@@ -195,24 +221,18 @@ class BuildingEnv(gym.Env):
         step = self.step_map(substeps)
         ground_terms = step.ground_terms(samples)
         self._n_steps = ground_terms.shape[0]
-        force_gain = step.force_gain * self.force_limits
-        self._transition = np.vstack(
-            [
-                np.hstack([step.phi.T, step.phi.T @ self._output_c.T]),
-                np.hstack([force_gain.T, (self._output_c @ force_gain + self._output_d * self.force_limits).T]),
-            ]
-        )
-        self._forcing = np.hstack([ground_terms, ground_terms @ self._output_c.T])
+        self._transition = self._outputs.transition(step, self.force_limits)
+        self._forcing = np.hstack([ground_terms, ground_terms @ self._outputs.c.T])
         self._advance = self._advance_linear
 
     def _prepare_yielding(self, samples: np.ndarray, substeps: int) -> None:
         """The non-linear step: x_{k+1} from the integrator, then the outputs, linear in x_{k+1} and u."""
         self._windows = sliding_window_view(samples, substeps + 1)[::substeps]
         self._n_steps = self._windows.shape[0]
-        self._forcing = np.zeros((self._n_steps, self.plant.n_state + self._output_c.shape[0]))
+        self._forcing = np.zeros((self._n_steps, self.plant.n_state + self._outputs.c.shape[0]))
         self._floor_gain = self.building.actuator_matrix * self.force_limits
-        self._output_ct = self._output_c.T.copy()
-        self._output_dt = (self._output_d * self.force_limits).T.copy()
+        self._output_ct = self._outputs.c.T.copy()
+        self._output_dt = (self._outputs.d * self.force_limits).T.copy()
         self._advance = self._advance_yielding
 
     def _advance_linear(self, k: int, clipped: np.ndarray) -> np.ndarray:
@@ -238,67 +258,59 @@ class BuildingEnv(gym.Env):
             self._prepare_linear(samples, substeps)
         else:
             self._prepare_yielding(samples, substeps)
-        p, rng = self._n_sensors, self.np_random
-        ground = samples[::substeps][: self._n_steps + 1]
-        self.ground_samples = ground
-        readings = np.empty((self._n_steps + 1, p + 1))
-        readings[:, :p] = rng.standard_normal((self._n_steps + 1, p)) * self._noise_scaled + self._bias_scaled
-        readings[:, p] = (ground + self._ground_noise * rng.standard_normal(ground.size)) / self.layout.ground_scale
-        self._forcing[:, self._reading_slice] += readings[1:]
+        self.ground_samples = samples[::substeps][: self._n_steps + 1]
+        readings = noisy_readings(self.plant, self.ground_samples, self.np_random)
+        self._forcing[:, self._n_state :][:, self._outputs.readings] += readings[1:]
         self._k = 0
         self._state_action[:] = 0.0
         self._held_force[:] = 0.0
         self._previous_action = np.zeros(self.building.n_actuators)
         self._observation[:] = 0.0
-        self._observation[: p + 1] = readings[0]
+        self._observation[: self._block] = readings[0]
         if self.kalman is not None:
-            self.kalman.reset()
-            ground = readings[0, p] * self.layout.ground_scale
-            estimate = self.kalman.update(
-                readings[0, :p] * self.layout.reading_scale, np.zeros(self.building.n_actuators), ground, 0.0
-            )
-            self._previous_ground = ground
-            self._observation[self._estimate_start : self._action_start] = estimate / self.layout.estimate_scale
+            self._estimate = np.zeros(self.kalman.size)
+            self._previous_ground = 0.0
+            self._update_estimate(readings[0], self._previous_action)
         return self._observation.copy(), {"motion": motion.name, "steps": self._n_steps}
+
+    def _update_estimate(self, readings: np.ndarray, held_action: np.ndarray) -> None:
+        """The Kalman estimate at the new scaled readings (ground last), into the observation."""
+        layout = self.layout
+        ground = readings[-1] * layout.ground_scale
+        self._estimate = self.kalman.update(
+            self._estimate, readings[:-1] * layout.reading_scale, held_action, ground, self._previous_ground
+        )
+        self._previous_ground = ground
+        self._observation[self._estimate_start : self._action_start] = self._estimate / layout.estimate_scale
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         k = self._k
         if k >= self._n_steps:
             raise RuntimeError("step() called after the episode ended; call reset()")
-        state_action, n_state = self._state_action, self._n_state
+        state_action, n_state, rows = self._state_action, self._n_state, self._outputs
         clipped = state_action[n_state:]
         clipped[:] = action
         np.minimum(clipped, 1.0, out=clipped)
         np.maximum(clipped, -1.0, out=clipped)
-        outputs = self._advance(k, clipped)
-        state_action[:n_state] = outputs[:n_state]
+        new = self._advance(k, clipped)
+        state_action[:n_state] = new[:n_state]
+        outputs = new[n_state:]
         self._k = k = k + 1
 
         observation, block, last = self._observation, self._block, self._action_start
         observation[block:last] = observation[: last - block]
-        observation[:block] = outputs[self._reading_slice]
+        observation[:block] = outputs[rows.readings]
         if self.kalman is not None:
-            readings = outputs[self._reading_slice]
-            ground = readings[-1] * self.layout.ground_scale
-            estimate = self.kalman.update(
-                readings[:-1] * self.layout.reading_scale, clipped, ground, self._previous_ground
-            )
-            self._previous_ground = ground
-            observation[self._estimate_start : last] = estimate / self.layout.estimate_scale
+            self._update_estimate(outputs[rows.readings], clipped)
         observation[last:] = clipped
 
-        weighted = outputs[self._reward_slice]
-        if self._change_factor is not None:
-            change = np.tile(clipped - self._previous_action, self._change_terms) * self._change_factor
-            weighted = np.concatenate([weighted, change])
+        terms = rows.reward_terms(outputs, clipped, self._previous_action).tolist()
         self._previous_action[:] = clipped
-        values = weighted * weighted if self._all_quadratic else np.abs(weighted) ** self._row_power
-        terms = np.add.reduceat(values, self._reward_starts).tolist()
-        info: dict[str, Any] = dict(zip(self._reward_names, terms, strict=True))
-        info["drift"] = outputs[self._drift_slice]
-        info["absolute_acceleration"] = outputs[self._acceleration_slice]
-        info["base_shear"] = outputs[self._base_shear_index]
-        self._held_force[:] = outputs[self._force_slice]
+        info: dict[str, Any] = dict(zip(rows.reward_names, terms, strict=True))
+        info["drift"] = outputs[rows.drift]
+        info["absolute_acceleration"] = outputs[rows.acceleration]
+        info["base_shear"] = outputs[rows.base_shear]
+        self._held_force[:] = outputs[rows.force]
         info["force"] = self._held_force.copy()
         info["time"] = k * self.control_dt
         return observation.copy(), -sum(terms), False, k >= self._n_steps, info

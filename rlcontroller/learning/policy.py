@@ -15,6 +15,7 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGPrior
+from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.plant import Plant
 
@@ -54,7 +55,8 @@ class ResidualAction(gym.ActionWrapper):
 
 
 class PolicyController:
-    """A trained stable-baselines3 policy as a controller: deterministic actions in [-1, 1].
+    """A trained stable-baselines3 policy as a controller: deterministic actions in [-1, 1], for one
+    observation or a batch (one forward pass).
 
     `normalize` is the run's observation normaliser (a VecNormalize), if it used one; `prior`
     maps an observation to the action the policy's output is added to (residual policies);
@@ -67,6 +69,7 @@ class PolicyController:
         self.name = name
         self.prior = prior
         self.source = source
+        self.actor = actor_of(model)
 
     @classmethod
     def load(cls, model_path: Path, name: str = "RL") -> PolicyController:
@@ -86,19 +89,12 @@ class PolicyController:
         return residual_action(action, self.prior(raw))
 
     def _deterministic(self, observation: np.ndarray) -> np.ndarray:
-        """The policy's deterministic action. For a Gaussian actor-critic policy (PPO, A2C) it is the
-        actor's mean, computed by the same torch operations as `predict` without its per-call
-        checks (the same numbers, 2.8x faster); any other policy goes through `predict`."""
-        import torch
-        from stable_baselines3.common.distributions import DiagGaussianDistribution
-        from stable_baselines3.common.policies import ActorCriticPolicy
-
-        policy = getattr(self.model, "policy", None)  # anything with predict() works as a model
-        if not (isinstance(policy, ActorCriticPolicy) and isinstance(policy.action_dist, DiagGaussianDistribution)):
-            return self.model.predict(observation, deterministic=True)[0]
-        with torch.no_grad():
-            features = policy.extract_features(torch.as_tensor(observation[None]), policy.pi_features_extractor)
-            return policy.action_net(policy.mlp_extractor.forward_actor(features)).numpy()[0]
+        """The policy's deterministic action: through its actor's layers in numpy when it is a plain
+        MLP (the same numbers as `predict` to float32 rounding, without torch's per-call overhead),
+        else through `predict`."""
+        if self.actor is not None:
+            return self.actor(observation)
+        return self.model.predict(observation, deterministic=True)[0]
 
 
 def load_policy(model_path: Path):

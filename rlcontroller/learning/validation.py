@@ -12,7 +12,7 @@ import numpy as np
 
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak
@@ -23,12 +23,12 @@ class Validator:
     """Runs a policy on the held-out generated validation motions."""
 
     def __init__(self, plant: Plant) -> None:
-        self.env = BuildingEnv(plant, randomize=True)  # with randomisation: fixed draws, one per motion
+        self.plant = plant
         excitation = plant.experiment.excitation
         self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
         self.prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None
-        bare = Uncontrolled(self.env.building.n_actuators)
-        self.uncontrolled = [rollout(self.env, motion, bare)[0] for motion in self.motions]
+        bare = Uncontrolled(plant.building.n_actuators)
+        self.uncontrolled = [response for response, _ in self._rollouts(bare)]
         self.reference = {}
         designs = {
             "lqg": lambda: design_lqg(plant),
@@ -46,10 +46,13 @@ class Validator:
         policy = PolicyController(model, model.get_vec_normalize_env(), prior=self.prior)
         return self.run(policy) | self.reference
 
+    def _rollouts(self, controller) -> list:
+        """Motion i on the plant drawn with seed i (with randomisation), noise seeded i: in one batch."""
+        return batch_rollout(self.plant, self.motions, [controller], randomize=True)[0]
+
     def run(self, controller) -> dict[str, float]:
         rewards, peaks, j1, j2 = [], [], [], []
-        for index, motion in enumerate(self.motions):
-            result, reward = rollout(self.env, motion, controller, seed=index)
+        for index, (result, reward) in enumerate(self._rollouts(controller)):
             metrics = j_metrics(result, self.uncontrolled[index])
             rewards.append(reward)
             peaks.append(float(np.max(peak(result.drift))))

@@ -27,8 +27,8 @@ def test_lqg_controller_acts_in_action_units_and_the_env_applies_newtons_once():
     for _ in range(200):
         action = controller.act(observation)
         ground = float(observation[plant.layout.ground]) * plant.layout.ground_scale
-        expected = np.clip(-design.feedback @ design.filter.estimate - design.feedforward * ground, -1.0, 1.0)
-        np.testing.assert_array_equal(action, expected)
+        expected = np.clip(-design.feedback @ controller.estimate - design.feedforward * ground, -1.0, 1.0)
+        np.testing.assert_allclose(action, expected, rtol=1e-12, atol=1e-15)
         observation, *_ = env.step(action)
         np.testing.assert_allclose(env.held_force, action * plant.force_limits, rtol=1e-15)
     assert 0.05 < np.abs(action).max() <= 1.0  # a real command, not newtons and not zero

@@ -37,12 +37,12 @@ def test_the_estimate_converges_to_the_true_state_from_noise_free_readings():
     env = BuildingEnv(plant)
     observation, _ = env.reset(seed=0, options={"motion": GroundMotion("pulse", 0.02, pulse)})
     layout, errors, previous = plant.layout, [], 0.0
-    kalman.reset()
+    estimate = np.zeros(kalman.size)
     for _ in range(1500):
         observation, *_ = env.step(np.zeros(3))
         ground = float(observation[layout.ground]) * layout.ground_scale
         readings = observation[layout.readings] * layout.reading_scale
-        estimate = kalman.update(readings, observation[layout.action], ground, previous)
+        estimate = kalman.update(estimate, readings, observation[layout.action], ground, previous)
         previous = ground
         errors.append(np.linalg.norm(estimate - env.state) / max(np.linalg.norm(env.state), 1e-12))
     assert np.mean(errors[:20]) > 100 * np.mean(errors[-100:])
@@ -55,3 +55,15 @@ def test_the_ground_model_filter_estimates_the_ground_it_measures():
     assert kalman.phi.shape == (12, 12) and kalman.measures_ground
     np.testing.assert_array_equal(kalman.sensor_c[-1, -2:], plant.ground_model.output)
     assert np.all(np.abs(np.linalg.eigvals(kalman.phi - kalman.gain @ kalman.sensor_c @ kalman.phi)) < 1.0)
+
+
+def test_a_batch_of_estimates_updates_as_each_one_alone():
+    plant = Plant(Experiment())
+    kalman = design_kalman(plant, known_ground=True)
+    rng = np.random.default_rng(1)
+    estimates, readings = rng.standard_normal((4, 10)), rng.standard_normal((4, 5))
+    actions, ground, previous = rng.uniform(-1, 1, (4, 3)), rng.standard_normal(4), rng.standard_normal(4)
+    batch = kalman.update(estimates, readings, actions, ground, previous)
+    for i in range(4):
+        alone = kalman.update(estimates[i], readings[i], actions[i], ground[i], previous[i])
+        np.testing.assert_allclose(batch[i], alone, rtol=1e-12, atol=1e-15)

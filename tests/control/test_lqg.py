@@ -5,7 +5,7 @@ import scipy.linalg
 from rlcontroller.config import Experiment, KanaiTajimiConfig, MeasurementConfig, SensorConfig
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.control.lqr import lqr_gain, quadratic_cost
+from rlcontroller.control.lqr import lqr_gain, preview_feedforward, preview_kernel, quadratic_cost
 from rlcontroller.control.optimal import optimal_response
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.policy import PolicyController
@@ -72,10 +72,10 @@ def test_the_lqr_cost_is_exactly_the_reward():
 def test_kalman_estimate_converges_on_a_noise_free_free_vibration():
     kalman = design_lqg(Plant(NOISE_FREE)).filter
     state = np.concatenate([np.linspace(0.02, 0.06, 5), np.zeros(5)])
-    errors = []
+    errors, estimate = [], np.zeros(kalman.size)
     for _ in range(300):
         state = kalman.phi @ state
-        estimate = kalman.update(kalman.sensor_c @ state, np.zeros(3), 0.0, 0.0)
+        estimate = kalman.update(estimate, kalman.sensor_c @ state, np.zeros(3), 0.0, 0.0)
         errors.append(np.linalg.norm(estimate - state) / np.linalg.norm(state))
     assert errors[-1] < 1e-3 * errors[0] and errors[-1] < 1e-4
 
@@ -251,3 +251,18 @@ def test_ground_model_lqg_wins_on_the_motions_it_models():
         result, rewards[name] = rollout(env, motion, LQGController(design, env.plant))
         assert np.max(np.abs(result.force)) < 0.9e5
     assert rewards["model"] > rewards["ground"] > rewards["plain"]
+
+
+@pytest.mark.parametrize("length", [1, 2, 7, 40, 60])
+def test_the_backward_feedforward_equals_the_kernel_sum(length):
+    """sum_{j < length} W_j g_{k+j} from the explicit kernels, for a batch of two ground histories."""
+    plant = Plant(Experiment())
+    step = plant.step_map(1)
+    cost = quadratic_cost(plant, plant.experiment.reward, step)
+    terms = np.random.default_rng(4).standard_normal((2, 60, step.phi.shape[0])) * 1e-3
+    kernels = preview_kernel(cost, step, plant.force_limits, length)
+    expected = np.zeros((2, 60, 3))
+    for lag, kernel in enumerate(kernels):
+        expected[:, : 60 - lag] += terms[:, lag:] @ kernel.T
+    actual = preview_feedforward(cost, step, plant.force_limits, terms, length)
+    np.testing.assert_allclose(actual, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())

@@ -10,7 +10,7 @@ from rlcontroller.evaluation.evaluation import (
     lqg_sweep,
     mean_metric,
     preview_study,
-    uncontrolled_response,
+    uncontrolled_responses,
 )
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.excitation import read_at2
@@ -21,7 +21,7 @@ from rlcontroller.physics.records import SYNTHETIC_LABEL, synthetic_suite
 def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
     motion = read_at2(records / "RSN753_LOMAP_CLS000.AT2")
     env = BuildingEnv()
-    whole = uncontrolled_response(env.plant, motion)
+    whole = uncontrolled_responses(env.plant, [motion])[0]
     stepped, _ = rollout(env, motion, Uncontrolled(3))
     for quantity in ("drift", "absolute_acceleration", "story_shear"):
         np.testing.assert_allclose(whole.quantity(quantity), stepped.quantity(quantity), rtol=1e-9, atol=1e-12)

@@ -1,18 +1,41 @@
-"""Saved policies as controllers: the deterministic fast path gives exactly `predict`'s actions."""
+"""Saved policies as controllers: the numpy actor gives `predict`'s actions to float32 rounding."""
 
 import numpy as np
+import pytest
 from conftest import REPOSITORY
 
-from rlcontroller.learning.policy import PolicyController, load_policy
+from rlcontroller.learning.actor import actor_of
+from rlcontroller.learning.env import BuildingEnv
+from rlcontroller.learning.policy import PolicyController, algorithm_class, load_policy
 
 
-def test_the_fast_deterministic_path_equals_predict_bit_for_bit():
+def test_the_numpy_actor_equals_predict_to_float32_rounding():
     model, _, _ = load_policy(REPOSITORY / "models" / "five_story" / "best_model.zip")
     controller = PolicyController(model)
-    observations = np.random.default_rng(0).standard_normal((200, *model.observation_space.shape)) * 3.0
-    for observation in observations.astype(np.float32):
-        expected, _ = model.predict(observation, deterministic=True)
-        np.testing.assert_array_equal(np.clip(controller._deterministic(observation), -1.0, 1.0), expected)
+    assert controller.actor is not None
+    observations = (np.random.default_rng(0).standard_normal((200, *model.observation_space.shape)) * 3.0).astype(
+        np.float32
+    )
+    expected, _ = model.predict(observations, deterministic=True)
+    batch = np.clip(controller._deterministic(observations), -1.0, 1.0)
+    np.testing.assert_allclose(batch, expected, rtol=1e-5, atol=1e-6)
+    for observation, row in zip(observations[:5], expected, strict=False):
+        np.testing.assert_allclose(
+            np.clip(controller._deterministic(observation), -1.0, 1.0), row, rtol=1e-5, atol=1e-6
+        )
+
+
+@pytest.mark.parametrize(("name", "activation"), [("SAC", "ReLU"), ("PPO", "Tanh"), ("PPO", "GELU"), ("A2C", "ELU")])
+def test_the_numpy_actor_of_other_learners_and_activations(name, activation):
+    import torch
+
+    model = algorithm_class(name)(
+        "MlpPolicy", BuildingEnv(), policy_kwargs={"net_arch": [32, 16], "activation_fn": getattr(torch.nn, activation)}
+    )
+    actor = actor_of(model)
+    observations = np.random.default_rng(1).standard_normal((50, *model.observation_space.shape)).astype(np.float32)
+    expected, _ = model.predict(observations, deterministic=True)
+    np.testing.assert_allclose(np.clip(actor(observations), -1.0, 1.0), expected, rtol=1e-5, atol=1e-6)
 
 
 def test_the_committed_policy_loads_with_its_normaliser_and_prior():

@@ -1,0 +1,1 @@
+"""Deployment: a trained controller exported to run outside Python (ONNX). Depends on `learning`."""

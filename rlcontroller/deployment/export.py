@@ -1,0 +1,236 @@
+"""A trained controller as one self-contained ONNX graph: raw sensor readings in, forces out.
+
+The graph does, per control step and for a batch of buildings, what the env and `PolicyController`
+do in Python: scale the readings and push them into the sensor history, update the Kalman estimate
+(designed on the design model, when the observation has one), normalise the observation (if the
+run did), run the policy's network, add the LQG prior's action (residual policies), clip, and
+multiply by the force limits.
+
+Inputs (float64, one row per building):
+    readings (N, p): the configured sensors, SI units (m/s^2 for accelerations), in config order;
+    ground (N, 1): the measured ground acceleration (m/s^2);
+    state (N, S): the controller's own state, zeros before the motion starts.
+Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
+The state is the observation of this step (history, scaled estimate, last action) and the last
+ground reading. Call once per control step (`control_dt_s` in the metadata), at the instant the
+readings are taken; apply the force until the next call.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from rlcontroller.config import ConfigError, load_experiment
+from rlcontroller.control.estimation import observation_filter
+from rlcontroller.files import atomic_write
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.plant import Plant
+
+OPSET = 17
+FLOAT, DOUBLE = 1, 11  # onnx.TensorProto.FLOAT, DOUBLE
+
+
+class _Graph:
+    """A few helpers to write an ONNX graph node by node."""
+
+    def __init__(self) -> None:
+        self.nodes: list = []
+        self.constants: list = []
+
+    def constant(self, name: str, value: np.ndarray | float, dtype=np.float64) -> str:
+        from onnx import numpy_helper
+
+        self.constants.append(numpy_helper.from_array(np.asarray(value, dtype=dtype), name))
+        return name
+
+    def node(self, op: str, inputs: list[str], output: str, **attributes) -> str:
+        from onnx import helper
+
+        self.nodes.append(helper.make_node(op, inputs, [output], name=output, **attributes))
+        return output
+
+    def columns(self, source: str, start: int, stop: int, output: str) -> str:
+        starts = self.constant(f"{output}_start", [start], np.int64)
+        stops = self.constant(f"{output}_stop", [stop], np.int64)
+        axes = self.constant(f"{output}_axis", [1], np.int64)
+        return self.node("Slice", [source, starts, stops, axes], output)
+
+    def affine(self, source: str, matrix: np.ndarray, output: str) -> str:
+        """source @ matrix.T"""
+        return self.node("MatMul", [source, self.constant(f"{output}_matrix", matrix.T)], output)
+
+    def clip(self, source: str, low: float, high: float, output: str, dtype=np.float64) -> str:
+        low_name = self.constant(f"{output}_low", low, dtype)
+        high_name = self.constant(f"{output}_high", high, dtype)
+        return self.node("Clip", [source, low_name, high_name], output)
+
+
+def controller_graph(plant: Plant, controller: PolicyController, source: str = ""):
+    """The ONNX model of `controller` (its normaliser, network and prior) with the observation the
+    env builds for `plant`: sensors, history and Kalman estimate."""
+    from onnx import helper
+
+    if controller.actor is None:
+        raise ConfigError(f"{source}: only MLP policies (PPO, A2C, SAC) can be exported")
+    layout, sensors, experiment = plant.layout, plant.sensors, plant.experiment
+    p, m = sensors.c.shape[0], plant.building.n_actuators
+    block, history = p + 1, experiment.sensors.history
+    size = layout.size
+    g = _Graph()
+
+    scaled = g.node("Div", ["readings", g.constant("reading_scale", layout.reading_scale)], "scaled_readings")
+    ground = g.node("Div", ["ground", g.constant("ground_scale", [layout.ground_scale])], "scaled_ground")
+    blocks = [g.node("Concat", [scaled, ground], "newest_block", axis=1)]
+    if history > 1:
+        blocks.append(g.columns("state", 0, (history - 1) * block, "older_blocks"))
+    held = g.columns("state", layout.action.start, layout.action.stop, "held_action")
+    parts = [g.node("Concat", blocks, "history", axis=1) if len(blocks) > 1 else blocks[0]]
+    if experiment.sensors.state_estimate:
+        parts.append(_kalman(g, plant, held))
+    observation = g.node("Concat", [*parts, held], "observation", axis=1)
+
+    network_input = observation
+    if controller.normalize is not None:
+        statistics = controller.normalize.obs_rms
+        centred = g.node("Sub", [observation, g.constant("observation_mean", statistics.mean)], "centred")
+        spread = np.sqrt(statistics.var + controller.normalize.epsilon)
+        divided = g.node("Div", [centred, g.constant("observation_spread", spread)], "divided")
+        clip_obs = float(controller.normalize.clip_obs)
+        network_input = g.clip(divided, -clip_obs, clip_obs, "normalised")
+    x = g.node("Cast", [network_input], "network_input", to=FLOAT)
+    for index, layer in enumerate(controller.actor.layers):
+        weight = g.constant(f"layer{index}_weight", layer.weight, np.float32)
+        bias = g.constant(f"layer{index}_bias", layer.bias, np.float32)
+        x = g.node("Gemm", [x, weight, bias], f"layer{index}", transB=1)
+        if layer.activation is not None:
+            x = _activation(g, layer.activation, x, f"layer{index}_{layer.activation.lower()}")
+    if controller.actor.squash:
+        x = g.node("Tanh", [x], "squashed")
+    action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, "policy_action")
+    if controller.prior is not None:
+        estimate = g.columns(observation, layout.estimate.start, layout.estimate.stop, "prior_estimate")
+        feedback = g.affine(estimate, controller.prior.feedback, "prior_feedback")
+        feedforward = g.node("Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff")
+        prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
+        action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
+    force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
+    observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
+    g.node("Concat", [observation_before_action, action, "ground"], "next_state", axis=1)
+
+    state_size = size + 1
+    graph = helper.make_graph(
+        g.nodes,
+        "rlcontroller",
+        [
+            helper.make_tensor_value_info("readings", DOUBLE, ["batch", p]),
+            helper.make_tensor_value_info("ground", DOUBLE, ["batch", 1]),
+            helper.make_tensor_value_info("state", DOUBLE, ["batch", state_size]),
+        ],
+        [
+            helper.make_tensor_value_info(force, DOUBLE, ["batch", m]),
+            helper.make_tensor_value_info("next_state", DOUBLE, ["batch", state_size]),
+        ],
+        initializer=g.constants,
+    )
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="rlcontroller")
+    model.ir_version = 8
+    model.doc_string = __doc__
+    metadata = {
+        "control_dt_s": repr(plant.control_dt),
+        "readings": "; ".join(_reading_names(plant)),
+        "actuator_stories": ", ".join(str(a.story) for a in experiment.actuators),
+        "force_limits_N": ", ".join(repr(float(f)) for f in plant.force_limits),
+        "state_size": str(state_size),
+        "source": source,
+    }
+    helper.set_model_props(model, metadata)
+    return model
+
+
+def _kalman(g: _Graph, plant: Plant, held: str) -> str:
+    """The scaled Kalman estimate after this step's readings (the env's own filter)."""
+    layout, kalman = plant.layout, observation_filter(plant)
+    previous = g.columns("state", layout.estimate.start, layout.estimate.stop, "previous_scaled_estimate")
+    estimate = g.node("Mul", [previous, g.constant("estimate_scale", layout.estimate_scale)], "previous_estimate")
+    predicted = g.node(
+        "Add",
+        [g.affine(estimate, kalman.phi, "free_response"), g.affine(held, kalman.action_gain, "action_response")],
+        "predicted_free",
+    )
+    if kalman.known_ground:
+        previous_ground = g.columns("state", layout.size, layout.size + 1, "previous_ground")
+        ground_response = g.affine(previous_ground, kalman.ground_gain[:, None], "ground_response")
+        predicted = g.node("Add", [predicted, ground_response], "predicted")
+    measured = g.node("Concat", ["readings", "ground"], "measured", axis=1) if kalman.measures_ground else "readings"
+    expected = g.node(
+        "Add",
+        [g.affine(predicted, kalman.sensor_c, "expected_state"), g.affine(held, kalman.sensor_d, "expected_action")],
+        "expected",
+    )
+    innovation = g.node("Sub", [measured, expected], "innovation")
+    corrected = g.node("Add", [predicted, g.affine(innovation, kalman.gain, "correction")], "estimate")
+    return g.node("Div", [corrected, "estimate_scale"], "scaled_estimate")
+
+
+def _activation(g: _Graph, name: str, x: str, output: str) -> str:
+    if name == "ReLU":
+        return g.node("Relu", [x], output)
+    if name == "Tanh":
+        return g.node("Tanh", [x], output)
+    if name == "ELU":
+        return g.node("Elu", [x], output, alpha=1.0)
+    if name == "LeakyReLU":
+        return g.node("LeakyRelu", [x], output, alpha=0.01)
+    half = g.node("Div", [x, g.constant(f"{output}_sqrt2", np.sqrt(2.0), np.float32)], f"{output}_scaled")
+    erf = g.node(
+        "Add", [g.node("Erf", [half], f"{output}_erf"), g.constant(f"{output}_one", 1.0, np.float32)], f"{output}_1erf"
+    )
+    return g.node(
+        "Mul", [g.node("Mul", [x, erf], f"{output}_x1erf"), g.constant(f"{output}_half", 0.5, np.float32)], output
+    )
+
+
+def _reading_names(plant: Plant) -> list[str]:
+    units = {"absolute_acceleration": "m/s^2", "displacement": "m", "velocity": "m/s", "drift": "m"}
+    names = []
+    for measurement in plant.experiment.sensors.measurements:
+        floors = measurement.floors or list(range(1, plant.building.n_floors + 1))
+        unit = units.get(measurement.quantity, "SI")
+        names += [f"{measurement.quantity} floor {floor} ({unit})" for floor in floors]
+    return names
+
+
+def export_onnx(model_path: Path, out: Path) -> Path:
+    """Write the saved model at `model_path` (its run folder's config beside it) as ONNX at `out`."""
+    import onnx
+
+    plant = Plant(load_experiment(model_path.parent / "config.yaml"))
+    controller = PolicyController.load(model_path)
+    model = controller_graph(plant, controller, source=str(model_path))
+    onnx.checker.check_model(model, full_check=True)
+    atomic_write(out, model.SerializeToString())
+    return out
+
+
+class OnnxController:
+    """An exported controller run by onnxruntime, one control step per call, for `batch` buildings."""
+
+    def __init__(self, path: Path, batch: int = 1, threads: int = 1) -> None:
+        import onnxruntime
+
+        options = onnxruntime.SessionOptions()
+        options.intra_op_num_threads = threads
+        options.inter_op_num_threads = 1
+        self.session = onnxruntime.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+        self.metadata = self.session.get_modelmeta().custom_metadata_map
+        self.state = np.zeros((batch, int(self.metadata["state_size"])))
+
+    def reset(self) -> None:
+        self.state[:] = 0.0
+
+    def step(self, readings: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """Forces (N) for the readings (SI, (batch, p)) and ground accelerations (m/s^2, (batch, 1))."""
+        force, self.state = self.session.run(None, {"readings": readings, "ground": ground, "state": self.state})
+        return force

@@ -1,0 +1,295 @@
+"""Many buildings stepped together: the batched counterpart of `BuildingEnv`.
+
+A batch of N members shares the experiment (sensors, history, reward, the design model's Kalman
+filter); each member has its own plant (randomised per episode with `randomize=True`), motion,
+length and noise generator. A control step of the whole batch is one matrix product
+[x | action] @ T + forcing for every member at once (T per member when the members' plants or
+sampling differ), one batched Kalman update and one batched reward: the observations, rewards and
+states are those of N `BuildingEnv`s fed the same actions, member i seeded as env i.
+
+States of plants of different size (actuator delays drawn per episode) are zero-padded to the
+largest; a member whose motion has ended keeps stepping on zero forcing until it is restarted, and
+its outputs are not used.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium.utils import seeding
+from numpy.lib.stride_tricks import sliding_window_view
+
+from rlcontroller.control.controllers import Controller
+from rlcontroller.control.estimation import observation_filter
+from rlcontroller.learning.env import noisy_readings, step_outputs
+from rlcontroller.physics.dynamics import Response
+from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
+from rlcontroller.physics.plant import Plant, draw_plant
+
+
+class BuildingBatch:
+    """N buildings of one experiment, stepped as one.
+
+    Parameters
+    ----------
+    plant : the plant every member simulates (the base of the draws with `randomize=True`).
+    size : number of members N.
+    motions : motions drawn from at each start (else the experiment's generator).
+    randomize : draw a new plant at each start from `plant_randomization`, as `BuildingEnv` does.
+
+    Attributes (one row per member): `observations` (N, obs) float32, `states` (N, S + m) the padded
+    plant states x then the clipped actions, `plants`, `steps` (K per member), `k` (steps taken).
+    """
+
+    def __init__(
+        self, plant: Plant, size: int, motions: list[GroundMotion] | None = None, randomize: bool = False
+    ) -> None:
+        experiment = plant.experiment
+        self.plant, self.size, self.motions = plant, size, motions
+        self.randomization = experiment.plant_randomization if randomize else None
+        self.layout = layout = plant.layout
+        self.rows = step_outputs(plant)  # slices and reward rules: the same for every member's plant
+        self.control_dt = plant.control_dt
+        self.m = plant.building.n_actuators
+        self.kalman = observation_filter(plant)
+        if self.kalman is not None:
+            self.estimates = np.zeros((size, self.kalman.size))
+            self.previous_ground = np.zeros(size)
+        self.plants = [plant] * size
+        self.steps = np.zeros(size, dtype=int)
+        self.k = np.zeros(size, dtype=int)
+        self.ground_samples: list[np.ndarray] = [np.zeros(1)] * size
+        self.observations = np.zeros((size, layout.size), dtype=np.float32)
+        self.previous_action = np.zeros((size, self.m))
+        self._block = layout.ground + 1
+        self._n_outputs = self.rows.c.shape[0]
+        self._state_size = plant.n_state  # S: every member's state is zero-padded to it
+        self.states = np.zeros((size, plant.n_state + self.m))
+        self._forcing = np.zeros((size, 1, plant.n_state + self._n_outputs))  # per member and step
+        self._stacked: np.ndarray | None = None  # the transitions of all members, padded to S
+        self._transitions: list[np.ndarray | None] = [None] * size  # each member's own T (unpadded)
+        self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
+        self._windows: list[np.ndarray | None] = [None] * size  # yielding members: ground per step
+        self._members = np.arange(size)
+
+    def _resize(self, state_size: int, length: int) -> None:
+        """Make room for plant states of `state_size` and motions of `length` control steps."""
+        old_size, old_length = self._state_size, self._forcing.shape[1]
+        state_size, length = max(state_size, old_size), max(length, old_length)
+        if (state_size, length) == (old_size, old_length):
+            return
+        states = np.zeros((self.size, state_size + self.m))
+        states[:, :old_size] = self.states[:, :old_size]
+        states[:, state_size:] = self.states[:, old_size:]
+        forcing = np.zeros((self.size, length, state_size + self._n_outputs))
+        forcing[:, :old_length, :old_size] = self._forcing[:, :, :old_size]
+        forcing[:, :old_length, state_size:] = self._forcing[:, :, old_size:]
+        self._state_size, self.states, self._forcing = state_size, states, forcing
+        self._stacked = None
+
+    def start(self, member: int, rng: np.random.Generator, motion: GroundMotion | None = None) -> None:
+        """Start `member` from rest: draw its plant (with randomisation) and motion (unless given), then
+        its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
+        plant = self.plant
+        if self.randomization is not None:
+            drawn = draw_plant(self.randomization, plant.experiment.plant, rng)
+            plant = Plant(plant.experiment.model_copy(update={"plant": drawn}))
+        if motion is None:
+            if self.motions:
+                motion = self.motions[int(rng.integers(len(self.motions)))]
+            else:
+                motion = generate(plant.experiment.excitation.generator, rng)
+        samples, substeps = for_control_step(motion, self.control_dt)
+        n_steps = (samples.size - 1) // substeps
+        self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
+        size = self._state_size
+        forcing = self._forcing[member]
+        forcing[:] = 0.0
+        rows = self.rows if plant is self.plant else step_outputs(plant)
+        if plant.yielding is None:
+            step = plant.step_map(substeps)
+            ground_terms = step.ground_terms(samples)
+            forcing[:n_steps, : plant.n_state] = ground_terms
+            forcing[:n_steps, size:] = ground_terms @ rows.c.T
+            if plant is not self.plant:
+                self._transitions[member] = rows.transition(step, plant.force_limits)
+            else:
+                if substeps not in self._cache:
+                    self._cache[substeps] = rows.transition(step, plant.force_limits)
+                self._transitions[member] = self._cache[substeps]
+            self._windows[member] = None
+        else:
+            self._transitions[member] = None
+            self._windows[member] = sliding_window_view(samples, substeps + 1)[::substeps]
+        self._stacked = None
+        ground = samples[::substeps][: n_steps + 1]
+        readings = noisy_readings(plant, ground, rng)
+        forcing[:n_steps, size:][:, self.rows.readings] += readings[1:]
+        self.plants[member] = plant
+        self.ground_samples[member] = ground
+        self.steps[member], self.k[member] = n_steps, 0
+        self.states[member] = 0.0
+        self.previous_action[member] = 0.0
+        observation = self.observations[member]
+        observation[:] = 0.0
+        observation[: self._block] = readings[0]
+        if self.kalman is not None:
+            self.estimates[member] = 0.0
+            self.previous_ground[member] = 0.0
+            self._update_estimates(readings[0][None], self.previous_action[member][None], [member])
+
+    def _padded(self, inner: np.ndarray) -> np.ndarray:
+        """A member's T zero-padded to the batch's state size."""
+        size, n = self._state_size, inner.shape[0] - self.m
+        if n == size:
+            return inner
+        padded = np.zeros((size + self.m, size + self._n_outputs))
+        padded[:n, :n] = inner[:n, :n]
+        padded[:n, size:] = inner[:n, n:]
+        padded[size:, :n] = inner[n:, :n]
+        padded[size:, size:] = inner[n:, n:]
+        return padded
+
+    def _update_estimates(self, readings: np.ndarray, held: np.ndarray, members) -> None:
+        layout = self.layout
+        ground = readings[:, -1] * layout.ground_scale
+        estimates = self.kalman.update(
+            self.estimates[members],
+            readings[:, :-1] * layout.reading_scale,
+            held,
+            ground,
+            self.previous_ground[members],
+        )
+        self.estimates[members] = estimates
+        self.previous_ground[members] = ground
+        self.observations[members, layout.estimate] = estimates / layout.estimate_scale
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Apply `actions` (N, m), clipped to [-1, 1]; returns the new observations (N, obs) float32 (a
+        view: copy to keep), the rewards (N,) and which members' motions have just ended (N,) bool."""
+        size, states = self._state_size, self.states
+        clipped = states[:, size:]
+        np.clip(actions, -1.0, 1.0, out=clipped)
+        forcing = self._forcing[self._members, np.minimum(self.k, self._forcing.shape[1] - 1)]
+        new = self._advance(clipped) + forcing
+        states[:, :size] = new[:, :size]
+        outputs = new[:, size:]
+        self.k += 1
+
+        observations, block, last = self.observations, self._block, self.layout.action.start
+        observations[:, block:last] = observations[:, : last - block]
+        readings = outputs[:, self.rows.readings]
+        observations[:, :block] = readings
+        if self.kalman is not None:
+            self._update_estimates(readings, clipped, slice(None))
+        observations[:, last:] = clipped
+        terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
+        self.previous_action[:] = clipped
+        self.outputs = outputs
+        return observations, -terms.sum(axis=1), self.k == self.steps
+
+    def _advance(self, clipped: np.ndarray) -> np.ndarray:
+        """[x_{k+1} | outputs_{k+1}] without the forcing, for every member."""
+        if self._windows[0] is not None:
+            return self._advance_yielding(clipped)
+        if self._stacked is None:
+            first = self._transitions[0]
+            if all(t is first for t in self._transitions):
+                self._stacked = self._padded(first)
+            else:
+                self._stacked = np.stack([self._padded(t) for t in self._transitions])
+        if self._stacked.ndim == 2:
+            return self.states @ self._stacked
+        return np.matmul(self.states[:, None, :], self._stacked)[:, 0, :]
+
+    def _advance_yielding(self, clipped: np.ndarray) -> np.ndarray:
+        size = self._state_size
+        new = np.zeros((self.size, size + self._n_outputs))
+        for member, plant in enumerate(self.plants):
+            n, windows = plant.n_state, self._windows[member]
+            k = min(self.k[member], windows.shape[0] - 1)
+            limits = plant.force_limits
+            floor_force = (plant.building.actuator_matrix * limits) @ clipped[member]
+            state = plant.yielding.step(self.states[member, :n], floor_force, windows[k], self.control_dt)
+            rows = self.rows if plant is self.plant else step_outputs(plant)
+            new[member, :n] = state
+            new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T
+        return new
+
+    def commands(self) -> np.ndarray:
+        """The commands (N) of the step that ended now, per member (N, m)."""
+        return self.states[:, self._state_size :] * self.plant.force_limits
+
+    def plant_states(self) -> np.ndarray:
+        """The padded plant states x (N, S)."""
+        return self.states[:, : self._state_size]
+
+
+ROWS_PER_BATCH = 400_000  # members x control steps simulated at once (bounds the memory to ~150 MB)
+
+
+def batch_rollout(
+    plant: Plant,
+    motions: list[GroundMotion],
+    controllers: list[Controller],
+    seeds: list[int] | None = None,
+    randomize: bool = False,
+) -> list[list[tuple[Response, float]]]:
+    """Run every controller on every motion (motion i with its noise, and with `randomize` its plant,
+    drawn from seeds[i], default i, the same for every controller): the (response, total reward) that
+    `rollout` gives on each motion in turn, computed in batches of motions of similar length, all
+    controllers stepping together; one list per controller."""
+    if not controllers:
+        return []
+    seeds = list(range(len(motions))) if seeds is None else list(seeds)
+    lengths = [(for_control_step(motion, plant.control_dt)[0].size - 1) for motion in motions]
+    order = sorted(range(len(motions)), key=lambda i: lengths[i])
+    results: list[list] = [[None] * len(motions) for _ in controllers]
+    while order:
+        chunk = [order.pop(0)]
+        while order and len(controllers) * (len(chunk) + 1) * lengths[order[0]] <= ROWS_PER_BATCH:
+            chunk.append(order.pop(0))
+        responses = _rollout_chunk(
+            plant, [motions[i] for i in chunk], controllers, [seeds[i] for i in chunk], randomize
+        )
+        for c, runs in enumerate(responses):
+            for index, response in zip(chunk, runs, strict=True):
+                results[c][index] = response
+    return results
+
+
+def _rollout_chunk(
+    plant: Plant, motions: list[GroundMotion], controllers: list[Controller], seeds: list[int], randomize: bool
+) -> list[list[tuple[Response, float]]]:
+    count = len(motions)
+    batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
+    for c in range(len(controllers)):
+        for i, (motion, seed) in enumerate(zip(motions, seeds, strict=True)):
+            batch.start(c * count + i, seeding.np_random(seed)[0], motion)
+    n_steps = int(batch.steps.max())
+    states = np.zeros((n_steps + 1, batch.size, batch.plant_states().shape[1]))
+    commands = np.zeros((n_steps + 1, batch.size, batch.m))
+    for controller in controllers:
+        controller.reset()
+    lanes = [slice(c * count, (c + 1) * count) for c in range(len(controllers))]
+    observations = batch.observations
+    rewards = np.zeros(batch.size)
+    for k in range(1, n_steps + 1):
+        actions = np.concatenate([c.act(observations[lane]) for c, lane in zip(controllers, lanes, strict=True)])
+        observations, reward, _ = batch.step(actions)
+        rewards += np.where(k <= batch.steps, reward, 0.0)
+        states[k] = batch.plant_states()
+        commands[k] = batch.commands()
+    responses: list[list[tuple[Response, float]]] = []
+    for lane in lanes:
+        runs = []
+        for member in range(lane.start, lane.stop):
+            member_plant, steps = batch.plants[member], batch.steps[member]
+            response = member_plant.response(
+                states[: steps + 1, member, : member_plant.n_state],
+                commands[: steps + 1, member],
+                np.arange(steps + 1) * plant.control_dt,
+                batch.ground_samples[member],
+            )
+            runs.append((response, float(rewards[member])))
+        responses.append(runs)
+    return responses

@@ -1,0 +1,120 @@
+"""The exported ONNX controller, run by onnxruntime in the loop, gives the Python controller's forces
+on whole records: the committed residual policy (Kalman estimate, LQG prior) and a SAC policy with an
+observation normaliser and a sensor history."""
+
+import subprocess
+import sys
+
+import numpy as np
+import onnx
+from conftest import REPOSITORY
+from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.policy import PolicyController, algorithm_class
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import synthetic_suite
+
+COMMITTED = REPOSITORY / "models" / "five_story"
+
+
+def onnx_rollout(plant: Plant, path, motion, seed: int) -> np.ndarray:
+    """Forces (N) held over each step when the exported controller drives the env."""
+    env = BuildingEnv(plant)
+    layout = plant.layout
+    controller = OnnxController(path)
+    observation, info = env.reset(seed=seed, options={"motion": motion})
+    forces = [np.zeros(plant.building.n_actuators)]
+    for _ in range(info["steps"]):
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        force = controller.step(readings[None], ground)[0]
+        observation, *_ = env.step(force / plant.force_limits)
+        forces.append(env.command)
+    return np.array(forces)
+
+
+def assert_same_forces(plant, python_controller, path, motions):
+    env = BuildingEnv(plant)
+    for seed, motion in enumerate(motions):
+        expected, _ = rollout(env, motion, python_controller, seed=seed)
+        actual = onnx_rollout(plant, path, motion, seed)
+        scale = np.abs(expected.force).max()
+        assert scale > 1e3  # the controller acts
+        np.testing.assert_allclose(actual, expected.force, rtol=0.0, atol=1e-4 * scale)
+
+
+def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
+    path = export_onnx(COMMITTED / "best_model.zip", tmp_path / "controller.onnx")
+    plant = Plant(load_experiment(COMMITTED / "config.yaml"))
+    assert_same_forces(plant, PolicyController.load(COMMITTED / "best_model.zip"), path, synthetic_suite(count=2))
+    metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
+    assert metadata["control_dt_s"] == "0.02" and metadata["actuator_stories"] == "1, 3, 5"
+    assert metadata["readings"].startswith("absolute_acceleration floor 1 (m/s^2)")
+
+
+def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
+    import torch
+
+    experiment = Experiment.model_validate({"sensors": {"history": 3}, "algorithm": {"name": "SAC"}})
+    plant = Plant(experiment)
+    model = algorithm_class("SAC")("MlpPolicy", BuildingEnv(plant), policy_kwargs={"net_arch": [64, 64]}, seed=0)
+    with torch.no_grad():  # a policy that acts strongly, so that forces are worth comparing
+        model.policy.actor.mu.weight.mul_(30.0)
+    normalize = VecNormalize(DummyVecEnv([lambda: BuildingEnv(plant)]), norm_reward=False)
+    rng = np.random.default_rng(0)
+    normalize.obs_rms.mean = rng.normal(0.0, 0.1, plant.layout.size)
+    normalize.obs_rms.var = rng.uniform(0.2, 3.0, plant.layout.size)
+    normalize.training = False
+    controller = PolicyController(model, normalize)
+    path = tmp_path / "sac.onnx"
+    path.write_bytes(controller_graph(plant, controller).SerializeToString())
+    # This random policy is a bang-bang controller; in a closed loop float32 rounding would be amplified,
+    # so the Python controller drives the building and both read the same sensors at every step.
+    env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(path)
+    observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
+    for _ in range(info["steps"]):
+        action = controller.act(observation)
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        force = exported.step(readings[None], np.array([[float(observation[layout.ground]) * layout.ground_scale]]))
+        np.testing.assert_allclose(force[0], action * plant.force_limits, rtol=0.0, atol=1e-4 * 1e5)
+        exported.state[0, layout.action] = action  # the held action is the one applied
+        observation, *_ = env.step(action)
+    assert np.abs(action).max() > 0.1
+
+
+def test_a_batch_of_buildings_runs_as_one_each(tmp_path):
+    path = export_onnx(COMMITTED / "best_model.zip", tmp_path / "controller.onnx")
+    rng = np.random.default_rng(2)
+    readings, ground = rng.normal(0.0, 2.0, (20, 4, 5)), rng.normal(0.0, 2.0, (20, 4, 1))
+    batch, singles = OnnxController(path, batch=4), [OnnxController(path) for _ in range(4)]
+    for k in range(20):
+        together = batch.step(readings[k], ground[k])
+        for i, single in enumerate(singles):
+            alone = single.step(readings[k, i : i + 1], ground[k, i : i + 1])[0]
+            np.testing.assert_allclose(together[i], alone, rtol=1e-9, atol=1e-6)
+
+
+def test_rlc_export_writes_the_file_and_refuses_bad_paths(tmp_path):
+    out = tmp_path / "deployed.onnx"
+    done = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "export", str(COMMITTED), "--out", str(out)],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0 and out.is_file() and str(out) in done.stdout
+    refused = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "export", "--out", str(tmp_path / "missing" / "x.onnx")],
+        capture_output=True,
+        text=True,
+    )
+    assert refused.returncode == 2 and "expected a file path in an existing folder" in refused.stderr
+    assert "Traceback" not in refused.stderr
+
+
+def test_rlc_export_refuses_unknown_formats():
+    command = [sys.executable, "-m", "rlcontroller", "export", "--format", "tflite"]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 2 and "--format" in done.stderr

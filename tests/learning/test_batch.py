@@ -1,0 +1,89 @@
+"""The batch steps many buildings as the env steps one: the same responses as `rollout`, record by
+record, for records of different lengths and sampling, on plants with actuator dynamics, sensor
+faults and yielding stories."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from conftest import REPOSITORY
+
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.control.controllers import LQGController, Uncontrolled
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.learning import batch as batch_module
+from rlcontroller.learning.batch import batch_rollout
+from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import synthetic_suite
+
+PLANTS = {
+    "nominal": {},
+    "lag, delay and sensor faults": {
+        "plant": {
+            "stiffness": 0.8,
+            "actuators": {"time_constant": 0.03, "delay_steps": 2},
+            "sensors": {"noise_factor": 2.0, "dead_floors": [2], "bias": [{"floor": 4, "value": 0.05}]},
+        }
+    },
+    "yielding": {"plant": {"hysteresis": {"yield_drift": 0.012}}},
+}
+
+
+def mixed_motions():
+    """Three motions of different lengths sampled at 0.005, 0.01 and 0.02 s."""
+    motions = synthetic_suite(count=3)
+    shortened = replace(motions[1], acceleration=motions[1].acceleration[:601])
+    time = np.arange(motions[2].acceleration.size) * motions[2].dt
+    fine_time = np.arange(0.0, 0.3 * motions[2].duration, motions[2].dt / 4)
+    finer = replace(motions[2], dt=motions[2].dt / 4, acceleration=np.interp(fine_time, time, motions[2].acceleration))
+    coarser = replace(motions[0], dt=motions[0].dt * 2, acceleration=motions[0].acceleration[::2])
+    return [shortened, finer, coarser]
+
+
+@pytest.mark.parametrize("case", list(PLANTS))
+def test_a_batch_of_records_gives_each_record_s_rollout(case):
+    plant = Plant(Experiment.model_validate(PLANTS[case]))
+    motions = mixed_motions()
+    assert len({motion.dt for motion in motions}) == 3 and len({m.acceleration.size for m in motions}) == 3
+    design = plant.design
+    controllers = [
+        Uncontrolled(3),
+        LQGController(design_lqg(design, known_ground=True), design),
+        LQGController(design_lqg_ground_model(design), design, "LQG + ground model"),
+    ]
+    batched = batch_rollout(plant, motions, controllers, seeds=[5, 6, 7])
+    env = BuildingEnv(plant)
+    for controller, runs in zip(controllers, batched, strict=True):
+        for motion, seed, (result, reward) in zip(motions, [5, 6, 7], runs, strict=True):
+            alone, alone_reward = rollout(env, motion, controller, seed=seed)
+            assert reward == pytest.approx(alone_reward, rel=1e-9)
+            assert result.drift.shape == alone.drift.shape
+            for quantity in ("drift", "absolute_acceleration", "base_shear", "force"):
+                expected = alone.quantity(quantity)
+                np.testing.assert_allclose(
+                    result.quantity(quantity), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max()
+                )
+
+
+def test_small_batches_give_the_same_responses_as_one(monkeypatch):
+    plant = Plant(Experiment())
+    motions = mixed_motions()
+    controller = LQGController(design_lqg(plant), plant)
+    whole = batch_rollout(plant, motions, [controller])[0]
+    monkeypatch.setattr(batch_module, "ROWS_PER_BATCH", 1)  # one motion per batch
+    for (one, _), (many, _) in zip(batch_rollout(plant, motions, [controller])[0], whole, strict=True):
+        np.testing.assert_allclose(one.drift, many.drift, rtol=1e-9, atol=1e-12 * np.abs(many.drift).max())
+
+
+def test_the_policy_acts_on_the_batch_as_on_each_record():
+    controller = PolicyController.load(REPOSITORY / "models" / "five_story" / "best_model.zip")
+    plant = Plant(load_experiment(REPOSITORY / "models" / "five_story" / "config.yaml"))
+    motions = mixed_motions()
+    batched = batch_rollout(plant, motions, [controller])[0]
+    env = BuildingEnv(plant)
+    for index, (motion, (result, _)) in enumerate(zip(motions, batched, strict=True)):
+        alone, _ = rollout(env, motion, controller, seed=index)
+        scale = np.abs(alone.force).max()
+        np.testing.assert_allclose(result.force, alone.force, rtol=1e-4, atol=1e-4 * scale)
