@@ -387,6 +387,108 @@ def robustness(
     typer.echo(f"{len(named)} scenarios evaluated in {seconds:.0f} s; tables and plot in {out}")
 
 
+class Engine(str, Enum):
+    local = "local"
+    dask = "dask"
+
+
+@app.command()
+@user_errors
+def tune(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML whose algorithm part has a 'search' space.")],
+    trials: Annotated[int, typer.Option(min=1, max=100_000, help="Trials of the study in all, over every worker.")],
+    storage: Annotated[
+        str | None,
+        typer.Option(help="Optuna storage URL shared by workers on many machines (default: OUT/study.journal)."),
+    ] = None,
+    study: Annotated[str | None, typer.Option(help="Study name (default: the experiment's name).")] = None,
+    jobs: Annotated[int, typer.Option(min=1, max=256, help="Worker processes on this machine.")] = 1,
+    out: Annotated[
+        Path | None, typer.Option(help="Folder of the study's files and trial runs (default: results/tune-NAME).")
+    ] = None,
+) -> None:
+    """Search hyperparameters with Optuna (TPE, median pruning on the validation J1); run the same
+    command on more machines with one --storage to share the study."""
+    from rlcontroller.studies.tuning import tune as run_tuning
+
+    experiment = load(config)
+    name = study or experiment.name
+    folder = out or Path("results") / f"tune-{name}"
+    ran = run_tuning(experiment, trials, storage, name, folder, jobs)
+    typer.echo(f"{ran} trials run here; study {name!r}: trials.csv, best.yaml and plots in {folder}")
+
+
+@app.command()
+@user_errors
+def sweep(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML.")],
+    seeds: Annotated[str, typer.Option(help="Seeds: a range 0-9 or a list 0,3,5.")] = "0-2",
+    set_: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set", help="KEY=V1,V2: a setting and its values (repeatable), e.g. algorithm.kwargs.gamma=0.99,0.999."
+        ),
+    ] = None,
+    engine: Annotated[Engine, typer.Option(help="local: processes here; dask: a Dask cluster.")] = Engine.local,
+    address: Annotated[
+        str | None, typer.Option(help="An existing Dask scheduler (tcp://HOST:8786); default: a local cluster.")
+    ] = None,
+    workers: Annotated[int, typer.Option(min=1, max=1024, help="Runs at once on a local engine or cluster.")] = 2,
+    records: RecordsOption = None,
+    out: Annotated[Path | None, typer.Option(help="Folder of the runs (default: results/sweep-NAME).")] = None,
+) -> None:
+    """Train and evaluate every combination of seeds and settings, then aggregate over seeds. Running
+    the same command again redoes only what is missing."""
+    from rlcontroller.studies.sweep import parse_seeds, parse_setting, plan
+    from rlcontroller.studies.sweep import sweep as run_sweep
+
+    experiment = load(config)
+    if address is not None and engine != Engine.dask:
+        raise ConfigError("--address: only with --engine dask")
+    chosen_seeds, settings = parse_seeds(seeds), [parse_setting(text) for text in set_ or []]
+    folder = out or Path("results") / f"sweep-{experiment.name}"
+    plan(experiment, chosen_seeds, settings, folder)  # every combination checked before any work
+    motion_suite(records, None)  # so is --records
+    results, written = run_sweep(
+        experiment,
+        chosen_seeds,
+        settings,
+        folder,
+        engine.value,
+        workers,
+        address,
+        str(records.resolve()) if records else None,
+        echo=typer.echo,
+    )
+    failed = [result for result in results if result.status == "failed"]
+    if written:
+        typer.echo((folder / "aggregate.md").read_text())
+    typer.echo(
+        f"{len(results) - len(failed)} runs done, {len(failed)} failed; runs, sweep.csv and aggregate in {folder}"
+    )
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command()
+@user_errors
+def aggregate(
+    runs: Annotated[list[Path], typer.Argument(help="Run folders (with evaluation/) or evaluation folders.")],
+    out: Annotated[Path | None, typer.Option(help="Folder of aggregate.csv/.md/.png (default: print only).")] = None,
+) -> None:
+    """Per controller and metric over runs: mean, std, interquartile mean, 95 % stratified-bootstrap intervals."""
+    from rlcontroller.studies.aggregate import aggregate as statistics
+    from rlcontroller.studies.aggregate import markdown, scores, write_aggregate
+
+    table = statistics(scores(runs))
+    title = f"{len(runs)} runs: mean over records and stories, statistics over runs"
+    if out is not None:
+        write_aggregate(table, out, title)
+    typer.echo(markdown(table, title))
+    if out is not None:
+        typer.echo(f"aggregate.csv, aggregate.md and aggregate.png in {out}")
+
+
 class ExportFormat(str, Enum):
     onnx = "onnx"
 

@@ -340,6 +340,33 @@ class PolicyConfig(StrictModel):
     log_std_init: Annotated[float, Field(ge=-20.0, le=5.0)] | None = None
 
 
+class SearchRange(StrictModel):
+    """One tuned setting of `rlc tune`: a number in [low, high] (log-uniform with `log: true`, whole
+    numbers with `integer: true`), or one of `choices` (any YAML values, lists included)."""
+
+    low: float | None = Field(default=None, ge=-1.0e12, le=1.0e12)
+    high: float | None = Field(default=None, ge=-1.0e12, le=1.0e12)
+    log: bool = False
+    integer: bool = False
+    choices: list[Any] | None = Field(default=None, min_length=1, max_length=1000)
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> SearchRange:
+        if self.choices is not None:
+            if self.low is not None or self.high is not None:
+                raise ValueError("give either choices or low and high, not both")
+            return self
+        if self.low is None or self.high is None:
+            raise ValueError("expected low and high (or choices)")
+        if self.low >= self.high:
+            raise ValueError(f"expected low < high, got low {self.low:g}, high {self.high:g}")
+        if self.log and self.low <= 0.0:
+            raise ValueError("a log range needs low > 0")
+        if self.integer and not (self.low.is_integer() and self.high.is_integer()):
+            raise ValueError("an integer range needs whole-number bounds")
+        return self
+
+
 class AlgorithmConfig(StrictModel):
     """The stable-baselines3 learner, its keyword arguments and the training schedule.
 
@@ -349,7 +376,9 @@ class AlgorithmConfig(StrictModel):
     statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
     LQG (+ measured ground) computed from the observation's state estimate (needs
     `sensors.state_estimate`): the agent learns a correction to LQG. `checkpoint_every` and
-    `eval_every` count environment steps.
+    `eval_every` count environment steps. `search` is `rlc tune`'s search space: dotted paths into
+    the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
+    `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
 
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
@@ -363,6 +392,7 @@ class AlgorithmConfig(StrictModel):
     torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
+    search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 
 Factor = Annotated[float, Field(ge=0.05, le=20.0)]
@@ -803,3 +833,27 @@ def finite(value: float, where: str, low: float = 0.0, high: float = math.inf, l
         bracket = "(" if low_open else "["
         raise ConfigError(f"{where}: expected a finite number in {bracket}{low:g}, {high:g}], got {value!r}")
     return value
+
+
+def with_overrides(experiment: Experiment, values: dict[str, Any], where: str) -> Experiment:
+    """The experiment with each dotted path (`algorithm.kwargs.gamma`, `reward.terms.0.weight`) set to
+    its value, validated as a whole; errors name `where` (an option or a trial) and the path."""
+    raw = experiment.model_dump(mode="json")
+    for path, value in values.items():
+        keys = path.split(".")
+        node: Any = raw
+        for depth, key in enumerate(keys):
+            last = depth == len(keys) - 1
+            free = keys[:depth] == ["algorithm", "kwargs"]  # the learner's own keyword arguments
+            if isinstance(node, list):
+                if not key.isdigit() or int(key) >= len(node):
+                    raise ConfigError(f"{where}: {path}: {key!r} is not an index below {len(node)}")
+                key = int(key)
+            elif not isinstance(node, dict) or (key not in node and not (free and last)):
+                options = ", ".join(sorted(node)) if isinstance(node, dict) else "nothing: it is a value"
+                raise ConfigError(f"{where}: {path}: no setting {key!r}; expected one of: {options}")
+            if last:
+                node[key] = value
+            else:
+                node = node[key]
+    return build_experiment(raw, {part: (where, part) for part in PARTS}, where)

@@ -14,11 +14,11 @@ from rlcontroller.config import ConfigError
 def atomic_write(path: Path, content: str | bytes) -> Path:
     """Write text or bytes to `path` through a temporary beside it."""
     write = (lambda t: t.write_bytes(content)) if isinstance(content, bytes) else (lambda t: t.write_text(content))
-    return _replace_with(path, path.with_name(f".{path.name}.tmp"), write)
+    return _replace_with(path, path.with_name(f".{path.name}.{os.getpid()}.tmp"), write)
 
 
 def atomic_savefig(figure, path: Path, dpi: int = 120) -> Path:
-    temporary = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    temporary = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")  # one per writing process
     return _replace_with(path, temporary, lambda temporary: figure.savefig(temporary, dpi=dpi))
 
 

@@ -197,3 +197,29 @@ def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypa
     assert line == "error: s.yaml: scenarios[0].plant.colour: unknown key"
     missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
     assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()
+
+
+STUDY_CASES = {
+    "seeds_backwards": (["sweep", str(SMOKE), "--seeds", "5-2"], "--seeds '5-2': the range 5-2 runs backwards"),
+    "set_without_value": (["sweep", str(SMOKE), "--set", "algorithm.kwargs.gamma"], "expected KEY=VALUE"),
+    "set_unknown_path": (["sweep", str(SMOKE), "--set", "foo.bar=1"], "foo.bar: no setting 'foo'"),
+    "set_bad_value": (["sweep", str(SMOKE), "--set", "algorithm.kwargs.gamma=oops"], "got 'oops'"),
+    "set_twice": (["sweep", str(SMOKE), "--set", "seed=1", "--set", "seed=2"], "a key is set twice"),
+    "address_without_dask": (["sweep", str(SMOKE), "--address", "tcp://h:1"], "--address: only with --engine dask"),
+    "tune_without_space": (["tune", str(SMOKE), "--trials", "2"], "search: empty"),
+    "tune_bad_storage": (
+        ["tune", str(REPOSITORY / "configs" / "five_story.yaml"), "--trials", "2", "--storage", "nonsense://x"],
+        "--storage nonsense://x",
+    ),
+    "aggregate_not_evaluated": (["aggregate", str(REPOSITORY / "configs")], "no evaluation/metrics.csv"),
+    "export_not_a_run": (["export", str(REPOSITORY / "configs")], "not a run folder"),
+}
+
+
+@pytest.mark.parametrize(("arguments", "expected"), list(STUDY_CASES.values()), ids=list(STUDY_CASES))
+def test_bad_study_and_export_arguments_stop_before_any_work(tmp_path, arguments, expected):
+    result = CliRunner().invoke(
+        app, [*arguments, "--out", str(tmp_path / "out")] if arguments[0] != "export" else arguments
+    )
+    assert expected in one_error_line(result)
+    assert not (tmp_path / "out").exists()

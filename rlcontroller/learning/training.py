@@ -12,7 +12,9 @@ import json
 import shutil
 import signal
 import sys
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,6 +49,7 @@ def _callback(
     stop: StopRequest,
     state: dict[str, Any],
     time_limit_s: float | None,
+    on_validation: Callable[[dict[str, float]], bool] | None,
 ):
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -55,6 +58,7 @@ def _callback(
     class TrainingCallback(BaseCallback):
         def _on_training_start(self) -> None:
             self.started = self.session_start = time.perf_counter()
+            self.keep_going = True
 
         def wall_time(self) -> float:
             return state["wall_time_s"] + time.perf_counter() - self.session_start
@@ -68,7 +72,7 @@ def _callback(
             if time_limit_s is not None and time.perf_counter() - self.started >= time_limit_s:
                 state["time_limit_reached"] = True
                 return False
-            return not stop.requested
+            return self.keep_going and not stop.requested
 
         def validate(self) -> None:
             result = validator(self.model)
@@ -77,6 +81,8 @@ def _callback(
             row["episode_reward"] = float(np.mean(episodes)) if episodes else float("nan")
             row.update(result)
             run.append_curve(row)
+            if on_validation is not None and not on_validation(row):
+                state["stopped_by_validation"] = self.keep_going = False
             if result["eval_reward"] > state["best_eval_reward"]:
                 state.update(best_eval_reward=result["eval_reward"], best_steps=self.num_timesteps, best=result)
                 run.save_model(self.model, "best_model")
@@ -99,11 +105,18 @@ class TrainingSummary:
     interrupted: bool
     time_limit_reached: bool = False
     beat_lqg_at: dict[str, float] | None = None
+    stopped_by_validation: bool = False  # `on_validation` asked to stop (a pruned trial)
 
     def line(self) -> str:
         rate = self.steps / self.wall_time_s if self.wall_time_s > 0 else float("nan")
         verb = (
-            "interrupted" if self.interrupted else "stopped at the time limit" if self.time_limit_reached else "trained"
+            "interrupted"
+            if self.interrupted
+            else "stopped at the time limit"
+            if self.time_limit_reached
+            else "stopped early by its validation (pruned)"
+            if self.stopped_by_validation
+            else "trained"
         )
         text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
         if self.beat_lqg_at:
@@ -126,11 +139,14 @@ def train(
     device: str = "auto",
     progress_bar: bool = False,
     time_limit_s: float | None = None,
+    on_validation: Callable[[dict[str, float]], bool] | None = None,
 ) -> TrainingSummary:
     """Train a new run (from `experiment`) or resume one (`resume` = its run folder).
 
     With `time_limit_s`, training stops (as finished, and resumable) once this call has trained
     that long; a new run that fails before its first checkpoint leaves no run folder.
+    `on_validation(row)` sees each learning-curve row as it is logged; returning False stops
+    training the same way (a tuner's pruner).
     """
     import torch
 
@@ -152,8 +168,9 @@ def train(
         model, state = _start(run, experiment, vec_env, device, resume is not None)
         created = resume is None
         stop = StopRequest()
-        previous_handlers = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
-        callback = _callback(run, experiment, Validator(plant), stop, state, time_limit_s)
+        signals = (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()
+        previous_handlers = {s: signal.signal(s, stop) for s in signals}  # none in a worker thread (Dask)
+        callback = _callback(run, experiment, Validator(plant), stop, state, time_limit_s, on_validation)
         remaining = experiment.algorithm.total_steps - model.num_timesteps
         try:
             if remaining > 0:
@@ -183,6 +200,7 @@ def train(
         stop.requested,
         bool(state.get("time_limit_reached")),
         beat[0] if beat else None,
+        bool(state.get("stopped_by_validation")),
     )
 
 
@@ -196,6 +214,7 @@ def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume:
         state.update(_read_state(checkpoints))
         state.pop("steps", None)
         state.pop("time_limit_reached", None)
+        state.pop("stopped_by_validation", None)
         run.truncate_curve(model.num_timesteps)
         return model, state
     tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None

@@ -1,0 +1,89 @@
+"""Statistics over seeds: the interquartile mean, stratified-bootstrap intervals that cover, and the
+tables from evaluation folders."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rlcontroller.config import ConfigError
+from rlcontroller.studies.aggregate import aggregate, interquartile_mean, scores, stratified_bootstrap
+
+
+def test_the_interquartile_mean_drops_a_quarter_at_each_end():
+    assert interquartile_mean(np.arange(1.0, 9.0)) == pytest.approx(4.5)  # mean of 3, 4, 5, 6
+    assert interquartile_mean(np.array([0.4, 0.5, 0.5, 0.6, 0.5, 0.5, 0.5, 90.0])) == pytest.approx(0.5)
+
+
+def test_identical_runs_give_intervals_of_zero_width():
+    matrix = np.tile(np.array([0.3, 0.5, 0.7]), (4, 1))  # 4 runs, 3 records, every run the same
+    intervals = stratified_bootstrap(matrix, np.random.default_rng(0), reps=200)
+    assert intervals["mean_low"] == pytest.approx(0.5) and intervals["mean_high"] == pytest.approx(0.5)
+
+
+def test_the_intervals_cover_the_true_mean_about_95_percent_of_the_time():
+    rng = np.random.default_rng(1)
+    record_means = np.array([0.3, 0.5, 0.7, 0.9, 0.4])
+    covered = 0
+    for _ in range(200):
+        matrix = record_means + rng.normal(0.0, 0.1, (10, 5))  # 10 runs: seed-to-seed spread per record
+        intervals = stratified_bootstrap(matrix, rng, reps=400)
+        covered += intervals["mean_low"] <= record_means.mean() <= intervals["mean_high"]
+    assert 0.85 <= covered / 200 <= 0.99
+
+
+def write_metrics(folder, values: dict[str, list[float]], records=("a", "b")):
+    """An evaluation folder: metrics.csv with one value per controller, record and story."""
+    rows = []
+    for controller, per_record in values.items():
+        for record, value in zip(records, per_record, strict=True):
+            for metric in ("J1", "J2"):
+                rows += [
+                    {
+                        "controller": controller,
+                        "record": record,
+                        "metric": metric,
+                        "index": i,
+                        "value": value + i * 0.01,
+                    }
+                    for i in (1, 2, 3)
+                ]
+    folder.mkdir(parents=True)
+    pd.DataFrame(rows).to_csv(folder / "metrics.csv", index=False)
+    return folder
+
+
+def test_scores_are_means_over_stories_and_statistics_are_over_runs(tmp_path):
+    runs = [write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.1 * s, 0.6], "LQG": [0.5, 0.5]}) for s in range(3)]
+    table = aggregate(scores(runs), reps=300)
+    rl_j1 = table[(table["controller"] == "RL") & (table["metric"] == "J1")].iloc[0]
+    run_means = [np.mean([0.42 + 0.1 * s, 0.62]) for s in range(3)]  # stories 1..3 add 0.01, 0.02, 0.03
+    assert rl_j1["runs"] == 3 and rl_j1["mean"] == pytest.approx(np.mean(run_means))
+    assert rl_j1["std"] == pytest.approx(np.std(run_means, ddof=1))
+    assert rl_j1["mean_low"] <= rl_j1["mean"] <= rl_j1["mean_high"]
+    assert list(dict.fromkeys(table["controller"])) == ["RL", "LQG"]
+
+
+def test_runs_on_different_records_are_refused(tmp_path):
+    one = write_metrics(tmp_path / "one", {"RL": [0.4, 0.5]})
+    other = write_metrics(tmp_path / "other", {"RL": [0.4, 0.5]}, records=("a", "c"))
+    with pytest.raises(ConfigError, match="different records"):
+        scores([one, other])
+
+
+def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
+    runs = [write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.05 * s, 0.6]}) for s in range(3)]
+    out = tmp_path / "aggregate"
+    command = [sys.executable, "-m", "rlcontroller", "aggregate", *map(str, runs), "--out", str(out)]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "Interquartile mean" in done.stdout and "| RL | 3 |" in done.stdout
+    assert {p.name for p in out.iterdir()} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
+    missing = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")], capture_output=True, text=True
+    )
+    assert (
+        missing.returncode == 2 and "no evaluation/metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
+    )

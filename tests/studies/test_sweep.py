@@ -1,0 +1,71 @@
+"""Sweeps: seeds and settings parsed and planned, runs on a Dask cluster of two workers and on local
+processes, a failed run reported while the others go on, and a re-run that redoes nothing done."""
+
+import subprocess
+import sys
+
+import pytest
+import yaml
+from conftest import REPOSITORY
+
+from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.studies.sweep import parse_seeds, parse_setting, plan, sweep
+
+TINY = yaml.safe_load((REPOSITORY / "configs" / "tiny.yaml").read_text())  # a run of a few seconds
+
+
+def test_seeds_and_settings_parse_as_a_user_writes_them():
+    assert parse_seeds("0-3") == [0, 1, 2, 3] and parse_seeds("5,7,9") == [5, 7, 9] and parse_seeds("4") == [4]
+    assert parse_setting("algorithm.kwargs.gamma=0.99,0.999") == ("algorithm.kwargs.gamma", [0.99, 0.999])
+    assert parse_setting("algorithm.policy.net_arch=[64,64],[128]") == ("algorithm.policy.net_arch", [[64, 64], [128]])
+    for bad in ("3-1", "a-b", "1,1", "-2"):
+        with pytest.raises(ConfigError, match="--seeds"):
+            parse_seeds(bad)
+    for bad in ("gamma", "=1", "algorithm.kwargs.gamma=", "algorithm.kwargs.gamma=0.9,,0.99"):
+        with pytest.raises(ConfigError, match="--set"):
+            parse_setting(bad)
+
+
+def test_the_plan_is_the_cartesian_product_and_checks_every_run_first(tmp_path):
+    experiment = Experiment.model_validate(TINY)
+    settings = [("algorithm.kwargs.gamma", [0.9, 0.99]), ("algorithm.policy.net_arch", [[16], [8, 8]])]
+    runs = plan(experiment, [0, 1, 2], settings, tmp_path)
+    assert len(runs) == 12 and len({run.folder for run in runs}) == 12
+    assert runs[0].folder == tmp_path / "gamma=0.9,net_arch=_16_" / "seed0"  # no brackets in paths
+    assert runs[0].group == "gamma=0.9,net_arch=[16]"
+    assert yaml.safe_load(runs[-1].config)["algorithm"]["policy"]["net_arch"] == [8, 8]
+    with pytest.raises(ConfigError, match="algorithm.n_envs"):
+        plan(experiment, [0], [("algorithm.n_envs", [2, 0])], tmp_path)
+    with pytest.raises(ConfigError, match="no setting 'gama'"):
+        plan(experiment, [0], [("algorithm.kwargs.gama.x", [1])], tmp_path)
+
+
+def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(tmp_path):
+    pytest.importorskip("distributed", reason="the distributed extra: pip install -e '.[distributed]'")
+    experiment = Experiment.model_validate(TINY)
+    settings = [("algorithm.kwargs.learning_rate", [0.0003, -1.0])]  # -1: the learner refuses it when it starts
+    lines = []
+    results, written = sweep(experiment, [0, 1], settings, tmp_path, "dask", workers=2, echo=lines.append)
+    by_status = sorted((result.run.settings["algorithm.kwargs.learning_rate"], result.status) for result in results)
+    assert by_status == [(-1.0, "failed"), (-1.0, "failed"), (0.0003, "trained"), (0.0003, "trained")]
+    assert all("Invalid learning rate" in result.error for result in results if result.status == "failed")
+    assert {path.name for path in written} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
+    assert "| learning_rate=0.0003 | RL | 2 |" in (tmp_path / "aggregate.md").read_text()
+    model = tmp_path / "learning_rate=0.0003" / "seed0" / "final_model.zip"
+    stamp = model.stat().st_mtime_ns
+    again, _ = sweep(experiment, [0, 1], settings, tmp_path, "dask", workers=2, echo=lines.append)
+    assert sorted(result.status for result in again) == ["failed", "failed", "finished before", "finished before"]
+    assert model.stat().st_mtime_ns == stamp  # nothing retrained
+    assert "sweep.csv" in {path.name for path in tmp_path.iterdir()}
+
+
+def test_rlc_sweep_on_local_processes(tmp_path):
+    config = tmp_path / "tiny.yaml"
+    config.write_text(yaml.safe_dump(TINY))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(config), "--seeds", "0-1", "--out", str(out)]
+    done = subprocess.run(command, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "2 runs done, 0 failed" in done.stdout and (out / "seed1" / "evaluation" / "metrics.csv").is_file()
+    refused = subprocess.run([*command, "--address", "tcp://nowhere:1"], capture_output=True, text=True)
+    assert refused.returncode == 2 and "--address: only with --engine dask" in refused.stderr
