@@ -239,7 +239,7 @@ def comparison(experiment: Experiment, run_dir: Path | None, model: str, records
 
 
 def print_summary(evaluation, out: Path) -> None:
-    from rlcontroller.evaluation.report import improvement_table, markdown_table, summary_table
+    from rlcontroller.evaluation.report import improvement_table, j1_by_pga, markdown_table, summary_table
 
     typer.echo(f"# {evaluation.label}")
     for name, source in evaluation.sources.items():
@@ -248,6 +248,7 @@ def print_summary(evaluation, out: Path) -> None:
     improvement = improvement_table(evaluation)
     if improvement is not None:
         typer.echo(markdown_table(improvement, digits=1))
+    typer.echo(markdown_table(j1_by_pga(evaluation)))
     typer.echo(f"evaluated {len(evaluation.records)} motions in {evaluation.seconds:.1f} s; tables and plots in {out}")
 
 

@@ -285,9 +285,16 @@ class KanaiTajimiConfig(StrictModel):
     ground_frequency: _range(0.0, 1000.0, low_open=True) = (8.0, 25.0)  # rad/s
     ground_damping: _range(0.0, 10.0, low_open=True) = (0.3, 0.7)
     pga: AccelerationRange = (1.0, 6.0)
+    pga_log: bool = False  # draw the PGA log-uniformly in `pga` (suites spanning weak to strong motions)
     rise_time: DurationRange = (1.0, 3.0)
     strong_duration: Range = (4.0, 12.0)
     decay_rate: Range = (0.2, 0.6)
+
+    @model_validator(mode="after")
+    def _positive_for_log(self) -> KanaiTajimiConfig:
+        if self.pga_log and self.pga[0] <= 0.0:
+            raise ValueError("pga_log needs pga low > 0")
+        return self
 
 
 SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig, Field(discriminator="kind")]
@@ -310,17 +317,27 @@ GeneratorConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | MixtureCon
 
 class ExcitationConfig(StrictModel):
     """Training motions come from `generator`; validation motions are `validation_motions` draws
-    of the same generator with the fixed `validation_seed`."""
+    of `validation_generator` (default: the same generator) with the fixed `validation_seed`."""
 
     generator: GeneratorConfig = NoiseImpulsesConfig()
+    validation_generator: GeneratorConfig | None = None
     validation_motions: Annotated[int, Field(ge=1, le=1000)] = 8
     validation_seed: Seed = 10_000
 
+    @property
+    def validation(self) -> GeneratorConfig:
+        """The generator of the validation motions."""
+        return self.validation_generator or self.generator
+
     def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig]:
-        """The generators motions can come from (the components of a mixture)."""
-        if isinstance(self.generator, MixtureConfig):
-            return [component.generator for component in self.generator.components]
-        return [self.generator]
+        """The generators motions can come from (the components of mixtures), validation included."""
+        sources = []
+        for generator in (self.generator, self.validation_generator):
+            if isinstance(generator, MixtureConfig):
+                sources += [component.generator for component in generator.components]
+            elif generator is not None:
+                sources.append(generator)
+        return sources
 
 
 class SimulationConfig(StrictModel):
@@ -372,8 +389,8 @@ class AlgorithmConfig(StrictModel):
 
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
     gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run in a dummy
-    (same process) or subprocess vector env. `normalize_observations` adds a VecNormalize whose
-    statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
+    (same process) or subprocess vector env. `normalize_observations` and `normalize_rewards` add a
+    VecNormalize whose statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
     LQG (+ measured ground) computed from the observation's state estimate (needs
     `sensors.state_estimate`): the agent learns a correction to LQG. `checkpoint_every` and
     `eval_every` count environment steps. `search` is `rlc tune`'s search space: dotted paths into
@@ -388,6 +405,7 @@ class AlgorithmConfig(StrictModel):
     policy: PolicyConfig = PolicyConfig()
     kwargs: dict[str, Any] = Field(default_factory=lambda: {"gamma": 0.999})
     normalize_observations: bool = False
+    normalize_rewards: bool = False  # scale rewards by a running std of the return (training only)
     residual_lqg: bool = False
     torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000

@@ -92,7 +92,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     observation = g.node("Concat", [*parts, held], "observation", axis=1)
 
     network_input = observation
-    if controller.normalize is not None:
+    if controller.normalize is not None and controller.normalize.norm_obs:
         statistics = controller.normalize.obs_rms
         centred = g.node("Sub", [observation, g.constant("observation_mean", statistics.mean)], "centred")
         spread = np.sqrt(statistics.var + controller.normalize.epsilon)

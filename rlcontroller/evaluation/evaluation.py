@@ -61,6 +61,7 @@ class Evaluation:
     seconds: float = 0.0
     sources: dict[str, str] = field(default_factory=dict)  # controller -> what was evaluated (a model file)
     descriptions: dict[str, str] = field(default_factory=dict)  # record -> event, station ... (may be empty)
+    pgas: dict[str, float] = field(default_factory=dict)  # record -> peak ground acceleration (m/s^2)
 
     @property
     def controllers(self) -> list[str]:
@@ -111,8 +112,11 @@ def evaluate(
                     for i, v in enumerate(values)
                 )
     descriptions = {motion.name: motion.description for motion in motions}
+    pgas = {motion.name: motion.pga for motion in motions}
     seconds = time.perf_counter() - start
-    return Evaluation(label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions)
+    return Evaluation(
+        label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions, pgas=pgas
+    )
 
 
 def compare(plant: Plant, motions: list[GroundMotion], label: str, policy: Path | None = None) -> Evaluation:

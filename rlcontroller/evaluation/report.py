@@ -18,6 +18,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from rlcontroller.evaluation.evaluation import LQG_VARIANTS, OPTIMAL, Evaluation, percent_better  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
+from rlcontroller.physics.excitation import STANDARD_GRAVITY  # noqa: E402
 from rlcontroller.physics.metrics import METRICS  # noqa: E402
 
 COLOURS = {
@@ -84,6 +85,24 @@ def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataF
     return pd.DataFrame.from_dict(rows, orient="index").rename_axis("comparison")
 
 
+PGA_BANDS_G = (0.0, 0.02, 0.1, 0.3, np.inf)  # weak motions, where sensor noise is as large as the signal, first
+
+
+def j1_by_pga(evaluation: Evaluation) -> pd.DataFrame:
+    """Controller x PGA band: mean J1 of the records in the band (mean over stories), and per
+    controller the number of records with J1 > 1 (worse than no control)."""
+    j1 = evaluation.metrics[evaluation.metrics["metric"] == "J1"].groupby(["controller", "record"], sort=False)["value"]
+    per_record = j1.mean().unstack("record")
+    pga = pd.Series({record: evaluation.pgas[record] / STANDARD_GRAVITY for record in per_record.columns})
+    table = pd.DataFrame(index=pd.Index(evaluation.controllers, name="controller"))
+    for low, high in zip(PGA_BANDS_G[:-1], PGA_BANDS_G[1:], strict=True):
+        chosen = pga[(pga >= low) & (pga < high)].index
+        label = f"PGA ≥ {low:g} g" if np.isinf(high) else f"PGA {low:g}–{high:g} g"
+        table[f"{label} ({len(chosen)})"] = per_record[chosen].mean(axis=1) if len(chosen) else np.nan
+    table["records with J1 > 1"] = (per_record > 1.0 + 1e-9).sum(axis=1).astype(object)
+    return table
+
+
 def per_record_frame(evaluation: Evaluation) -> pd.DataFrame:
     wide = evaluation.metrics.pivot_table(
         index=["controller", "record", "metric"], columns="index", values="value", sort=False
@@ -109,6 +128,9 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     text += [markdown_table(summary), ""]
     if improvement is not None:
         text += [markdown_table(improvement, digits=1), ""]
+    by_pga = j1_by_pga(evaluation)
+    written.append(atomic_write(out / "j1_by_pga.csv", by_pga.assign(suite=evaluation.label).to_csv()))
+    text += ["Mean J1 by the record's PGA (number of records in the band):", "", markdown_table(by_pga), ""]
     text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
     atomic_write(out / "summary.md", "\n".join(text))
     stories = ", ".join(str(a.story) for a in evaluation.experiment.actuators)

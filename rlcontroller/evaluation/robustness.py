@@ -4,7 +4,10 @@ Controllers, all run on the scenario's plant (the real building) with the same s
 records: the uncontrolled building; LQG designed on the design model, as deployed in practice;
 LQG re-designed on the true plant (its stiffness, mass, damping, damage, sensor faults, and the
 actuator lag and delay as states of its model; for yielding stories, their initial stiffness) — the
-oracle, the room a perfect linear model would give;
+oracle, the room a perfect linear model would give; when the run was trained with
+`plant_randomization`, LQG designed on the centre of its structural and sensor ranges with the
+nominal actuator dynamics, the robust classical design an engineer would deploy without knowing the
+plant;
 and the RL policy of a run, if given. J1-J4 are taken against the uncontrolled *plant*.
 """
 
@@ -22,10 +25,11 @@ from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
-from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.plant import Plant, centre_of_ranges
 
 NOMINAL_LQG = "LQG (nominal design)"
 ORACLE_LQG = "LQG (re-designed on the plant)"
+CENTRE_LQG = "LQG (centre of the ranges)"
 
 
 def robustness(
@@ -38,6 +42,10 @@ def robustness(
     """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken."""
     start = time.perf_counter()
     learned = PolicyController.load(policy) if policy is not None else None
+    centre = None
+    if experiment.plant_randomization is not None:
+        part = centre_of_ranges(experiment.plant_randomization, experiment.plant)
+        centre = Plant(experiment.model_copy(update={"plant": part, "plant_randomization": None}))
     frames = []
     for scenario in scenarios:
         plant = Plant(experiment.model_copy(update={"plant": scenario.plant}))
@@ -46,6 +54,8 @@ def robustness(
             LQGController(design_lqg(design), design, NOMINAL_LQG),
             LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG),
         ]
+        if centre is not None:
+            controllers.append(LQGController(design_lqg(centre.elastic), centre.elastic, CENTRE_LQG))
         if learned is not None:
             controllers.append(learned)
         result = evaluate(plant, motions, controllers, label, include_optimal=False)

@@ -94,9 +94,23 @@ def make_vec_env(plant: Plant, seed: int):
         vec_env = DummyVecEnv(factories)
     vec_env.seed(seed)
     vec_env = VecMonitor(vec_env)
-    if experiment.algorithm.normalize_observations:
-        vec_env = VecNormalize(vec_env, norm_obs=True, norm_reward=False)
+    algorithm = experiment.algorithm
+    if algorithm.normalize_observations or algorithm.normalize_rewards:
+        vec_env = VecNormalize(
+            vec_env,
+            norm_obs=algorithm.normalize_observations,
+            norm_reward=algorithm.normalize_rewards,
+            gamma=_gamma(experiment),
+        )
     return vec_env
+
+
+def _gamma(experiment: Experiment) -> float:
+    """The learner's discount (the return whose spread scales the rewards)."""
+    gamma = experiment.algorithm.kwargs.get("gamma")
+    if gamma is None:
+        gamma = inspect.signature(algorithm_class(experiment.algorithm.name).__init__).parameters["gamma"].default
+    return float(gamma)
 
 
 def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorboard: Path | None):

@@ -1,9 +1,10 @@
 """Validation: a policy on held-out generated motions, never the real records.
 
-The deterministic policy runs on `excitation.validation_motions` motions drawn with
-`excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same
-motions, and the three LQGs are run once on them as references. With `plant_randomization`, motion i
-runs on the plant drawn with seed i, the same draw for every controller and every validation.
+The deterministic policy runs on `excitation.validation_motions` motions of the validation generator
+(`excitation.validation_generator`, else the training generator) drawn with
+`excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same motions,
+and the three LQGs are run once on them as references. With `plant_randomization`, motion i runs on
+the plant drawn with seed i, the same draw for every controller and every validation.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ class Validator:
     def __init__(self, plant: Plant) -> None:
         self.plant = plant
         excitation = plant.experiment.excitation
-        self.motions = generate_suite(excitation.generator, excitation.validation_motions, excitation.validation_seed)
+        self.motions = generate_suite(excitation.validation, excitation.validation_motions, excitation.validation_seed)
         self.prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None
         bare = Uncontrolled(plant.building.n_actuators)
         self.uncontrolled = [response for response, _ in self._rollouts(bare)]

@@ -276,7 +276,9 @@ def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str 
     acceleration = filtered * envelope
     peak = np.max(np.abs(acceleration))
     if peak > 0:
-        acceleration *= _uniform(rng, config.pga) / peak
+        low, high = config.pga
+        target = float(np.exp(rng.uniform(np.log(low), np.log(high)))) if config.pga_log else _uniform(rng, config.pga)
+        acceleration *= target / peak
     return GroundMotion(name, config.dt, acceleration, synthetic=True)
 
 

@@ -180,6 +180,22 @@ def draw_plant(randomization: PlantRandomization, base: PlantConfig | None, rng:
     return randomized_plant(base, values)
 
 
+def centre_of_ranges(randomization: PlantRandomization, base: PlantConfig | None) -> PlantConfig:
+    """The plant part at the centre of the structural and sensor ranges (the geometric centre of log
+    ranges), with the actuator dynamics of `base` (the nominal ones): what a careful engineer designs
+    on without knowing which plant it will be."""
+    values: dict[str, float] = {}
+    for key in ("stiffness", "mass", "damping", "noise_factor"):
+        bounds = getattr(randomization, key)
+        if bounds is None:
+            continue
+        if bounds.log:
+            values[key] = float(np.sqrt(bounds.low * bounds.high))
+        else:
+            values[key] = 0.5 * (bounds.low + bounds.high)
+    return randomized_plant(base, values)
+
+
 class Plant:
     """An experiment's building with its actuators, sensors and discretisation, built once.
 

@@ -11,7 +11,7 @@ from conftest import REPOSITORY
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
-from rlcontroller.config import load_experiment
+from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.evaluation import report
 from rlcontroller.learning.training import train
 
@@ -220,3 +220,31 @@ def test_equivalent_preview_reads_the_preview_curve_backwards():
     preview = pd.DataFrame({"preview_s": [0.0, 0.1, 0.2, np.inf], "J1": [0.45, 0.40, 0.30, 0.27]})
     assert report.equivalent_preview(preview, 0.35) == pytest.approx(0.15)
     assert report.equivalent_preview(preview, 0.46) is None
+
+
+def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
+    from rlcontroller.control.controllers import Uncontrolled
+    from rlcontroller.evaluation.evaluation import evaluate
+    from rlcontroller.evaluation.report import j1_by_pga
+    from rlcontroller.physics.excitation import STANDARD_GRAVITY, scale_to_pga
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import synthetic_suite
+
+    class Pushing(Uncontrolled):
+        name = "pushes"  # full force on every actuator, whatever happens: worse than nothing
+
+        def act(self, observation):
+            return np.ones(np.shape(observation)[:-1] + (self.n_actuators,))
+
+    motions = synthetic_suite(count=3)
+    motions = [scale_to_pga(m, g * STANDARD_GRAVITY) for m, g in zip(motions, (0.01, 0.05, 0.5), strict=True)]
+    table = j1_by_pga(evaluate(Plant(Experiment()), motions, [Pushing(3)], "SYNTHETIC test", include_optimal=False))
+    assert list(table.columns) == [
+        "PGA 0–0.02 g (1)",
+        "PGA 0.02–0.1 g (1)",
+        "PGA 0.1–0.3 g (0)",
+        "PGA ≥ 0.3 g (1)",
+        "records with J1 > 1",
+    ]
+    assert table.loc["uncontrolled", "records with J1 > 1"] == 0 and table.loc["pushes", "records with J1 > 1"] >= 2
+    assert np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0

@@ -77,3 +77,24 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
         set(table["scenario"]) == {"nominal", "soft"}
         and "## Mean J1 per scenario" in (out / "robustness.md").read_text()
     )
+
+
+def test_a_randomised_run_adds_lqg_designed_on_the_centre_of_its_ranges():
+    from rlcontroller.evaluation.robustness import CENTRE_LQG
+    from rlcontroller.physics.plant import Plant, centre_of_ranges
+
+    ranges = {
+        "stiffness": {"low": 0.6, "high": 1.0},
+        "delay_steps": [0, 2],
+        "noise_factor": {"low": 1, "high": 4, "log": True},
+    }
+    experiment = Experiment.model_validate({"plant_randomization": ranges})
+    part = centre_of_ranges(experiment.plant_randomization, None)
+    assert part.stiffness == pytest.approx(0.8) and part.actuators.delay_steps == 0  # the nominal actuators
+    assert part.sensors.noise_factor == pytest.approx(2.0)  # the geometric centre of a log range
+    assert Plant(experiment.model_copy(update={"plant": part})).n_state == 10
+    scenarios = [Scenario(name="soft", plant={"stiffness": 0.8, "sensors": {"noise_factor": 2.0}})]
+    means = summary(robustness(experiment, scenarios, synthetic_suite(count=2), "SYNTHETIC test")[0])
+    # on the plant at the centre the robust design is the oracle; the nominal design is worse there
+    assert means.loc[("soft", CENTRE_LQG), "J1"] == pytest.approx(means.loc[("soft", ORACLE_LQG), "J1"], rel=1e-9)
+    assert means.loc[("soft", CENTRE_LQG), "J1"] < means.loc[("soft", NOMINAL_LQG), "J1"]

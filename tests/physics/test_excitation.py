@@ -201,3 +201,15 @@ def test_a_mixture_draws_from_its_components_by_weight():
     durations = [generate(mixture, rng).duration for _ in range(400)]
     share = np.mean(np.isclose(durations, 30.0))
     assert 0.68 < share < 0.82
+
+
+def test_a_log_uniform_pga_spans_weak_to_strong_motions():
+    from rlcontroller.config import KanaiTajimiConfig
+
+    config = KanaiTajimiConfig(pga=(0.05, 10.0), pga_log=True)
+    pgas = np.array([motion.pga for motion in generate_suite(config, 200, seed=3)])
+    assert pgas.min() >= 0.05 and pgas.max() <= 10.0 + 1e-9
+    below_half = np.mean(pgas < np.sqrt(0.05 * 10.0))  # the geometric middle splits a log-uniform draw in two
+    assert 0.4 < below_half < 0.6
+    with pytest.raises(ValueError, match="pga_log needs pga low > 0"):
+        KanaiTajimiConfig(pga=(0.0, 1.0), pga_log=True)
