@@ -204,14 +204,16 @@ class MeasurementConfig(StrictModel):
 
 class SensorConfig(StrictModel):
     """Observation: the measurements and the ground acceleration over the last `history` control
-    steps, plus the last action. With `state_estimate`, a steady-state Kalman estimate of the
-    floor displacements and velocities computed from those same noisy readings (and the measured
+    steps, plus the last `action_history` actions (newest first; with actuator delays the commands
+    not yet applied). With `state_estimate`, a steady-state Kalman estimate of the floor
+    displacements and velocities computed from those same noisy readings (and the measured
     ground acceleration) is added, divided by `displacement_scale` (m) and `velocity_scale` (m/s).
     With `ground_model` that estimate also holds the two states of a Kanai-Tajimi ground filter
     (firm soil), i.e. a prediction of the coming ground motion, and a residual policy's prior is
     LQG + ground model."""
 
     history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 5
+    action_history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 1
     measurements: list[MeasurementConfig] = Field(
         default_factory=lambda: [MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.05)],
         min_length=1,

@@ -86,10 +86,11 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     if history > 1:
         blocks.append(g.columns("state", 0, (history - 1) * block, "older_blocks"))
     held = g.columns("state", layout.action.start, layout.action.stop, "held_action")
+    actions = g.columns("state", layout.actions.start, layout.actions.stop, "last_actions")
     parts = [g.node("Concat", blocks, "history", axis=1) if len(blocks) > 1 else blocks[0]]
     if experiment.sensors.state_estimate:
         parts.append(_kalman(g, plant, held))
-    observation = g.node("Concat", [*parts, held], "observation", axis=1)
+    observation = g.node("Concat", [*parts, actions], "observation", axis=1)
 
     network_input = observation
     if controller.normalize is not None and controller.normalize.norm_obs:
@@ -117,7 +118,10 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
-    g.node("Concat", [observation_before_action, action, "ground"], "next_state", axis=1)
+    kept = [observation_before_action, action]
+    if layout.actions.stop > layout.action.stop:  # older actions shift by one
+        kept.append(g.columns(observation, layout.action.start, layout.actions.stop - m, "older_actions"))
+    g.node("Concat", [*kept, "ground"], "next_state", axis=1)
 
     state_size = size + 1
     graph = helper.make_graph(

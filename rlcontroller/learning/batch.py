@@ -181,7 +181,8 @@ class BuildingBatch:
         observations[:, :block] = readings
         if self.kalman is not None:
             self._update_estimates(readings, clipped, slice(None))
-        observations[:, last:] = clipped
+        observations[:, last + self.m :] = observations[:, last : self.layout.size - self.m]  # older actions
+        observations[:, last : last + self.m] = clipped
         terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
         self.previous_action[:] = clipped
         self.outputs = outputs

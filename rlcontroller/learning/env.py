@@ -1,7 +1,7 @@
 """Gymnasium environment: a shear building under one ground motion per episode.
 
-Observation (float32, scaled to order one): H blocks, newest first, then the last action:
-    [readings(t_k), a_g(t_k), readings(t_{k-1}), a_g(t_{k-1}), ..., (estimate), last action]
+Observation (float32, scaled to order one): H blocks, newest first, then the last actions:
+    [readings(t_k), a_g(t_k), readings(t_{k-1}), a_g(t_{k-1}), ..., (estimate), last actions]
 where readings are the configured sensors divided by their scales (with noise), a_g is the
 ground acceleration divided by `ground_scale`, and the last action has m values in [-1, 1].
 With `sensors.state_estimate` a Kalman estimate of [x; x'] from those same readings (scaled)
@@ -302,7 +302,9 @@ class BuildingEnv(gym.Env):
         observation[:block] = outputs[rows.readings]
         if self.kalman is not None:
             self._update_estimate(outputs[rows.readings], clipped)
-        observation[last:] = clipped
+        m = clipped.size
+        observation[last + m :] = observation[last : observation.size - m]  # older actions, if kept
+        observation[last : last + m] = clipped
 
         terms = rows.reward_terms(outputs, clipped, self._previous_action).tolist()
         self._previous_action[:] = clipped

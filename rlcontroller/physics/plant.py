@@ -71,7 +71,8 @@ class ObservationLayout:
     readings: slice
     ground: int
     estimate: slice  # empty without `sensors.state_estimate`
-    action: slice
+    action: slice  # the newest action
+    actions: slice  # the last `sensors.action_history` actions, newest first
     reading_scale: np.ndarray
     ground_scale: float
     estimate_scale: np.ndarray
@@ -123,7 +124,7 @@ def reward_matrices(plant: Plant, terms: list[RewardTerm]) -> tuple[np.ndarray, 
 
 def observation_layout(building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray):
     """H blocks of (readings, ground reading), newest first, the state estimate if configured, then
-    the last action."""
+    the last actions, newest first."""
     n = building.n_floors
     estimate_scale = np.zeros(0)
     if sensors.state_estimate:
@@ -137,10 +138,11 @@ def observation_layout(building: Building, sensors: SensorConfig, n_readings: in
         ground=n_readings,
         estimate=slice(estimate_start, action_start),
         action=slice(action_start, action_start + building.n_actuators),
+        actions=slice(action_start, action_start + sensors.action_history * building.n_actuators),
         reading_scale=reading_scale,
         ground_scale=sensors.ground_scale,
         estimate_scale=estimate_scale,
-        size=action_start + building.n_actuators,
+        size=action_start + sensors.action_history * building.n_actuators,
     )
 
 

@@ -1,6 +1,6 @@
 """The exported ONNX controller, run by onnxruntime in the loop, gives the Python controller's forces
 on whole records: the committed residual policy (Kalman estimate, LQG prior) and a SAC policy with an
-observation normaliser and a sensor history."""
+observation normaliser, a sensor history and the last two actions."""
 
 import subprocess
 import sys
@@ -58,7 +58,9 @@ def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
 def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     import torch
 
-    experiment = Experiment.model_validate({"sensors": {"history": 3}, "algorithm": {"name": "SAC"}})
+    experiment = Experiment.model_validate(
+        {"sensors": {"history": 3, "action_history": 2}, "algorithm": {"name": "SAC"}}
+    )
     plant = Plant(experiment)
     model = algorithm_class("SAC")("MlpPolicy", BuildingEnv(plant), policy_kwargs={"net_arch": [64, 64]}, seed=0)
     with torch.no_grad():  # a policy that acts strongly, so that forces are worth comparing

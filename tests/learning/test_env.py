@@ -11,6 +11,7 @@ from rlcontroller.config import Experiment, MeasurementConfig, RewardTerm, Senso
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.dynamics import simulate
 from rlcontroller.physics.excitation import GroundMotion, read_at2
+from rlcontroller.physics.records import synthetic_suite
 
 NOISE_FREE = Experiment(
     sensors=SensorConfig(
@@ -249,3 +250,16 @@ def test_without_randomize_the_env_runs_the_configured_plant():
     for seed in range(3):
         env.reset(seed=seed)
         assert env.plant.config is None and env.plant.n_state == 10
+
+
+def test_the_last_actions_are_kept_newest_first():
+    env = BuildingEnv(Experiment.model_validate({"sensors": {"action_history": 3}}))
+    layout = env.layout
+    assert layout.actions.stop - layout.actions.start == 9 and layout.size == layout.actions.stop
+    observation, _ = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
+    assert not observation[layout.actions].any()
+    actions = [np.full(3, 0.1), np.full(3, -0.2), np.full(3, 0.3)]
+    for action in actions:
+        observation, *_ = env.step(action)
+    np.testing.assert_allclose(observation[layout.actions], np.concatenate(actions[::-1]), rtol=1e-6)
+    np.testing.assert_allclose(observation[layout.action], actions[-1], rtol=1e-6)

@@ -20,6 +20,7 @@ CASES = {
     },
     "randomised plants, delays of 0-2 steps": {
         "excitation": SHORT_MOTIONS,
+        "sensors": {"action_history": 3},
         "plant_randomization": {
             "stiffness": {"low": 0.7, "high": 1.3},
             "time_constant": {"low": 0.0, "high": 0.03},
