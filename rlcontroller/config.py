@@ -352,11 +352,13 @@ class SimulationConfig(StrictModel):
 
 
 class PolicyConfig(StrictModel):
-    """The MLP; `log_std_init` sets the initial exploration noise of Gaussian policies (log of std)."""
+    """The MLP; `log_std_init` sets the initial exploration noise of Gaussian policies (log of std);
+    `odd` makes the action odd in the observation, a(-o) = -a(o) and a(0) = 0 (PPO and A2C)."""
 
     net_arch: list[Annotated[int, Field(ge=1, le=4096)]] = Field([128, 128, 128], min_length=1, max_length=16)
     activation: Literal["relu", "tanh", "elu", "leaky_relu", "gelu"] = "relu"
     log_std_init: Annotated[float, Field(ge=-20.0, le=5.0)] | None = None
+    odd: bool = False
 
 
 class SearchRange(StrictModel):

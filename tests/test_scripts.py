@@ -19,3 +19,22 @@ def test_prediction_r2_is_one_for_a_sine_and_zero_for_white_noise():
     assert prediction_r2(np.sin(7.0 * time), horizon=10) > 0.999
     noise = np.random.default_rng(0).standard_normal(3000)
     assert abs(prediction_r2(noise, horizon=1)) < 0.02
+
+
+def test_generated_records_are_read_back_as_written(tmp_path):
+    import subprocess
+    import sys
+
+    from rlcontroller.physics.excitation import STANDARD_GRAVITY
+    from rlcontroller.physics.records import load_records
+
+    out = tmp_path / "suite"
+    script = [sys.executable, str(SCRIPTS / "generated_records.py"), str(out), "--count", "4", "--seed", "7"]
+    done = subprocess.run(script, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    motions, label = load_records(out)
+    assert len(motions) == 4 and "4 records" in label
+    manifest = (out / "manifest.csv").read_text().splitlines()[1:]
+    for motion, line in zip(motions, manifest, strict=True):
+        assert abs(motion.pga / STANDARD_GRAVITY - float(line.split(",")[2])) < 1e-3
+        assert abs(motion.dt - 0.02) < 1e-12

@@ -101,14 +101,11 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         clip_obs = float(controller.normalize.clip_obs)
         network_input = g.clip(divided, -clip_obs, clip_obs, "normalised")
     x = g.node("Cast", [network_input], "network_input", to=FLOAT)
-    for index, layer in enumerate(controller.actor.layers):
-        weight = g.constant(f"layer{index}_weight", layer.weight, np.float32)
-        bias = g.constant(f"layer{index}_bias", layer.bias, np.float32)
-        x = g.node("Gemm", [x, weight, bias], f"layer{index}", transB=1)
-        if layer.activation is not None:
-            x = _activation(g, layer.activation, x, f"layer{index}_{layer.activation.lower()}")
-    if controller.actor.squash:
-        x = g.node("Tanh", [x], "squashed")
+    x = _network(g, controller.actor, x, "")
+    if controller.actor.odd:  # (g(o) - g(-o)) / 2
+        mirrored = _network(g, controller.actor, g.node("Neg", ["network_input"], "mirrored_input"), "mirrored_")
+        difference = g.node("Sub", [x, mirrored], "odd_difference")
+        x = g.node("Mul", [difference, g.constant("one_half", 0.5, np.float32)], "odd_action")
     action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, "policy_action")
     if controller.prior is not None:
         estimate = g.columns(observation, layout.estimate.start, layout.estimate.stop, "prior_estimate")
@@ -151,6 +148,17 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     }
     helper.set_model_props(model, metadata)
     return model
+
+
+def _network(g: _Graph, actor, x: str, prefix: str) -> str:
+    """The actor's layers on `x` (float32), node names starting with `prefix`."""
+    for index, layer in enumerate(actor.layers):
+        weight = g.constant(f"layer{index}_weight", layer.weight, np.float32) if not prefix else f"layer{index}_weight"
+        bias = g.constant(f"layer{index}_bias", layer.bias, np.float32) if not prefix else f"layer{index}_bias"
+        x = g.node("Gemm", [x, weight, bias], f"{prefix}layer{index}", transB=1)
+        if layer.activation is not None:
+            x = _activation(g, layer.activation, x, f"{prefix}layer{index}_{layer.activation.lower()}")
+    return g.node("Tanh", [x], f"{prefix}squashed") if actor.squash else x
 
 
 def _kalman(g: _Graph, plant: Plant, held: str) -> str:

@@ -36,9 +36,15 @@ class Actor:
 
     layers: tuple[Layer, ...]
     squash: bool  # tanh on the output (SAC's squashed Gaussian)
+    odd: bool = False  # the action is (g(o) - g(-o)) / 2 (`OddActorCriticPolicy`)
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         x = np.asarray(observation, dtype=np.float32)
+        if self.odd:
+            return 0.5 * (self._network(x) - self._network(-x))
+        return self._network(x)
+
+    def _network(self, x: np.ndarray) -> np.ndarray:
         for layer in self.layers:
             x = x @ layer.weight.T + layer.bias
             if layer.activation is not None:
@@ -79,4 +85,6 @@ def actor_of(model) -> Actor | None:
             layers[-1] = Layer(layers[-1].weight, layers[-1].bias, type(module).__name__)
         else:
             return None
-    return Actor(tuple(layers), squash) if layers else None
+    from rlcontroller.learning.odd_policy import OddActorCriticPolicy
+
+    return Actor(tuple(layers), squash, isinstance(policy, OddActorCriticPolicy)) if layers else None

@@ -49,6 +49,8 @@ def check_algorithm(experiment: Experiment) -> None:
     """Refuse keyword arguments the learner does not take, naming the file and key."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C"):
+        raise ConfigError(f"{location(file, prefix, 'policy.odd')}: only for PPO and A2C, not {algorithm.name}")
     accepted = set(inspect.signature(algorithm_class(algorithm.name).__init__).parameters) - {"self"}
     for key, value in algorithm.kwargs.items():
         where = location(file, prefix, f"kwargs.{key}")
@@ -124,9 +126,14 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
     }
     if algorithm.policy.log_std_init is not None:
         policy_kwargs["log_std_init"] = algorithm.policy.log_std_init
+    policy = "MlpPolicy"
+    if algorithm.policy.odd:
+        from rlcontroller.learning.odd_policy import OddActorCriticPolicy
+
+        policy = OddActorCriticPolicy
     try:
         return algorithm_class(algorithm.name)(
-            "MlpPolicy",
+            policy,
             vec_env,
             policy_kwargs=policy_kwargs,
             seed=seed,

@@ -120,3 +120,26 @@ def test_rlc_export_refuses_unknown_formats():
     command = [sys.executable, "-m", "rlcontroller", "export", "--format", "tflite"]
     done = subprocess.run(command, capture_output=True, text=True)
     assert done.returncode == 2 and "--format" in done.stderr
+
+
+def test_an_odd_policy_exports_with_its_symmetry(tmp_path):
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+
+    experiment = Experiment.model_validate(
+        {"algorithm": {"name": "PPO", "policy": {"net_arch": [32, 32], "odd": True, "log_std_init": -1.0}}}
+    )
+    plant = Plant(experiment)
+    model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
+    controller = PolicyController(model)
+    path = tmp_path / "odd.onnx"
+    path.write_bytes(controller_graph(plant, controller).SerializeToString())
+    exported = OnnxController(path)
+    zero = exported.step(np.zeros((1, 5)), np.zeros((1, 1)))
+    assert np.all(zero == 0.0)  # no readings, no force
+    readings, ground = np.random.default_rng(3).normal(0.0, 2.0, (1, 5)), np.array([[1.5]])
+    exported.reset()
+    force = exported.step(readings, ground)
+    layout, observation = plant.layout, np.zeros(plant.layout.size, dtype=np.float32)
+    observation[layout.readings] = readings[0] / layout.reading_scale
+    observation[layout.ground] = ground[0, 0] / layout.ground_scale
+    np.testing.assert_allclose(force[0], controller.act(observation) * plant.force_limits, rtol=1e-5, atol=1e-2)

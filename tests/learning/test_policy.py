@@ -43,3 +43,44 @@ def test_the_committed_policy_loads_with_its_normaliser_and_prior():
     assert controller.prior is not None and controller.source.endswith("best_model.zip")
     action = controller.act(np.zeros(controller.model.observation_space.shape, dtype=np.float32))
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
+
+
+def test_an_odd_policy_gives_no_force_without_readings_and_mirrors_its_action():
+    from rlcontroller.config import Experiment
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+    from rlcontroller.physics.plant import Plant
+
+    experiment = Experiment.model_validate(
+        {"algorithm": {"name": "PPO", "policy": {"net_arch": [32, 32], "odd": True}}}
+    )
+    model = build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
+    observations = np.random.default_rng(2).standard_normal((20, *model.observation_space.shape)).astype(np.float32)
+    zero = np.zeros((1, *model.observation_space.shape), dtype=np.float32)
+    assert np.all(model.predict(zero, deterministic=True)[0] == 0.0)
+    forward, _ = model.predict(observations, deterministic=True)
+    mirrored, _ = model.predict(-observations, deterministic=True)
+    np.testing.assert_allclose(mirrored, -forward, atol=1e-6)
+    actor = actor_of(model)
+    assert actor.odd
+    np.testing.assert_allclose(np.clip(actor(observations), -1.0, 1.0), forward, rtol=1e-5, atol=1e-6)
+
+
+def test_an_odd_policy_is_refused_for_sac():
+    from rlcontroller.config import ConfigError, Experiment
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+    from rlcontroller.physics.plant import Plant
+
+    experiment = Experiment.model_validate({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
+    with pytest.raises(ConfigError, match="policy.odd: only for PPO and A2C"):
+        build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
+
+
+@pytest.mark.parametrize("name", ["five_story", "five_story_odd", "five_story_robust"])
+def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
+    controller = PolicyController.load(REPOSITORY / "models" / name / "best_model.zip")
+    zero = np.zeros(controller.model.observation_space.shape, dtype=np.float32)
+    action = controller.act(zero)
+    assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
+    assert (name == "five_story_odd") == controller.actor.odd
+    if controller.actor.odd:
+        assert np.all(controller.actor(zero) == 0.0)  # no readings, no residual
