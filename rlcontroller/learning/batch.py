@@ -185,7 +185,6 @@ class BuildingBatch:
         observations[:, last : last + self.m] = clipped
         terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
         self.previous_action[:] = clipped
-        self.outputs = outputs
         return observations, -terms.sum(axis=1), self.k == self.steps
 
     def _advance(self, clipped: np.ndarray) -> np.ndarray:
@@ -242,7 +241,8 @@ def batch_rollout(
     if not controllers:
         return []
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
-    lengths = [(for_control_step(motion, plant.control_dt)[0].size - 1) for motion in motions]
+    sampled = [for_control_step(motion, plant.control_dt) for motion in motions]
+    lengths = [(samples.size - 1) // substeps for samples, substeps in sampled]  # control steps
     order = sorted(range(len(motions)), key=lambda i: lengths[i])
     results: list[list] = [[None] * len(motions) for _ in controllers]
     while order:
