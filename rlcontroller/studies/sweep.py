@@ -15,6 +15,7 @@ import itertools
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import as_completed as local_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -178,13 +179,7 @@ def execute(
 
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = {pool.submit(run_one, run, records): run for run in runs}
-        yield from _as_completed(futures, _local_completed)
-
-
-def _local_completed(futures):
-    from concurrent.futures import as_completed
-
-    return as_completed(futures)
+        yield from _as_completed(futures, local_completed)
 
 
 def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str | None) -> Iterator[RunResult]:
