@@ -75,12 +75,12 @@ def test_an_odd_policy_is_refused_for_sac():
         build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
 
 
-@pytest.mark.parametrize("name", ["five_story", "five_story_odd", "five_story_robust"])
+@pytest.mark.parametrize("name", ["five_story", "five_story_odd", "five_story_robust", "five_story_robust_free"])
 def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
     controller = PolicyController.load(REPOSITORY / "models" / name / "best_model.zip")
     zero = np.zeros(controller.model.observation_space.shape, dtype=np.float32)
     action = controller.act(zero)
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
-    assert (name == "five_story_odd") == controller.actor.odd
+    assert (name in ("five_story_odd", "five_story_robust_free")) == controller.actor.odd
     if controller.actor.odd:
         assert np.all(controller.actor(zero) == 0.0)  # no readings, no residual
