@@ -210,7 +210,12 @@ class SensorConfig(StrictModel):
     ground acceleration) is added, divided by `displacement_scale` (m) and `velocity_scale` (m/s).
     With `ground_model` that estimate also holds the two states of a Kanai-Tajimi ground filter
     (firm soil), i.e. a prediction of the coming ground motion, and a residual policy's prior is
-    LQG + ground model."""
+    LQG + ground model.
+
+    `integration_cutoff` (Hz) is the model-free alternative to `state_estimate`: every reading
+    (ground included) is integrated to a velocity and a displacement through a high-pass at that
+    frequency, as structural health monitoring does (`control.estimation.integration_filter`),
+    and those are added instead, divided by `velocity_scale` and `displacement_scale`."""
 
     history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 5
     action_history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 1
@@ -223,6 +228,7 @@ class SensorConfig(StrictModel):
     ground_noise_std: NoiseStd = 0.05
     state_estimate: bool = False
     ground_model: bool = False
+    integration_cutoff: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
     displacement_scale: Scale = 0.02
     velocity_scale: Scale = 0.2
 
@@ -249,6 +255,12 @@ class RewardTerm(StrictModel):
 
 
 class RewardConfig(StrictModel):
+    """The terms of the reward. With `per_motion`, each episode's terms are divided by the rms of its
+    ground acceleration (in m/s^2) to each term's power: a linear building's reward then does not
+    depend on the motion's intensity, so weak and strong motions count alike, as in J1-J4 (where the
+    plain reward is dominated by the strongest motions and a learner may act on noise in weak ones).
+    LQG's design is unchanged (every quadratic term is scaled alike)."""
+
     terms: list[RewardTerm] = Field(
         default_factory=lambda: [
             RewardTerm(quantity="drift", weight=1.0, scale=0.01),
@@ -258,6 +270,7 @@ class RewardConfig(StrictModel):
         min_length=1,
         max_length=50,
     )
+    per_motion: bool = False
 
     @model_validator(mode="after")
     def _something_to_learn(self) -> RewardConfig:
@@ -397,7 +410,9 @@ class AlgorithmConfig(StrictModel):
     VecNormalize whose statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
     LQG (+ measured ground) computed from the observation's state estimate (needs
     `sensors.state_estimate`): the agent learns a correction to LQG. `checkpoint_every` and
-    `eval_every` count environment steps. `search` is `rlc tune`'s search space: dotted paths into
+    `eval_every` count environment steps; `best_model` is the validation with the highest reward, or
+    with `select_by: J1` the lowest mean J1 (every validation motion counts alike, weak or strong,
+    where the reward is dominated by the strongest). `search` is `rlc tune`'s search space: dotted paths into
     the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
     `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
@@ -414,6 +429,7 @@ class AlgorithmConfig(StrictModel):
     torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
+    select_by: Literal["reward", "J1"] = "reward"
     search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 
@@ -700,6 +716,16 @@ def _check_cross_references(experiment: Experiment) -> None:
         )
     if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
         raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
+    cutoff = experiment.sensors.integration_cutoff
+    if cutoff is not None:
+        where = location(*experiment.origin("sensors"), "integration_cutoff")
+        if experiment.sensors.state_estimate:
+            raise ConfigError(f"{where}: the observation holds either integrated readings or state_estimate, not both")
+        nyquist = 0.5 / experiment.simulation.control_dt
+        if cutoff >= 0.5 * nyquist:
+            raise ConfigError(
+                f"{where}: {cutoff:g} Hz, expected below half the Nyquist frequency ({0.5 * nyquist:g} Hz)"
+            )
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     for index, actuator in enumerate(experiment.actuators):

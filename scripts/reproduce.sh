@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
-# Reproduce the README's Results from a fresh clone: train configs/five_story.yaml and its odd-actor
-# variant (five_story_odd.yaml) with three seeds each and evaluate every run on the seven records
-# (rlc sweep: two runs at a time, mean, std, interquartile mean and bootstrap intervals over seeds),
-# then trace LQG's trade-off and the value of preview. About 15 min on a 2-core machine.
+# Reproduce the README's Results from a fresh clone, three seeds of each learned controller, every run
+# evaluated on the seven records (rlc sweep: two runs at a time; mean, std, interquartile mean and
+# bootstrap intervals over seeds):
+#   1. configs/five_story.yaml (the benchmark) and five_story_odd.yaml (odd actor), then LQG's
+#      trade-off and the value of preview;
+#   2. configs/five_story_robust.yaml (trained on randomised plants), each seed also through
+#      `rlc robustness` (standard scenarios), aggregated per scenario and over all scenarios;
+#   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior).
+# About 1 h 45 min on a 2-core machine.
 #   bash scripts/reproduce.sh [OUT_DIR] [extra rlc sweep options, e.g. --engine dask --address tcp://HOST:8786]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
 set -euo pipefail
@@ -10,9 +15,22 @@ cd "$(dirname "$0")/.."
 records="${RLC_RECORDS:-../shared/records}"
 out="${1:-results/five_story}"
 shift || true
-rlc sweep configs/five_story.yaml --seeds 0-2 --workers 2 --records "$records" --out "$out" "$@"
-rlc sweep configs/five_story_odd.yaml --seeds 0-2 --workers 2 --records "$records" --out "$out/odd" "$@"
+sweep() { rlc sweep "$1" --seeds 0-2 --workers 2 --records "$records" --out "$2" "${@:3}"; }
+
+sweep configs/five_story.yaml "$out" "$@"
+sweep configs/five_story_odd.yaml "$out/odd" "$@"
 if [ ! -f "$out/compare_lqg/summary.csv" ]; then
   rlc compare lqg "$out/seed0" --records "$records" --sweep --preview --out "$out/compare_lqg" > /dev/null
 fi
-echo "runs: $out/seed*, $out/odd/seed*; aggregates: $out/aggregate.md, $out/odd/aggregate.md; LQG trade-off and preview: $out/compare_lqg"
+
+sweep configs/five_story_robust.yaml "$out/robust" "$@"
+for run in "$out"/robust/seed[0-9]*; do
+  if [ ! -f "$run/robustness/robustness.csv" ]; then
+    rlc robustness "$run" --records "$records" --out "$run/robustness" > /dev/null
+  fi
+done
+rlc aggregate "$out"/robust/seed[0-9]*/robustness --out "$out/robust/robustness_aggregate" > /dev/null
+
+sweep configs/five_story_model_free.yaml "$out/model_free" "$@"
+echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust (robustness: $out/robust/robustness_aggregate),"
+echo "$out/model_free; LQG trade-off and preview: $out/compare_lqg"

@@ -58,6 +58,15 @@ CONFIG_CASES = {
     ),
     "scale_inf": ("sensors: {ground_scale: .inf}\n", "sensors.ground_scale: Input should be a finite number"),
     "noise_inf": ("sensors: {ground_noise_std: .inf}\n", "sensors.ground_noise_std: Input should be a finite"),
+    "integration_with_estimate": (
+        "sensors: {integration_cutoff: 0.1, state_estimate: true}\n",
+        "sensors.integration_cutoff: the observation holds either integrated readings or state_estimate",
+    ),
+    "integration_above_nyquist": (
+        "sensors: {integration_cutoff: 3.0}\nsimulation: {control_dt: 0.1}\n",
+        "sensors.integration_cutoff: 3 Hz, expected below half the Nyquist frequency (2.5 Hz)",
+    ),
+    "integration_inf": ("sensors: {integration_cutoff: .inf}\n", "sensors.integration_cutoff: Input should be"),
     "weight_inf": (
         "reward: {terms: [{quantity: drift, weight: .inf, scale: 0.01}]}\n",
         "reward.terms[0].weight: Input should be a finite number",

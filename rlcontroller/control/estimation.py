@@ -1,4 +1,5 @@
-"""Steady-state Kalman filter of the building state from the noisy sensors.
+"""Steady-state Kalman filter of the building state from the noisy sensors, and the model-free
+integration of the readings that some observations hold instead.
 
 Measurements y_k = C z_k + D a_{k-1} + v_k include the feed-through of the action held over the
 step that ended at t_k (absolute accelerations). The ground acceleration is either process noise,
@@ -117,11 +118,45 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     )
 
 
+def integration_filter(cutoff: float, control_dt: float, channels: int, n_actuators: int) -> KalmanFilter:
+    """Model-free integration of `channels` accelerations (the readings, then the ground reading)
+    to velocities and displacements, with no model of the building: per channel the states
+    [h, d, v] of
+
+        H(s) = 1 / (s + w),   D(s) = s / (s + w)^3,   V(s) = s^2 / (s + w)^3   (times A(s)),
+
+    w = 2 pi `cutoff` (Hz). Above the cutoff h and v tend to the velocity (m/s) and d to the
+    displacement (m); the three poles at -w remove a constant bias and the drift of integrated
+    noise. Discretised by backward Euler (s -> (1 - 1/z) / dt), so the newest reading counts.
+    The states are ordered [h of every channel, d of every channel, v of every channel]. In the
+    Kalman filter's form: no prediction from the model, the "gain" feeds the readings in."""
+    w = 2.0 * np.pi * cutoff
+    a = np.array([[-w, 0.0, 0.0], [0.0, 0.0, 1.0], [-w, -w * w, -2.0 * w]])
+    b = np.array([1.0, 0.0, 1.0])
+    step = np.linalg.inv(np.eye(3) - control_dt * a)
+    identity = np.eye(channels)
+    size = 3 * channels
+    return KalmanFilter(
+        phi=np.kron(step, identity),
+        action_gain=np.zeros((size, n_actuators)),
+        ground_gain=np.zeros(size),
+        sensor_c=np.zeros((channels, size)),
+        sensor_d=np.zeros((channels, n_actuators)),
+        gain=np.kron((control_dt * step @ b)[:, None], identity),
+        known_ground=False,
+        measures_ground=True,
+    )
+
+
 def observation_filter(plant: Plant) -> KalmanFilter | None:
-    """The filter of the observation's own state estimate (`sensors.state_estimate`), designed on the
-    design model as every controller is: the ground-model filter with `sensors.ground_model`, else
-    the one with the measured ground as a known input; None without a state estimate."""
+    """The filter of the observation's own estimate: with `sensors.state_estimate` the Kalman filter
+    designed on the design model as every controller is (the ground-model filter with
+    `sensors.ground_model`, else the one with the measured ground as a known input); with
+    `sensors.integration_cutoff` the model-free `integration_filter`; else None."""
     sensors = plant.experiment.sensors
+    if sensors.integration_cutoff is not None:
+        channels = plant.sensors.c.shape[0] + 1
+        return integration_filter(sensors.integration_cutoff, plant.control_dt, channels, plant.building.n_actuators)
     if not sensors.state_estimate:
         return None
     design = plant.design

@@ -88,7 +88,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     held = g.columns("state", layout.action.start, layout.action.stop, "held_action")
     actions = g.columns("state", layout.actions.start, layout.actions.stop, "last_actions")
     parts = [g.node("Concat", blocks, "history", axis=1) if len(blocks) > 1 else blocks[0]]
-    if experiment.sensors.state_estimate:
+    if layout.estimate.stop > layout.estimate.start:
         parts.append(_kalman(g, plant, held))
     observation = g.node("Concat", [*parts, actions], "observation", axis=1)
 
@@ -162,7 +162,7 @@ def _network(g: _Graph, actor, x: str, prefix: str) -> str:
 
 
 def _kalman(g: _Graph, plant: Plant, held: str) -> str:
-    """The scaled Kalman estimate after this step's readings (the env's own filter)."""
+    """The scaled estimate after this step's readings (the env's own filter: Kalman or integration)."""
     layout, kalman = plant.layout, observation_filter(plant)
     previous = g.columns("state", layout.estimate.start, layout.estimate.stop, "previous_scaled_estimate")
     estimate = g.node("Mul", [previous, g.constant("estimate_scale", layout.estimate_scale)], "previous_estimate")

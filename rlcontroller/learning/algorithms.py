@@ -51,6 +51,11 @@ def check_algorithm(experiment: Experiment) -> None:
     file, prefix = experiment.origin("algorithm")
     if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C"):
         raise ConfigError(f"{location(file, prefix, 'policy.odd')}: only for PPO and A2C, not {algorithm.name}")
+    if algorithm.policy.odd and algorithm.normalize_observations:
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
+            "(centring the observation breaks a(-o) = -a(o)); scale the readings in the sensors part instead"
+        )
     accepted = set(inspect.signature(algorithm_class(algorithm.name).__init__).parameters) - {"self"}
     for key, value in algorithm.kwargs.items():
         where = location(file, prefix, f"kwargs.{key}")

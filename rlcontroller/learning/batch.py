@@ -58,6 +58,7 @@ class BuildingBatch:
         self.steps = np.zeros(size, dtype=int)
         self.k = np.zeros(size, dtype=int)
         self.ground_samples: list[np.ndarray] = [np.zeros(1)] * size
+        self.term_factors = np.ones((size, len(self.rows.reward_names)))  # `reward.per_motion`
         self.observations = np.zeros((size, layout.size), dtype=np.float32)
         self.previous_action = np.zeros((size, self.m))
         self._block = layout.ground + 1
@@ -126,6 +127,7 @@ class BuildingBatch:
         forcing[:n_steps, size:][:, self.rows.readings] += readings[1:]
         self.plants[member] = plant
         self.ground_samples[member] = ground
+        self.term_factors[member] = self.rows.term_factors(ground)
         self.steps[member], self.k[member] = n_steps, 0
         self.states[member] = 0.0
         self.previous_action[member] = 0.0
@@ -185,7 +187,7 @@ class BuildingBatch:
         observations[:, last : last + self.m] = clipped
         terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
         self.previous_action[:] = clipped
-        return observations, -terms.sum(axis=1), self.k == self.steps
+        return observations, -(terms * self.term_factors).sum(axis=1), self.k == self.steps
 
     def _advance(self, clipped: np.ndarray) -> np.ndarray:
         """[x_{k+1} | outputs_{k+1}] without the forcing, for every member."""

@@ -6,14 +6,17 @@ where readings are the configured sensors divided by their scales (with noise), 
 ground acceleration divided by `ground_scale`, and the last action has m values in [-1, 1].
 With `sensors.state_estimate` a Kalman estimate of [x; x'] from those same readings (scaled)
 comes before the last action, followed, with `sensors.ground_model`, by the two estimated states
-of a Kanai-Tajimi ground filter. Before the motion starts the history is zero.
+of a Kanai-Tajimi ground filter; with `sensors.integration_cutoff` the model-free integrated
+readings (`control.estimation.integration_filter`) sit there instead. Before the motion starts
+the history is zero.
 
 Action: one value per actuator in [-1, 1], clipped, times the actuator's force limit (N);
 the force is held constant over the control step.
 
 Reward: -sum over terms of weight * sum over components (quantity / scale)^2, the quantities
-taken at the end of the step with the force just applied. `info` holds each term's value
-(`reward_<quantity>`) and the step's drift (m), absolute_acceleration (m/s^2), base_shear (N),
+taken at the end of the step with the force just applied (with `reward.per_motion` each term is
+divided by the episode's rms ground acceleration to its power). `info` holds each term's value
+(`reward_<quantity>`, not divided) and the step's drift (m), absolute_acceleration (m/s^2), base_shear (N),
 force (N) and time (s).
 
 Termination: never (the building is stable); the episode is truncated when the ground motion
@@ -61,6 +64,8 @@ class StepOutputs:
     force: slice
     reward_names: list[str]  # linear terms first, then force-change terms
     reward_starts: np.ndarray  # first row of each term among the reward rows (then the change rows)
+    term_power: np.ndarray  # each term's power, in the order of reward_names
+    per_motion: bool  # `reward.per_motion`
     row_power: np.ndarray
     quadratic: bool  # every term squared
     change_factor: np.ndarray | None  # force limit * weight^(1/power) / scale per change row
@@ -84,6 +89,15 @@ class StepOutputs:
             weighted = np.concatenate([weighted, change], axis=-1)
         values = weighted * weighted if self.quadratic else np.abs(weighted) ** self.row_power
         return np.add.reduceat(values, self.reward_starts, axis=-1)
+
+    def term_factors(self, ground: np.ndarray) -> np.ndarray:
+        """Each term's factor for an episode whose ground acceleration at the control steps is
+        `ground` (m/s^2): 1, or with `reward.per_motion` (1 m/s^2 / rms)^power (rms floored at
+        1e-6 m/s^2)."""
+        if not self.per_motion:
+            return np.ones(self.term_power.size)
+        rms = max(float(np.sqrt(np.mean(np.square(ground)))), 1e-6)
+        return rms ** (-self.term_power)
 
 
 def step_outputs(plant: Plant) -> StepOutputs:
@@ -121,6 +135,8 @@ def step_outputs(plant: Plant) -> StepOutputs:
         force=slice(shear + 1, shear + 1 + m),
         reward_names=[term.label for term in linear_terms + change_terms],
         reward_starts=np.array(starts, dtype=int),
+        term_power=np.array([term.power for term in linear_terms + change_terms]),
+        per_motion=experiment.reward.per_motion,
         row_power=np.concatenate(row_powers),
         quadratic=all(term.power == 2.0 for term in experiment.reward.terms),
         change_factor=change_factor,
@@ -259,6 +275,7 @@ class BuildingEnv(gym.Env):
         else:
             self._prepare_yielding(samples, substeps)
         self.ground_samples = samples[::substeps][: self._n_steps + 1]
+        self._term_factors = self._outputs.term_factors(self.ground_samples)
         readings = noisy_readings(self.plant, self.ground_samples, self.np_random)
         self._forcing[:, self._n_state :][:, self._outputs.readings] += readings[1:]
         self._k = 0
@@ -306,16 +323,16 @@ class BuildingEnv(gym.Env):
         observation[last + m :] = observation[last : observation.size - m]  # older actions, if kept
         observation[last : last + m] = clipped
 
-        terms = rows.reward_terms(outputs, clipped, self._previous_action).tolist()
+        terms = rows.reward_terms(outputs, clipped, self._previous_action)
         self._previous_action[:] = clipped
-        info: dict[str, Any] = dict(zip(rows.reward_names, terms, strict=True))
+        info: dict[str, Any] = dict(zip(rows.reward_names, terms.tolist(), strict=True))
         info["drift"] = outputs[rows.drift]
         info["absolute_acceleration"] = outputs[rows.acceleration]
         info["base_shear"] = outputs[rows.base_shear]
         self._held_force[:] = outputs[rows.force]
         info["force"] = self._held_force.copy()
         info["time"] = k * self.control_dt
-        return observation.copy(), -sum(terms), False, k >= self._n_steps, info
+        return observation.copy(), -float(terms @ self._term_factors), False, k >= self._n_steps, info
 
 
 def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed: int = 0) -> tuple[Response, float]:

@@ -4,13 +4,13 @@ A run folder holds:
     config.yaml            the resolved experiment (with command-line overrides applied)
     run.json               command line, package versions, seed, device used, host, start time
     checkpoints/step_N/    model.zip, replay_buffer.pkl (off-policy), vecnormalize.pkl (if used),
-                           state.json (steps, wall time, best validation reward); written to a
+                           state.json (steps, wall time, best validation); written to a
                            temporary folder and renamed, so the newest complete one is always valid
     learning_curve.csv     steps, wall_time_s, episode_reward, eval_reward, eval_peak_drift_m,
                            eval_J1, eval_J2 (validation on held-out generated motions), and the
                            references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2,
                            lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
-    best_model.zip         the best validation reward so far; final_model.zip at the end
+    best_model.zip         the best validation so far (algorithm.select_by); final_model.zip at the end
     learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
 """
 

@@ -83,8 +83,11 @@ def _callback(
             run.append_curve(row)
             if on_validation is not None and not on_validation(row):
                 state["stopped_by_validation"] = self.keep_going = False
-            if result["eval_reward"] > state["best_eval_reward"]:
-                state.update(best_eval_reward=result["eval_reward"], best_steps=self.num_timesteps, best=result)
+            best = state["best"]
+            if best is None or selection_score(result, algorithm.select_by) > selection_score(
+                best, algorithm.select_by
+            ):
+                state.update(best_steps=self.num_timesteps, best=result)
                 run.save_model(self.model, "best_model")
 
         def checkpoint(self) -> None:
@@ -93,6 +96,11 @@ def _callback(
             run.save_checkpoint(self.model, state)
 
     return TrainingCallback()
+
+
+def selection_score(result: dict[str, float], select_by: str) -> float:
+    """Higher is better: the validation reward, or minus the validation J1 (`algorithm.select_by`)."""
+    return result["eval_reward"] if select_by == "reward" else -result["eval_J1"]
 
 
 @dataclass
@@ -124,7 +132,7 @@ class TrainingSummary:
             text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
         if self.best:
             text += (
-                f"; best validation reward {self.best['eval_reward']:.2f} at step {self.best_steps} "
+                f"; best model at step {self.best_steps}: validation reward {self.best['eval_reward']:.2f}, "
                 f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; LQG J1 {self.best['lqg_J1']:.3f}, "
                 f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f}; "
                 f"LQG + ground model J1 {self.best['lqg_ground_model_J1']:.3f})"
@@ -207,7 +215,7 @@ def train(
 def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, dict[str, Any]]:
     """The model and training state: from the newest checkpoint when resuming, else new (and the
     run folder is created, recording the device the model is on)."""
-    state: dict[str, Any] = {"wall_time_s": 0.0, "best_eval_reward": -float("inf"), "best_steps": None, "best": None}
+    state: dict[str, Any] = {"wall_time_s": 0.0, "best_steps": None, "best": None}
     checkpoints = run.checkpoints()
     if resume and checkpoints:
         model = _load_checkpoint(experiment, checkpoints, vec_env, device)

@@ -70,7 +70,7 @@ class ObservationLayout:
 
     readings: slice
     ground: int
-    estimate: slice  # empty without `sensors.state_estimate`
+    estimate: slice  # empty without `sensors.state_estimate` or `sensors.integration_cutoff`
     action: slice  # the newest action
     actions: slice  # the last `sensors.action_history` actions, newest first
     reading_scale: np.ndarray
@@ -123,10 +123,15 @@ def reward_matrices(plant: Plant, terms: list[RewardTerm]) -> tuple[np.ndarray, 
 
 
 def observation_layout(building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray):
-    """H blocks of (readings, ground reading), newest first, the state estimate if configured, then
-    the last actions, newest first."""
+    """H blocks of (readings, ground reading), newest first, the state estimate or the integrated
+    readings if configured, then the last actions, newest first."""
     n = building.n_floors
     estimate_scale = np.zeros(0)
+    if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
+        channels = n_readings + 1
+        estimate_scale = np.repeat(
+            [sensors.velocity_scale, sensors.displacement_scale, sensors.velocity_scale], channels
+        )
     if sensors.state_estimate:
         estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
         if sensors.ground_model:

@@ -27,8 +27,9 @@ STATISTICS = ["runs", "mean", "std", "mean_low", "mean_high", "iqm", "iqm_low", 
 
 
 def metrics_file(run: Path) -> Path:
-    """The evaluation metrics of a run folder (RUN/evaluation/metrics.csv) or of an evaluation folder."""
-    for candidate in (run / "evaluation" / "metrics.csv", run / "metrics.csv"):
+    """The evaluation metrics of a run folder (RUN/evaluation/metrics.csv), of an evaluation folder, or
+    of a robustness folder (robustness.csv)."""
+    for candidate in (run / "evaluation" / "metrics.csv", run / "metrics.csv", run / "robustness.csv"):
         if candidate.is_file():
             return candidate
     raise ConfigError(
@@ -37,17 +38,28 @@ def metrics_file(run: Path) -> Path:
 
 
 def scores(runs: list[Path]) -> pd.DataFrame:
-    """Long form (run, controller, metric, record, score): each run's mean over stories per record."""
+    """Long form (run, controller, metric, record, score): each run's mean over stories per record.
+    Robustness results add a `group` per scenario and one more, "all scenarios", whose records are
+    every scenario's."""
     frames = []
     for run in runs:
         path = metrics_file(run)
         try:
             frame = pd.read_csv(path)
-            per_record = frame.groupby(["controller", "metric", "record"], sort=False)["value"].mean()
+            keys = ["scenario"] if "scenario" in frame.columns else []
+            per_record = frame.groupby([*keys, "controller", "metric", "record"], sort=False)["value"].mean()
         except (ValueError, KeyError, pd.errors.ParserError) as error:
             raise ConfigError(f"{path}: not an evaluation metrics file ({type(error).__name__}: {error})") from None
-        frames.append(per_record.rename("score").reset_index().assign(run=str(run)))
+        per_record = per_record.rename("score").reset_index().assign(run=str(run))
+        if keys:
+            pooled = per_record.assign(
+                group="all scenarios", record=per_record["scenario"] + ": " + per_record["record"]
+            )
+            per_record = pd.concat([per_record.rename(columns={"scenario": "group"}), pooled.drop(columns="scenario")])
+        frames.append(per_record)
     table = pd.concat(frames, ignore_index=True)
+    if "group" in table.columns and table["group"].isna().any():
+        raise ConfigError("robustness results and evaluations cannot be aggregated together")
     records = table.groupby("run")["record"].apply(frozenset)
     if records.nunique() > 1:
         raise ConfigError("the runs were evaluated on different records; aggregate runs of one motion suite")

@@ -70,11 +70,29 @@ def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     normalize.obs_rms.mean = rng.normal(0.0, 0.1, plant.layout.size)
     normalize.obs_rms.var = rng.uniform(0.2, 3.0, plant.layout.size)
     normalize.training = False
-    controller = PolicyController(model, normalize)
-    path = tmp_path / "sac.onnx"
+    assert_same_forces_open_loop(plant, PolicyController(model, normalize), tmp_path / "sac.onnx")
+
+
+def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
+    """The integration filter runs in the graph as the env runs it."""
+    import torch
+
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+
+    experiment = Experiment.model_validate(
+        {"sensors": {"integration_cutoff": 0.1}, "algorithm": {"name": "PPO", "policy": {"odd": True}}}
+    )
+    plant = Plant(experiment)
+    model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
+    with torch.no_grad():
+        model.policy.action_net.weight.mul_(30.0)
+    assert_same_forces_open_loop(plant, PolicyController(model), tmp_path / "model_free.onnx")
+
+
+def assert_same_forces_open_loop(plant, controller, path):
+    """These random policies are bang-bang controllers; in a closed loop float32 rounding would be
+    amplified, so the Python controller drives the building and both read the same sensors."""
     path.write_bytes(controller_graph(plant, controller).SerializeToString())
-    # This random policy is a bang-bang controller; in a closed loop float32 rounding would be amplified,
-    # so the Python controller drives the building and both read the same sensors at every step.
     env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(path)
     observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
     for _ in range(info["steps"]):

@@ -263,3 +263,33 @@ def test_the_last_actions_are_kept_newest_first():
         observation, *_ = env.step(action)
     np.testing.assert_allclose(observation[layout.actions], np.concatenate(actions[::-1]), rtol=1e-6)
     np.testing.assert_allclose(observation[layout.action], actions[-1], rtol=1e-6)
+
+
+def test_a_reward_per_motion_does_not_depend_on_the_motion_intensity():
+    """Noise-free sensors and LQG (linear in the readings): with `reward.per_motion` a motion and the
+    same motion x 20 give the same return for homogeneous terms of powers 2 and 4 and a force change;
+    without it, 20^2 times more for the quadratic terms."""
+    from rlcontroller.control.controllers import LQGController
+    from rlcontroller.control.lqg import design_lqg
+    from rlcontroller.learning.env import rollout
+    from rlcontroller.physics.plant import Plant
+
+    terms = [
+        {"quantity": "drift", "weight": 1.0, "scale": 0.01},
+        {"quantity": "drift", "weight": 1.0, "scale": 0.02, "power": 4},
+        {"quantity": "force_change", "weight": 0.2, "scale": 1.0e5},
+    ]
+    quiet = {"ground_noise_std": 0.0, "measurements": [{"quantity": "absolute_acceleration", "scale": 5.0}]}
+    weak = synthetic_suite(count=1)[0]
+    weak = GroundMotion("weak", weak.dt, weak.acceleration * (0.001 / np.abs(weak.acceleration).max()))
+    strong = GroundMotion("strong", weak.dt, 20.0 * weak.acceleration)
+    returns = {}
+    for per_motion in (True, False):
+        experiment = Experiment.model_validate({"sensors": quiet, "reward": {"terms": terms, "per_motion": per_motion}})
+        plant = Plant(experiment)
+        env = BuildingEnv(plant)
+        lqg = LQGController(design_lqg(plant), plant)
+        returns[per_motion] = [rollout(env, motion, lqg)[1] for motion in (weak, strong)]
+        assert np.abs(rollout(env, strong, lqg)[0].force).max() < 0.99 * plant.force_limits.min()  # linear
+    np.testing.assert_allclose(returns[True][1], returns[True][0], rtol=1e-3)  # float32 readings into LQG
+    assert returns[False][1] / returns[False][0] > 400  # 20^2 for the quadratic terms, 20^4 for the other

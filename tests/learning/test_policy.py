@@ -75,6 +75,17 @@ def test_an_odd_policy_is_refused_for_sac():
         build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
 
 
+def test_an_odd_policy_is_refused_with_centred_observations():
+    from rlcontroller.config import ConfigError, Experiment
+    from rlcontroller.learning.algorithms import check_algorithm
+
+    experiment = Experiment.model_validate(
+        {"algorithm": {"name": "PPO", "normalize_observations": True, "policy": {"odd": True}}}
+    )
+    with pytest.raises(ConfigError, match="policy.odd: needs normalize_observations: false"):
+        check_algorithm(experiment)
+
+
 @pytest.mark.parametrize("name", ["five_story", "five_story_odd", "five_story_robust", "five_story_robust_free"])
 def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
     controller = PolicyController.load(REPOSITORY / "models" / name / "best_model.zip")

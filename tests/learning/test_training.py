@@ -322,3 +322,39 @@ def load_experiment_from(experiment, folder: Path):
 def curve_of(experiment, run_dir: Path) -> list[dict[str, str]]:
     train(experiment, run_dir=run_dir)
     return curve(run_dir)
+
+
+class ScriptedValidator:
+    """Validation results in a set order: the reward keeps rising, J1 is best at the second one."""
+
+    J1 = [0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
+
+    def __init__(self, plant) -> None:
+        self.calls = 0
+
+    def __call__(self, model) -> dict[str, float]:
+        self.calls += 1
+        j1 = self.J1[self.calls - 1]
+        reference = {f"{name}_J{i}": 1.0 for name in ("lqg", "lqg_ground", "lqg_ground_model") for i in (1, 2)}
+        return {"eval_reward": float(self.calls), "eval_peak_drift_m": 0.01, "eval_J1": j1, "eval_J2": j1} | reference
+
+
+@pytest.mark.parametrize(("select_by", "best_steps"), [("reward", 1024), ("J1", 256)])
+def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypatch, select_by, best_steps):
+    """best_model.zip is the model of the best validation by reward, or by mean J1 (a checkpoint is
+    saved and kept at every validation here, so the two can be compared)."""
+    from stable_baselines3 import PPO
+
+    from rlcontroller.learning import run_folder, training
+
+    monkeypatch.setattr(run_folder, "KEPT_CHECKPOINTS", 100)
+    monkeypatch.setattr(training, "Validator", ScriptedValidator)
+    experiment = load_experiment(REPOSITORY / "configs" / "tiny.yaml")
+    settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": select_by}
+    experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
+    summary = train(experiment, run_dir=tmp_path / "run", device="cpu")
+    assert summary.best_steps == best_steps
+    best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
+    saved = PPO.load(tmp_path / "run" / "checkpoints" / f"step_{best_steps:010d}" / "model.zip", device="cpu")
+    for ours, theirs in zip(best.policy.parameters(), saved.policy.parameters(), strict=True):
+        assert ours.detach().equal(theirs.detach())

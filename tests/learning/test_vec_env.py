@@ -28,6 +28,18 @@ CASES = {
             "noise_factor": {"low": 0.5, "high": 2.0},
         },
     },
+    "integrated readings, model-free, reward per motion": {
+        "excitation": SHORT_MOTIONS,
+        "sensors": {"integration_cutoff": 0.1, "action_history": 2},
+        "reward": {
+            "per_motion": True,
+            "terms": [
+                {"quantity": "drift", "weight": 1.0, "scale": 0.01},
+                {"quantity": "drift", "weight": 1.0, "scale": 0.02, "power": 4},
+                {"quantity": "force_change", "weight": 0.2, "scale": 1.0e5},
+            ],
+        },
+    },
     "yielding stories": {"excitation": SHORT_MOTIONS, "plant": {"hysteresis": {"yield_drift": 0.01}}},
 }
 

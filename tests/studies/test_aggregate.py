@@ -87,3 +87,28 @@ def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
     assert (
         missing.returncode == 2 and "no evaluation/metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
     )
+
+
+def test_robustness_results_aggregate_per_scenario_and_over_all_scenarios(tmp_path):
+    """robustness.csv: one group per scenario and "all scenarios" = every scenario's records pooled."""
+    for run, offset in enumerate([0.0, 0.1]):
+        rows = [
+            {
+                "scenario": scenario,
+                "controller": "RL",
+                "record": record,
+                "metric": "J1",
+                "index": story,
+                "value": base + offset + 0.01 * story,
+            }
+            for scenario, base in (("nominal", 0.4), ("soft", 0.8))
+            for record in ("a", "b")
+            for story in (1, 2)
+        ]
+        (tmp_path / f"seed{run}").mkdir()
+        pd.DataFrame(rows).to_csv(tmp_path / f"seed{run}" / "robustness.csv", index=False)
+    frame = aggregate(scores([tmp_path / "seed0", tmp_path / "seed1"]), reps=50).set_index("group")
+    assert frame.loc["nominal", "mean"] == pytest.approx(0.465)  # 0.4 + 0.05 (seeds) + 0.015 (stories)
+    assert frame.loc["soft", "mean"] == pytest.approx(0.865)
+    assert frame.loc["all scenarios", "mean"] == pytest.approx(0.665)
+    assert frame.loc["all scenarios", "std"] == pytest.approx(np.std([0.615, 0.715], ddof=1))
