@@ -86,12 +86,15 @@ def test_an_odd_policy_is_refused_with_centred_observations():
         check_algorithm(experiment)
 
 
-@pytest.mark.parametrize("name", ["five_story", "five_story_odd", "five_story_robust", "five_story_robust_free"])
+ODD_ACTORS = ["five_story_odd", "five_story_robust_free", "five_story_model_free", "five_story_model_free_robust"]
+
+
+@pytest.mark.parametrize("name", ["five_story", "five_story_robust", *ODD_ACTORS])
 def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
     controller = PolicyController.load(REPOSITORY / "models" / name / "best_model.zip")
     zero = np.zeros(controller.model.observation_space.shape, dtype=np.float32)
     action = controller.act(zero)
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
-    assert (name in ("five_story_odd", "five_story_robust_free")) == controller.actor.odd
+    assert (name in ODD_ACTORS) == controller.actor.odd
     if controller.actor.odd:
         assert np.all(controller.actor(zero) == 0.0)  # no readings, no residual
