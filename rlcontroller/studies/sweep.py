@@ -12,6 +12,9 @@ At the end, one aggregate table over seeds per group (`studies.aggregate`) in OU
 from __future__ import annotations
 
 import itertools
+import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
@@ -177,9 +180,41 @@ def execute(
         return
     import multiprocessing
 
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(run_one, run, records): run for run in runs}
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(),)) as pool:
+        futures = {pool.submit(_run_local, run, records): run for run in runs}
         yield from _as_completed(futures, local_completed)
+
+
+_parent_gone = threading.Event()  # in a local worker: the sweep's process has died
+_running = threading.Event()  # in a local worker: a run is in progress
+
+
+def stop_with_parent(parent: int) -> None:
+    """Worker initializer: once the sweep's process is gone (killed, say by a job's time limit), stop
+    the run in progress as Ctrl-C would (it checkpoints and resumes later) and exit, instead of
+    training on as an orphan beside a sweep started again."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        _parent_gone.set()
+        if not _running.is_set():
+            os._exit(1)
+        os.kill(os.getpid(), signal.SIGTERM)  # `_run_local` exits once the run has stopped
+
+    threading.Thread(target=watch, name="stop-with-parent", daemon=True).start()
+
+
+def _run_local(run: SweepRun, records: str | None) -> RunResult:
+    """`run_one` in a local worker, which exits after it if the sweep has died meanwhile."""
+    _running.set()
+    try:
+        return run_one(run, records)
+    finally:
+        _running.clear()
+        if _parent_gone.is_set():
+            os._exit(1)
 
 
 def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str | None) -> Iterator[RunResult]:

@@ -1,8 +1,11 @@
 """Sweeps: seeds and settings parsed and planned, runs on a Dask cluster of two workers and on local
-processes, a failed run reported while the others go on, and a re-run that redoes nothing done."""
+processes, a failed run reported while the others go on, a re-run that redoes nothing done, and a
+killed sweep whose worker checkpoints and stops."""
 
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
 import yaml
@@ -69,3 +72,47 @@ def test_rlc_sweep_on_local_processes(tmp_path):
     assert "2 runs done, 0 failed" in done.stdout and (out / "seed1" / "evaluation" / "metrics.csv").is_file()
     refused = subprocess.run([*command, "--address", "tcp://nowhere:1"], capture_output=True, text=True)
     assert refused.returncode == 2 and "--address: only with --engine dask" in refused.stderr
+
+
+def test_a_killed_sweep_leaves_no_worker_training_and_its_run_resumable(tmp_path):
+    """SIGKILL to `rlc sweep`: its worker checkpoints and exits instead of training on as an orphan."""
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0"]
+    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while not list((out / "seed0" / "checkpoints").glob("step_*")):
+        assert sweep_process.poll() is None and time.time() < deadline
+        time.sleep(0.2)
+    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    assert len(workers) == 1
+    sweep_process.kill()
+    sweep_process.wait()
+    deadline = time.time() + 60
+    while alive(workers[0]):
+        assert time.time() < deadline, "the worker kept training after its sweep was killed"
+        time.sleep(0.2)
+    newest = sorted((out / "seed0" / "checkpoints").glob("step_*"))[-1]
+    assert (newest / "state.json").is_file() and not (out / "seed0" / "final_model.zip").exists()
+
+
+def children(pid: int) -> list[int]:
+    """Process ids whose parent is `pid` (Linux /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def alive(pid: int) -> bool:
+    """Running (not gone, not a zombie)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
