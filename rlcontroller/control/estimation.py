@@ -12,6 +12,7 @@ a = u / force_limit at the control step.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import control
 import numpy as np
@@ -38,6 +39,18 @@ class KalmanFilter:
     def size(self) -> int:
         return self.phi.shape[0]
 
+    @cached_property
+    def _update_matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Predict and correct folded into one affine map, (I - L C) applied once here instead of at
+        every step: new = estimate @ A + held @ B + measured @ L' (+ previous ground * g)."""
+        correction = np.eye(self.size) - self.gain @ self.sensor_c
+        return (
+            (correction @ self.phi).T,
+            (correction @ self.action_gain - self.gain @ self.sensor_d).T,
+            self.gain.T,
+            correction @ self.ground_gain,
+        )
+
     def update(
         self,
         estimate: np.ndarray,
@@ -50,14 +63,13 @@ class KalmanFilter:
         `readings` (and the ground reading `ground` at the same time, m/s^2); `previous_ground` is the
         one of the step before. Start from a zero estimate, zero action and zero previous ground: the
         prediction is then zero and the first update is the correction alone."""
-        ground = np.asarray(ground, dtype=float)
+        free, action, measured, ground_gain = self._update_matrices
         if self.measures_ground:
-            readings = np.concatenate([readings, ground[..., None]], axis=-1)
-        predicted = estimate @ self.phi.T + held_action @ self.action_gain.T
+            readings = np.concatenate([readings, np.asarray(ground, dtype=float)[..., None]], axis=-1)
+        new = estimate @ free + held_action @ action + readings @ measured
         if self.known_ground:
-            predicted += np.asarray(previous_ground, dtype=float)[..., None] * self.ground_gain
-        innovation = readings - predicted @ self.sensor_c.T - held_action @ self.sensor_d.T
-        return predicted + innovation @ self.gain.T
+            new += np.asarray(previous_ground, dtype=float)[..., None] * ground_gain
+        return new
 
 
 def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
