@@ -72,13 +72,15 @@ class LQGController:
 class LQGPrior:
     """The action of LQG + measured ground, or of LQG + ground model with `sensors.ground_model`
     (action units, unclipped), from an observation that holds the env's own Kalman estimate
-    (`sensors.state_estimate`), for residual policies."""
+    (`sensors.state_estimate`), for residual policies. Designed on `plant`'s design model, as the
+    estimate is: a prior never reads the simulated plant's parameters."""
 
     def __init__(self, plant: Plant) -> None:
         sensors = plant.experiment.sensors
         if not sensors.state_estimate:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
-        design = design_lqg_ground_model(plant) if sensors.ground_model else design_lqg(plant, known_ground=True)
+        model = plant.design
+        design = design_lqg_ground_model(model) if sensors.ground_model else design_lqg(model, known_ground=True)
         layout = plant.layout
         self.feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
         self.feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading

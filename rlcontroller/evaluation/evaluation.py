@@ -156,8 +156,9 @@ def lqg_sweep(
     multipliers: np.ndarray,
     known_ground: bool = False,
 ) -> pd.DataFrame:
-    """LQG's trade-off: mean J1..J4 for the reward's force weights times each multiplier."""
-    experiment = plant.experiment
+    """LQG's trade-off: mean J1..J4 for the reward's force weights times each multiplier (LQG
+    designed on the design model, run on the plant)."""
+    experiment, design = plant.experiment, plant.design
     if not any(term.quantity == "force" for term in experiment.reward.terms):
         raise ValueError("the reward has no force term to sweep")
     rows = []
@@ -167,7 +168,7 @@ def lqg_sweep(
             for term in experiment.reward.terms
         ]
         reward = experiment.reward.model_copy(update={"terms": terms})
-        controller = LQGController(design_lqg(plant, known_ground=known_ground, reward=reward), plant)
+        controller = LQGController(design_lqg(design, known_ground=known_ground, reward=reward), design)
         result = evaluate(plant, motions, [controller], label, include_optimal=False)
         summary = result.summary().loc["LQG"]
         rows.append({"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in METRICS}})

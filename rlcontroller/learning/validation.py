@@ -3,8 +3,9 @@
 The deterministic policy runs on `excitation.validation_motions` motions of the validation generator
 (`excitation.validation_generator`, else the training generator) drawn with
 `excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same motions,
-and the three LQGs are run once on them as references. With `plant_randomization`, motion i runs on
-the plant drawn with seed i, the same draw for every controller and every validation.
+and the three LQGs, designed on the design model as deployed, are run once on them as references.
+With `plant_randomization`, motion i runs on the plant drawn with seed i, the same draw for every
+controller and every validation.
 """
 
 from __future__ import annotations
@@ -31,14 +32,15 @@ class Validator:
         bare = Uncontrolled(plant.building.n_actuators)
         self.uncontrolled = [response for response, _ in self._rollouts(bare)]
         self.reference = {}
+        model = plant.design
         designs = {
-            "lqg": lambda: design_lqg(plant),
-            "lqg_ground": lambda: design_lqg(plant, known_ground=True),
-            "lqg_ground_model": lambda: design_lqg_ground_model(plant),
+            "lqg": lambda: design_lqg(model),
+            "lqg_ground": lambda: design_lqg(model, known_ground=True),
+            "lqg_ground_model": lambda: design_lqg_ground_model(model),
         }
         for prefix, design in designs.items():
             try:
-                lqg = self.run(LQGController(design(), plant))
+                lqg = self.run(LQGController(design(), model))
             except ValueError:  # a reward LQG cannot be designed for
                 lqg = {"eval_J1": float("nan"), "eval_J2": float("nan")}
             self.reference |= {f"{prefix}_J1": lqg["eval_J1"], f"{prefix}_J2": lqg["eval_J2"]}

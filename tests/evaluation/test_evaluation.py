@@ -56,3 +56,13 @@ def test_sweep_trades_force_energy_for_drift():
     assert list(table["force_weight_multiplier"]) == [0.01, 1.0, 100.0]
     assert table["J3"].is_monotonic_decreasing
     assert table["J1"].iloc[-1] > table["J1"].iloc[0]
+
+
+def test_the_sweep_designs_lqg_on_the_design_model_and_runs_it_on_the_plant():
+    softer = Plant(Experiment(plant={"stiffness": 0.7}))
+    motions = synthetic_suite(count=2)
+    table = lqg_sweep(softer, motions, SYNTHETIC_LABEL, np.array([1.0]))
+    deployed = evaluate(softer, motions, [LQGController(design_lqg(softer.design), softer.design)], SYNTHETIC_LABEL)
+    oracle = evaluate(softer, motions, [LQGController(design_lqg(softer), softer)], SYNTHETIC_LABEL)
+    assert table["J1"].iloc[0] == pytest.approx(mean_metric(deployed, "LQG", "J1"), rel=1e-12)
+    assert abs(mean_metric(oracle, "LQG", "J1") - table["J1"].iloc[0]) > 1e-3
