@@ -2,13 +2,14 @@
 
 Controllers, all run on the scenario's plant (the real building) with the same sensors, noise and
 records: the uncontrolled building; LQG designed on the design model, as deployed in practice;
-LQG re-designed on the true plant (its stiffness, mass, damping, damage, sensor faults, and the
-actuator lag and delay as states of its model; for yielding stories, their initial stiffness) — the
-oracle, the room a perfect linear model would give; when the run was trained with
-`plant_randomization`, LQG designed on the centre of its structural and sensor ranges with the
-nominal actuator dynamics, the robust classical design an engineer would deploy without knowing the
-plant;
-and the RL policy of a run, if given. J1-J4 are taken against the uncontrolled *plant*.
+LQG + ground model designed on the design model (it also reads the ground accelerometer and models
+the ground motion, as the learned controllers may); LQG re-designed on the true plant (its
+stiffness, mass, damping, damage, sensor faults, and the actuator lag and delay as states of its
+model; for yielding stories, their initial stiffness) — the oracle, the room a perfect linear model
+would give; when the run was trained with `plant_randomization`, LQG designed on the centre of its
+structural and sensor ranges with the nominal actuator dynamics, the robust classical design an
+engineer would deploy without knowing the plant; and the RL policy of a run, if given. J1-J4 are
+taken against the uncontrolled *plant*.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import pandas as pd
 
 from rlcontroller.config import Experiment, Scenario
 from rlcontroller.control.controllers import Controller, LQGController
-from rlcontroller.control.lqg import design_lqg
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import GroundMotion
@@ -28,6 +29,7 @@ from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
 from rlcontroller.physics.plant import Plant, centre_of_ranges
 
 NOMINAL_LQG = "LQG (nominal design)"
+NOMINAL_GROUND_MODEL = "LQG + ground model (nominal design)"
 ORACLE_LQG = "LQG (re-designed on the plant)"
 CENTRE_LQG = "LQG (centre of the ranges)"
 
@@ -52,6 +54,7 @@ def robustness(
         design = plant.design
         controllers: list[Controller] = [
             LQGController(design_lqg(design), design, NOMINAL_LQG),
+            LQGController(design_lqg_ground_model(design), design, NOMINAL_GROUND_MODEL),
             LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG),
         ]
         if centre is not None:

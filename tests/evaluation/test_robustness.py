@@ -7,7 +7,16 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import ConfigError, Experiment, Scenario, load_scenarios
-from rlcontroller.evaluation.robustness import NOMINAL_LQG, ORACLE_LQG, robustness, stiffness_curve, summary
+from rlcontroller.evaluation.evaluation import compare, mean_metric
+from rlcontroller.evaluation.robustness import (
+    NOMINAL_GROUND_MODEL,
+    NOMINAL_LQG,
+    ORACLE_LQG,
+    robustness,
+    stiffness_curve,
+    summary,
+)
+from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
 
@@ -36,6 +45,16 @@ def test_off_design_the_oracle_wins_and_a_delay_makes_nominal_lqg_amplify(table)
     assert means.loc[("late", NOMINAL_LQG), "J2"] > 1.0 > means.loc[("late", ORACLE_LQG), "J2"]
     curve = stiffness_curve(means, scenarios)
     assert list(curve.index) == [0.7, 1.0] and curve.loc[1.0, NOMINAL_LQG] == curve.loc[1.0, ORACLE_LQG]
+
+
+def test_lqg_with_the_ground_model_is_the_one_evaluate_runs_designed_on_the_design_model():
+    motions = synthetic_suite(count=2)
+    scenarios = [Scenario(name="soft", plant={"stiffness": 0.7})]
+    means = summary(robustness(Experiment(), scenarios, motions, "SYNTHETIC test")[0])
+    softer = Plant(Experiment(plant={"stiffness": 0.7}))
+    expected = mean_metric(compare(softer, motions, "SYNTHETIC test"), "LQG + ground model", "J1")
+    assert means.loc[("soft", NOMINAL_GROUND_MODEL), "J1"] == pytest.approx(expected, rel=1e-12)
+    assert means.loc[("soft", NOMINAL_GROUND_MODEL), "J1"] != means.loc[("soft", NOMINAL_LQG), "J1"]
 
 
 @pytest.mark.parametrize(
@@ -72,7 +91,7 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} == {"robustness.csv", "robustness.md", "robustness.png"}
     table = pd.read_csv(out / "robustness.csv")
-    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, ORACLE_LQG, "RL"}
+    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, NOMINAL_GROUND_MODEL, ORACLE_LQG, "RL"}
     assert (
         set(table["scenario"]) == {"nominal", "soft"}
         and "## Mean J1 per scenario" in (out / "robustness.md").read_text()
