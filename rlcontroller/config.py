@@ -365,10 +365,13 @@ class SimulationConfig(StrictModel):
 
 
 class PolicyConfig(StrictModel):
-    """The MLP; `log_std_init` sets the initial exploration noise of Gaussian policies (log of std);
-    `odd` makes the action odd in the observation, a(-o) = -a(o) and a(0) = 0 (PPO and A2C)."""
+    """The MLP; `net_arch` are the hidden layers of actor and critic, `actor_arch` (if given) the
+    actor's own ([]: a linear actor, the action mean a linear map of the observation);
+    `log_std_init` sets the initial exploration noise of Gaussian policies (log of std); `odd`
+    makes the action odd in the observation, a(-o) = -a(o) and a(0) = 0 (PPO and A2C)."""
 
     net_arch: list[Annotated[int, Field(ge=1, le=4096)]] = Field([128, 128, 128], min_length=1, max_length=16)
+    actor_arch: list[Annotated[int, Field(ge=1, le=4096)]] | None = Field(None, max_length=16)
     activation: Literal["relu", "tanh", "elu", "leaky_relu", "gelu"] = "relu"
     log_std_init: Annotated[float, Field(ge=-20.0, le=5.0)] | None = None
     odd: bool = False

@@ -125,8 +125,12 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
 
     algorithm = experiment.algorithm
     check_algorithm(experiment)
+    net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
+    if algorithm.policy.actor_arch is not None:
+        critic = "vf" if algorithm.name in ("PPO", "A2C") else "qf"
+        net_arch = {"pi": list(algorithm.policy.actor_arch), critic: net_arch}
     policy_kwargs = {
-        "net_arch": list(algorithm.policy.net_arch),
+        "net_arch": net_arch,
         "activation_fn": getattr(torch.nn, ACTIVATIONS[algorithm.policy.activation]),
     }
     if algorithm.policy.log_std_init is not None:

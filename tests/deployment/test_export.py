@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import onnx
+import pytest
 from conftest import REPOSITORY
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
@@ -140,12 +141,12 @@ def test_rlc_export_refuses_unknown_formats():
     assert done.returncode == 2 and "--format" in done.stderr
 
 
-def test_an_odd_policy_exports_with_its_symmetry(tmp_path):
+@pytest.mark.parametrize("actor_arch", [None, []])
+def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch):
     from rlcontroller.learning.algorithms import build_model, make_vec_env
 
-    experiment = Experiment.model_validate(
-        {"algorithm": {"name": "PPO", "policy": {"net_arch": [32, 32], "odd": True, "log_std_init": -1.0}}}
-    )
+    policy = {"net_arch": [32, 32], "actor_arch": actor_arch, "odd": True, "log_std_init": -1.0}
+    experiment = Experiment.model_validate({"algorithm": {"name": "PPO", "policy": policy}})
     plant = Plant(experiment)
     model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
     controller = PolicyController(model)

@@ -65,6 +65,26 @@ def test_an_odd_policy_gives_no_force_without_readings_and_mirrors_its_action():
     np.testing.assert_allclose(np.clip(actor(observations), -1.0, 1.0), forward, rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("name", ["PPO", "SAC"])
+def test_an_empty_actor_arch_gives_a_linear_actor_and_keeps_the_critic(name):
+    import torch
+
+    from rlcontroller.config import Experiment
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+    from rlcontroller.physics.plant import Plant
+
+    policy = {"net_arch": [32, 32], "actor_arch": [], "odd": name == "PPO", "log_std_init": -1.0}
+    experiment = Experiment.model_validate({"algorithm": {"name": name, "policy": policy}})
+    model = build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
+    actor = actor_of(model)
+    assert len(actor.layers) == 1 and actor.layers[0].activation is None
+    critic = model.policy.mlp_extractor.value_net if name == "PPO" else model.policy.critic.qf0
+    assert sum(isinstance(layer, torch.nn.Linear) for layer in critic) == (2 if name == "PPO" else 3)
+    first, second = np.random.default_rng(4).standard_normal((2, 7, *model.observation_space.shape)).astype(np.float32)
+    if name == "PPO":  # odd and linear: the mean is W o, no bias
+        np.testing.assert_allclose(actor(first + second), actor(first) + actor(second), rtol=1e-4, atol=1e-5)
+
+
 def test_an_odd_policy_is_refused_for_sac():
     from rlcontroller.config import ConfigError, Experiment
     from rlcontroller.learning.algorithms import build_model, make_vec_env
