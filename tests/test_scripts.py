@@ -57,3 +57,13 @@ def test_randomized_lqg_on_ranges_of_zero_width_is_lqg_on_that_plant():
     motions = generate_suite(experiment.excitation.validation, 2, 5)
     expected = mean_metric(evaluate(plant, motions, [controller], "test", include_optimal=False), controller.name, "J1")
     assert abs(np.mean(j1[2]) - expected) < 1e-9
+
+
+def test_the_linear_clone_fit_recovers_a_linear_teacher_and_ridge_shrinks_it():
+    fit_linear = load_script("linear_clone").fit_linear
+    rng = np.random.default_rng(1)
+    weights = rng.standard_normal((3, 8))
+    observations = rng.standard_normal((500, 8))
+    np.testing.assert_allclose(fit_linear(observations, observations @ weights.T, 0.0), weights, atol=1e-10)
+    shrunk = fit_linear(observations, observations @ weights.T, 1.0)
+    assert np.linalg.norm(shrunk) < 0.7 * np.linalg.norm(weights)
