@@ -43,24 +43,22 @@ def robustness(
 ) -> tuple[pd.DataFrame, float]:
     """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken."""
     start = time.perf_counter()
-    learned = PolicyController.load(policy) if policy is not None else None
-    centre = None
+    model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
+    designed: list[Controller] = [  # designed once, without knowing the plant
+        LQGController(design_lqg(model), model, NOMINAL_LQG),
+        LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
+    ]
+    robust: list[Controller] = []
     if experiment.plant_randomization is not None:
         part = centre_of_ranges(experiment.plant_randomization, experiment.plant)
-        centre = Plant(experiment.model_copy(update={"plant": part, "plant_randomization": None}))
+        centre = Plant(experiment.model_copy(update={"plant": part, "plant_randomization": None})).elastic
+        robust.append(LQGController(design_lqg(centre), centre, CENTRE_LQG))
+    learned: list[Controller] = [PolicyController.load(policy)] if policy is not None else []
     frames = []
     for scenario in scenarios:
         plant = Plant(experiment.model_copy(update={"plant": scenario.plant}))
-        design = plant.design
-        controllers: list[Controller] = [
-            LQGController(design_lqg(design), design, NOMINAL_LQG),
-            LQGController(design_lqg_ground_model(design), design, NOMINAL_GROUND_MODEL),
-            LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG),
-        ]
-        if centre is not None:
-            controllers.append(LQGController(design_lqg(centre.elastic), centre.elastic, CENTRE_LQG))
-        if learned is not None:
-            controllers.append(learned)
+        oracle = LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG)
+        controllers = [*designed, oracle, *robust, *learned]
         result = evaluate(plant, motions, controllers, label, include_optimal=False)
         frames.append(result.metrics.assign(scenario=scenario.name))
     table = pd.concat(frames, ignore_index=True)
