@@ -67,3 +67,22 @@ def test_the_linear_clone_fit_recovers_a_linear_teacher_and_ridge_shrinks_it():
     np.testing.assert_allclose(fit_linear(observations, observations @ weights.T, 0.0), weights, atol=1e-10)
     shrunk = fit_linear(observations, observations @ weights.T, 1.0)
     assert np.linalg.norm(shrunk) < 0.7 * np.linalg.norm(weights)
+
+
+def test_random_search_runs_plus_and_minus_on_the_same_motions_and_noise():
+    from rlcontroller.config import Experiment
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import synthetic_suite
+
+    paired_log_costs = load_script("linear_random_search").paired_log_costs
+    plant = Plant(Experiment())
+    rng = np.random.default_rng(3)
+    weights = 0.05 * rng.standard_normal((plant.building.n_actuators, plant.layout.size))
+    direction = 0.05 * rng.standard_normal((1, *weights.shape))
+    motions, seeds = synthetic_suite(count=2), [11, 12]
+    plus, minus = paired_log_costs(plant, weights, direction, motions, seeds)
+    swapped_plus, swapped_minus = paired_log_costs(plant, weights, -direction, motions, seeds)
+    assert plus[0] != minus[0]
+    assert swapped_plus[0] == minus[0] and swapped_minus[0] == plus[0]  # the same motion and noise in both lanes
+    zero_plus, zero_minus = paired_log_costs(plant, weights, np.zeros_like(direction), motions, seeds)
+    assert zero_plus[0] == zero_minus[0]
