@@ -11,8 +11,11 @@ difference), and steps along sum_k (f(W + sigma d_k) - f(W - sigma d_k)) d_k sca
 the f's, with f = the mean over the motions of log(-return) (each motion counts by its relative
 change). The policy reads only the experiment's observation (for the model-free config: readings and
 their model-free integrals); no model enters. Every 10 iterations W is validated on the experiment's
-validation motions; the best validation J1 is kept. Writes OUT/weights.npy (the best W) and
-OUT/curve.csv; with --records, prints the best W's J1-J4 on them.
+validation motions; the best validation J1 is kept. Writes OUT/weights.npy (the best W),
+OUT/curve.csv, and the policy as a model folder `rlc evaluate`, `rlc robustness` and `rlc export`
+read: OUT/best_model.zip (the experiment's own PPO policy, which must have a linear odd actor,
+`policy: {actor_arch: [], odd: true}`, with W as its action layer; trained by this script, not by
+PPO) and OUT/config.yaml. With --records, prints the best W's J1-J4 on them.
 
 sb3-contrib's ARS evaluates each candidate on the environment's next episodes, so + and - never see
 the same motion; hence this script rather than that class.
@@ -117,6 +120,22 @@ def random_search(
     return best, curve
 
 
+def as_model(experiment: Experiment, weights: np.ndarray):
+    """The experiment's PPO model with the linear odd actor's action layer set to W (bias 0)."""
+    import torch
+
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+
+    policy = experiment.algorithm.policy
+    if experiment.algorithm.name != "PPO" or policy.actor_arch != [] or not policy.odd:
+        raise SystemExit("the experiment's algorithm must be PPO with policy: {actor_arch: [], odd: true}")
+    model = build_model(experiment, make_vec_env(Plant(experiment), experiment.seed), experiment.seed, "cpu", None)
+    with torch.no_grad():
+        model.policy.action_net.weight.copy_(torch.as_tensor(weights, dtype=torch.float32))
+        model.policy.action_net.bias.zero_()
+    return model
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path, help="a new folder")
@@ -144,9 +163,12 @@ def main() -> None:
     buffer = io.BytesIO()
     np.save(buffer, weights)
     rows = [f"{r['iteration']},{r['seconds']:.1f},{r['J1']:.6f},{r['J2']:.6f}" for r in curve]
+    model = as_model(experiment, weights)
     with new_folder(arguments.out) as staging:
         atomic_write(staging / "weights.npy", buffer.getvalue())
         atomic_write(staging / "curve.csv", "\n".join(["iteration,seconds,J1,J2", *rows]) + "\n")
+        atomic_write(staging / "config.yaml", experiment.model_copy(update={"seed": arguments.seed}).to_yaml())
+        model.save(staging / "best_model.zip")
     best = min(curve, key=lambda row: row["J1"])
     print(f"best validation J1 {best['J1']:.3f} (J2 {best['J2']:.3f}) at iteration {best['iteration']}")
     print(f"weights and learning curve in {arguments.out}")

@@ -6,7 +6,10 @@
 #      trade-off and the value of preview;
 #   2. configs/five_story_robust.yaml (trained on randomised plants), each seed also through
 #      `rlc robustness` (standard scenarios), aggregated per scenario and over all scenarios;
-#   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior).
+#   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior),
+#      its randomised-plant version five_story_model_free_robust.yaml (+ `rlc robustness`), and the
+#      same linear policy learned by random search (scripts/linear_random_search.py, evaluated on the
+#      records and through `rlc robustness`).
 # About 1 h 45 min on a 2-core machine.
 #   bash scripts/reproduce.sh [OUT_DIR] [extra rlc sweep options, e.g. --engine dask --address tcp://HOST:8786]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
@@ -17,6 +20,15 @@ out="${1:-results/five_story}"
 shift || true
 sweep() { rlc sweep "$1" --seeds 0-2 --workers 2 --records "$records" --out "$2" "${@:3}"; }
 
+robustness_of() {  # rlc robustness for every seed of a folder, then the aggregate over seeds
+  for run in "$1"/seed[0-9]*; do
+    if [ ! -f "$run/robustness/robustness.csv" ]; then
+      rlc robustness "$run" --records "$records" --out "$run/robustness" > /dev/null
+    fi
+  done
+  rlc aggregate "$1"/seed[0-9]*/robustness --out "$1/robustness_aggregate" > /dev/null
+}
+
 sweep configs/five_story.yaml "$out" "$@"
 sweep configs/five_story_odd.yaml "$out/odd" "$@"
 if [ ! -f "$out/compare_lqg/summary.csv" ]; then
@@ -24,13 +36,28 @@ if [ ! -f "$out/compare_lqg/summary.csv" ]; then
 fi
 
 sweep configs/five_story_robust.yaml "$out/robust" "$@"
-for run in "$out"/robust/seed[0-9]*; do
-  if [ ! -f "$run/robustness/robustness.csv" ]; then
-    rlc robustness "$run" --records "$records" --out "$run/robustness" > /dev/null
-  fi
-done
-rlc aggregate "$out"/robust/seed[0-9]*/robustness --out "$out/robust/robustness_aggregate" > /dev/null
+robustness_of "$out/robust"
 
 sweep configs/five_story_model_free.yaml "$out/model_free" "$@"
-echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust (robustness: $out/robust/robustness_aggregate),"
-echo "$out/model_free; LQG trade-off and preview: $out/compare_lqg"
+sweep configs/five_story_model_free_robust.yaml "$out/model_free_robust" "$@"
+robustness_of "$out/model_free_robust"
+
+searched="$out/model_free_random_search"
+searches=()
+for seed in 0 1 2; do
+  if [ ! -f "$searched/seed$seed/best_model.zip" ]; then
+    python scripts/linear_random_search.py "$searched/seed$seed" --seed "$seed" > /dev/null &
+    searches+=($!)
+  fi
+done
+for search in ${searches[@]+"${searches[@]}"}; do wait "$search"; done  # a failed search stops the script
+for seed in 0 1 2; do
+  if [ ! -d "$searched/seed$seed/evaluation" ]; then
+    rlc evaluate "$searched/seed$seed" --records "$records" --out "$searched/seed$seed/evaluation" > /dev/null
+  fi
+done
+rlc aggregate "$searched"/seed[0-9]*/evaluation --out "$searched/aggregate" > /dev/null
+robustness_of "$searched"
+
+echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust, $out/model_free, $out/model_free_robust,"
+echo "$searched (robustness: */robustness_aggregate); LQG trade-off and preview: $out/compare_lqg"

@@ -86,3 +86,22 @@ def test_random_search_runs_plus_and_minus_on_the_same_motions_and_noise():
     assert swapped_plus[0] == minus[0] and swapped_minus[0] == plus[0]  # the same motion and noise in both lanes
     zero_plus, zero_minus = paired_log_costs(plant, weights, np.zeros_like(direction), motions, seeds)
     assert zero_plus[0] == zero_minus[0]
+
+
+def test_a_random_search_policy_is_saved_as_a_model_that_acts_as_clip_w_o(tmp_path):
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import load_experiment
+    from rlcontroller.learning.policy import PolicyController
+
+    script = load_script("linear_random_search")
+    experiment = load_experiment(REPOSITORY / "configs" / "five_story_model_free.yaml")
+    rng = np.random.default_rng(5)
+    n = script.Plant(experiment).layout.size
+    weights = 0.3 * rng.standard_normal((3, n))
+    script.as_model(experiment, weights).save(tmp_path / "best_model.zip")
+    (tmp_path / "config.yaml").write_text(experiment.to_yaml())
+    controller = PolicyController.load(tmp_path / "best_model.zip")
+    observations = rng.standard_normal((6, n)).astype(np.float32)
+    expected = script.LinearPolicy(weights).act(observations)
+    np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
