@@ -19,12 +19,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import load_experiment
+from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.excitation import MotionError, generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 
@@ -80,6 +80,7 @@ def main() -> None:
     arguments = parser.parse_args()
 
     plant = Plant(load_experiment(arguments.config))
+    records = load_records(arguments.records)[0] if arguments.records is not None else None  # before the work
     teacher = LQGController(design_lqg(plant.design, known_ground=True), plant.design, "LQG + ground (teacher)")
     observations, actions = teacher_data(plant, teacher, arguments.motions, arguments.seed)
     weights = fit_linear(observations, actions, arguments.ridge)
@@ -91,12 +92,15 @@ def main() -> None:
             excitation.validation, excitation.validation_motions, excitation.validation_seed
         )
     }
-    if arguments.records is not None:
-        suites["records"] = load_records(arguments.records)[0]
+    if records is not None:
+        suites["records"] = records
     for label, motions in suites.items():
         summary = evaluate(plant, motions, [teacher, LinearController(weights)], label, include_optimal=False).summary()
         print(f"\n{label} (mean J1, J2, J3)\n{summary[['J1', 'J2', 'J3']].round(3).to_string()}")
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except (ConfigError, MotionError) as error:  # a bad config, records or output folder: one line
+        raise SystemExit(f"error: {error}") from None

@@ -30,12 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.files import atomic_write, check_new_folder, new_folder
 from rlcontroller.learning.batch import batch_rollout
-from rlcontroller.physics.excitation import GroundMotion, generate_suite
+from rlcontroller.physics.excitation import GroundMotion, MotionError, generate_suite
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
@@ -151,6 +151,7 @@ def main() -> None:
 
     experiment = load_experiment(arguments.config)
     check_new_folder(arguments.out)
+    records = load_records(arguments.records) if arguments.records is not None else None  # before the search
     weights, curve = random_search(
         experiment,
         arguments.seed,
@@ -172,11 +173,14 @@ def main() -> None:
     best = min(curve, key=lambda row: row["J1"])
     print(f"best validation J1 {best['J1']:.3f} (J2 {best['J2']:.3f}) at iteration {best['iteration']}")
     print(f"weights and learning curve in {arguments.out}")
-    if arguments.records is not None:
-        motions, label = load_records(arguments.records)
+    if records is not None:
+        motions, label = records
         summary = evaluate(Plant(experiment), motions, [LinearPolicy(weights)], label, include_optimal=False).summary()
         print(f"{label}\n{summary[['J1', 'J2', 'J3', 'J4']].round(3).to_string()}")
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except (ConfigError, MotionError) as error:  # a bad config, records or output folder: one line
+        raise SystemExit(f"error: {error}") from None

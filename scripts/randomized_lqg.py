@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.learning.batch import batch_rollout
-from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.excitation import MotionError, generate_suite
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant, draw_plant
 
@@ -75,4 +75,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except (ConfigError, MotionError) as error:  # a bad config, records or output folder: one line
+        raise SystemExit(f"error: {error}") from None
