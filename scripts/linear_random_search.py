@@ -31,12 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment, load_experiment
-from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.files import atomic_write, check_new_folder, new_folder
 from rlcontroller.learning.batch import batch_rollout
+from rlcontroller.learning.validation import Validator
 from rlcontroller.physics.excitation import GroundMotion, MotionError, generate_suite
-from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 
@@ -68,24 +67,6 @@ def paired_log_costs(
     return f[: len(deltas)], f[len(deltas) :]
 
 
-class Validation:
-    """Mean J1 and J2 of a policy on the experiment's validation motions (nominal plant)."""
-
-    def __init__(self, plant: Plant) -> None:
-        excitation = plant.experiment.excitation
-        self.plant = plant
-        self.motions = generate_suite(excitation.validation, excitation.validation_motions, excitation.validation_seed)
-        self.bare = [
-            response
-            for response, _ in batch_rollout(plant, self.motions, [Uncontrolled(plant.building.n_actuators)])[0]
-        ]
-
-    def __call__(self, weights: np.ndarray) -> tuple[float, float]:
-        runs = batch_rollout(self.plant, self.motions, [LinearPolicy(weights)])[0]
-        metrics = [j_metrics(response, bare) for (response, _), bare in zip(runs, self.bare, strict=True)]
-        return float(np.mean([np.mean(m["J1"]) for m in metrics])), float(np.mean([np.mean(m["J2"]) for m in metrics]))
-
-
 def random_search(
     experiment: Experiment,
     seed: int,
@@ -98,7 +79,7 @@ def random_search(
 ) -> tuple[np.ndarray, list[dict[str, float]]]:
     """The best-validated W and the learning curve (iteration, seconds, validation J1 and J2)."""
     plant = Plant(experiment)
-    validation = Validation(plant)
+    validator = Validator(plant)
     rng = np.random.default_rng(seed)
     weights = np.zeros((plant.building.n_actuators, plant.layout.size))
     best_j1, best = np.inf, weights.copy()
@@ -112,7 +93,8 @@ def random_search(
         spread = float(np.std(np.concatenate([plus, minus]))) or 1.0
         weights = weights - step / (directions * spread * sigma) * np.tensordot(plus - minus, deltas, axes=1)
         if iteration % 10 == 0:
-            j1, j2 = validation(weights)
+            result = validator.run(LinearPolicy(weights))
+            j1, j2 = result["eval_J1"], result["eval_J2"]
             if j1 < best_j1:
                 best_j1, best = j1, weights.copy()
             curve.append({"iteration": iteration, "seconds": time.perf_counter() - start, "J1": j1, "J2": j2})

@@ -40,23 +40,21 @@ def test_generated_records_are_read_back_as_written(tmp_path):
         assert abs(motion.dt - 0.02) < 1e-12
 
 
-def test_randomized_lqg_on_ranges_of_zero_width_is_lqg_on_that_plant():
-    from rlcontroller.config import Experiment, PlantConfig, PlantRandomization
-    from rlcontroller.control.controllers import LQGController
-    from rlcontroller.control.lqg import design_lqg_ground_model
-    from rlcontroller.evaluation.evaluation import evaluate, mean_metric
-    from rlcontroller.physics.excitation import generate_suite
+def test_randomized_lqg_is_the_validation_reference_on_more_motions():
+    from rlcontroller.config import Experiment, PlantRandomization
+    from rlcontroller.learning.validation import Validator
     from rlcontroller.physics.plant import Plant
 
-    ranges = PlantRandomization(stiffness={"low": 0.8, "high": 0.8}, delay_steps=(1, 1))
+    ranges = PlantRandomization(stiffness={"low": 0.7, "high": 1.2}, delay_steps=(0, 2))
     experiment = Experiment(plant_randomization=ranges)
-    names, j1, _, delays = load_script("randomized_lqg").randomized_lqg(experiment, count=2, seed=5)
-    assert names[2] == "LQG + ground model" and list(delays) == [1, 1]
-    plant = Plant(Experiment(plant=PlantConfig(stiffness=0.8, actuators={"delay_steps": 1})))
-    controller = LQGController(design_lqg_ground_model(plant.design), plant.design, "LQG + ground model")
-    motions = generate_suite(experiment.excitation.validation, 2, 5)
-    expected = mean_metric(evaluate(plant, motions, [controller], "test", include_optimal=False), controller.name, "J1")
-    assert abs(np.mean(j1[2]) - expected) < 1e-9
+    excitation = experiment.excitation.model_copy(update={"validation_motions": 3, "validation_seed": 5})
+    experiment = experiment.model_copy(update={"excitation": excitation})
+    names, j1, j2 = load_script("randomized_lqg").randomized_lqg(experiment, count=3, seed=5)
+    reference = Validator(Plant(experiment)).reference
+    assert names == ["LQG", "LQG + ground", "LQG + ground model"]
+    for row, prefix in enumerate(("lqg", "lqg_ground", "lqg_ground_model")):
+        assert abs(np.mean(j1[row]) - reference[f"{prefix}_J1"]) < 1e-12
+        assert abs(np.mean(j2[row]) - reference[f"{prefix}_J2"]) < 1e-12
 
 
 def test_the_linear_clone_fit_recovers_a_linear_teacher_and_ridge_shrinks_it():
