@@ -10,8 +10,9 @@ numbers: a strong motion's return is 10^4 times a weak one's, which would otherw
 difference), and steps along sum_k (f(W + sigma d_k) - f(W - sigma d_k)) d_k scaled by the spread of
 the f's, with f = the mean over the motions of log(-return) (each motion counts by its relative
 change). The policy reads only the experiment's observation (for the model-free config: readings and
-their model-free integrals); no model enters. Every 10 iterations W is validated on the experiment's
-validation motions; the best validation J1 is kept. Writes OUT/weights.npy (the best W),
+their model-free integrals); no model enters. With `plant_randomization` every motion runs on a plant
+drawn with its seed (the same for + and -). Every 10 iterations W is validated on the experiment's
+validation motions (and plants); the best validation J1 is kept. Writes OUT/weights.npy (the best W),
 OUT/curve.csv, and the policy as a model folder `rlc evaluate`, `rlc robustness` and `rlc export`
 read: OUT/best_model.zip (the experiment's own PPO policy, which must have a linear odd actor,
 `policy: {actor_arch: [], odd: true}`, with W as its action layer; trained by this script, not by
@@ -60,9 +61,10 @@ class LinearPolicy:
 def paired_log_costs(
     plant: Plant, weights: np.ndarray, deltas: np.ndarray, motions: list[GroundMotion], seeds: list[int]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """f(W + d_k) and f(W - d_k) for every direction, all on the same motions and noise seeds."""
+    """f(W + d_k) and f(W - d_k) for every direction, all on the same motions, noise seeds and (with
+    `plant_randomization`) plants drawn from those seeds."""
     policies = [LinearPolicy(weights + d) for d in deltas] + [LinearPolicy(weights - d) for d in deltas]
-    runs = batch_rollout(plant, motions, policies, seeds=seeds)
+    runs = batch_rollout(plant, motions, policies, seeds=seeds, randomize=True)
     f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
     return f[: len(deltas)], f[len(deltas) :]
 
