@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
-from rlcontroller.control.controllers import LQGController
+from rlcontroller.control.controllers import LinearFeedback, LQGController
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.env import BuildingEnv
@@ -36,21 +36,6 @@ def fit_linear(observations: np.ndarray, actions: np.ndarray, ridge: float) -> n
     x = np.asarray(observations, dtype=float)
     gram = x.T @ x + ridge * len(x) * np.eye(x.shape[1])
     return np.linalg.solve(gram, x.T @ np.asarray(actions, dtype=float)).T
-
-
-class LinearController:
-    """a = clip(W o): the fitted clone."""
-
-    name = "linear clone of LQG + ground"
-
-    def __init__(self, weights: np.ndarray) -> None:
-        self.weights = weights
-
-    def reset(self) -> None:
-        pass
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        return np.clip(np.asarray(observation, dtype=float) @ self.weights.T, -1.0, 1.0)
 
 
 def teacher_data(plant: Plant, teacher: LQGController, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -95,7 +80,13 @@ def main() -> None:
     if records is not None:
         suites["records"] = records
     for label, motions in suites.items():
-        summary = evaluate(plant, motions, [teacher, LinearController(weights)], label, include_optimal=False).summary()
+        summary = evaluate(
+            plant,
+            motions,
+            [teacher, LinearFeedback(weights, "linear clone of LQG + ground")],
+            label,
+            include_optimal=False,
+        ).summary()
         print(f"\n{label} (mean J1, J2, J3)\n{summary[['J1', 'J2', 'J3']].round(3).to_string()}")
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment, load_experiment
+from rlcontroller.control.controllers import LinearFeedback
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.files import atomic_write, check_new_folder, new_folder
 from rlcontroller.learning.batch import batch_rollout
@@ -41,21 +42,7 @@ from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 
 REPOSITORY = Path(__file__).resolve().parents[1]
-
-
-class LinearPolicy:
-    """a = clip(W o): odd in the observation, no bias."""
-
-    name = "RL (linear, random search)"
-
-    def __init__(self, weights: np.ndarray) -> None:
-        self.weights = weights
-
-    def reset(self) -> None:
-        pass
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        return np.clip(np.asarray(observation, dtype=float) @ self.weights.T, -1.0, 1.0)
+POLICY = "RL (linear, random search)"
 
 
 def paired_log_costs(
@@ -63,7 +50,7 @@ def paired_log_costs(
 ) -> tuple[np.ndarray, np.ndarray]:
     """f(W + d_k) and f(W - d_k) for every direction, all on the same motions, noise seeds and (with
     `plant_randomization`) plants drawn from those seeds."""
-    policies = [LinearPolicy(weights + d) for d in deltas] + [LinearPolicy(weights - d) for d in deltas]
+    policies = [LinearFeedback(weights + d) for d in deltas] + [LinearFeedback(weights - d) for d in deltas]
     runs = batch_rollout(plant, motions, policies, seeds=seeds, randomize=True)
     f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
     return f[: len(deltas)], f[len(deltas) :]
@@ -95,7 +82,7 @@ def random_search(
         spread = float(np.std(np.concatenate([plus, minus]))) or 1.0
         weights = weights - step / (directions * spread * sigma) * np.tensordot(plus - minus, deltas, axes=1)
         if iteration % 10 == 0:
-            result = validator.run(LinearPolicy(weights))
+            result = validator.run(LinearFeedback(weights))
             j1, j2 = result["eval_J1"], result["eval_J2"]
             if j1 < best_j1:
                 best_j1, best = j1, weights.copy()
@@ -159,7 +146,9 @@ def main() -> None:
     print(f"weights and learning curve in {arguments.out}")
     if records is not None:
         motions, label = records
-        summary = evaluate(Plant(experiment), motions, [LinearPolicy(weights)], label, include_optimal=False).summary()
+        summary = evaluate(
+            Plant(experiment), motions, [LinearFeedback(weights, POLICY)], label, include_optimal=False
+        ).summary()
         print(f"{label}\n{summary[['J1', 'J2', 'J3', 'J4']].round(3).to_string()}")
 
 

@@ -42,6 +42,20 @@ class Uncontrolled:
         return np.zeros(np.shape(observation)[:-1] + (self.n_actuators,))
 
 
+class LinearFeedback:
+    """a = clip(W o): a fixed linear map of the observation, odd (no bias); W is (m, observation size)."""
+
+    def __init__(self, weights: np.ndarray, name: str = "linear feedback") -> None:
+        self.weights = np.asarray(weights, dtype=float)
+        self.name = name
+
+    def reset(self) -> None:
+        pass
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return np.clip(np.asarray(observation, dtype=float) @ self.weights.T, -1.0, 1.0)
+
+
 class LQGController:
     """Kalman filter + LQR on the observation (the same readings the agent gets)."""
 

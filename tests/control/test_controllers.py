@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import Experiment, PlantConfig
-from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.controllers import LinearFeedback, LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.learning.policy import residual_action
@@ -16,6 +16,14 @@ from rlcontroller.physics.records import synthetic_suite
 def test_uncontrolled_is_zero_for_every_actuator():
     action = Uncontrolled(3).act(np.ones(33))
     assert action.shape == (3,) and not action.any()
+
+
+def test_linear_feedback_is_clipped_w_o_for_one_building_or_a_batch():
+    weights = np.array([[2.0, 0.0], [0.5, -1.0], [0.0, 0.1]])
+    controller = LinearFeedback(weights)
+    np.testing.assert_allclose(controller.act(np.array([1.0, 3.0])), [1.0, -1.0, 0.3])
+    batch = np.array([[0.1, 0.2], [-0.1, -0.2]])
+    np.testing.assert_allclose(controller.act(batch), [[0.2, -0.15, 0.02], [-0.2, 0.15, -0.02]])
 
 
 def test_lqg_controller_acts_in_action_units_and_the_env_applies_newtons_once():
