@@ -405,7 +405,9 @@ class SearchRange(StrictModel):
 
 
 class AlgorithmConfig(StrictModel):
-    """The stable-baselines3 learner, its keyword arguments and the training schedule.
+    """The learner (a stable-baselines3 one, or `RandomSearch`: random search with common random
+    numbers on a linear odd policy, `rlcontroller.learning.random_search`), its keyword arguments
+    and the training schedule.
 
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
     gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run in a dummy
@@ -420,7 +422,7 @@ class AlgorithmConfig(StrictModel):
     `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
 
-    name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C"] = "SAC"
+    name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C", "RandomSearch"] = "SAC"
     total_steps: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 1_500_000
     n_envs: Annotated[int, Field(ge=1, le=MAX_ENVS)] = 1
     vec_env: Literal["batched", "dummy", "subproc"] = "batched"

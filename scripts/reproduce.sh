@@ -6,11 +6,12 @@
 #      trade-off and the value of preview;
 #   2. configs/five_story_robust.yaml (trained on randomised plants), each seed also through
 #      `rlc robustness` (standard scenarios), aggregated per scenario and over all scenarios;
-#   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior),
-#      its randomised-plant version five_story_model_free_robust.yaml (+ `rlc robustness`), and the
-#      same linear policy learned by random search (scripts/linear_random_search.py, evaluated on the
-#      records and through `rlc robustness`).
-# About 1 h 45 min on a 2-core machine.
+#   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior;
+#      PPO), and the same linear policy learned by random search with common random numbers, on the
+#      nominal and on randomised plants (five_story_model_free_random_search[_robust].yaml), each
+#      seed of those two also through `rlc robustness`.
+# About 1 h 35 min on a 2-core machine. (PPO on randomised plants, five_story_model_free_robust.yaml,
+# and five_story_robust_free.yaml are run with their own `rlc sweep` commands, README Round 2.)
 #   bash scripts/reproduce.sh [OUT_DIR] [extra rlc sweep options, e.g. --engine dask --address tcp://HOST:8786]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
 set -euo pipefail
@@ -39,25 +40,12 @@ sweep configs/five_story_robust.yaml "$out/robust" "$@"
 robustness_of "$out/robust"
 
 sweep configs/five_story_model_free.yaml "$out/model_free" "$@"
-sweep configs/five_story_model_free_robust.yaml "$out/model_free_robust" "$@"
-robustness_of "$out/model_free_robust"
 
-searched="$out/model_free_random_search"
-searches=()
-for seed in 0 1 2; do
-  if [ ! -f "$searched/seed$seed/best_model.zip" ]; then
-    python scripts/linear_random_search.py "$searched/seed$seed" --seed "$seed" > /dev/null &
-    searches+=($!)
-  fi
-done
-for search in ${searches[@]+"${searches[@]}"}; do wait "$search"; done  # a failed search stops the script
-for seed in 0 1 2; do
-  if [ ! -d "$searched/seed$seed/evaluation" ]; then
-    rlc evaluate "$searched/seed$seed" --records "$records" --out "$searched/seed$seed/evaluation" > /dev/null
-  fi
-done
-rlc aggregate "$searched"/seed[0-9]*/evaluation --out "$searched/aggregate" > /dev/null
-robustness_of "$searched"
+sweep configs/five_story_model_free_random_search.yaml "$out/model_free_random_search" "$@"
+robustness_of "$out/model_free_random_search"
+sweep configs/five_story_model_free_random_search_robust.yaml "$out/model_free_random_search_robust" "$@"
+robustness_of "$out/model_free_random_search_robust"
 
-echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust, $out/model_free, $out/model_free_robust,"
-echo "$searched (robustness: */robustness_aggregate); LQG trade-off and preview: $out/compare_lqg"
+echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust, $out/model_free,"
+echo "$out/model_free_random_search, $out/model_free_random_search_robust (robustness: */robustness_aggregate);"
+echo "LQG trade-off and preview: $out/compare_lqg"

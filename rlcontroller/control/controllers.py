@@ -42,18 +42,27 @@ class Uncontrolled:
         return np.zeros(np.shape(observation)[:-1] + (self.n_actuators,))
 
 
-class LinearFeedback:
-    """a = clip(W o): a fixed linear map of the observation, odd (no bias); W is (m, observation size)."""
+def residual_action(action: np.ndarray, prior_action: np.ndarray) -> np.ndarray:
+    """A residual policy's rule: its action (clipped) plus the prior's, clipped to [-1, 1]."""
+    return np.clip(np.clip(action, -1.0, 1.0) + prior_action, -1.0, 1.0)
 
-    def __init__(self, weights: np.ndarray, name: str = "linear feedback") -> None:
+
+class LinearFeedback:
+    """a = clip(W o): a fixed linear map of the observation, odd (no bias); W is (m, observation size).
+    With a `prior` (an `LQGPrior`), W o is a residual on the prior's action (`residual_action`)."""
+
+    def __init__(self, weights: np.ndarray, name: str = "linear feedback", prior: LQGPrior | None = None) -> None:
         self.weights = np.asarray(weights, dtype=float)
         self.name = name
+        self.prior = prior
 
     def reset(self) -> None:
         pass
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        return np.clip(np.asarray(observation, dtype=float) @ self.weights.T, -1.0, 1.0)
+        observation = np.asarray(observation, dtype=float)
+        action = observation @ self.weights.T
+        return np.clip(action, -1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
 
 
 class LQGController:

@@ -42,6 +42,9 @@ NUMERIC_KWARGS = {
     "n_steps": (1, 2**31, True),
     "n_epochs": (1, 2**31, True),
     "learning_starts": (0, 2**40, True),
+    "n_delta": (1, 10_000, True),
+    "n_motions": (1, 10_000, True),
+    "delta_std": (1e-12, 1e6, False),
 }
 
 
@@ -49,8 +52,12 @@ def check_algorithm(experiment: Experiment) -> None:
     """Refuse keyword arguments the learner does not take, naming the file and key."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
-    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C"):
-        raise ConfigError(f"{location(file, prefix, 'policy.odd')}: only for PPO and A2C, not {algorithm.name}")
+    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C", "RandomSearch"):
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not {algorithm.name}"
+        )
+    if algorithm.name == "RandomSearch":
+        _check_random_search(experiment)
     if algorithm.policy.odd and algorithm.normalize_observations:
         raise ConfigError(
             f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
@@ -70,6 +77,24 @@ def check_algorithm(experiment: Experiment) -> None:
             low, high, integer = NUMERIC_KWARGS[key]
             kind = "an integer" if integer else "a number"
             raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
+
+
+def _check_random_search(experiment: Experiment) -> None:
+    """RandomSearch learns a linear odd actor (a residual with `residual_lqg`) on the batched env's plant."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.actor_arch != [] or not algorithm.policy.odd:
+        raise ConfigError(
+            f"{location(file, prefix, 'policy')}: RandomSearch trains a linear odd actor; "
+            "expected actor_arch: [] and odd: true"
+        )
+    refused = {
+        "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
+        "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),
+    }
+    for key, (wrong, why) in refused.items():
+        if wrong:
+            raise ConfigError(f"{location(file, prefix, key)}: not for RandomSearch ({why})")
 
 
 def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
@@ -126,7 +151,9 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
     algorithm = experiment.algorithm
     check_algorithm(experiment)
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
-    if algorithm.policy.actor_arch is not None:
+    if algorithm.name == "RandomSearch":
+        net_arch = {"pi": [], "vf": []}  # no critic is trained
+    elif algorithm.policy.actor_arch is not None:
         critic = "vf" if algorithm.name in ("PPO", "A2C") else "qf"
         net_arch = {"pi": list(algorithm.policy.actor_arch), critic: net_arch}
     policy_kwargs = {

@@ -1,8 +1,8 @@
 """Saved policies: loading a run's model, the residual on a prior, and the policy as a controller.
 
 A residual policy's action is added to its prior's (LQG's) action, both clipped to [-1, 1]:
-`residual_action` is that rule, used in training (the `ResidualAction` wrapper) and in
-evaluation (`PolicyController`) alike.
+`control.controllers.residual_action` is that rule, used in training (the `ResidualAction`
+wrapper) and in evaluation (`PolicyController`) alike.
 """
 
 from __future__ import annotations
@@ -14,22 +14,21 @@ import gymnasium as gym
 import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
-from rlcontroller.control.controllers import LQGPrior
+from rlcontroller.control.controllers import LQGPrior, residual_action
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.plant import Plant
 
 
 def algorithm_class(name: str) -> type:
-    """The stable-baselines3 learner class called `name` (SAC, PPO, ...)."""
+    """The learner class called `name`: a stable-baselines3 one (SAC, PPO, ...) or RandomSearch."""
+    if name == "RandomSearch":
+        from rlcontroller.learning.random_search import RandomSearch
+
+        return RandomSearch
     import stable_baselines3
 
     return getattr(stable_baselines3, name)
-
-
-def residual_action(action: np.ndarray, prior_action: np.ndarray) -> np.ndarray:
-    """The policy's action (clipped) plus the prior's, clipped to [-1, 1]."""
-    return np.clip(np.clip(action, -1.0, 1.0) + prior_action, -1.0, 1.0)
 
 
 class ResidualAction(gym.ActionWrapper):

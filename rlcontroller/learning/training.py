@@ -59,12 +59,14 @@ def _callback(
         def _on_training_start(self) -> None:
             self.started = self.session_start = time.perf_counter()
             self.keep_going = True
+            self.previous_steps = self.model.num_timesteps
 
         def wall_time(self) -> float:
             return state["wall_time_s"] + time.perf_counter() - self.session_start
 
         def _on_step(self) -> bool:
-            steps, previous = self.num_timesteps, self.num_timesteps - self.training_env.num_envs
+            steps, previous = self.num_timesteps, self.previous_steps  # RandomSearch: many steps per call
+            self.previous_steps = steps
             if steps // algorithm.eval_every > previous // algorithm.eval_every:
                 self.validate()
             if steps // algorithm.checkpoint_every > previous // algorithm.checkpoint_every:

@@ -16,9 +16,8 @@ import numpy as np
 from gymnasium.utils import seeding
 from stable_baselines3.common.vec_env import VecEnv
 
-from rlcontroller.control.controllers import LQGPrior
+from rlcontroller.control.controllers import LQGPrior, residual_action
 from rlcontroller.learning.batch import BuildingBatch
-from rlcontroller.learning.policy import residual_action
 from rlcontroller.physics.plant import Plant
 
 
@@ -26,6 +25,7 @@ class BatchedVecEnv(VecEnv):
     """`n_envs` buildings of `plant` stepped as one; `prior` makes the actions residuals on it."""
 
     def __init__(self, plant: Plant, n_envs: int, prior: LQGPrior | None = None) -> None:
+        self.plant = plant
         self.batch = BuildingBatch(plant, n_envs, randomize=True)
         self.prior = prior
         self.render_mode = None

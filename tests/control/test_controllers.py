@@ -5,10 +5,9 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import Experiment, PlantConfig
-from rlcontroller.control.controllers import LinearFeedback, LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.controllers import LinearFeedback, LQGController, LQGPrior, Uncontrolled, residual_action
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.learning.policy import residual_action
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 

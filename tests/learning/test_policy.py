@@ -91,7 +91,7 @@ def test_an_odd_policy_is_refused_for_sac():
     from rlcontroller.physics.plant import Plant
 
     experiment = Experiment.model_validate({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
-    with pytest.raises(ConfigError, match="policy.odd: only for PPO and A2C"):
+    with pytest.raises(ConfigError, match="policy.odd: only for PPO, A2C and RandomSearch"):
         build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
 
 
@@ -112,6 +112,7 @@ ODD_ACTORS = [
     "five_story_model_free",
     "five_story_model_free_robust",
     "five_story_model_free_random_search",
+    "five_story_model_free_random_search_robust",
 ]
 
 

@@ -1,0 +1,165 @@
+"""Random search with common random numbers: a learner of a linear odd policy a = clip(W o).
+
+Augmented random search (Mania et al., 2018) on W (actuators x observation), started at W = 0 (no
+control; the learner needs no model of the building). Each iteration draws `n_motions` training
+motions (the experiment's generator) with their noise seeds and `n_delta` random directions d_k,
+runs W + delta_std d_k and W - delta_std d_k on the *same* motions, noise and (with
+`plant_randomization`) plants drawn from those seeds, and steps along
+sum_k (f(W + delta_std d_k) - f(W - delta_std d_k)) d_k, scaled by `learning_rate` / (n_delta
+delta_std std(f)), where f is the mean over the motions of log(-return): each motion counts by its
+relative change, since a strong motion's return is 10^4 times a weak one's and would drown every
+difference on unpaired motions. That pairing is why this learner exists: sb3-contrib's ARS evaluates
+each candidate on the environment's next episodes, so + and - never see the same motion.
+
+The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) with a linear actor
+(`actor_arch: []`; its action layer is W, bias 0; no critic is trained), so saving, loading,
+evaluation, validation and ONNX export are those of any run. `num_timesteps` counts the control
+steps simulated. The learner runs on the plant of its training env (a `BatchedVecEnv`), whose
+generator and randomisation it uses; every field needed to resume exactly (W, the search's random
+generator) is saved with the model.
+With `residual_lqg` the candidates are residuals on the LQG prior (`LinearFeedback` with a prior),
+and W = 0 starts the search at LQG.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import CallbackList, ProgressBarCallback
+
+from rlcontroller.control.controllers import LinearFeedback, LQGPrior
+from rlcontroller.learning.batch import batch_rollout
+from rlcontroller.learning.odd_policy import OddActorCriticPolicy
+from rlcontroller.physics.excitation import GroundMotion, generate_suite
+
+
+class RandomSearch(BaseAlgorithm):
+    """Augmented random search with common random numbers (module docstring).
+
+    Parameters
+    ----------
+    n_delta : random directions per iteration (each run with + and -).
+    n_motions : training motions per iteration, shared by every candidate.
+    delta_std : size of the perturbations of W (action per unit observation).
+    learning_rate : step size, in units of delta_std-scaled, spread-normalised steps.
+    """
+
+    policy_aliases = {"MlpPolicy": OddActorCriticPolicy}
+
+    def __init__(
+        self,
+        policy: str | type[OddActorCriticPolicy],
+        env,
+        n_delta: int = 8,
+        n_motions: int = 8,
+        delta_std: float = 0.02,
+        learning_rate: float = 0.01,
+        policy_kwargs: dict[str, Any] | None = None,
+        tensorboard_log: str | None = None,
+        seed: int | None = None,
+        device: str = "auto",
+        verbose: int = 0,
+        _init_setup_model: bool = True,
+    ) -> None:
+        super().__init__(
+            policy,
+            env,
+            learning_rate=learning_rate,
+            policy_kwargs=policy_kwargs,
+            tensorboard_log=tensorboard_log,
+            verbose=verbose,
+            device=device,
+            seed=seed,
+            support_multi_env=True,
+        )
+        self.n_delta = n_delta
+        self.n_motions = n_motions
+        self.delta_std = delta_std
+        if _init_setup_model:
+            self._setup_model()
+
+    def _setup_model(self) -> None:
+        self._setup_lr_schedule()
+        self.set_random_seed(self.seed)
+        policy = self.policy_class(self.observation_space, self.action_space, self.lr_schedule, **self.policy_kwargs)
+        self.policy = policy.to(self.device)
+        if self.policy.mlp_extractor.policy_net:
+            raise ValueError("RandomSearch trains a linear actor: set policy.actor_arch: []")
+        self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
+        residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg
+        self.prior = LQGPrior(self.plant) if residual else None
+        if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
+            self.weights = np.zeros(self.policy.action_net.weight.shape)
+            self.search_rng = np.random.default_rng(self.seed)
+        self._set_actor()
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "plant", "prior"]
+
+    def _set_actor(self) -> None:
+        with torch.no_grad():
+            self.policy.action_net.weight.copy_(torch.as_tensor(self.weights, dtype=torch.float32))
+            self.policy.action_net.bias.zero_()
+
+    def paired_log_costs(
+        self, deltas: np.ndarray, motions: list[GroundMotion], seeds: list[int]
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """f(W + d_k) and f(W - d_k) for every direction d_k, all on the same motions, noise seeds
+        and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
+        candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
+        controllers = [LinearFeedback(w, prior=self.prior) for w in candidates]
+        runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
+        f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
+        episodes = [{"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane]
+        self.ep_info_buffer.extend(episodes)
+        return f[: len(deltas)], f[len(deltas) :], sum(episode["l"] for episode in episodes)
+
+    def iterate(self) -> int:
+        """One update of W; returns the control steps it simulated."""
+        rng = self.search_rng
+        motions = generate_suite(self.plant.experiment.excitation.generator, self.n_motions, int(rng.integers(2**31)))
+        seeds = [int(s) for s in rng.integers(2**31, size=self.n_motions)]
+        deltas = self.delta_std * rng.standard_normal((self.n_delta, *self.weights.shape))
+        plus, minus, steps = self.paired_log_costs(deltas, motions, seeds)
+        spread = float(np.std(np.concatenate([plus, minus]))) or 1.0
+        step = self.lr_schedule(self._current_progress_remaining) / (self.n_delta * spread * self.delta_std)
+        self.weights = self.weights - step * np.tensordot(plus - minus, deltas, axes=1)
+        self._set_actor()
+        self._n_updates += 1
+        return steps
+
+    def learn(
+        self,
+        total_timesteps: int,
+        callback=None,
+        log_interval: int = 1,
+        tb_log_name: str = "RandomSearch",
+        reset_num_timesteps: bool = True,
+        progress_bar: bool = False,
+    ) -> RandomSearch:
+        if self.plant is None:
+            raise ValueError("RandomSearch needs a BatchedVecEnv as its env (algorithm.vec_env: batched)")
+        total_timesteps, callback = self._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name)
+        if progress_bar:
+            callback = CallbackList([callback, _StepsProgressBar()])
+            callback.init_callback(self)
+        callback.on_training_start(locals(), globals())
+        while self.num_timesteps < total_timesteps:
+            self.num_timesteps += self.iterate()
+            self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
+            callback.update_locals(locals())
+            if not callback.on_step():
+                break
+        callback.on_training_end()
+        return self
+
+
+class _StepsProgressBar(ProgressBarCallback):
+    """stable-baselines3's progress bar, advanced by the steps an iteration simulated (not by n_envs)."""
+
+    def _on_step(self) -> bool:
+        self.pbar.update(self.model.num_timesteps - self.model._num_timesteps_at_start - self.pbar.n)
+        return True

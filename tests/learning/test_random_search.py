@@ -1,0 +1,151 @@
+from collections import deque
+
+import numpy as np
+import pytest
+import yaml
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+from rlcontroller.config import load_experiment
+from rlcontroller.learning.algorithms import build_model, make_vec_env
+from rlcontroller.learning.batch import batch_rollout
+from rlcontroller.learning.policy import PolicyController
+from rlcontroller.learning.training import train
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import synthetic_suite
+
+MODEL_FREE = REPOSITORY / "configs" / "five_story_model_free_random_search.yaml"
+
+
+def tiny(config=MODEL_FREE, **algorithm):
+    """A random search on 2-3 s motions: a run of a few seconds."""
+    experiment = load_experiment(config)
+    settings = experiment.algorithm.model_dump() | {"eval_every": 4000, "checkpoint_every": 8000} | algorithm
+    settings["kwargs"] = {"n_delta": 2, "n_motions": 2} | algorithm.get("kwargs", {})  # the learner's defaults
+    excitation = experiment.excitation.model_dump() | {
+        "generator": {"kind": "noise_impulses", "duration": [2.0, 3.0]},
+        "validation_generator": {"kind": "noise_impulses", "duration": [2.0, 3.0]},
+        "validation_motions": 2,
+    }
+    return experiment.model_validate(experiment.model_dump() | {"algorithm": settings, "excitation": excitation})
+
+
+def new_model(experiment, seed: int = 0):
+    model = build_model(experiment, make_vec_env(Plant(experiment), seed), seed, "cpu", None)
+    model.ep_info_buffer = deque(maxlen=100)
+    return model
+
+
+def test_plus_and_minus_run_on_the_same_motions_and_noise():
+    model = new_model(tiny())
+    rng = np.random.default_rng(3)
+    model.weights = 0.05 * rng.standard_normal(model.weights.shape)
+    direction = 0.05 * rng.standard_normal((1, *model.weights.shape))
+    motions, seeds = synthetic_suite(count=2), [11, 12]
+    plus, minus, steps = model.paired_log_costs(direction, motions, seeds)
+    swapped_plus, swapped_minus, _ = model.paired_log_costs(-direction, motions, seeds)
+    assert plus[0] != minus[0]
+    assert swapped_plus[0] == minus[0] and swapped_minus[0] == plus[0]  # the same motion and noise in both lanes
+    zero_plus, zero_minus, _ = model.paired_log_costs(np.zeros_like(direction), motions, seeds)
+    assert zero_plus[0] == zero_minus[0]
+    control_steps = sum(round(m.duration / 0.02) for m in motions)
+    assert abs(steps - 2 * control_steps) <= 4  # both lanes, every motion, counted once
+
+
+def test_an_iteration_steps_downhill_on_its_own_motions():
+    """For a small step the update lowers the mean log cost on the motions it was computed from."""
+    model = new_model(tiny(kwargs={"learning_rate": 0.002}), seed=1)
+    seen = []
+    paired_log_costs = model.paired_log_costs
+    model.paired_log_costs = lambda deltas, motions, seeds: (
+        seen.append((motions, seeds)) or paired_log_costs(deltas, motions, seeds)
+    )
+    model.iterate()
+    zero = np.zeros((1, *model.weights.shape))
+    after = paired_log_costs(zero, *seen[0])[0][0]
+    model.weights = np.zeros_like(model.weights)
+    before = paired_log_costs(zero, *seen[0])[0][0]
+    assert after < before
+
+
+def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
+    summary = train(tiny(total_steps=40000), run_dir=tmp_path / "run")
+    assert summary.steps >= 40000 and summary.best["eval_J1"] < 0.95  # no control: 1
+    controller = PolicyController.load(tmp_path / "run" / "best_model.zip")
+    weights = controller.model.weights
+    observations = np.random.default_rng(5).standard_normal((6, weights.shape[1])).astype(np.float32) * 30
+    expected = np.clip(observations @ weights.T, -1.0, 1.0)
+    np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
+    assert controller.actor.odd and np.all(controller.act(np.zeros(weights.shape[1], np.float32)) == 0.0)
+
+
+def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_path):
+    from rlcontroller.control.controllers import LinearFeedback, LQGController
+    from rlcontroller.control.lqg import design_lqg_ground_model
+
+    robust = REPOSITORY / "configs" / "five_story_robust.yaml"  # its sensors hold the Kalman estimate
+    experiment = tiny(robust, name="RandomSearch", policy={"actor_arch": [], "odd": True}, normalize_rewards=False)
+    experiment = experiment.model_validate(experiment.model_dump() | {"plant_randomization": None})
+    model = new_model(experiment)
+    motions, seeds = synthetic_suite(count=2), [4, 5]
+    at_zero = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)[0][0]
+    lqg = LQGController(design_lqg_ground_model(model.plant.design), model.plant)
+    lqg_runs = batch_rollout(model.plant, motions, [lqg], seeds)[0]
+    assert at_zero == pytest.approx(np.mean([np.log(-total) for _, total in lqg_runs]), rel=1e-9)
+
+    train(
+        experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),
+        run_dir=tmp_path / "run",
+    )
+    controller = PolicyController.load(tmp_path / "run" / "final_model.zip")
+    weights = controller.model.weights
+    assert controller.prior is not None and np.any(weights != 0.0)
+    observations = np.random.default_rng(2).standard_normal((6, weights.shape[1])).astype(np.float32)
+    expected = LinearFeedback(weights, prior=controller.prior).act(observations)
+    np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
+
+
+def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
+    experiment = tiny(total_steps=24000)
+    whole = train(experiment, run_dir=tmp_path / "whole")
+    stopped = train(experiment, run_dir=tmp_path / "stopped", time_limit_s=0.0)  # stops after one iteration
+    assert stopped.time_limit_reached and stopped.steps < 24000
+    resumed = train(resume=tmp_path / "stopped")
+    assert resumed.steps == whole.steps
+    final = [PolicyController.load(tmp_path / run / "final_model.zip").model.weights for run in ("whole", "stopped")]
+    np.testing.assert_array_equal(final[0], final[1])
+
+
+def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
+    import re
+
+    summary = train(tiny(total_steps=8000), run_dir=tmp_path / "run", progress_bar=True)
+    output = capsys.readouterr()
+    shown = re.findall(r"([\d,]+)/8,000", output.out + output.err)
+    assert shown and int(shown[-1].replace(",", "")) == summary.steps >= 8000  # not one tick per iteration
+
+
+@pytest.mark.parametrize(
+    ("algorithm", "expected"),
+    [
+        ("{policy: {actor_arch: [16], odd: true}}", "algorithm.policy: RandomSearch trains a linear odd actor"),
+        ("{policy: {actor_arch: []}}", "algorithm.policy: RandomSearch trains a linear odd actor"),
+        ("{normalize_rewards: true}", "algorithm.normalize_rewards: not for RandomSearch"),
+        ("{vec_env: dummy}", "algorithm.vec_env: not for RandomSearch"),
+        ("{kwargs: {delta_std: 0}}", "algorithm.kwargs.delta_std: expected a number in"),
+        ("{kwargs: {n_delta: 2.5}}", "algorithm.kwargs.n_delta: expected an integer in"),
+        ("{kwargs: {batch_size: 64}}", "algorithm.kwargs.batch_size: not a keyword argument of RandomSearch"),
+    ],
+)
+def test_bad_random_search_settings_exit_2_naming_the_key(tmp_path, algorithm, expected):
+    settings = yaml.safe_load(algorithm)
+    base = {"name": "RandomSearch", "policy": {"actor_arch": [], "odd": True}}
+    path = tmp_path / "bad.yaml"
+    sensors = REPOSITORY / "configs" / "sensors" / "floor_accelerations_integrated.yaml"
+    path.write_text(yaml.safe_dump({"sensors": str(sensors), "algorithm": base | settings}))
+    result = CliRunner().invoke(app, ["train", str(path), "--run-dir", str(tmp_path / "run")])
+    assert result.exit_code == 2, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and expected in lines[0] and "bad.yaml" in lines[0], lines
+    assert not (tmp_path / "run").exists()
