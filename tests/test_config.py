@@ -70,7 +70,10 @@ def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:
             "sensors:\n  measurements: [{quantity: drift, floors: [9], scale: 1}]\n",
             "sensors.measurements[0].floors: floor 9 does not exist",
         ),
-        ("algorithm:\n  name: DQN\n", "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C' or 'RandomSearch'"),
+        (
+            "algorithm:\n  name: DQN\n",
+            "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C' or 'RandomSearch'",
+        ),
         ("building: [1, 2\n", "bad.yaml:2: invalid YAML"),
         ("- 1\n", "expected a mapping of experiment keys"),
     ],
