@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import torch
 from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import CallbackList, ProgressBarCallback
+from stable_baselines3.common.callbacks import ProgressBarCallback
 
 from rlcontroller.control.controllers import LinearFeedback, LQGPrior
 from rlcontroller.learning.batch import batch_rollout
@@ -44,7 +44,7 @@ class RandomSearch(BaseAlgorithm):
     n_delta : random directions per iteration (each run with + and -).
     n_motions : training motions per iteration, shared by every candidate.
     delta_std : size of the perturbations of W (action per unit observation).
-    learning_rate : step size, in units of delta_std-scaled, spread-normalised steps.
+    learning_rate : step size of W's update, as in the module docstring's formula.
     """
 
     policy_aliases = {"MlpPolicy": OddActorCriticPolicy}
@@ -142,10 +142,10 @@ class RandomSearch(BaseAlgorithm):
     ) -> RandomSearch:
         if self.plant is None:
             raise ValueError("RandomSearch needs a BatchedVecEnv as its env (algorithm.vec_env: batched)")
+        if progress_bar:  # stable-baselines3's own bar would advance by n_envs per iteration
+            given = callback if isinstance(callback, list) else [callback] if callback is not None else []
+            callback = [*given, _StepsProgressBar()]
         total_timesteps, callback = self._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name)
-        if progress_bar:
-            callback = CallbackList([callback, _StepsProgressBar()])
-            callback.init_callback(self)
         callback.on_training_start(locals(), globals())
         while self.num_timesteps < total_timesteps:
             self.num_timesteps += self.iterate()
