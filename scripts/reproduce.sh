@@ -10,7 +10,7 @@
 #      PPO), and the same linear policy learned by random search with common random numbers, on the
 #      nominal and on randomised plants (five_story_model_free_random_search[_robust].yaml), each
 #      seed of those two also through `rlc robustness`.
-# About 1 h 35 min on a 2-core machine. (PPO on randomised plants, five_story_model_free_robust.yaml,
+# 61 min end to end on a 2-core VM (README, Round 2). (PPO on randomised plants, five_story_model_free_robust.yaml,
 # and five_story_robust_free.yaml are run with their own `rlc sweep` commands, README Round 2.)
 #   bash scripts/reproduce.sh [OUT_DIR] [extra rlc sweep options, e.g. --engine dask --address tcp://HOST:8786]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
