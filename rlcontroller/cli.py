@@ -141,7 +141,9 @@ def info(
 @app.command()
 @user_errors
 def train(
-    config: Annotated[Path | None, typer.Argument(help="Experiment YAML (not needed with --resume).")] = None,
+    config: Annotated[
+        Path | None, typer.Argument(help="Experiment YAML (see configs/README.md; not with --resume).")
+    ] = None,
     total_steps: Annotated[
         int | None, typer.Option(min=1, max=MAX_TOTAL_STEPS, help="Override algorithm.total_steps.")
     ] = None,
@@ -169,7 +171,9 @@ def train(
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
         summary = run_training(resume=resume, device=device, progress_bar=progress, time_limit_s=limit)
     else:
-        experiment = load(config)
+        if config is None:
+            raise ConfigError("rlc train: expected an experiment YAML (e.g. configs/smoke.yaml) or --resume RUN")
+        experiment = load_experiment(config)
         if total_steps is not None:
             experiment = experiment.model_copy(
                 update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": total_steps})}
@@ -182,11 +186,14 @@ def train(
         typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
     if summary.interrupted:
         raise typer.Exit(130)
+    if not summary.time_limit_reached:
+        run_check(summary.run_dir, "best")
 
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "five_story"
-SMOKE_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "smoke.yaml"
+DEMO_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "demo.yaml"
 STANDARD_SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "standard.yaml"
+SAFETY_STANDARD = Path(__file__).resolve().parents[1] / "configs" / "checks" / "standard.yaml"
 
 
 def model_folder(run_dir: Path | None) -> Path:
@@ -196,6 +203,39 @@ def model_folder(run_dir: Path | None) -> Path:
         hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
         raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
     return folder
+
+
+def run_check(folder: Path, model: str, standard: Path = SAFETY_STANDARD, scenarios: Path = STANDARD_SCENARIOS):
+    """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml."""
+    from rlcontroller.config import load_safety_check, load_scenarios
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.evaluation.safety import safety_check, write_verdict
+    from rlcontroller.physics.plant import Plant
+
+    experiment = load_experiment(folder / "config.yaml")
+    plant = Plant(experiment)
+    policy = read_policy(folder, model, plant)
+    verdict = safety_check(plant, policy, load_safety_check(standard), load_scenarios(scenarios, experiment))
+    path = write_verdict(verdict, folder, model)
+    for line in verdict.lines():
+        typer.echo(line)
+    typer.echo(f"verdict in {path}")
+    return verdict
+
+
+def warn_unchecked(folder: Path, model: str) -> None:
+    """One line on stderr when the policy failed the safety check or was never checked."""
+    from rlcontroller.evaluation.safety import read_verdict, verdict_path
+
+    passed = read_verdict(folder, model)
+    if passed is None:
+        typer.echo(f"note: {folder}'s {model} policy was never safety-checked; run 'rlc check {folder}'", err=True)
+    elif not passed:
+        typer.echo(
+            f"warning: {folder}'s {model} policy FAILED the safety check (it can be worse than no control): "
+            f"{verdict_path(folder, model)}",
+            err=True,
+        )
 
 
 def show_progress(progress: bool | None) -> bool:
@@ -228,13 +268,13 @@ def motion_suite(records: Path | None, scale_pga: float | None):
 
 def comparison(experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None):
     """The plant, the motions and the evaluation of every controller (the run's policy if given)."""
+    from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.evaluation import compare
-    from rlcontroller.learning.run_folder import model_file
     from rlcontroller.physics.plant import Plant
 
-    policy = model_file(run_dir, model) if run_dir is not None else None
-    motions, label = motion_suite(records, scale_pga)
     plant = Plant(experiment)
+    policy = read_policy(run_dir, model, plant) if run_dir is not None else None
+    motions, label = motion_suite(records, scale_pga)
     return plant, motions, compare(plant, motions, label, policy)
 
 
@@ -269,6 +309,7 @@ def evaluate(
     folder = model_folder(run_dir)
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
+    warn_unchecked(folder, model)
     _, _, evaluation = comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
     with new_folder(out) as staging:
         write_report(evaluation, staging)
@@ -278,13 +319,14 @@ def evaluate(
 @app.command()
 @user_errors
 def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
-    """The main job end to end: train the small smoke experiment, then evaluate it against LQG."""
+    """The main job end to end: train a small controller (configs/demo.yaml, about 30 s), evaluate it
+    against LQG and the uncontrolled building, and run the safety check on it."""
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.learning.training import train as run_training
     from rlcontroller.physics.records import choose_motions
 
     choose_motions(records)  # a bad --records stops here, before training
-    summary = run_training(load_experiment(SMOKE_CONFIG), progress_bar=show_progress(progress))
+    summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=show_progress(progress))
     typer.echo(summary.line())
     _, _, evaluation = comparison(
         load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
@@ -293,7 +335,7 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     print_summary(evaluation, out)
-    typer.echo("the smoke policy is barely trained; 'rlc evaluate' shows the committed benchmark policy")
+    run_check(summary.run_dir, "best")
 
 
 compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers.")
@@ -368,15 +410,16 @@ def robustness(
 ) -> None:
     """Every controller on every scenario's plant and every record: how each copes with model error."""
     from rlcontroller.config import load_scenarios
+    from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.report import markdown_table, write_robustness
     from rlcontroller.evaluation.robustness import robustness as run_robustness
     from rlcontroller.evaluation.robustness import summary
-    from rlcontroller.learning.run_folder import model_file
+    from rlcontroller.physics.plant import Plant
 
     folder = model_folder(run_dir)
     experiment = load_experiment(folder / "config.yaml")
     named = load_scenarios(scenarios, experiment)
-    policy = model_file(folder, model)
+    policy = read_policy(folder, model, Plant(experiment))
     out = output_folder(out, f"robustness-{folder.resolve().name}")
     check_new_folder(out)
     motions, label = motion_suite(records, scale_pga)
@@ -475,16 +518,21 @@ def sweep(
 @user_errors
 def aggregate(
     runs: Annotated[list[Path], typer.Argument(help="Run folders (with evaluation/) or evaluation folders.")],
-    out: Annotated[Path | None, typer.Option(help="Folder of aggregate.csv/.md/.png (default: print only).")] = None,
+    out: Annotated[
+        Path | None, typer.Option(help="New folder for aggregate.csv/.md/.png (default: print only).")
+    ] = None,
 ) -> None:
     """Per controller and metric over runs: mean, std, interquartile mean, 95 % stratified-bootstrap intervals."""
     from rlcontroller.studies.aggregate import aggregate as statistics
     from rlcontroller.studies.aggregate import markdown, scores, write_aggregate
 
+    if out is not None:
+        check_new_folder(out)
     table = statistics(scores(runs))
     title = f"{len(runs)} runs: mean over records and stories, statistics over runs"
     if out is not None:
-        write_aggregate(table, out, title)
+        with new_folder(out) as staging:
+            write_aggregate(table, staging, title)
     typer.echo(markdown(table, title))
     if out is not None:
         typer.echo(f"aggregate.csv, aggregate.md and aggregate.png in {out}")
@@ -501,20 +549,77 @@ def export(
         Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
     ] = None,
     format: Annotated[ExportFormat, typer.Option("--format", help="File format.")] = ExportFormat.onnx,
-    out: Annotated[Path | None, typer.Option(help="Output file (default: RUN_DIR/MODEL_controller.onnx).")] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(help="New output file (default: results/FOLDER_MODEL_controller.onnx); never overwritten."),
+    ] = None,
     model: ModelOption = "best",
 ) -> None:
     """The trained controller as one file: sensor readings (SI) and its own state in, forces (N) out."""
     from rlcontroller.deployment.export import export_onnx
-    from rlcontroller.learning.run_folder import model_file
 
     folder = model_folder(run_dir)
-    path = model_file(folder, model)
-    out = out or folder / f"{model}_controller.{format.value}"
-    if out.is_dir() or not out.parent.is_dir():
+    if out is None:
+        Path("results").mkdir(exist_ok=True)
+        out = Path("results") / f"{folder.resolve().name}_{model}_controller.{format.value}"
+    if out.exists():
+        raise ConfigError(f"--out {out}: exists; an export is never overwritten (choose another --out)")
+    if not out.parent.is_dir():
         raise ConfigError(f"--out {out}: expected a file path in an existing folder")
-    export_onnx(path, out)
+    warn_unchecked(folder, model)
+    export_onnx(folder, model, out)
     typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see README 'Deployment'")
+
+
+@app.command()
+@user_errors
+def check(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run or model folder (default: the committed models/five_story).")
+    ] = None,
+    model: ModelOption = "best",
+    standard: Annotated[
+        Path,
+        typer.Option(help="The check's standard: suite, seed, bounds.", show_default="configs/checks/standard.yaml"),
+    ] = SAFETY_STANDARD,
+    scenarios: Annotated[
+        Path,
+        typer.Option(help="Plants for the stability report.", show_default="configs/scenarios/standard.yaml"),
+    ] = STANDARD_SCENARIOS,
+) -> None:
+    """The safety check a controller passes before it is shipped: never worse than no control on a
+    broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
+    the folder; exit code 1 when it fails."""
+    folder = model_folder(run_dir)
+    if not run_check(folder, model, standard, scenarios).passed:
+        raise typer.Exit(1)
+
+
+@app.command()
+@user_errors
+def convert(
+    run_dir: Annotated[Path, typer.Argument(help="Run folder with best_model.zip / final_model.zip.")],
+    trust_pickle: Annotated[
+        bool,
+        typer.Option(
+            "--trust-pickle",
+            help="Required. Opening a stable-baselines3 zip or .pkl unpickles it, which runs any code its author "
+            "put in it with your permissions: only for folders you made yourself or whose author you trust.",
+        ),
+    ] = False,
+) -> None:
+    """Write a run's stable-baselines3 models as policy data (best/final_policy.yaml + .npz), the files
+    that evaluate, check and export read without unpickling. Runs trained by this rlc have them already."""
+    from rlcontroller.learning.policy import convert as convert_models
+
+    if not trust_pickle:
+        raise ConfigError(
+            f"{run_dir}: converting opens pickles, which can run their author's code; "
+            "add --trust-pickle only if you trust whoever made this folder"
+        )
+    model_folder(run_dir)
+    for path in convert_models(run_dir):
+        typer.echo(f"wrote {path} and its .npz")
 
 
 def main() -> None:

@@ -312,7 +312,31 @@ class KanaiTajimiConfig(StrictModel):
         return self
 
 
-SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig, Field(discriminator="kind")]
+class NearFaultConfig(StrictModel):
+    """A near-fault motion: a Kanai-Tajimi background (`background`, its PGA ignored) plus a
+    Mavroeidis-Papageorgiou (2003) velocity pulse of period `pulse_period` (s), `pulse_cycles`
+    (their gamma, > 1) and a random phase, whose peak acceleration is `pulse_ratio` times the
+    background's; the sum is scaled to a random PGA (m/s^2)."""
+
+    kind: Literal["near_fault"] = "near_fault"
+    dt: TimeStep = 0.02
+    background: KanaiTajimiConfig = KanaiTajimiConfig()
+    pulse_period: _range(0.0, 100.0, low_open=True) = (0.5, 4.0)
+    pulse_cycles: _range(1.0, 20.0, low_open=True) = (1.5, 3.0)
+    pulse_ratio: _range(0.0, 100.0, low_open=True) = (1.0, 3.0)
+    pga: AccelerationRange = (1.0, 6.0)
+    pga_log: bool = False
+
+    @model_validator(mode="after")
+    def _consistent(self) -> NearFaultConfig:
+        if self.background.dt != self.dt:
+            raise ValueError("background.dt must equal dt")
+        if self.pga_log and self.pga[0] <= 0.0:
+            raise ValueError("pga_log needs pga low > 0")
+        return self
+
+
+SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig, Field(discriminator="kind")]
 
 
 class MixtureComponent(StrictModel):
@@ -327,7 +351,9 @@ class MixtureConfig(StrictModel):
     components: list[MixtureComponent] = Field(min_length=1, max_length=50)
 
 
-GeneratorConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | MixtureConfig, Field(discriminator="kind")]
+GeneratorConfig = Annotated[
+    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | MixtureConfig, Field(discriminator="kind")
+]
 
 
 class ExcitationConfig(StrictModel):
@@ -344,7 +370,7 @@ class ExcitationConfig(StrictModel):
         """The generator of the validation motions."""
         return self.validation_generator or self.generator
 
-    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig]:
+    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig]:
         """The generators motions can come from (the components of mixtures), validation included."""
         sources = []
         for generator in (self.generator, self.validation_generator):
@@ -573,7 +599,7 @@ class Experiment(StrictModel):
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
 
-GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "mixture")
+GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "near_fault", "mixture")
 MAX_NESTING = 50  # levels of YAML nesting; deeper is not a configuration
 
 
@@ -831,6 +857,33 @@ def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
         if scenario.plant is not None:
             check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
     return scenarios
+
+
+class SafetyCheckConfig(StrictModel):
+    """The safety check's standard (`evaluation.safety`): a suite of `motions` generated motions drawn
+    with its own `seed`, the drift below which a motion is insignificant (a ratio of the story
+    height; `story_height` (m) where the building gives none), and the at-rest test: `rest_runs`
+    noise realisations of `rest_duration` (s) without ground motion."""
+
+    motions: Annotated[int, Field(ge=1, le=100_000)] = 320
+    seed: Seed = 31_337
+    generator: GeneratorConfig
+    insignificant_drift_ratio: Annotated[float, Field(gt=0.0, le=0.1)] = 2.0e-4
+    story_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 3.0
+    rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
+    rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
+
+
+def load_safety_check(path: str | Path) -> SafetyCheckConfig:
+    """The safety check's standard from a YAML file."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with 'generator', got {type(raw).__name__}")
+    try:
+        return SafetyCheckConfig.model_validate(raw)
+    except ValidationError as error:
+        raise _first_error(error, str(path), "") from None
 
 
 RANDOMIZED_FIELDS = {

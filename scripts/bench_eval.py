@@ -24,16 +24,16 @@ from rlcontroller.config import KanaiTajimiConfig, load_experiment, load_scenari
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_response
+from rlcontroller.control.policy import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 
 REPOSITORY = Path(__file__).resolve().parents[1]
-MODEL = REPOSITORY / "models" / "five_story" / "best_model.zip"
+MODEL = REPOSITORY / "models" / "five_story"
 SCENARIOS = REPOSITORY / "configs" / "scenarios" / "standard.yaml"
 
 
@@ -45,7 +45,7 @@ def record_by_record(plant: Plant, motions: list[GroundMotion]) -> float:
         LQGController(design_lqg(design), design),
         LQGController(design_lqg(design, known_ground=True), design),
         LQGController(design_lqg_ground_model(design), design),
-        PolicyController.load(MODEL),
+        read_policy(MODEL, "best", plant),
     ]
     env = BuildingEnv(plant)
     start = time.perf_counter()
@@ -78,15 +78,16 @@ def main() -> None:
     parser.add_argument("--skip-robustness", action="store_true")
     arguments = parser.parse_args()
     print(f"machine: {platform.node()} ({platform.machine()}, {platform.processor() or 'cpu'})")
-    experiment = load_experiment(MODEL.parent / "config.yaml")
+    experiment = load_experiment(MODEL / "config.yaml")
     plant = Plant(experiment)
+    policy = read_policy(MODEL, "best", plant)
     motions, label = load_records(arguments.records)
     warm_up = [replace(motion, acceleration=motion.acceleration[:400]) for motion in motions]
-    compare(plant, warm_up, label, MODEL)  # imports, the policy's first load, numba compilation
+    compare(plant, warm_up, label, policy)  # imports, the policy's first load, numba compilation
     record_by_record(plant, warm_up)
 
     start = time.perf_counter()
-    evaluation = compare(plant, motions, label, MODEL)
+    evaluation = compare(plant, motions, label, policy)
     batched = time.perf_counter() - start
     looped = record_by_record(plant, motions)
     count = len(evaluation.controllers)
@@ -98,7 +99,7 @@ def main() -> None:
     large = synthetic_records(arguments.large)
     seconds = sum(motion.duration for motion in large)
     start = time.perf_counter()
-    compare(plant, large, f"{len(large)} synthetic records", MODEL)
+    compare(plant, large, f"{len(large)} synthetic records", policy)
     print(
         f"{count} controllers x {len(large)} synthetic records ({seconds / 3600:.1f} h of ground motion): "
         f"batched {time.perf_counter() - start:.1f} s"
@@ -106,7 +107,7 @@ def main() -> None:
 
     if not arguments.skip_robustness:
         scenarios = load_scenarios(SCENARIOS, experiment)
-        _, elapsed = robustness(experiment, scenarios, motions, label, MODEL)
+        _, elapsed = robustness(experiment, scenarios, motions, label, policy)
         print(f"robustness: {len(scenarios)} scenarios x {len(motions)} records x 4 controllers in {elapsed:.1f} s")
 
 

@@ -1,6 +1,6 @@
 """Benchmark: one control step's latency of the exported controller (onnxruntime) and of the Python one.
 
-Usage: python scripts/bench_latency.py [--calls 10000] [--model models/five_story/best_model.zip]
+Usage: python scripts/bench_latency.py [--calls 10000] [--model models/five_story]
 
 The committed policy is exported to ONNX; one control step is one call with a single building's
 readings: for onnxruntime, `OnnxController.step` (one session.run on one core: intra- and inter-op
@@ -22,8 +22,8 @@ import numpy as np
 
 from rlcontroller.config import load_experiment
 from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.policy import PolicyController, read_policy
 from rlcontroller.deployment.export import OnnxController, export_onnx
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[1]
@@ -66,23 +66,23 @@ def python_step(plant: Plant, controller: PolicyController):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=10_000)
-    parser.add_argument("--model", type=Path, default=REPOSITORY / "models" / "five_story" / "best_model.zip")
+    parser.add_argument("--model", type=Path, default=REPOSITORY / "models" / "five_story", help="model folder")
     arguments = parser.parse_args()
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     import torch
 
     torch.set_num_threads(1)
     print(f"machine: {platform.node()} ({platform.machine()}), pinned to one CPU")
-    plant = Plant(load_experiment(arguments.model.parent / "config.yaml"))
+    plant = Plant(load_experiment(arguments.model / "config.yaml"))
     rng = np.random.default_rng(0)
     p = plant.sensors.c.shape[0]
     inputs = [(rng.normal(0.0, 1.0, (1, p)), rng.normal(0.0, 1.0, (1, 1))) for _ in range(arguments.calls + 500)]
     with tempfile.TemporaryDirectory() as folder:
-        path = export_onnx(arguments.model, Path(folder) / "controller.onnx")
+        path = export_onnx(arguments.model, "best", Path(folder) / "controller.onnx")
         exported = OnnxController(path)
         results = {
             "onnxruntime": latencies(exported.step, inputs),
-            "Python (numpy)": latencies(python_step(plant, PolicyController.load(arguments.model)), inputs),
+            "Python (numpy)": latencies(python_step(plant, read_policy(arguments.model, "best", plant)), inputs),
         }
     for name, times in results.items():
         print(

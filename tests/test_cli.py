@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -61,10 +62,14 @@ def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
     code, output = run_at_a_terminal(["demo"], tmp_path)
     assert code == 0, output
     assert "Traceback" not in output and "Error" not in output
-    assert "1,500/1,500" in output  # the progress bar was drawn
+    assert re.search(r"6\d\d,\d{3}/600,000", output)  # the progress bar was drawn (simulated steps)
     assert "tables and plots in runs" in output and "| RL |" in output
+    assert "safety check of RL:" in output and "verdict in runs" in output
     (run,) = (tmp_path / "runs").iterdir()
-    assert (run / "evaluation" / "summary.md").is_file() and (run / "final_model.zip").is_file()
+    assert (run / "evaluation" / "summary.md").is_file() and (run / "best_check.yaml").is_file()
+    metrics = pd.read_csv(run / "evaluation" / "metrics.csv")  # on every record shown: better than no control
+    rl = metrics[(metrics["controller"] == "RL") & (metrics["metric"] == "J1")].groupby("record")["value"].mean()
+    assert len(rl) > 0 and (rl < 1.0).all()
 
 
 def test_a_user_mistake_at_a_terminal_is_one_line(tmp_path):
@@ -87,3 +92,9 @@ def test_help_is_wrapped_not_cut_and_shows_the_real_progress_default():
     assert "…" not in result.output and "<bool>" not in result.output
     assert "--progress / --no-progress" in result.output and "[default: (on a terminal)]" in result.output
     assert "runs/NAME-seedS-TIME" in result.output.replace("\n", "").replace(" ", "")
+
+
+def test_train_without_a_config_is_a_usage_error_not_a_four_hour_run(tmp_path):
+    result = CliRunner().invoke(app, ["train", "--run-dir", str(tmp_path / "run")])
+    assert result.exit_code == 2 and "expected an experiment YAML" in result.output
+    assert not (tmp_path / "run").exists()

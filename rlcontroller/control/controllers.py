@@ -95,20 +95,26 @@ class LQGController:
 class LQGPrior:
     """The action of LQG + measured ground, or of LQG + ground model with `sensors.ground_model`
     (action units, unclipped), from an observation that holds the env's own Kalman estimate
-    (`sensors.state_estimate`), for residual policies. Designed on `plant`'s design model, as the
-    estimate is: a prior never reads the simulated plant's parameters."""
+    (`sensors.state_estimate`), for residual policies: -feedback @ scaled estimate - feedforward *
+    scaled ground reading."""
 
-    def __init__(self, plant: Plant) -> None:
+    def __init__(self, feedback: np.ndarray, feedforward: np.ndarray, layout) -> None:
+        self.feedback = np.asarray(feedback, dtype=float)  # (m, estimate size), on the scaled estimate
+        self.feedforward = np.asarray(feedforward, dtype=float)  # (m,), on the scaled ground reading
+        self._estimate = layout.estimate
+        self._ground = layout.ground
+
+    @classmethod
+    def design(cls, plant: Plant) -> LQGPrior:
+        """Designed on `plant`'s design model, as the estimate is: a prior never reads the simulated
+        plant's parameters."""
         sensors = plant.experiment.sensors
         if not sensors.state_estimate:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
         model = plant.design
         design = design_lqg_ground_model(model) if sensors.ground_model else design_lqg(model, known_ground=True)
         layout = plant.layout
-        self.feedback = design.feedback * layout.estimate_scale  # acts on the scaled estimate
-        self.feedforward = design.feedforward * layout.ground_scale  # on the scaled ground reading
-        self._estimate = layout.estimate
-        self._ground = layout.ground
+        return cls(design.feedback * layout.estimate_scale, design.feedforward * layout.ground_scale, layout)
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation, dtype=float)

@@ -18,14 +18,15 @@ readings are taken; apply the force until the next call.
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import ConfigError, load_experiment
+from rlcontroller.config import load_experiment
 from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.policy import PolicyController, policy_paths, read_policy
 from rlcontroller.files import atomic_write
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.plant import Plant
 
 OPSET = 17
@@ -72,8 +73,6 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     env builds for `plant`: sensors, history and Kalman estimate."""
     from onnx import helper
 
-    if controller.actor is None:
-        raise ConfigError(f"{source}: only MLP policies (PPO, A2C, SAC) can be exported")
     layout, sensors, experiment = plant.layout, plant.sensors, plant.experiment
     p, m = sensors.c.shape[0], plant.building.n_actuators
     block, history = p + 1, experiment.sensors.history
@@ -93,13 +92,12 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     observation = g.node("Concat", [*parts, actions], "observation", axis=1)
 
     network_input = observation
-    if controller.normalize is not None and controller.normalize.norm_obs:
-        statistics = controller.normalize.obs_rms
-        centred = g.node("Sub", [observation, g.constant("observation_mean", statistics.mean)], "centred")
-        spread = np.sqrt(statistics.var + controller.normalize.epsilon)
+    normalizer = controller.normalizer
+    if normalizer is not None:
+        centred = g.node("Sub", [observation, g.constant("observation_mean", normalizer.mean)], "centred")
+        spread = np.sqrt(normalizer.var + normalizer.epsilon)
         divided = g.node("Div", [centred, g.constant("observation_spread", spread)], "divided")
-        clip_obs = float(controller.normalize.clip_obs)
-        network_input = g.clip(divided, -clip_obs, clip_obs, "normalised")
+        network_input = g.clip(divided, -normalizer.clip, normalizer.clip, "normalised")
     x = g.node("Cast", [network_input], "network_input", to=FLOAT)
     x = _network(g, controller.actor, x, "")
     if controller.actor.odd:  # (g(o) - g(-o)) / 2
@@ -214,15 +212,18 @@ def _reading_names(plant: Plant) -> list[str]:
     return names
 
 
-def export_onnx(model_path: Path, out: Path) -> Path:
-    """Write the saved model at `model_path` (its run folder's config beside it) as ONNX at `out`."""
+def export_onnx(folder: Path, model: str, out: Path) -> Path:
+    """Write the saved policy `model` (best or final) of a run or model folder as ONNX at `out`. The
+    metadata names its source by folder name and the SHA-256 of its weights, never a local path."""
     import onnx
 
-    plant = Plant(load_experiment(model_path.parent / "config.yaml"))
-    controller = PolicyController.load(model_path)
-    model = controller_graph(plant, controller, source=str(model_path))
-    onnx.checker.check_model(model, full_check=True)
-    atomic_write(out, model.SerializeToString())
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    controller = read_policy(folder, model, plant)
+    _, weights = policy_paths(folder, model)
+    digest = hashlib.sha256(weights.read_bytes()).hexdigest()
+    graph = controller_graph(plant, controller, source=f"{folder.resolve().name}/{weights.name} (sha256 {digest})")
+    onnx.checker.check_model(graph, full_check=True)
+    atomic_write(out, graph.SerializeToString())
     return out
 
 

@@ -1,8 +1,9 @@
 """Run every controller on every record in the same simulator and collect J1-J4.
 
 The uncontrolled building is simulated as whole records with the precomputed step map; LQG and
-the RL policy run through the same environment (same sensors, noise realisation per record, force
-clipping); the clairvoyant optimal controller is the reference no causal controller can pass.
+the RL policy run through the same environment (same sensors, force clipping, and a noise
+realisation seeded by the record's content, so a record gives the same numbers in any folder and
+order); the clairvoyant optimal controller is the reference no causal controller can pass.
 """
 
 from __future__ import annotations
@@ -18,10 +19,10 @@ from rlcontroller.config import Experiment, display_path
 from rlcontroller.control.controllers import Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_responses
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.batch import batch_rollout
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
-from rlcontroller.physics.excitation import GroundMotion, for_control_step
+from rlcontroller.physics.excitation import GroundMotion, content_seed, for_control_step
 from rlcontroller.physics.metrics import METRICS, SETTLING_TAIL_S, YIELDING_METRICS, j_metrics, yielding_metrics
 from rlcontroller.physics.plant import Plant
 
@@ -92,7 +93,7 @@ def evaluate(
     include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant, simulated)
-    controlled = batch_rollout(plant, simulated, controllers)
+    controlled = batch_rollout(plant, simulated, controllers, seeds=[content_seed(motion) for motion in motions])
     optimal = optimal_responses(plant, simulated) if include_optimal else []
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
@@ -119,10 +120,12 @@ def evaluate(
     )
 
 
-def compare(plant: Plant, motions: list[GroundMotion], label: str, policy: Path | None = None) -> Evaluation:
+def compare(
+    plant: Plant, motions: list[GroundMotion], label: str, policy: PolicyController | None = None
+) -> Evaluation:
     """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), the
-    saved policy at `policy` (if given) and the optimal reference, on every motion. The LQGs are
-    designed on the design model and run on the plant."""
+    saved `policy` (if given) and the optimal reference, on every motion. The LQGs are designed on
+    the design model and run on the plant."""
     design = plant.design
     designs = [design_lqg(design), design_lqg(design, known_ground=True), design_lqg_ground_model(design)]
     controllers: list[Controller] = [
@@ -130,9 +133,8 @@ def compare(plant: Plant, motions: list[GroundMotion], label: str, policy: Path 
     ]
     sources = {}
     if policy is not None:
-        controller = PolicyController.load(policy)
-        controllers.append(controller)
-        sources[controller.name] = f"{display_path(policy)} ({controller.model.num_timesteps:,} training steps)"
+        controllers.append(policy)
+        sources[policy.name] = f"{display_path(Path(policy.source))} ({policy.steps:,} training steps)"
     evaluation = evaluate(plant, motions, controllers, label)
     evaluation.sources.update(sources)
     return evaluation

@@ -15,15 +15,14 @@ taken against the uncontrolled *plant*.
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import pandas as pd
 
 from rlcontroller.config import Experiment, Scenario
 from rlcontroller.control.controllers import Controller, LQGController
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
 from rlcontroller.physics.plant import Plant, centre_of_ranges
@@ -39,7 +38,7 @@ def robustness(
     scenarios: list[Scenario],
     motions: list[GroundMotion],
     label: str,
-    policy: Path | None = None,
+    policy: PolicyController | None = None,
 ) -> tuple[pd.DataFrame, float]:
     """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken."""
     start = time.perf_counter()
@@ -53,7 +52,7 @@ def robustness(
         part = centre_of_ranges(experiment.plant_randomization, experiment.plant)
         centre = Plant(experiment.model_copy(update={"plant": part, "plant_randomization": None})).elastic
         robust.append(LQGController(design_lqg(centre), centre, CENTRE_LQG))
-    learned: list[Controller] = [PolicyController.load(policy)] if policy is not None else []
+    learned: list[Controller] = [policy] if policy is not None else []
     frames = []
     for scenario in scenarios:
         plant = Plant(experiment.model_copy(update={"plant": scenario.plant}))

@@ -116,7 +116,7 @@ def make_vec_env(plant: Plant, seed: int):
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor, VecNormalize
 
     experiment = plant.experiment
-    prior = LQGPrior(plant) if experiment.algorithm.residual_lqg else None
+    prior = LQGPrior.design(plant) if experiment.algorithm.residual_lqg else None
     factories = [functools.partial(make_env, plant, prior) for _ in range(experiment.algorithm.n_envs)]
     if experiment.algorithm.vec_env == "batched":
         vec_env = BatchedVecEnv(plant, experiment.algorithm.n_envs, prior)

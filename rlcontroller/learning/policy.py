@@ -1,22 +1,25 @@
-"""Saved policies: loading a run's model, the residual on a prior, and the policy as a controller.
+"""stable-baselines3 models as controllers: the learner registry, the residual wrapper of training,
+and the conversion of a trained model into the policy data of `control.policy`.
 
 A residual policy's action is added to its prior's (LQG's) action, both clipped to [-1, 1]:
 `control.controllers.residual_action` is that rule, used in training (the `ResidualAction`
-wrapper) and in evaluation (`PolicyController`) alike.
+wrapper) and in evaluation (`control.policy.PolicyController`) alike.
+
+Opening a stable-baselines3 zip unpickles its author's objects (it can run any code): this module
+does it only for one's own runs (training, validation, `--resume`) and for `rlc convert
+--trust-pickle`, never when a controller is evaluated, checked or exported.
 """
 
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGPrior, residual_action
+from rlcontroller.control.policy import Normalizer, PolicyController, policy_paths, write_policy
 from rlcontroller.learning.actor import actor_of
-from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.plant import Plant
 
 
@@ -53,67 +56,49 @@ class ResidualAction(gym.ActionWrapper):
         return residual_action(action, self.prior(self._observation))
 
 
-class PolicyController:
-    """A trained stable-baselines3 policy as a controller: deterministic actions in [-1, 1], for one
-    observation or a batch (one forward pass).
-
-    `normalize` is the run's observation normaliser (a VecNormalize), if it used one; `prior`
-    maps an observation to the action the policy's output is added to (residual policies);
-    `source` names the saved model file, for reports.
-    """
-
-    def __init__(self, model, normalize=None, name: str = "RL", prior=None, source: str = "") -> None:
-        self.model = model
-        self.normalize = normalize
-        self.name = name
-        self.prior = prior
-        self.source = source
-        self.actor = actor_of(model)
-
-    @classmethod
-    def load(cls, model_path: Path, name: str = "RL") -> PolicyController:
-        model, normalize, prior = load_policy(model_path)
-        return cls(model, normalize, name, prior, source=str(model_path))
-
-    def reset(self) -> None:
-        pass
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        raw = observation
-        if self.normalize is not None:
-            observation = self.normalize.normalize_obs(observation)
-        action = self._deterministic(observation)
-        if self.prior is None:
-            return np.clip(action, -1.0, 1.0)
-        return residual_action(action, self.prior(raw))
-
-    def _deterministic(self, observation: np.ndarray) -> np.ndarray:
-        """The policy's deterministic action: through its actor's layers in numpy when it is a plain
-        MLP (the same numbers as `predict` to float32 rounding, without torch's per-call overhead),
-        else through `predict`."""
-        if self.actor is not None:
-            return self.actor(observation)
-        return self.model.predict(observation, deterministic=True)[0]
+def policy_controller(model, prior: LQGPrior | None, normalize=None, name: str = "RL") -> PolicyController:
+    """The deterministic policy of a stable-baselines3 model (and its VecNormalize, if any) as numpy
+    data: exactly what `write_policy` saves and `read_policy` reads back."""
+    actor = actor_of(model)
+    if actor is None:
+        raise ConfigError(f"{type(model).__name__}: only MLP policies on flat observations can be saved as data")
+    normalizer = None
+    if normalize is not None and normalize.norm_obs:
+        statistics = normalize.obs_rms
+        normalizer = Normalizer(statistics.mean.copy(), statistics.var.copy(), normalize.epsilon, normalize.clip_obs)
+    steps, algorithm = int(model.num_timesteps), type(model).__name__
+    return PolicyController(actor, normalizer, prior, name, steps=steps, algorithm=algorithm)
 
 
-def load_policy(model_path: Path):
-    """A saved model of a run folder, its observation normaliser and its prior (or None), on the CPU."""
+def convert(folder: Path) -> list[Path]:
+    """Write the policy data of every stable-baselines3 model (best, final) in `folder`: this opens
+    pickles, so only for folders whose author is trusted (`rlc convert --trust-pickle`)."""
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    model_path = Path(model_path)
-    plant = Plant(load_experiment(model_path.parent / "config.yaml"))
+    from rlcontroller.learning.env import BuildingEnv
+
+    plant = Plant(load_experiment(folder / "config.yaml"))
     experiment = plant.experiment
-    statistics = model_path.with_name(model_path.stem + ".vecnormalize.pkl")
-    normalize = None
-    path = model_path
-    try:
-        model = algorithm_class(experiment.algorithm.name).load(model_path, device="cpu")
-        if statistics.is_file():
-            path = statistics
-            normalize = VecNormalize.load(str(statistics), DummyVecEnv([functools.partial(BuildingEnv, plant)]))
-            normalize.training = False
-    except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
-        detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
-        raise ConfigError(f"{path}: cannot load the saved model ({type(error).__name__}: {detail})") from None
-    prior = LQGPrior(plant) if experiment.algorithm.residual_lqg else None
-    return model, normalize, prior
+    prior = LQGPrior.design(plant) if experiment.algorithm.residual_lqg else None
+    written = []
+    for model_name in ("best", "final"):
+        path = folder / f"{model_name}_model.zip"
+        if not path.is_file():
+            continue
+        statistics = path.with_name(path.stem + ".vecnormalize.pkl")
+        try:
+            model = algorithm_class(experiment.algorithm.name).load(path, device="cpu")
+            normalize = None
+            if statistics.is_file():
+                normalize = VecNormalize.load(str(statistics), DummyVecEnv([lambda: BuildingEnv(plant)]))
+        except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
+            detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+            raise ConfigError(f"{path}: cannot load the saved model ({type(error).__name__}: {detail})") from None
+        written.append(write_policy(policy_controller(model, prior, normalize), plant, folder, model_name))
+    if not written:
+        raise ConfigError(f"{folder}: no best_model.zip or final_model.zip to convert")
+    return written
+
+
+def saved_policy_exists(folder: Path, model: str) -> bool:
+    return all(path.is_file() for path in policy_paths(folder, model))

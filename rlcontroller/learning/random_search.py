@@ -90,7 +90,7 @@ class RandomSearch(BaseAlgorithm):
             raise ValueError("RandomSearch trains a linear actor: set policy.actor_arch: []")
         self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
         residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg
-        self.prior = LQGPrior(self.plant) if residual else None
+        self.prior = LQGPrior.design(self.plant) if residual else None
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
             self.weights = np.zeros(self.policy.action_net.weight.shape)
             self.search_rng = np.random.default_rng(self.seed)

@@ -11,6 +11,10 @@ A run folder holds:
                            references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2,
                            lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
     best_model.zip         the best validation so far (algorithm.select_by); final_model.zip at the end
+                           (stable-baselines3 files, for this run's own use: they unpickle)
+    best_policy.yaml/.npz  the same policies as data (`control.policy`): what evaluate, check and
+    final_policy.yaml/.npz export read, never unpickling
+    check.yaml             the safety check's verdict on the best policy (`evaluation.safety`)
     learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
 """
 
@@ -30,8 +34,10 @@ from typing import Any
 
 import numpy as np
 
-from rlcontroller.config import ConfigError, Experiment, load_experiment
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.control.policy import PolicyController, write_policy
 from rlcontroller.files import atomic_savefig, atomic_write, check_new_folder
+from rlcontroller.physics.plant import Plant
 
 CURVE_COLUMNS = (
     "steps",
@@ -150,32 +156,23 @@ class RunFolder:
         with open(self.curve_path, newline="") as handle:
             return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(handle)]
 
-    def save_model(self, model, name: str) -> Path:
-        """Save `name`.zip (and `name`.vecnormalize.pkl if used) atomically."""
-        temporary = self.path / f".{name}.tmp.zip"
+    def save_model(self, model, name: str, controller: PolicyController, plant: Plant) -> Path:
+        """Save the model `name` (best or final) atomically: NAME_model.zip (and its
+        .vecnormalize.pkl if used) for this run, and `controller`, its policy, as data."""
+        temporary = self.path / f".{name}_model.tmp.zip"
         model.save(temporary)
-        os.replace(temporary, self.path / f"{name}.zip")
+        os.replace(temporary, self.path / f"{name}_model.zip")
         normalize = model.get_vec_normalize_env()
         if normalize is not None:
-            statistics = self.path / f".{name}.vecnormalize.tmp"
+            statistics = self.path / f".{name}_model.vecnormalize.tmp"
             normalize.save(str(statistics))
-            os.replace(statistics, self.path / f"{name}.vecnormalize.pkl")
-        return self.path / f"{name}.zip"
+            os.replace(statistics, self.path / f"{name}_model.vecnormalize.pkl")
+        return write_policy(controller, plant, self.path, name)
 
 
 def default_run_dir(experiment: Experiment) -> Path:
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
     return Path("runs") / f"{experiment.name}-seed{experiment.seed}-{stamp}"
-
-
-def model_file(folder: Path, model: str) -> Path:
-    """The saved `model` (best or final) of a run folder."""
-    if model not in ("best", "final"):
-        raise ConfigError(f"--model: expected best or final, got {model!r}")
-    path = folder / f"{model}_model.zip"
-    if not path.is_file():
-        raise ConfigError(f"{folder}: no {path.name}; expected a run folder written by 'rlc train'")
-    return path
 
 
 def plot_learning_curve(run: RunFolder) -> Path:

@@ -22,8 +22,10 @@ from typing import Any
 import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.files import check_new_folder
 from rlcontroller.learning.algorithms import algorithm_class, build_model, check_algorithm, make_vec_env
+from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder, default_run_dir, plot_learning_curve
 from rlcontroller.learning.validation import Validator
 from rlcontroller.physics.plant import Plant
@@ -76,8 +78,12 @@ def _callback(
                 return False
             return self.keep_going and not stop.requested
 
+        def policy(self) -> PolicyController:
+            return policy_controller(self.model, validator.prior, self.model.get_vec_normalize_env())
+
         def validate(self) -> None:
-            result = validator(self.model)
+            policy = self.policy()
+            result = validator(policy)
             episodes = [info["r"] for info in self.model.ep_info_buffer]
             row = {"steps": self.num_timesteps, "wall_time_s": round(self.wall_time(), 2)}
             row["episode_reward"] = float(np.mean(episodes)) if episodes else float("nan")
@@ -90,7 +96,7 @@ def _callback(
                 best, algorithm.select_by
             ):
                 state.update(best_steps=self.num_timesteps, best=result)
-                run.save_model(self.model, "best_model")
+                run.save_model(self.model, "best", policy, validator.plant)
 
         def checkpoint(self) -> None:
             state["wall_time_s"] = self.wall_time()
@@ -177,6 +183,7 @@ def train(
     try:
         model, state = _start(run, experiment, vec_env, device, resume is not None)
         created = resume is None
+        policy_controller(model, None)  # a policy that cannot be saved as data stops before training
         stop = StopRequest()
         signals = (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()
         previous_handlers = {s: signal.signal(s, stop) for s in signals}  # none in a worker thread (Dask)
@@ -195,7 +202,7 @@ def train(
     if remaining > 0:
         callback.checkpoint()
     if not stop.requested:
-        run.save_model(model, "final_model")
+        run.save_model(model, "final", callback.policy(), plant)
         if state["best"] is None:
             callback.validate()
         plot_learning_curve(run)

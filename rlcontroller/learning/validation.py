@@ -14,8 +14,8 @@ import numpy as np
 
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.batch import batch_rollout
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.excitation import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak
 from rlcontroller.physics.plant import Plant
@@ -28,7 +28,7 @@ class Validator:
         self.plant = plant
         excitation = plant.experiment.excitation
         self.motions = generate_suite(excitation.validation, excitation.validation_motions, excitation.validation_seed)
-        self.prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None
+        self.prior = LQGPrior.design(plant) if plant.experiment.algorithm.residual_lqg else None
         bare = Uncontrolled(plant.building.n_actuators)
         self.uncontrolled = [response for response, _ in self._rollouts(bare)]
         self.reference = {}
@@ -45,8 +45,8 @@ class Validator:
                 lqg = {"eval_J1": float("nan"), "eval_J2": float("nan")}
             self.reference |= {f"{prefix}_J1": lqg["eval_J1"], f"{prefix}_J2": lqg["eval_J2"]}
 
-    def __call__(self, model) -> dict[str, float]:
-        policy = PolicyController(model, model.get_vec_normalize_env(), prior=self.prior)
+    def __call__(self, policy: PolicyController) -> dict[str, float]:
+        """The validation row of `policy` (a model's `policy_controller`), with the references."""
         return self.run(policy) | self.reference
 
     def _rollouts(self, controller) -> list:

@@ -7,6 +7,7 @@ converted once, here. Between samples a motion is piecewise linear.
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 import re
 from dataclasses import dataclass, field, replace
@@ -23,6 +24,7 @@ from rlcontroller.config import (
     GeneratorConfig,
     KanaiTajimiConfig,
     MixtureConfig,
+    NearFaultConfig,
     NoiseImpulsesConfig,
 )
 
@@ -276,9 +278,40 @@ def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str 
     acceleration = filtered * envelope
     peak = np.max(np.abs(acceleration))
     if peak > 0:
-        low, high = config.pga
-        target = float(np.exp(rng.uniform(np.log(low), np.log(high)))) if config.pga_log else _uniform(rng, config.pga)
-        acceleration *= target / peak
+        acceleration *= _log_or_uniform(rng, config.pga, config.pga_log) / peak
+    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+
+
+def _log_or_uniform(rng: np.random.Generator, bounds: tuple[float, float], log: bool) -> float:
+    return float(np.exp(rng.uniform(np.log(bounds[0]), np.log(bounds[1])))) if log else _uniform(rng, bounds)
+
+
+def near_fault(config: NearFaultConfig, rng: np.random.Generator, name: str = "near_fault") -> GroundMotion:
+    """A Kanai-Tajimi background plus a Mavroeidis-Papageorgiou (2003) pulse, scaled to a random PGA.
+
+    The pulse's velocity is (1 + cos(2 pi f (t - t0) / gamma)) cos(2 pi f (t - t0) + nu) / 2 for
+    |t - t0| <= gamma / (2 f), f = 1 / period; its acceleration (the derivative) is added with a
+    peak `pulse_ratio` times the background's, centred in the background's strong phase."""
+    background = kanai_tajimi(config.background, rng, name)
+    time, acceleration = background.time, background.acceleration.copy()
+    frequency, cycles = 1.0 / _uniform(rng, config.pulse_period), _uniform(rng, config.pulse_cycles)
+    phase, ratio = float(rng.uniform(0.0, 2.0 * np.pi)), _uniform(rng, config.pulse_ratio)
+    centre = float(rng.uniform(0.2, 0.5)) * time[-1]
+    shifted = time - centre
+    inside = np.abs(shifted) <= cycles / (2.0 * frequency)
+    velocity = np.where(
+        inside,
+        0.5
+        * (1.0 + np.cos(2.0 * np.pi * frequency * shifted / cycles))
+        * np.cos(2.0 * np.pi * frequency * shifted + phase),
+        0.0,
+    )
+    pulse = np.gradient(velocity, config.dt)
+    if np.max(np.abs(pulse)) > 0:
+        acceleration += pulse * ratio * np.max(np.abs(acceleration)) / np.max(np.abs(pulse))
+    peak = np.max(np.abs(acceleration))
+    if peak > 0:
+        acceleration *= _log_or_uniform(rng, config.pga, config.pga_log) / peak
     return GroundMotion(name, config.dt, acceleration, synthetic=True)
 
 
@@ -290,7 +323,17 @@ def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None
         return generate(chosen.generator, rng, name)
     if isinstance(config, KanaiTajimiConfig):
         return kanai_tajimi(config, rng, name or "kanai_tajimi")
+    if isinstance(config, NearFaultConfig):
+        return near_fault(config, rng, name or "near_fault")
     return noise_impulses(config, rng, name or "noise_impulses")
+
+
+def content_seed(motion: GroundMotion, seed: int = 0) -> int:
+    """A seed fixed by the motion's samples and time step and by `seed`, not by its name, file or
+    position in a suite: the same record gets the same sensor noise wherever it is evaluated."""
+    content = np.float64(motion.dt).tobytes() + np.ascontiguousarray(motion.acceleration, dtype=np.float64).tobytes()
+    digest = hashlib.sha256(content + int(seed).to_bytes(8, "little", signed=False)).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
 
 
 def generate_suite(config: GeneratorConfig, count: int, seed: int) -> list[GroundMotion]:

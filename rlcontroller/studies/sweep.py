@@ -154,10 +154,10 @@ def _train(run: SweepRun) -> str:
 
 
 def _evaluate(run: SweepRun, records: str | None) -> None:
+    from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.files import new_folder
-    from rlcontroller.learning.run_folder import model_file
     from rlcontroller.physics.plant import Plant
     from rlcontroller.physics.records import choose_motions
 
@@ -166,7 +166,8 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
         return
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
     motions, label = choose_motions(Path(records) if records else None)
-    evaluation = compare(Plant(experiment), motions, label, model_file(run.folder, "best"))
+    plant = Plant(experiment)
+    evaluation = compare(plant, motions, label, read_policy(run.folder, "best", plant))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
 

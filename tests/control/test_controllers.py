@@ -63,24 +63,24 @@ def test_the_residual_prior_reads_the_scaled_estimate_of_the_observation(ground_
     estimate = observation[layout.estimate].astype(float) * layout.estimate_scale
     ground = float(observation[layout.ground]) * layout.ground_scale
     expected = -design.feedback @ estimate - design.feedforward * ground
-    np.testing.assert_allclose(LQGPrior(plant)(observation), expected, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(LQGPrior.design(plant)(observation), expected, rtol=1e-6, atol=1e-9)
 
 
 @pytest.mark.parametrize("ground_model", [False, True])
 def test_the_prior_is_designed_on_the_design_model_not_on_the_plant(ground_model):
     experiment = Experiment(sensors={"state_estimate": True, "ground_model": ground_model})
-    nominal = LQGPrior(Plant(experiment))
-    softer = LQGPrior(Plant(experiment.model_copy(update={"plant": PlantConfig(stiffness=0.7)})))
+    nominal = LQGPrior.design(Plant(experiment))
+    softer = LQGPrior.design(Plant(experiment.model_copy(update={"plant": PlantConfig(stiffness=0.7)})))
     np.testing.assert_array_equal(softer.feedback, nominal.feedback)
     np.testing.assert_array_equal(softer.feedforward, nominal.feedforward)
     delayed = Plant(experiment.model_copy(update={"plant": PlantConfig(actuators={"delay_steps": 2})}))
     observation = np.ones(delayed.layout.size, dtype=np.float32)
-    np.testing.assert_array_equal(LQGPrior(delayed)(observation), nominal(observation))
+    np.testing.assert_array_equal(LQGPrior.design(delayed)(observation), nominal(observation))
 
 
 def test_a_prior_needs_the_state_estimate():
     with pytest.raises(ValueError, match="state_estimate"):
-        LQGPrior(Plant(Experiment()))
+        LQGPrior.design(Plant(Experiment()))
 
 
 def test_the_residual_rule_clips_the_policy_then_the_sum():

@@ -7,8 +7,8 @@ from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontroll
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, preview_kernel, quadratic_cost
 from rlcontroller.control.optimal import optimal_response
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, step_map
 from rlcontroller.physics.excitation import GroundModel, GroundMotion, kanai_tajimi, read_at2, scale_to_pga
 from rlcontroller.physics.metrics import j_metrics
@@ -129,17 +129,20 @@ def test_lqg_keeps_only_the_quadratic_terms_of_linear_quantities():
     np.testing.assert_allclose(design_lqg(Plant(extended)).feedback, design_lqg(Plant(base)).feedback)
 
 
+class ZeroActor:
+    """A network whose action is zero for any observation."""
+
+    def __call__(self, observation):
+        return np.zeros(np.shape(observation)[:-1] + (3,))
+
+
 @pytest.mark.parametrize("ground_model", [False, True])
 def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
-    class ZeroPolicy:
-        def predict(self, observation, deterministic=True):
-            return np.zeros(3), None
-
     sensors = {"state_estimate": True, "ground_model": ground_model}
     experiment = Experiment(sensors=sensors, algorithm={"residual_lqg": True})
     env = BuildingEnv(experiment)
     motion = read_at2_or_synthetic()
-    residual, _ = rollout(env, motion, PolicyController(ZeroPolicy(), prior=LQGPrior(Plant(experiment))))
+    residual, _ = rollout(env, motion, PolicyController(ZeroActor(), prior=LQGPrior.design(Plant(experiment))))
     design = (
         design_lqg_ground_model(Plant(experiment)) if ground_model else design_lqg(Plant(experiment), known_ground=True)
     )

@@ -2,6 +2,7 @@
 on whole records: the committed residual policy (Kalman estimate, LQG prior) and a SAC policy with an
 observation normaliser, a sensor history and the last two actions."""
 
+import hashlib
 import subprocess
 import sys
 
@@ -12,9 +13,10 @@ from conftest import REPOSITORY
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
 from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.control.policy import read_policy
 from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.learning.policy import PolicyController, algorithm_class
+from rlcontroller.learning.policy import algorithm_class, policy_controller
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
@@ -48,12 +50,15 @@ def assert_same_forces(plant, python_controller, path, motions):
 
 
 def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
-    path = export_onnx(COMMITTED / "best_model.zip", tmp_path / "controller.onnx")
+    path = export_onnx(COMMITTED, "best", tmp_path / "controller.onnx")
     plant = Plant(load_experiment(COMMITTED / "config.yaml"))
-    assert_same_forces(plant, PolicyController.load(COMMITTED / "best_model.zip"), path, synthetic_suite(count=2))
+    assert_same_forces(plant, read_policy(COMMITTED, "best", plant), path, synthetic_suite(count=2))
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
     assert metadata["control_dt_s"] == "0.02" and metadata["actuator_stories"] == "1, 3, 5"
     assert metadata["readings"].startswith("absolute_acceleration floor 1 (m/s^2)")
+    digest = hashlib.sha256((COMMITTED / "best_policy.npz").read_bytes()).hexdigest()
+    assert metadata["source"] == f"five_story/best_policy.npz (sha256 {digest})"
+    assert str(REPOSITORY) not in onnx.load(path).SerializeToString().decode("latin-1")  # no local path
 
 
 def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
@@ -71,7 +76,7 @@ def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     normalize.obs_rms.mean = rng.normal(0.0, 0.1, plant.layout.size)
     normalize.obs_rms.var = rng.uniform(0.2, 3.0, plant.layout.size)
     normalize.training = False
-    assert_same_forces_open_loop(plant, PolicyController(model, normalize), tmp_path / "sac.onnx")
+    assert_same_forces_open_loop(plant, policy_controller(model, None, normalize), tmp_path / "sac.onnx")
 
 
 def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
@@ -87,7 +92,7 @@ def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
     model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
     with torch.no_grad():
         model.policy.action_net.weight.mul_(30.0)
-    assert_same_forces_open_loop(plant, PolicyController(model), tmp_path / "model_free.onnx")
+    assert_same_forces_open_loop(plant, policy_controller(model, None), tmp_path / "model_free.onnx")
 
 
 def assert_same_forces_open_loop(plant, controller, path):
@@ -107,7 +112,7 @@ def assert_same_forces_open_loop(plant, controller, path):
 
 
 def test_a_batch_of_buildings_runs_as_one_each(tmp_path):
-    path = export_onnx(COMMITTED / "best_model.zip", tmp_path / "controller.onnx")
+    path = export_onnx(COMMITTED, "best", tmp_path / "controller.onnx")
     rng = np.random.default_rng(2)
     readings, ground = rng.normal(0.0, 2.0, (20, 4, 5)), rng.normal(0.0, 2.0, (20, 4, 1))
     batch, singles = OnnxController(path, batch=4), [OnnxController(path) for _ in range(4)]
@@ -133,6 +138,23 @@ def test_rlc_export_writes_the_file_and_refuses_bad_paths(tmp_path):
     )
     assert refused.returncode == 2 and "expected a file path in an existing folder" in refused.stderr
     assert "Traceback" not in refused.stderr
+    again = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "export", str(COMMITTED), "--out", str(out)],
+        capture_output=True,
+        text=True,
+    )
+    assert again.returncode == 2 and "never overwritten" in again.stderr
+
+
+def test_rlc_export_writes_by_default_under_results_never_into_the_model_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    before = sorted(path.name for path in COMMITTED.iterdir())
+    done = subprocess.run([sys.executable, "-m", "rlcontroller", "export"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "results" / "five_story_best_controller.onnx").is_file()
+    assert sorted(path.name for path in COMMITTED.iterdir()) == before
+    again = subprocess.run([sys.executable, "-m", "rlcontroller", "export"], capture_output=True, text=True)
+    assert again.returncode == 2 and "never overwritten" in again.stderr
 
 
 def test_rlc_export_refuses_unknown_formats():
@@ -149,7 +171,7 @@ def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch):
     experiment = Experiment.model_validate({"algorithm": {"name": "PPO", "policy": policy}})
     plant = Plant(experiment)
     model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
-    controller = PolicyController(model)
+    controller = policy_controller(model, None)
     path = tmp_path / "odd.onnx"
     path.write_bytes(controller_graph(plant, controller).SerializeToString())
     exported = OnnxController(path)

@@ -61,7 +61,7 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
     assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {f"7 records from {records}, as recorded"}
     summary = (out / "summary.md").read_text()
     assert "RL better than LQG (%)" in summary and f"7 records from {records}" in summary
-    assert f"Evaluated RL: {smoke_run / 'best_model.zip'} (" in summary and "training steps)" in summary
+    assert f"Evaluated RL: {smoke_run / 'best_policy.yaml'} (" in summary and "training steps)" in summary
     assert "RL better than LQG" in result.output
     reductions = [line for line in summary.splitlines() if line.startswith("| LQG |")][0].split("|")[2:-1]
     assert [len(cell.strip().split(".")[1]) for cell in reductions] == [3, 3, 3, 3, 1, 1, 1]

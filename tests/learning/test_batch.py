@@ -11,10 +11,10 @@ from conftest import REPOSITORY
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.policy import read_policy
 from rlcontroller.learning import batch as batch_module
 from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.learning.policy import PolicyController
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
@@ -78,8 +78,8 @@ def test_small_batches_give_the_same_responses_as_one(monkeypatch):
 
 
 def test_the_policy_acts_on_the_batch_as_on_each_record():
-    controller = PolicyController.load(REPOSITORY / "models" / "five_story" / "best_model.zip")
     plant = Plant(load_experiment(REPOSITORY / "models" / "five_story" / "config.yaml"))
+    controller = read_policy(REPOSITORY / "models" / "five_story", "best", plant)
     motions = mixed_motions()
     batched = batch_rollout(plant, motions, [controller])[0]
     env = BuildingEnv(plant)

@@ -1,31 +1,43 @@
-"""Saved policies as controllers: the numpy actor gives `predict`'s actions to float32 rounding."""
+"""Saved policies: the numpy actor gives `predict`'s actions to float32 rounding; a policy is data
+(saved and read back exactly, never unpickled)."""
+
+import base64
+import json
+import pickle
+import shutil
+import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import REPOSITORY
+from typer.testing import CliRunner
 
+from rlcontroller.cli import app
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.control.controllers import LQGPrior
+from rlcontroller.control.policy import PolicyController, read_policy, write_policy
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.learning.policy import PolicyController, algorithm_class, load_policy
+from rlcontroller.learning.policy import algorithm_class, policy_controller
+from rlcontroller.physics.plant import Plant
 
 
 def test_the_numpy_actor_equals_predict_to_float32_rounding():
-    model, _, _ = load_policy(REPOSITORY / "models" / "five_story" / "best_model.zip")
-    controller = PolicyController(model)
-    assert controller.actor is not None
+    model = algorithm_class("PPO")("MlpPolicy", BuildingEnv(), policy_kwargs={"net_arch": [64, 64]}, seed=0)
+    controller = policy_controller(model, None)
     observations = (np.random.default_rng(0).standard_normal((200, *model.observation_space.shape)) * 3.0).astype(
         np.float32
     )
     expected, _ = model.predict(observations, deterministic=True)
-    batch = np.clip(controller._deterministic(observations), -1.0, 1.0)
-    np.testing.assert_allclose(batch, expected, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-6)
     for observation, row in zip(observations[:5], expected, strict=False):
-        np.testing.assert_allclose(
-            np.clip(controller._deterministic(observation), -1.0, 1.0), row, rtol=1e-5, atol=1e-6
-        )
+        np.testing.assert_allclose(controller.act(observation), row, rtol=1e-5, atol=1e-6)
 
 
-@pytest.mark.parametrize(("name", "activation"), [("SAC", "ReLU"), ("PPO", "Tanh"), ("PPO", "GELU"), ("A2C", "ELU")])
+@pytest.mark.parametrize(
+    ("name", "activation"), [("SAC", "ReLU"), ("PPO", "Tanh"), ("PPO", "GELU"), ("A2C", "ELU"), ("TD3", "ReLU")]
+)
 def test_the_numpy_actor_of_other_learners_and_activations(name, activation):
     import torch
 
@@ -38,11 +50,106 @@ def test_the_numpy_actor_of_other_learners_and_activations(name, activation):
     np.testing.assert_allclose(np.clip(actor(observations), -1.0, 1.0), expected, rtol=1e-5, atol=1e-6)
 
 
-def test_the_committed_policy_loads_with_its_normaliser_and_prior():
-    controller = PolicyController.load(REPOSITORY / "models" / "five_story" / "best_model.zip")
-    assert controller.prior is not None and controller.source.endswith("best_model.zip")
-    action = controller.act(np.zeros(controller.model.observation_space.shape, dtype=np.float32))
+def test_the_committed_policy_loads_with_its_prior_from_data():
+    plant = Plant(load_experiment(REPOSITORY / "models" / "five_story" / "config.yaml"))
+    controller = read_policy(REPOSITORY / "models" / "five_story", "best", plant)
+    assert controller.prior is not None and controller.source.endswith("best_policy.yaml")
+    np.testing.assert_allclose(controller.prior.feedback, LQGPrior.design(plant).feedback, rtol=1e-12)
+    action = controller.act(np.zeros(plant.layout.size, dtype=np.float32))
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.parametrize(
+    ("name", "experiment"),
+    [
+        ("PPO", {"algorithm": {"name": "PPO", "normalize_observations": True}}),
+        ("SAC", {"algorithm": {"name": "SAC"}, "sensors": {"history": 3}}),
+        ("PPO", {"algorithm": {"name": "PPO", "residual_lqg": True}, "sensors": {"state_estimate": True}}),
+    ],
+)
+def test_a_policy_saved_as_data_reads_back_to_the_same_actions(tmp_path, name, experiment):
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+
+    experiment = Experiment.model_validate(experiment)
+    plant = Plant(experiment)
+    vec_env = make_vec_env(plant, seed=0)
+    model = build_model(experiment, vec_env, seed=0, device="cpu", tensorboard=None)
+    normalize = model.get_vec_normalize_env()
+    if normalize is not None:  # statistics away from their initial values
+        normalize.obs_rms.mean = np.linspace(-1.0, 1.0, plant.layout.size)
+        normalize.obs_rms.var = np.linspace(0.5, 2.0, plant.layout.size)
+    prior = LQGPrior.design(plant) if experiment.algorithm.residual_lqg else None
+    saved = policy_controller(model, prior, normalize)
+    write_policy(saved, plant, tmp_path, "best")
+    read = read_policy(tmp_path, "best", plant)
+    observations = np.random.default_rng(3).standard_normal((50, plant.layout.size)).astype(np.float32)
+    np.testing.assert_array_equal(read.act(observations), saved.act(observations))
+    assert (read.normalizer is None) == (normalize is None) and (read.prior is None) == (prior is None)
+    if normalize is not None:  # the statistics matter: without them the actions differ
+        bare = PolicyController(read.actor)
+        assert not np.allclose(bare.act(observations), read.act(observations))
+
+
+class Payload:
+    """Unpickling this creates the file `marker`: proof that opening a file ran its author's code."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return (open, (str(self.marker), "w"))
+
+
+def plant_payloads(folder: Path, marker: Path) -> None:
+    """A copy of a model folder with a pickle payload in every file a loader might open."""
+    payload = pickle.dumps(Payload(marker))
+    serialized = {"policy_class": {":type:": "x", ":serialized:": base64.b64encode(payload).decode()}}
+    with zipfile.ZipFile(folder / "best_model.zip", "w") as archive:  # stable-baselines3's layout
+        archive.writestr("data", json.dumps(serialized))
+        archive.writestr("policy.pth", payload)
+    (folder / "best_model.vecnormalize.pkl").write_bytes(payload)
+    (folder / "replay_buffer.pkl").write_bytes(payload)
+
+
+@pytest.mark.parametrize("where", ["beside", "weights", "yaml"])
+def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where):
+    folder = tmp_path / "shared_model"
+    shutil.copytree(REPOSITORY / "models" / "five_story", folder)
+    marker = tmp_path / "payload_ran"
+    plant_payloads(folder, marker)
+    if where == "weights":  # an object array in the .npz is a pickle
+        np.savez(folder / "best_policy.npz", layer0_weight=np.array([Payload(marker)], dtype=object))
+    if where == "yaml":
+        text = (folder / "best_policy.yaml").read_text()
+        tag = f"extra: !!python/object/apply:builtins.open ['{marker}', 'w']\n"
+        (folder / "best_policy.yaml").write_text(text + tag)
+    kobe = str(records / "RSN1106_KOBE_KJM000.AT2")
+    commands = [
+        ["evaluate", str(folder), "--records", kobe, "--out", str(tmp_path / "evaluation")],
+        ["compare", "lqg", str(folder), "--records", kobe, "--out", str(tmp_path / "compare")],
+        ["robustness", str(folder), "--records", kobe, "--out", str(tmp_path / "robustness")],
+        ["export", str(folder), "--out", str(tmp_path / "controller.onnx")],
+    ]
+    for arguments in commands:
+        result = CliRunner().invoke(app, arguments)
+        assert not marker.exists(), f"rlc {arguments[0]} ran the payload"
+        if where == "beside":
+            assert result.exit_code == 0, result.output
+        else:
+            assert result.exit_code == 2 and "error: " in result.output, result.output
+            assert "Traceback" not in result.output
+
+
+def test_a_folder_with_only_a_stable_baselines3_zip_is_refused_with_the_way_to_convert(tmp_path):
+    folder = tmp_path / "old_run"
+    folder.mkdir()
+    shutil.copy(REPOSITORY / "models" / "five_story" / "config.yaml", folder)
+    plant_payloads(folder, tmp_path / "payload_ran")
+    result = CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2 and "--trust-pickle" in result.output and not (tmp_path / "payload_ran").exists()
+    refused = CliRunner().invoke(app, ["convert", str(folder)])
+    assert refused.exit_code == 2 and "can run their author's code" in refused.output
+    assert not (tmp_path / "payload_ran").exists()
 
 
 def test_an_odd_policy_gives_no_force_without_readings_and_mirrors_its_action():
@@ -118,10 +225,13 @@ ODD_ACTORS = [
 
 @pytest.mark.parametrize("name", ["five_story", "five_story_robust", *ODD_ACTORS])
 def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
-    controller = PolicyController.load(REPOSITORY / "models" / name / "best_model.zip")
-    zero = np.zeros(controller.model.observation_space.shape, dtype=np.float32)
+    folder = REPOSITORY / "models" / name
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    controller = read_policy(folder, "best", plant)
+    zero = np.zeros(plant.layout.size, dtype=np.float32)
     action = controller.act(zero)
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
     assert (name in ODD_ACTORS) == controller.actor.odd
     if controller.actor.odd:
         assert np.all(controller.actor(zero) == 0.0)  # no readings, no residual
+    assert not list(folder.glob("*.zip")) and not list(folder.glob("*.pkl"))  # nothing that unpickles

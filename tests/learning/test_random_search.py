@@ -8,9 +8,10 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
+from rlcontroller.control.policy import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.batch import batch_rollout
-from rlcontroller.learning.policy import PolicyController
+from rlcontroller.learning.random_search import RandomSearch
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
@@ -69,11 +70,16 @@ def test_an_iteration_steps_downhill_on_its_own_motions():
     assert after < before
 
 
+def saved_policy(run, model):
+    """The run's saved policy, as evaluation reads it (data, no unpickling)."""
+    return read_policy(run, model, Plant(load_experiment(run / "config.yaml")))
+
+
 def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     summary = train(tiny(total_steps=40000), run_dir=tmp_path / "run")
     assert summary.steps >= 40000 and summary.best["eval_J1"] < 0.95  # no control: 1
-    controller = PolicyController.load(tmp_path / "run" / "best_model.zip")
-    weights = controller.model.weights
+    controller = saved_policy(tmp_path / "run", "best")
+    weights = RandomSearch.load(tmp_path / "run" / "best_model.zip", device="cpu").weights
     observations = np.random.default_rng(5).standard_normal((6, weights.shape[1])).astype(np.float32) * 30
     expected = np.clip(observations @ weights.T, -1.0, 1.0)
     np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
@@ -98,8 +104,8 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
         experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),
         run_dir=tmp_path / "run",
     )
-    controller = PolicyController.load(tmp_path / "run" / "final_model.zip")
-    weights = controller.model.weights
+    controller = saved_policy(tmp_path / "run", "final")
+    weights = RandomSearch.load(tmp_path / "run" / "final_model.zip", device="cpu").weights
     assert controller.prior is not None and np.any(weights != 0.0)
     observations = np.random.default_rng(2).standard_normal((6, weights.shape[1])).astype(np.float32)
     expected = LinearFeedback(weights, prior=controller.prior).act(observations)
@@ -109,11 +115,11 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
 def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
     experiment = tiny(total_steps=24000)
     whole = train(experiment, run_dir=tmp_path / "whole")
-    stopped = train(experiment, run_dir=tmp_path / "stopped", time_limit_s=0.0)  # stops after one iteration
+    stopped = train(experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)  # stops after one iteration
     assert stopped.time_limit_reached and stopped.steps < 24000
-    resumed = train(resume=tmp_path / "stopped")
+    resumed = train(resume=tmp_path / "stop")
     assert resumed.steps == whole.steps
-    final = [PolicyController.load(tmp_path / run / "final_model.zip").model.weights for run in ("whole", "stopped")]
+    final = [RandomSearch.load(tmp_path / run / "final_model.zip", device="cpu").weights for run in ("whole", "stop")]
     np.testing.assert_array_equal(final[0], final[1])
 
 

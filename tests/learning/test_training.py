@@ -16,9 +16,10 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import PlantRandomization, load_experiment
-from rlcontroller.learning.policy import load_policy
+from rlcontroller.control.policy import read_policy
 from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
+from rlcontroller.physics.plant import Plant
 
 SMOKE = REPOSITORY / "configs" / "smoke.yaml"
 
@@ -45,6 +46,10 @@ def test_a_run_folder_has_every_file(tmp_path):
         "learning_curve.png",
         "best_model.zip",
         "final_model.zip",
+        "best_policy.yaml",
+        "best_policy.npz",
+        "final_policy.yaml",
+        "final_policy.npz",
     ):
         assert (run / name).is_file(), name
     checkpoints = RunFolder(run).checkpoints()
@@ -58,8 +63,8 @@ def test_a_run_folder_has_every_file(tmp_path):
     assert load_experiment(run / "config.yaml").algorithm.total_steps == 600
     assert json.loads((run / "run.json").read_text())["device"] == "cpu"  # the device used, not "auto"
     assert summary.steps == 600 and "run folder" in summary.line()
-    model, normalize, prior = load_policy(run / "best_model.zip")
-    assert normalize is None and prior is None and model.num_timesteps == summary.best_steps
+    policy = read_policy(run, "best", Plant(load_experiment(run / "config.yaml")))
+    assert policy.normalizer is None and policy.prior is None and policy.steps == summary.best_steps
 
 
 def test_runs_are_never_overwritten(tmp_path):
@@ -74,10 +79,10 @@ def test_same_seed_gives_identical_parameters(tmp_path):
     settings = {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
     train(smoke(**settings), run_dir=tmp_path / "a")
     train(smoke(**settings), run_dir=tmp_path / "b")
-    first, _, _ = load_policy(tmp_path / "a" / "final_model.zip")
-    second, _, _ = load_policy(tmp_path / "b" / "final_model.zip")
-    for (name, a), b in zip(first.policy.state_dict().items(), second.policy.state_dict().values(), strict=True):
-        assert np.array_equal(a.numpy(), b.numpy()), name
+    first, second = (np.load(tmp_path / run / "final_policy.npz") for run in ("a", "b"))
+    assert first.files == second.files
+    for name in first.files:
+        assert np.array_equal(first[name], second[name]), name
 
 
 @pytest.mark.slow
@@ -169,8 +174,8 @@ def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
         run_dir=tmp_path / "run",
     )
     assert (RunFolder(tmp_path / "run").checkpoints()[-1] / "vecnormalize.pkl").is_file()
-    _, normalize, _ = load_policy(tmp_path / "run" / "final_model.zip")
-    assert normalize is not None and not normalize.training and normalize.obs_rms.count > 300
+    policy = read_policy(tmp_path / "run", "final", Plant(load_experiment(tmp_path / "run" / "config.yaml")))
+    assert policy.normalizer is not None and np.any(policy.normalizer.mean != 0.0)
 
 
 @pytest.mark.parametrize(
@@ -213,8 +218,8 @@ def test_a_residual_policy_trains_and_starts_at_lqg(tmp_path):
         update={"sensors": experiment.sensors.model_copy(update={"state_estimate": True})}
     )
     summary = train(experiment, run_dir=tmp_path / "run")
-    _, _, prior = load_policy(tmp_path / "run" / "final_model.zip")
-    assert prior is not None
+    policy = read_policy(tmp_path / "run", "final", Plant(experiment))
+    assert policy.prior is not None
     # Barely trained, the residual is close to zero: validation J1 is near LQG + ground's.
     assert abs(summary.best["eval_J1"] - summary.best["lqg_ground_J1"]) < 0.1
 
@@ -291,11 +296,11 @@ def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finishe
 def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_path):
     run = tmp_path / "run"
     shutil.copytree(finished_run, run)
-    (run / "best_model.zip").write_bytes(b"PK\x03\x04 truncated")
+    (run / "best_policy.npz").write_bytes(b"PK\x03\x04 truncated")
     result = CliRunner().invoke(app, ["evaluate", str(run), "--out", str(tmp_path / "out")])
     lines = result.output.strip().splitlines()
     assert result.exit_code == 2 and "Traceback" not in result.output
-    assert lines[-1].startswith(f"error: {run / 'best_model.zip'}: cannot load the saved model")
+    assert lines[-1].startswith(f"error: {run / 'best_policy.npz'}: not readable weights")
     assert not (tmp_path / "out").exists()
 
 
@@ -330,7 +335,7 @@ class ScriptedValidator:
     J1 = [0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
 
     def __init__(self, plant) -> None:
-        self.calls = 0
+        self.calls, self.plant, self.prior = 0, plant, None
 
     def __call__(self, model) -> dict[str, float]:
         self.calls += 1

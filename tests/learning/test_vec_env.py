@@ -47,7 +47,7 @@ CASES = {
 @pytest.mark.parametrize("case", list(CASES))
 def test_the_batched_vec_env_steps_as_a_dummy_vec_env(case):
     plant = Plant(Experiment.model_validate(CASES[case]))
-    prior = LQGPrior(plant) if plant.experiment.algorithm.residual_lqg else None
+    prior = LQGPrior.design(plant) if plant.experiment.algorithm.residual_lqg else None
     dummy = DummyVecEnv([lambda: make_env(plant, prior) for _ in range(4)])
     batched = BatchedVecEnv(plant, 4, prior)
     dummy.seed(11)

@@ -81,6 +81,8 @@ def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "Interquartile mean" in done.stdout and "| RL | 3 |" in done.stdout
     assert {p.name for p in out.iterdir()} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
+    again = subprocess.run(command, capture_output=True, text=True)
+    assert again.returncode == 2 and "never overwritten" in again.stderr and "Traceback" not in again.stderr
     missing = subprocess.run(
         [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")], capture_output=True, text=True
     )

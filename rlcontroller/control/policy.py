@@ -1,0 +1,290 @@
+"""A trained policy as data: its weights in `.npz`, everything else in YAML; read with numpy alone.
+
+A run or model folder holds, for NAME = best or final, beside the experiment's `config.yaml`:
+
+    NAME_policy.yaml   format and format_version, the learner and its training steps, the network
+                       (each layer's activation, tanh squashing, odd symmetry), the observation's
+                       size and normalisation (epsilon, clip), the residual prior (none,
+                       lqg_ground or lqg_ground_model), the actuators' force limits (N) and the
+                       control step (s) it was trained with
+    NAME_policy.npz    layer{i}_weight (out, in) and layer{i}_bias (float32); observation_mean and
+                       observation_var (normalised observations); prior_feedback (m, estimate) and
+                       prior_feedforward (m,) on the scaled observation (residual policies)
+
+Reading never unpickles (`np.load(..., allow_pickle=False)`, `yaml.safe_load`) and imports neither
+torch nor stable-baselines3: a controller from someone else is data, never code. The actor is the
+deterministic one: PPO/A2C's Gaussian mean, SAC's tanh-squashed mean, TD3's output.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.special
+import yaml
+
+from rlcontroller.config import ConfigError
+from rlcontroller.control.controllers import LQGPrior, residual_action
+from rlcontroller.files import atomic_write
+from rlcontroller.physics.plant import Plant
+
+FORMAT = "rlcontroller-policy"
+FORMAT_VERSION = 1
+MODELS = ("best", "final")
+PRIORS = ("none", "lqg_ground", "lqg_ground_model")
+
+ACTIVATIONS = {
+    "ReLU": lambda x: np.maximum(x, 0.0),
+    "Tanh": np.tanh,
+    "ELU": lambda x: np.where(x > 0.0, x, np.expm1(np.minimum(x, 0.0))),
+    "LeakyReLU": lambda x: np.where(x > 0.0, x, 0.01 * x),
+    "GELU": lambda x: 0.5 * x * (1.0 + scipy.special.erf(x / np.sqrt(2.0))),
+}
+
+
+@dataclass(frozen=True)
+class Layer:
+    weight: np.ndarray  # (out, in), float32
+    bias: np.ndarray  # (out,), float32
+    activation: str | None  # a key of ACTIVATIONS applied after the layer, or None
+
+
+@dataclass(frozen=True)
+class Actor:
+    """observation (..., n) float32 -> deterministic action (..., m), before clipping."""
+
+    layers: tuple[Layer, ...]
+    squash: bool  # tanh on the output (SAC's squashed Gaussian, TD3's actor)
+    odd: bool = False  # the action is (g(o) - g(-o)) / 2 (`OddActorCriticPolicy`)
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        x = np.asarray(observation, dtype=np.float32)
+        if self.odd:
+            return 0.5 * (self._network(x) - self._network(-x))
+        return self._network(x)
+
+    def _network(self, x: np.ndarray) -> np.ndarray:
+        for layer in self.layers:
+            x = x @ layer.weight.T + layer.bias
+            if layer.activation is not None:
+                x = ACTIVATIONS[layer.activation](x).astype(x.dtype, copy=False)
+        return np.tanh(x) if self.squash else x
+
+    @property
+    def linear(self) -> bool:
+        """The action is a linear map of the observation (before clipping): no activation, no squash,
+        and no bias (or odd, which cancels it)."""
+        plain = not self.squash and all(layer.activation is None for layer in self.layers)
+        return plain and (self.odd or all(not np.any(layer.bias) for layer in self.layers))
+
+    def jacobian(self) -> np.ndarray:
+        """d action / d observation at the zero observation, (m, n): the policy linearised at rest."""
+        step = 1e-4
+        basis = np.eye(self.layers[0].weight.shape[1]) * step
+        return ((self._network(basis) - self._network(-basis)) / (2.0 * step)).T
+
+
+@dataclass(frozen=True)
+class Normalizer:
+    """The observation normalisation of training: clip((o - mean) / sqrt(var + epsilon), -clip, clip)."""
+
+    mean: np.ndarray
+    var: np.ndarray
+    epsilon: float
+    clip: float
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        spread = np.sqrt(self.var + self.epsilon)
+        return np.clip((observation - self.mean) / spread, -self.clip, self.clip)
+
+
+class PolicyController:
+    """A trained policy as a controller: deterministic actions in [-1, 1] for one observation or a
+    batch (one forward pass). A residual policy's action is added to its prior's (`residual_action`).
+
+    Parameters
+    ----------
+    actor : the deterministic network.
+    normalizer : the observation normalisation of training, if it used one.
+    prior : the residual prior (maps an observation to an action), or None.
+    name, source : the controller's name in tables, and what was loaded (for reports).
+    steps : training steps of the saved policy; algorithm: the learner that trained it.
+    """
+
+    def __init__(
+        self,
+        actor: Actor,
+        normalizer: Normalizer | None = None,
+        prior: LQGPrior | None = None,
+        name: str = "RL",
+        source: str = "",
+        steps: int = 0,
+        algorithm: str = "",
+    ) -> None:
+        self.actor, self.normalizer, self.prior = actor, normalizer, prior
+        self.name, self.source, self.steps, self.algorithm = name, source, steps, algorithm
+
+    def reset(self) -> None:
+        pass
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        raw = observation
+        if self.normalizer is not None:
+            observation = self.normalizer(observation)
+        action = self.actor(observation)
+        if self.prior is None:
+            return np.clip(action, -1.0, 1.0)
+        return residual_action(action, self.prior(raw))
+
+
+def policy_paths(folder: Path, model: str) -> tuple[Path, Path]:
+    """The YAML and the weights of the saved `model` (best or final) of a run or model folder."""
+    if model not in MODELS:
+        raise ConfigError(f"--model: expected best or final, got {model!r}")
+    return folder / f"{model}_policy.yaml", folder / f"{model}_policy.npz"
+
+
+def write_policy(controller: PolicyController, plant: Plant, folder: Path, model: str) -> Path:
+    """Save `controller` (trained on `plant`'s experiment) as `model`_policy.yaml/.npz in `folder`."""
+    description, weights = policy_data(controller, plant)
+    meta_path, weights_path = policy_paths(folder, model)
+    buffer = io.BytesIO()
+    np.savez(buffer, **weights)
+    atomic_write(weights_path, buffer.getvalue())
+    atomic_write(meta_path, yaml.safe_dump(description, sort_keys=False))
+    return meta_path
+
+
+def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[str, np.ndarray]]:
+    """The YAML mapping and the arrays that describe `controller` completely."""
+    actor, normalizer = controller.actor, controller.normalizer
+    weights: dict[str, np.ndarray] = {}
+    for index, layer in enumerate(actor.layers):
+        weights[f"layer{index}_weight"] = layer.weight.astype(np.float32)
+        weights[f"layer{index}_bias"] = layer.bias.astype(np.float32)
+    description = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "algorithm": controller.algorithm,
+        "training_steps": int(controller.steps),
+        "network": {
+            "activations": [layer.activation for layer in actor.layers],
+            "squash": bool(actor.squash),
+            "odd": bool(actor.odd),
+        },
+        "observation": {"size": int(plant.layout.size), "normalize": normalizer is not None},
+        "prior": "none" if controller.prior is None else prior_kind(plant),
+        "actions": int(plant.building.n_actuators),
+        "force_limits_N": [float(f) for f in plant.force_limits],
+        "control_dt_s": float(plant.control_dt),
+    }
+    if normalizer is not None:
+        description["observation"] |= {"epsilon": float(normalizer.epsilon), "clip": float(normalizer.clip)}
+        weights |= {"observation_mean": np.asarray(normalizer.mean), "observation_var": np.asarray(normalizer.var)}
+    if controller.prior is not None:
+        weights |= {"prior_feedback": controller.prior.feedback, "prior_feedforward": controller.prior.feedforward}
+    return description, weights
+
+
+def prior_kind(plant: Plant) -> str:
+    return "lqg_ground_model" if plant.experiment.sensors.ground_model else "lqg_ground"
+
+
+def read_policy(folder: Path, model: str, plant: Plant, name: str = "RL") -> PolicyController:
+    """The saved `model` of `folder` as a controller for `plant` (the folder's experiment), checked
+    against it; a missing, damaged or mismatched file is a one-line `ConfigError`."""
+    meta_path, weights_path = policy_paths(folder, model)
+    if not meta_path.is_file():
+        zipped = folder / f"{model}_model.zip"
+        hint = (
+            f"; {zipped.name} is a stable-baselines3 file, which can run its author's code when opened: "
+            f"if you trust who made it, convert it once with 'rlc convert {folder} --trust-pickle'"
+            if zipped.is_file()
+            else "; expected a run folder written by 'rlc train' or a model folder"
+        )
+        raise ConfigError(f"{folder}: no {meta_path.name}{hint}")
+    description = _read_yaml(meta_path)
+    weights = _read_npz(weights_path)
+    try:
+        controller = _controller(description, weights, plant, name)
+    except (KeyError, TypeError, ValueError) as error:
+        detail = str(error).strip("'\"") or type(error).__name__
+        raise ConfigError(f"{meta_path}: not a valid policy ({detail})") from None
+    controller.source = str(meta_path)
+    return controller
+
+
+def _read_yaml(path: Path) -> dict:
+    try:
+        description = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{path}: not readable YAML ({type(error).__name__})") from None
+    if not isinstance(description, dict) or description.get("format") != FORMAT:
+        raise ConfigError(f"{path}: not an rlcontroller policy (expected 'format: {FORMAT}')")
+    if description.get("format_version") != FORMAT_VERSION:
+        raise ConfigError(
+            f"{path}: format_version {description.get('format_version')!r}; this rlc reads version {FORMAT_VERSION}"
+        )
+    return description
+
+
+def _read_npz(path: Path) -> dict[str, np.ndarray]:
+    if not path.is_file():
+        raise ConfigError(f"{path}: missing (the policy's weights)")
+    try:
+        with np.load(path, allow_pickle=False) as arrays:
+            weights = {key: arrays[key] for key in arrays.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+        raise ConfigError(f"{path}: not readable weights ({detail})") from None
+    for key, array in weights.items():
+        if array.dtype.kind != "f" or not np.all(np.isfinite(array)):
+            raise ConfigError(f"{path}: {key}: expected finite floating-point numbers")
+    return weights
+
+
+def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant, name: str) -> PolicyController:
+    network, observation = description["network"], description["observation"]
+    size, m = plant.layout.size, plant.building.n_actuators
+    if observation["size"] != size or description["actions"] != m:
+        raise ValueError(
+            f"observation size {observation['size']} and {description['actions']} actions; "
+            f"the folder's config.yaml gives {size} and {m}"
+        )
+    if not np.allclose(description["force_limits_N"], plant.force_limits, rtol=1e-12, atol=0.0):
+        raise ValueError("force_limits_N differ from the folder's config.yaml")
+    layers, width = [], size
+    for index, activation in enumerate(network["activations"]):
+        if activation is not None and activation not in ACTIVATIONS:
+            raise ValueError(f"network.activations: unknown {activation!r}")
+        weight, bias = weights[f"layer{index}_weight"], weights[f"layer{index}_bias"]
+        if weight.ndim != 2 or weight.shape[1] != width or bias.shape != (weight.shape[0],):
+            raise ValueError(f"layer{index}: shapes {weight.shape} and {bias.shape} do not chain from {width} inputs")
+        layers.append(Layer(weight.astype(np.float32), bias.astype(np.float32), activation))
+        width = weight.shape[0]
+    if not layers or width != m:
+        raise ValueError(f"the network gives {width} actions, expected {m}")
+    actor = Actor(tuple(layers), bool(network["squash"]), bool(network["odd"]))
+    normalizer = None
+    if observation["normalize"]:
+        mean, var = weights["observation_mean"], weights["observation_var"]
+        if mean.shape != (size,) or var.shape != (size,) or np.any(var < 0):
+            raise ValueError("observation_mean and observation_var: expected one value per observation, var >= 0")
+        normalizer = Normalizer(mean, var, float(observation["epsilon"]), float(observation["clip"]))
+    prior = None
+    if description["prior"] not in PRIORS:
+        raise ValueError(f"prior: expected one of {', '.join(PRIORS)}")
+    if description["prior"] != "none":
+        if not plant.experiment.sensors.state_estimate or description["prior"] != prior_kind(plant):
+            raise ValueError(f"prior {description['prior']!r} does not match the folder's config.yaml sensors")
+        feedback, feedforward = weights["prior_feedback"], weights["prior_feedforward"]
+        estimate = plant.layout.estimate
+        if feedback.shape != (m, estimate.stop - estimate.start) or feedforward.shape != (m,):
+            raise ValueError("prior_feedback / prior_feedforward: shapes do not match the observation")
+        prior = LQGPrior(feedback, feedforward, plant.layout)
+    steps = int(description["training_steps"])
+    return PolicyController(actor, normalizer, prior, name, steps=steps, algorithm=str(description["algorithm"]))

@@ -1,0 +1,211 @@
+"""The safety check: a controller must never make the building worse than no control.
+
+Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds):
+
+1. **check suite** — on every one of its generated motions (own seed, never used in training or
+   selection): the building's peak inter-story drift (max over stories and time) is no larger than
+   the uncontrolled building's and the mean over stories of J1 is at most 1; on a motion whose
+   uncontrolled peak drift ratio is below the insignificance bound, the controlled peak drift ratio
+   stays below the bound instead. The mean J1 over the significant motions is at most 1 as well.
+2. **at rest** — sensor noise only, no ground motion: the peak drift ratio stays below the bound.
+3. **closed-loop stability** — for a policy (a function of the observation), the closed loop
+   linearised at rest on the design model has spectral radius < 1; the same number on every linear
+   plant of the standard scenarios is reported (not a pass criterion: the verdict says where it is
+   not stable).
+
+The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the policy it judges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from rlcontroller.config import SafetyCheckConfig, Scenario
+from rlcontroller.control.controllers import Controller
+from rlcontroller.control.policy import PolicyController
+from rlcontroller.evaluation.evaluation import evaluate
+from rlcontroller.files import atomic_write
+from rlcontroller.learning.batch import BuildingBatch, batch_rollout
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
+from rlcontroller.physics.plant import Plant
+
+ROUNDING = 1e-9  # a controller that never acts equals the uncontrolled building to this relative rounding
+
+
+@dataclass
+class Verdict:
+    """Pass or fail per criterion, with the worst motion and the numbers behind each."""
+
+    controller: str
+    passed: bool
+    criteria: dict[str, dict] = field(default_factory=dict)
+
+    def to_yaml(self) -> str:
+        return yaml.safe_dump(
+            {"controller": self.controller, "passed": self.passed, "criteria": self.criteria}, sort_keys=False
+        )
+
+    def lines(self) -> list[str]:
+        head = f"safety check of {self.controller}: {'PASSED' if self.passed else 'FAILED'}"
+        return [head] + [
+            f"  {name}: {'pass' if item['passed'] else 'FAIL'} - {item['summary']}"
+            for name, item in self.criteria.items()
+        ]
+
+
+def drift_bounds(plant: Plant, standard: SafetyCheckConfig) -> np.ndarray:
+    """The insignificant drift of each story (m): the bound ratio times its height."""
+    heights = plant.building.story_heights
+    if heights is None:
+        heights = np.full(plant.building.n_floors, standard.story_height)
+    return standard.insignificant_drift_ratio * np.asarray(heights, dtype=float)
+
+
+def safety_check(
+    plant: Plant, controller: Controller, standard: SafetyCheckConfig, scenarios: list[Scenario]
+) -> Verdict:
+    """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`."""
+    bounds = drift_bounds(plant, standard)
+    criteria = {
+        "check suite": suite_criterion(plant, controller, standard, bounds),
+        "at rest": rest_criterion(plant, controller, standard, bounds),
+    }
+    if isinstance(controller, PolicyController):
+        criteria["closed-loop stability"] = stability_criterion(plant, controller, scenarios)
+    passed = all(item["passed"] for item in criteria.values())
+    return Verdict(controller.name, passed, criteria)
+
+
+def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
+    motions = generate_suite(standard.generator, standard.motions, standard.seed)
+    evaluation = evaluate(plant, motions, [controller], "safety check suite", include_optimal=False)
+    failures, j1_means, worst = [], [], None
+    for motion in motions:
+        bare = evaluation.responses["uncontrolled", motion.name].drift
+        controlled = evaluation.responses[controller.name, motion.name].drift
+        bare_peak, peak = np.max(np.abs(bare), axis=0), np.max(np.abs(controlled), axis=0)
+        if np.max(bare_peak / bounds) < 1.0:  # insignificant: stay below the bound
+            score, ok = float(np.max(peak / bounds)), bool(np.max(peak / bounds) < 1.0)
+            kind = "peak drift / insignificance bound"
+        else:
+            j1 = float(np.mean(peak / bare_peak))
+            j1_means.append(j1)
+            score = float(np.max(peak) / np.max(bare_peak))
+            ok = score <= 1.0 + ROUNDING and j1 <= 1.0 + ROUNDING
+            score, kind = max(score, j1), "peak drift ratio to uncontrolled (or mean J1, the larger)"
+        row = {"motion": motion.name, "pga_g": round(motion.pga / STANDARD_GRAVITY, 5), "value": round(score, 4)}
+        if not ok:
+            failures.append(row)
+        if worst is None or score > worst["value"]:
+            worst = row | {"measure": kind}
+    mean_j1 = float(np.mean(j1_means)) if j1_means else float("nan")
+    passed = not failures and (not j1_means or mean_j1 <= 1.0 + ROUNDING)
+    summary = (
+        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than no control "
+        f"({len(motions) - len(j1_means)} insignificant); mean J1 {mean_j1:.3f}; worst {worst['motion']} "
+        f"(PGA {worst['pga_g']:g} g): {worst['value']:.3f}"
+    )
+    return {
+        "passed": passed,
+        "summary": summary,
+        "motions": len(motions),
+        "insignificant_motions": len(motions) - len(j1_means),
+        "mean_J1": round(mean_j1, 4),
+        "worst": worst,
+        "failures": failures[:20],
+        "failure_count": len(failures),
+    }
+
+
+def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
+    dt = plant.control_dt
+    still = GroundMotion("at rest", dt, np.zeros(round(standard.rest_duration / dt) + 1), synthetic=True)
+    seeds = [standard.seed + 1 + run for run in range(standard.rest_runs)]
+    runs = batch_rollout(plant, [still] * standard.rest_runs, [controller], seeds=seeds)[0]
+    worst = max(float(np.max(np.max(np.abs(response.drift), axis=0) / bounds)) for response, _ in runs)
+    return {
+        "passed": worst < 1.0,
+        "summary": f"peak drift {worst:.3f} of the bound over {standard.rest_runs} noise realisations of "
+        f"{standard.rest_duration:g} s",
+        "peak_drift_over_bound": round(worst, 4),
+    }
+
+
+def stability_criterion(plant: Plant, controller: PolicyController, scenarios: list[Scenario]) -> dict:
+    design = spectral_radius(plant.design, controller)
+    experiment = plant.experiment
+    per_scenario, unstable = {}, []
+    for scenario in scenarios:
+        if scenario.plant is not None and scenario.plant.hysteresis is not None:
+            per_scenario[scenario.name] = "not linear: not checked"
+            continue
+        radius = spectral_radius(Plant(experiment.model_copy(update={"plant": scenario.plant})), controller)
+        per_scenario[scenario.name] = round(radius, 6)
+        if radius >= 1.0:
+            unstable.append(scenario.name)
+    where = f"; unstable on {', '.join(unstable)}" if unstable else "; stable on every linear standard scenario"
+    return {
+        "passed": design < 1.0,
+        "summary": f"spectral radius {design:.5f} on the design model (linearised at rest){where}",
+        "spectral_radius_design_model": round(design, 6),
+        "spectral_radius_scenarios": per_scenario,
+    }
+
+
+class _Silent:
+    """A random generator that draws zeros: the noise-free closed loop."""
+
+    def standard_normal(self, size) -> np.ndarray:
+        return np.zeros(size)
+
+
+def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float = 1e-4) -> np.ndarray:
+    """A with s_{k+1} = A s_k for the closed loop linearised at rest without ground motion or noise,
+    s = [plant state x; observation] (the observation holds the sensor history, the filter's
+    estimate and the last actions, so it is the controller's whole state). Central differences of
+    one batched control step from +/- `step` along each coordinate (exact for a linear policy)."""
+    n_x, n_o = plant.n_state, plant.layout.size
+    size = n_x + n_o
+    batch = BuildingBatch(plant, 2 * size)
+    still = GroundMotion("at rest", plant.control_dt, np.zeros(3), synthetic=True)
+    for member in range(2 * size):
+        batch.start(member, _Silent(), still)
+    basis = np.vstack([np.eye(size), -np.eye(size)]) * step
+    batch.plant_states()[:] = basis[:, :n_x]
+    batch.observations[:] = basis[:, n_x:]
+    if batch.kalman is not None:
+        batch.estimates[:] = batch.observations[:, plant.layout.estimate] * plant.layout.estimate_scale
+    controller.reset()
+    observations, _, _ = batch.step(controller.act(batch.observations.copy()))
+    after = np.hstack([batch.plant_states(), observations])
+    return ((after[:size] - after[size:]) / (2.0 * step)).T
+
+
+def spectral_radius(plant: Plant, controller: PolicyController) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(closed_loop_matrix(plant, controller)))))
+
+
+def verdict_path(folder: Path, model: str) -> Path:
+    return folder / f"{model}_check.yaml"
+
+
+def write_verdict(verdict: Verdict, folder: Path, model: str) -> Path:
+    return atomic_write(verdict_path(folder, model), verdict.to_yaml())
+
+
+def read_verdict(folder: Path, model: str) -> bool | None:
+    """True or False from the verdict on a folder's `model` policy, None when there is none (never
+    checked) or it is unreadable."""
+    path = verdict_path(folder, model)
+    if not path.is_file():
+        return None
+    try:
+        verdict = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError, OSError):
+        return None
+    passed = verdict.get("passed") if isinstance(verdict, dict) else None
+    return passed if isinstance(passed, bool) else None

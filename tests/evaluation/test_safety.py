@@ -1,0 +1,88 @@
+"""The safety check: a controller that never acts passes the motion criteria exactly at the
+boundary; the closed loop's spectral radius is the building's own without control and above one
+with destabilising feedback; the verdict file round-trips."""
+
+import numpy as np
+import pytest
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+from rlcontroller.config import Experiment, load_safety_check
+from rlcontroller.control.controllers import Uncontrolled
+from rlcontroller.control.policy import Actor, Layer, PolicyController
+from rlcontroller.evaluation.safety import (
+    closed_loop_matrix,
+    read_verdict,
+    safety_check,
+    spectral_radius,
+    write_verdict,
+)
+from rlcontroller.physics.plant import Plant
+
+STANDARD = REPOSITORY / "configs" / "checks" / "standard.yaml"
+
+
+def small_standard(**changes):
+    standard = load_safety_check(STANDARD)
+    return standard.model_copy(update={"motions": 12, "rest_runs": 2, "rest_duration": 10.0, **changes})
+
+
+def linear_policy(weights: np.ndarray) -> PolicyController:
+    layer = Layer(weights.astype(np.float32), np.zeros(weights.shape[0], np.float32), None)
+    return PolicyController(Actor((layer,), squash=False))
+
+
+def test_a_controller_that_never_acts_passes_the_motion_criteria():
+    plant = Plant(Experiment())
+    verdict = safety_check(plant, Uncontrolled(3), small_standard(), [])
+    assert verdict.passed and set(verdict.criteria) == {"check suite", "at rest"}
+    assert verdict.criteria["check suite"]["mean_J1"] == pytest.approx(1.0, abs=1e-9)
+    assert verdict.criteria["at rest"]["peak_drift_over_bound"] == 0.0
+
+
+def test_without_control_the_spectral_radius_is_the_least_damped_modes_decay():
+    """Zero feedback: the building's own exact step map, |lambda| = exp(-zeta omega dt) per mode."""
+    plant = Plant(Experiment())
+    building = plant.building
+    omega = 2.0 * np.pi / building.periods()
+    expected = np.max(np.exp(-building.modal_damping_ratios() * omega * plant.control_dt))
+    zero = linear_policy(np.zeros((3, plant.layout.size)))
+    assert spectral_radius(plant, zero) == pytest.approx(expected, abs=1e-9)
+    assert closed_loop_matrix(plant, zero).shape == (plant.n_state + plant.layout.size,) * 2
+
+
+def test_positive_velocity_feedback_is_found_unstable_and_fails_the_check():
+    """Floor-acceleration readings fed back with a large positive gain pump energy into the building."""
+    plant = Plant(Experiment())
+    weights = np.zeros((3, plant.layout.size))
+    weights[:, : plant.layout.ground] = 50.0  # every reading pushes every actuator the same way
+    unstable = linear_policy(weights)
+    radius = spectral_radius(plant, unstable)
+    stable = spectral_radius(plant, linear_policy(-weights * 0.001))
+    assert radius > 1.0 > stable
+    verdict = safety_check(plant, unstable, small_standard(), [])
+    assert not verdict.passed and not verdict.criteria["closed-loop stability"]["passed"]
+
+
+def test_the_verdict_is_written_and_read_back(tmp_path):
+    plant = Plant(Experiment())
+    verdict = safety_check(plant, Uncontrolled(3), small_standard(motions=2), [])
+    write_verdict(verdict, tmp_path, "best")
+    assert read_verdict(tmp_path, "best") is True and read_verdict(tmp_path, "final") is None
+    (tmp_path / "best_check.yaml").write_text("passed: [")
+    assert read_verdict(tmp_path, "best") is None
+
+
+@pytest.mark.slow
+def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_path):
+    import shutil
+
+    folder = tmp_path / "model"
+    shutil.copytree(REPOSITORY / "models" / "five_story_robust_free", folder)
+    (folder / "best_check.yaml").unlink()
+    result = CliRunner().invoke(app, ["check", str(folder)])
+    assert result.exit_code == 1 and "FAILED" in result.output, result.output
+    assert read_verdict(folder, "best") is False
+    warned = CliRunner().invoke(app, ["export", str(folder), "--out", str(tmp_path / "c.onnx")])
+    assert warned.exit_code == 0 and "FAILED the safety check" in warned.output
