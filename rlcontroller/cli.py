@@ -99,15 +99,14 @@ ProgressOption = Annotated[
 
 
 def load(config: Path | None) -> Experiment:
-    return Experiment() if config is None else load_experiment(config)
+    """The experiment of `config`, or of the default model."""
+    return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config)
 
 
 @app.command()
 @user_errors
 def info(
-    config: Annotated[
-        Path | None, typer.Argument(help="Experiment YAML; the embedded paper default if omitted.")
-    ] = None,
+    config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
     the simulated plant when there is a plant part) and actuator layout."""
@@ -190,7 +189,8 @@ def train(
         run_check(summary.run_dir, "best")
 
 
-DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "five_story"
+MODELS = Path(__file__).resolve().parents[1] / "models"
+DEFAULT_MODEL = MODELS / "five_story_model_free_random_search"  # the rule: models/README.md
 DEMO_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "demo.yaml"
 STANDARD_SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "standard.yaml"
 SAFETY_STANDARD = Path(__file__).resolve().parents[1] / "configs" / "checks" / "standard.yaml"
@@ -296,7 +296,7 @@ def print_summary(evaluation, out: Path) -> None:
 @user_errors
 def evaluate(
     run_dir: Annotated[
-        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+        Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")
     ] = None,
     records: RecordsOption = None,
     out: OutOption = None,
@@ -345,10 +345,10 @@ app.add_typer(compare_app, name="compare")
 @compare_app.command("lqg")
 @user_errors
 def compare_lqg(
-    run_dir: Annotated[Path | None, typer.Argument(help="Optional run folder: adds its RL policy.")] = None,
-    config: Annotated[
-        Path | None, typer.Option(help="Experiment YAML when no run is given (default: embedded).")
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run or model folder whose policy joins (default: the default model).")
     ] = None,
+    config: Annotated[Path | None, typer.Option(help="Experiment YAML instead of a run: LQG only.")] = None,
     records: RecordsOption = None,
     out: OutOption = None,
     scale_pga: ScaleOption = None,
@@ -364,11 +364,13 @@ def compare_lqg(
     from rlcontroller.evaluation.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
     from rlcontroller.evaluation.report import write_preview, write_report, write_sweep
 
-    if run_dir is not None:
+    if config is not None and run_dir is not None:
+        raise ConfigError("--config: either a run folder or --config, not both")
+    if config is None:
         run_dir = model_folder(run_dir)
         experiment = load_experiment(run_dir / "config.yaml")
     else:
-        experiment = load(config)
+        experiment = load_experiment(config)
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga)
@@ -394,7 +396,7 @@ def compare_lqg(
 @user_errors
 def robustness(
     run_dir: Annotated[
-        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+        Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")
     ] = None,
     records: RecordsOption = None,
     scenarios: Annotated[
@@ -538,6 +540,25 @@ def aggregate(
         typer.echo(f"aggregate.csv, aggregate.md and aggregate.png in {out}")
 
 
+@app.command()
+@user_errors
+def models() -> None:
+    """The shipped controllers: learner, training steps, safety verdict; the default is marked."""
+    import yaml
+
+    from rlcontroller.evaluation.safety import read_verdict
+
+    typer.echo("models/ (card.md in each says what it is, what it observes and its numbers)")
+    for folder in sorted(path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file()):
+        policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
+        verdict = {True: "safety check passed", False: "safety check FAILED", None: "never checked"}
+        mark = " (default)" if folder == DEFAULT_MODEL else ""
+        typer.echo(
+            f"{folder.name}{mark}: {policy['algorithm']}, {policy['training_steps']:,} steps, "
+            f"{verdict[read_verdict(folder, 'best')]}"
+        )
+
+
 class ExportFormat(str, Enum):
     onnx = "onnx"
 
@@ -546,7 +567,7 @@ class ExportFormat(str, Enum):
 @user_errors
 def export(
     run_dir: Annotated[
-        Path | None, typer.Argument(help="Run folder (default: the committed models/five_story).")
+        Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")
     ] = None,
     format: Annotated[ExportFormat, typer.Option("--format", help="File format.")] = ExportFormat.onnx,
     out: Annotated[
@@ -575,7 +596,7 @@ def export(
 @user_errors
 def check(
     run_dir: Annotated[
-        Path | None, typer.Argument(help="Run or model folder (default: the committed models/five_story).")
+        Path | None, typer.Argument(help="Run or model folder (default: the default model, see rlc models).")
     ] = None,
     model: ModelOption = "best",
     standard: Annotated[

@@ -98,3 +98,31 @@ def test_train_without_a_config_is_a_usage_error_not_a_four_hour_run(tmp_path):
     result = CliRunner().invoke(app, ["train", "--run-dir", str(tmp_path / "run")])
     assert result.exit_code == 2 and "expected an experiment YAML" in result.output
     assert not (tmp_path / "run").exists()
+
+
+def test_the_default_model_follows_the_stated_rule_on_the_committed_verdicts():
+    """models/README.md: the shipped controller that passes the safety check with the lowest mean J1
+    on the check suite; while none passes, the one with the fewest failing check motions."""
+    import yaml
+
+    from rlcontroller.cli import DEFAULT_MODEL, MODELS
+
+    verdicts = {
+        folder: yaml.safe_load((folder / "best_check.yaml").read_text())
+        for folder in MODELS.iterdir()
+        if (folder / "best_policy.yaml").is_file()
+    }
+    assert verdicts and all((folder / "card.md").is_file() for folder in verdicts)
+
+    def rank(folder):
+        suite = verdicts[folder]["criteria"]["check suite"]
+        return (not verdicts[folder]["passed"], suite["failure_count"], suite["mean_J1"])
+
+    assert min(verdicts, key=rank) == DEFAULT_MODEL
+
+
+def test_rlc_models_lists_every_shipped_controller_and_marks_the_default():
+    result = CliRunner().invoke(app, ["models"])
+    assert result.exit_code == 0
+    assert "five_story_model_free_random_search (default): RandomSearch" in result.output
+    assert "five_story_robust: PPO, 2,000,000 steps, safety check FAILED" in result.output
