@@ -147,12 +147,14 @@ def test_rlc_export_writes_the_file_and_refuses_bad_paths(tmp_path):
 
 
 def test_rlc_export_writes_by_default_under_results_never_into_the_model_folder(tmp_path, monkeypatch):
+    from rlcontroller.cli import DEFAULT_MODEL
+
     monkeypatch.chdir(tmp_path)
-    before = sorted(path.name for path in COMMITTED.iterdir())
+    before = sorted(path.name for path in DEFAULT_MODEL.iterdir())
     done = subprocess.run([sys.executable, "-m", "rlcontroller", "export"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert (tmp_path / "results" / "five_story_best_controller.onnx").is_file()
-    assert sorted(path.name for path in COMMITTED.iterdir()) == before
+    assert (tmp_path / "results" / f"{DEFAULT_MODEL.name}_best_controller.onnx").is_file()
+    assert sorted(path.name for path in DEFAULT_MODEL.iterdir()) == before
     again = subprocess.run([sys.executable, "-m", "rlcontroller", "export"], capture_output=True, text=True)
     assert again.returncode == 2 and "never overwritten" in again.stderr
 
