@@ -211,9 +211,12 @@ def read_policy(folder: Path, model: str, plant: Plant, name: str = "RL") -> Pol
     weights = _read_npz(weights_path)
     try:
         controller = _controller(description, weights, plant, name)
-    except (KeyError, TypeError, ValueError) as error:
-        detail = str(error).strip("'\"") or type(error).__name__
-        raise ConfigError(f"{meta_path}: not a valid policy ({detail})") from None
+    except KeyError as error:
+        raise ConfigError(f"{meta_path}: not a valid policy (missing {error.args[0]!r})") from None
+    except TypeError as error:
+        raise ConfigError(f"{meta_path}: not a valid policy (a value of the wrong kind: {error})") from None
+    except ValueError as error:
+        raise ConfigError(f"{meta_path}: not a valid policy ({error})") from None
     controller.source = str(meta_path)
     return controller
 

@@ -228,3 +228,41 @@ def test_every_committed_model_loads_and_acts_from_a_fresh_clone(name):
     if controller.actor.odd:
         assert np.all(controller.actor(zero) == 0.0)  # no readings, no residual
     assert not list(folder.glob("*.zip")) and not list(folder.glob("*.pkl"))  # nothing that unpickles
+
+
+@pytest.mark.parametrize(
+    ("damage", "expected"),
+    [
+        (lambda f: edit(f / "best_policy.yaml", "format_version: 1", "format_version: 7"), "format_version 7"),
+        (lambda f: edit(f / "best_policy.yaml", "size: 43", "size: 44"), "observation size 44"),
+        (lambda f: edit(f / "best_policy.yaml", "network:", "network: 5\nx:"), "a value of the wrong kind"),
+        (lambda f: (f / "best_policy.yaml").write_text("[1, 2"), "not readable YAML"),
+        (lambda f: arrays(f, layer0_weight=lambda a: a[:, :5]), "do not chain from 43 inputs"),
+        (lambda f: arrays(f, layer1_bias=lambda a: a * np.nan), "expected finite floating-point numbers"),
+        (lambda f: arrays(f, prior_feedback=None), "missing 'prior_feedback'"),
+        (lambda f: (f / "best_policy.npz").unlink(), "missing (the policy's weights)"),
+    ],
+)
+def test_a_damaged_policy_file_is_one_line_naming_it(tmp_path, damage, expected):
+    folder = tmp_path / "model"
+    shutil.copytree(REPOSITORY / "models" / "five_story", folder)
+    damage(folder)
+    result = CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(tmp_path / "out")])
+    lines = result.output.strip().splitlines()
+    assert result.exit_code == 2 and lines[-1].startswith(f"error: {folder}") and expected in lines[-1], result.output
+    assert "Traceback" not in result.output and not (tmp_path / "out").exists()
+
+
+def edit(path: Path, old: str, new: str) -> None:
+    path.write_text(path.read_text().replace(old, new))
+
+
+def arrays(folder: Path, **changes) -> None:
+    """Rewrite best_policy.npz with each named array changed (None: removed)."""
+    weights = dict(np.load(folder / "best_policy.npz"))
+    for key, change in changes.items():
+        if change is None:
+            del weights[key]
+        else:
+            weights[key] = change(weights[key])
+    np.savez(folder / "best_policy.npz", **weights)
