@@ -171,7 +171,10 @@ def train(
         summary = run_training(resume=resume, device=device, progress_bar=progress, time_limit_s=limit)
     else:
         if config is None:
-            raise ConfigError("rlc train: expected an experiment YAML (e.g. configs/smoke.yaml) or --resume RUN")
+            raise ConfigError(
+                "rlc train: expected an experiment YAML (e.g. configs/demo.yaml; configs/README.md lists them) "
+                "or --resume RUN"
+            )
         experiment = load_experiment(config)
         if total_steps is not None:
             experiment = experiment.model_copy(
