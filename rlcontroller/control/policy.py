@@ -74,19 +74,6 @@ class Actor:
                 x = ACTIVATIONS[layer.activation](x).astype(x.dtype, copy=False)
         return np.tanh(x) if self.squash else x
 
-    @property
-    def linear(self) -> bool:
-        """The action is a linear map of the observation (before clipping): no activation, no squash,
-        and no bias (or odd, which cancels it)."""
-        plain = not self.squash and all(layer.activation is None for layer in self.layers)
-        return plain and (self.odd or all(not np.any(layer.bias) for layer in self.layers))
-
-    def jacobian(self) -> np.ndarray:
-        """d action / d observation at the zero observation, (m, n): the policy linearised at rest."""
-        step = 1e-4
-        basis = np.eye(self.layers[0].weight.shape[1]) * step
-        return ((self._network(basis) - self._network(-basis)) / (2.0 * step)).T
-
 
 @dataclass(frozen=True)
 class Normalizer:

@@ -18,7 +18,7 @@ import gymnasium as gym
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGPrior, residual_action
-from rlcontroller.control.policy import Normalizer, PolicyController, policy_paths, write_policy
+from rlcontroller.control.policy import Normalizer, PolicyController, write_policy
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.physics.plant import Plant
 
@@ -98,7 +98,3 @@ def convert(folder: Path) -> list[Path]:
     if not written:
         raise ConfigError(f"{folder}: no best_model.zip or final_model.zip to convert")
     return written
-
-
-def saved_policy_exists(folder: Path, model: str) -> bool:
-    return all(path.is_file() for path in policy_paths(folder, model))
