@@ -210,7 +210,7 @@ def model_folder(run_dir: Path | None) -> Path:
 
 def run_check(folder: Path, model: str, standard: Path = SAFETY_STANDARD, scenarios: Path = STANDARD_SCENARIOS):
     """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml."""
-    from rlcontroller.config import load_safety_check, load_scenarios
+    from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.safety import safety_check, write_verdict
     from rlcontroller.physics.plant import Plant
@@ -218,7 +218,12 @@ def run_check(folder: Path, model: str, standard: Path = SAFETY_STANDARD, scenar
     experiment = load_experiment(folder / "config.yaml")
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
-    verdict = safety_check(plant, policy, load_safety_check(standard), load_scenarios(scenarios, experiment))
+    checking = load_safety_check(standard)
+    typer.echo(
+        f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated motions, "
+        f"{checking.rest_runs} runs at rest, closed-loop stability..."
+    )
+    verdict = safety_check(plant, policy, checking, load_scenarios(scenarios, experiment))
     path = write_verdict(verdict, folder, model)
     for line in verdict.lines():
         typer.echo(line)
