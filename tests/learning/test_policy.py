@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from conftest import REPOSITORY
 from typer.testing import CliRunner
 
@@ -124,7 +125,11 @@ def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where
         tag = f"extra: !!python/object/apply:builtins.open ['{marker}', 'w']\n"
         (folder / "best_policy.yaml").write_text(text + tag)
     kobe = str(records / "RSN1106_KOBE_KJM000.AT2")
+    quick = tmp_path / "quick_standard.yaml"  # the safety check on a few motions: the same reading path
+    standard = yaml.safe_load((REPOSITORY / "configs" / "checks" / "standard.yaml").read_text())
+    quick.write_text(yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0}))
     commands = [
+        ["check", str(folder), "--standard", str(quick)],
         ["evaluate", str(folder), "--records", kobe, "--out", str(tmp_path / "evaluation")],
         ["compare", "lqg", str(folder), "--records", kobe, "--out", str(tmp_path / "compare")],
         ["robustness", str(folder), "--records", kobe, "--out", str(tmp_path / "robustness")],
@@ -134,7 +139,7 @@ def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where
         result = CliRunner().invoke(app, arguments)
         assert not marker.exists(), f"rlc {arguments[0]} ran the payload"
         if where == "beside":
-            assert result.exit_code == 0, result.output
+            assert result.exit_code in (0, 1) if arguments[0] == "check" else result.exit_code == 0, result.output
         else:
             assert result.exit_code == 2 and "error: " in result.output, result.output
             assert "Traceback" not in result.output
