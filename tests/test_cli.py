@@ -126,3 +126,11 @@ def test_rlc_models_lists_every_shipped_controller_and_marks_the_default():
     assert result.exit_code == 0
     assert "five_story_model_free_random_search (default): RandomSearch" in result.output
     assert "five_story_robust: PPO, 2,000,000 steps, safety check FAILED" in result.output
+
+
+def test_compare_lqg_takes_a_run_or_a_config_not_both(tmp_path):
+    from rlcontroller.cli import MODELS
+
+    model = MODELS / "five_story"
+    result = CliRunner().invoke(app, ["compare", "lqg", str(model), "--config", str(model / "config.yaml")])
+    assert result.exit_code == 2 and "either a run folder or --config" in result.output
