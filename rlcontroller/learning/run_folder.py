@@ -14,7 +14,7 @@ A run folder holds:
                            (stable-baselines3 files, for this run's own use: they unpickle)
     best_policy.yaml/.npz  the same policies as data (`control.policy`): what evaluate, check and
     final_policy.yaml/.npz export read, never unpickling
-    check.yaml             the safety check's verdict on the best policy (`evaluation.safety`)
+    best_check.yaml        the safety check's verdict on the best policy (`rlc train`, `evaluation.safety`)
     learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
 """
 
