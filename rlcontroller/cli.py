@@ -158,7 +158,8 @@ def train(
     ] = None,
     progress: ProgressOption = None,
 ) -> None:
-    """Train SAC, PPO, TD3, DDPG or A2C on generated ground motions; checkpoints resume."""
+    """Train a controller (SAC, PPO, TD3, DDPG, A2C or random search) on generated ground motions;
+    checkpoints resume."""
     from rlcontroller.learning.training import train as run_training
 
     if device not in ("cpu", "cuda", "auto"):
@@ -193,7 +194,7 @@ def train(
 
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-DEFAULT_MODEL = MODELS / "five_story_model_free_random_search"  # the rule: models/README.md
+DEFAULT_MODEL = MODELS / "five_story_every_story"  # the rule: models/README.md
 DEMO_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "demo.yaml"
 STANDARD_SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "standard.yaml"
 SAFETY_STANDARD = Path(__file__).resolve().parents[1] / "configs" / "checks" / "standard.yaml"
@@ -344,7 +345,7 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
         write_report(evaluation, staging)
     print_summary(evaluation, out)
     if not run_check(summary.run_dir, "best").passed:
-        typer.echo("no controller passes the safety check yet, LQG included: docs/safety_check.md says why")
+        typer.echo("this run's controller failed the safety check: docs/safety_check.md says what that means")
 
 
 compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers.")

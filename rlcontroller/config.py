@@ -531,6 +531,14 @@ class PlantConfig(StrictModel):
     hysteresis: HysteresisConfig | None = None  # None: linear stories
 
 
+class SupervisorConfig(StrictModel):
+    """The control system's supervisory layer: what stands between every controller's action and
+    the actuators (`control.supervisor`). The same for every controller of the experiment."""
+
+    trigger: AccelerationRange | None = None  # m/s^2: [off below, full authority from], on the peak ground reading
+    dissipative: bool = False  # pass only forces that take energy out of the building (estimated velocities)
+
+
 class RandomRange(StrictModel):
     """A value drawn per episode, uniformly in [low, high], or log-uniformly with `log: true`."""
 
@@ -571,8 +579,9 @@ PARTS: dict[str, Any] = {
     "algorithm": AlgorithmConfig,
     "plant": PlantConfig,
     "plant_randomization": PlantRandomization,
+    "supervisor": SupervisorConfig,
 }
-OPTIONAL_PARTS = ("plant", "plant_randomization")  # may be null: the simulated building is the design model
+OPTIONAL_PARTS = ("plant", "plant_randomization", "supervisor")  # may be null: see the fields of Experiment
 
 
 class Experiment(StrictModel):
@@ -589,6 +598,7 @@ class Experiment(StrictModel):
     algorithm: AlgorithmConfig = AlgorithmConfig()
     plant: PlantConfig | None = None  # None: the simulated building is the design model
     plant_randomization: PlantRandomization | None = None  # training and validation only
+    supervisor: SupervisorConfig | None = None  # None: actions go to the actuators as they are
     _origins: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
 
     def origin(self, part: str) -> tuple[str, str]:
@@ -735,7 +745,7 @@ def build_experiment(
         experiment = Experiment.model_validate(raw)
     except ValidationError as error:
         raise _first_error(error, file, "") from None
-    experiment._origins.update(origins)
+    experiment._origins.update({part: origins.get(part, (file, part)) for part in PARTS})
     _check_cross_references(experiment)
     return experiment
 
@@ -745,6 +755,10 @@ def _check_cross_references(experiment: Experiment) -> None:
         raise ConfigError(
             f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
         )
+    supervisor = experiment.supervisor
+    if supervisor is not None and supervisor.dissipative and not experiment.sensors.state_estimate:
+        where = location(*experiment.origin("supervisor"), "dissipative")
+        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
     if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
         raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
     cutoff = experiment.sensors.integration_cutoff

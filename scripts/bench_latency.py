@@ -1,6 +1,6 @@
 """Benchmark: one control step's latency of the exported controller (onnxruntime) and of the Python one.
 
-Usage: python scripts/bench_latency.py [--calls 10000] [--model models/five_story]
+Usage: python scripts/bench_latency.py [--calls 10000] [--model models/five_story_every_story]
 
 The committed policy is exported to ONNX; one control step is one call with a single building's
 readings: for onnxruntime, `OnnxController.step` (one session.run on one core: intra- and inter-op
@@ -66,7 +66,9 @@ def python_step(plant: Plant, controller: PolicyController):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=10_000)
-    parser.add_argument("--model", type=Path, default=REPOSITORY / "models" / "five_story", help="model folder")
+    parser.add_argument(
+        "--model", type=Path, default=REPOSITORY / "models" / "five_story_every_story", help="model folder"
+    )
     arguments = parser.parse_args()
     os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     import torch

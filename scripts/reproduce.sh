@@ -9,9 +9,13 @@
 #   3. configs/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior;
 #      PPO), and the same linear policy learned by random search with common random numbers, on the
 #      nominal and on randomised plants (five_story_model_free_random_search[_robust].yaml), each
-#      seed of those two also through `rlc robustness`.
-# 61 min end to end on a 2-core VM (README, Round 2). (PPO on randomised plants, five_story_model_free_robust.yaml,
-# and five_story_robust_free.yaml are run with their own `rlc sweep` commands, README Round 2.)
+#      seed of those two also through `rlc robustness`;
+#   4. the shipped controllers (every story actuated, the standard supervisor; models/README.md):
+#      configs/five_story_every_story.yaml and five_story_every_story_robust.yaml (robustness too).
+# Steps 1-3: 61 min end to end on a 2-core VM (README, Round 2); step 4 adds 3 x (104-164 s + 199-269 s)
+# of training, two at a time, plus robustness (measured per run, not end to end). PPO on randomised
+# plants (five_story_model_free_robust.yaml) and five_story_robust_free.yaml are run with their own
+# `rlc sweep` commands, README Round 2.
 #   bash scripts/reproduce.sh [OUT_DIR] [extra rlc sweep options, e.g. --engine dask --address tcp://HOST:8786]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
 set -euo pipefail
@@ -46,6 +50,11 @@ robustness_of "$out/model_free_random_search"
 sweep configs/five_story_model_free_random_search_robust.yaml "$out/model_free_random_search_robust" "$@"
 robustness_of "$out/model_free_random_search_robust"
 
+sweep configs/five_story_every_story.yaml "$out/every_story" "$@"
+sweep configs/five_story_every_story_robust.yaml "$out/every_story_robust" "$@"
+robustness_of "$out/every_story_robust"
+
 echo "runs and aggregates: $out (benchmark), $out/odd, $out/robust, $out/model_free,"
-echo "$out/model_free_random_search, $out/model_free_random_search_robust (robustness: */robustness_aggregate);"
+echo "$out/model_free_random_search, $out/model_free_random_search_robust, $out/every_story,"
+echo "$out/every_story_robust (robustness: */robustness_aggregate);"
 echo "LQG trade-off and preview: $out/compare_lqg"

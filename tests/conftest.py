@@ -7,6 +7,9 @@ from rlcontroller.config import BuildingConfig, Experiment
 from rlcontroller.physics.structure import Building, build
 
 REPOSITORY = Path(__file__).resolve().parents[1]
+# A PPO residual network policy with its config and failing verdict: the retired `five_story` model (worse
+# than no control on 73 of the safety check's 320 motions), kept only as a fixture of the policy file format.
+NETWORK_POLICY = REPOSITORY / "tests" / "data" / "retired_five_story"
 
 
 def records_folder() -> Path:

@@ -124,13 +124,14 @@ def test_the_default_model_follows_the_stated_rule_on_the_committed_verdicts():
 def test_rlc_models_lists_every_shipped_controller_and_marks_the_default():
     result = CliRunner().invoke(app, ["models"])
     assert result.exit_code == 0
-    assert "five_story_model_free_random_search (default): RandomSearch" in result.output
-    assert "five_story_robust: PPO, 2,000,000 steps, safety check FAILED" in result.output
+    assert "five_story_every_story (default): RandomSearch" in result.output
+    assert "five_story_every_story_robust: RandomSearch" in result.output
+    assert result.output.count("safety check passed") == 2 and "FAILED" not in result.output
 
 
 def test_compare_lqg_takes_a_run_or_a_config_not_both(tmp_path):
-    from rlcontroller.cli import MODELS
+    from rlcontroller.cli import DEFAULT_MODEL
 
-    model = MODELS / "five_story"
+    model = DEFAULT_MODEL
     result = CliRunner().invoke(app, ["compare", "lqg", str(model), "--config", str(model / "config.yaml")])
     assert result.exit_code == 2 and "either a run folder or --config" in result.output

@@ -3,17 +3,19 @@
 The graph does, per control step and for a batch of buildings, what the env and `PolicyController`
 do in Python: scale the readings and push them into the sensor history, update the Kalman estimate
 (designed on the design model, when the observation has one), normalise the observation (if the
-run did), run the policy's network, add the LQG prior's action (residual policies), clip, and
-multiply by the force limits.
+run did), run the policy's network, add the LQG prior's action (residual policies), clip, apply
+the experiment's supervisor if it has one (`control.supervisor`: trigger level, dissipative forces
+only), and multiply by the force limits.
 
 Inputs (float64, one row per building):
     readings (N, p): the configured sensors, SI units (m/s^2 for accelerations), in config order;
     ground (N, 1): the measured ground acceleration (m/s^2);
     state (N, S): the controller's own state, zeros before the motion starts.
 Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
-The state is the observation of this step (history, scaled estimate, last action) and the last
-ground reading. Call once per control step (`control_dt_s` in the metadata), at the instant the
-readings are taken; apply the force until the next call.
+The state is the observation of this step (history, scaled estimate, last action), the last
+ground reading and, with a supervisor's trigger, the largest ground reading so far (m/s^2). Call
+once per control step (`control_dt_s` in the metadata), at the instant the readings are taken;
+apply the force until the next call.
 """
 
 from __future__ import annotations
@@ -111,14 +113,18 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         feedforward = g.node("Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff")
         prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
+    supervisor = experiment.supervisor
+    if supervisor is not None:
+        action, peak = _supervised(g, plant, observation, action)
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
     if layout.actions.stop > layout.action.stop:  # older actions shift by one
         kept.append(g.columns(observation, layout.action.start, layout.actions.stop - m, "older_actions"))
-    g.node("Concat", [*kept, "ground"], "next_state", axis=1)
+    trigger = supervisor is not None and supervisor.trigger is not None
+    g.node("Concat", [*kept, "ground", *([peak] if trigger else [])], "next_state", axis=1)
 
-    state_size = size + 1
+    state_size = size + 1 + trigger
     graph = helper.make_graph(
         g.nodes,
         "rlcontroller",
@@ -142,10 +148,57 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         "actuator_stories": ", ".join(str(a.story) for a in experiment.actuators),
         "force_limits_N": ", ".join(repr(float(f)) for f in plant.force_limits),
         "state_size": str(state_size),
+        "supervisor": _supervisor_text(supervisor),
         "source": source,
     }
     helper.set_model_props(model, metadata)
     return model
+
+
+def _supervised(g: _Graph, plant: Plant, observation: str, action: str) -> tuple[str, str | None]:
+    """The supervisor's action and the new peak ground reading (None without a trigger), computed as
+    `control.supervisor` does from the observation as the env stores it (float32)."""
+    layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_floors
+    stored = g.node(
+        "Cast", [g.node("Cast", [observation], "observation_f32", to=FLOAT)], "stored_observation", to=DOUBLE
+    )
+    if supervisor.dissipative:
+        start = layout.estimate.start + n
+        velocity = g.columns(stored, start, start + n, "velocity_estimate")
+        stroke = g.node(
+            "MatMul", [velocity, g.constant("actuator_matrix", plant.building.actuator_matrix)], "stroke_velocity"
+        )
+        feeds = g.node(
+            "Greater", [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)], "feeds_energy"
+        )
+        action = g.node("Where", [feeds, g.constant("no_action", 0.0), action], "dissipative_action")
+    if supervisor.trigger is None:
+        return action, None
+    reading = g.columns(stored, layout.ground, layout.ground + 1, "stored_ground")
+    ground = g.node("Abs", [g.node("Mul", [reading, "ground_scale"], "ground_reading")], "ground_magnitude")
+    previous_peak = g.columns("state", layout.size + 1, layout.size + 2, "previous_peak_ground")
+    peak = g.node("Max", [previous_peak, ground], "peak_ground")
+    start, full = supervisor.trigger
+    if full == start:
+        gain = g.node(
+            "Cast", [g.node("GreaterOrEqual", [peak, g.constant("trigger_full", full)], "on")], "gain", to=DOUBLE
+        )
+    else:
+        rise = g.node("Sub", [peak, g.constant("trigger_start", start)], "above_start")
+        ramp = g.node("Div", [rise, g.constant("trigger_span", full - start)], "ramp")
+        gain = g.clip(ramp, 0.0, 1.0, "gain")
+    return g.node("Mul", [action, gain], "supervised_action"), peak
+
+
+def _supervisor_text(supervisor) -> str:
+    if supervisor is None:
+        return "none"
+    parts = []
+    if supervisor.trigger is not None:
+        parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak ground reading")
+    if supervisor.dissipative:
+        parts.append("dissipative forces only")
+    return "; ".join(parts) or "none"
 
 
 def _network(g: _Graph, actor, x: str, prefix: str) -> str:

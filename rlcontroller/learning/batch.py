@@ -20,6 +20,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.supervisor import supervisor
 from rlcontroller.learning.env import noisy_readings, step_outputs
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
@@ -51,6 +52,7 @@ class BuildingBatch:
         self.control_dt = plant.control_dt
         self.m = plant.building.n_actuators
         self.kalman = observation_filter(plant)
+        self.supervisor = supervisor(plant, size)
         if self.kalman is not None:
             self.estimates = np.zeros((size, self.kalman.size))
             self.previous_ground = np.zeros(size)
@@ -131,6 +133,8 @@ class BuildingBatch:
         self.steps[member], self.k[member] = n_steps, 0
         self.states[member] = 0.0
         self.previous_action[member] = 0.0
+        if self.supervisor is not None:
+            self.supervisor.reset(member)
         observation = self.observations[member]
         observation[:] = 0.0
         observation[: self._block] = readings[0]
@@ -171,6 +175,8 @@ class BuildingBatch:
         size, states = self._state_size, self.states
         clipped = states[:, size:]
         np.clip(actions, -1.0, 1.0, out=clipped)
+        if self.supervisor is not None:
+            clipped[:] = self.supervisor(self.observations, clipped)
         forcing = self._forcing[self._members, np.minimum(self.k, self._forcing.shape[1] - 1)]
         new = self._advance(clipped) + forcing
         states[:, :size] = new[:, :size]

@@ -10,8 +10,10 @@ of a Kanai-Tajimi ground filter; with `sensors.integration_cutoff` the model-fre
 readings (`control.estimation.integration_filter`) sit there instead. Before the motion starts
 the history is zero.
 
-Action: one value per actuator in [-1, 1], clipped, times the actuator's force limit (N);
-the force is held constant over the control step.
+Action: one value per actuator in [-1, 1], clipped, passed through the experiment's supervisor if
+it has one (`control.supervisor`: a trigger level, dissipative forces only), times the actuator's
+force limit (N); the force is held constant over the control step. The observation's last action
+is the one applied.
 
 Reward: -sum over terms of weight * sum over components (quantity / scale)^2, the quantities
 taken at the end of the step with the force just applied (with `reward.per_motion` each term is
@@ -41,6 +43,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response, StepMap
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant, reward_matrices
@@ -187,6 +190,7 @@ class BuildingEnv(gym.Env):
         self._estimate_start = layout.estimate.start
         self._action_start = layout.action.start
         self.kalman = observation_filter(plant)  # the agent's own estimate, designed like LQG's
+        self.supervisor = supervisor(plant, 1)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
         self._observation = np.zeros(layout.size, dtype=np.float32)
@@ -282,6 +286,8 @@ class BuildingEnv(gym.Env):
         self._state_action[:] = 0.0
         self._held_force[:] = 0.0
         self._previous_action = np.zeros(self.building.n_actuators)
+        if self.supervisor is not None:
+            self.supervisor.reset()
         self._observation[:] = 0.0
         self._observation[: self._block] = readings[0]
         if self.kalman is not None:
@@ -309,6 +315,8 @@ class BuildingEnv(gym.Env):
         clipped[:] = action
         np.minimum(clipped, 1.0, out=clipped)
         np.maximum(clipped, -1.0, out=clipped)
+        if self.supervisor is not None:
+            clipped[:] = self.supervisor(self._observation[None], clipped[None])[0]
         new = self._advance(k, clipped)
         state_action[:n_state] = new[:n_state]
         outputs = new[n_state:]

@@ -9,18 +9,20 @@ import sys
 import numpy as np
 import onnx
 import pytest
-from conftest import REPOSITORY
+from conftest import NETWORK_POLICY, REPOSITORY
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
+from rlcontroller.cli import DEFAULT_MODEL
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.policy import read_policy
 from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.policy import algorithm_class, policy_controller
+from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
-COMMITTED = REPOSITORY / "models" / "five_story"
+COMMITTED = NETWORK_POLICY
 
 
 def onnx_rollout(plant: Plant, path, motion, seed: int) -> np.ndarray:
@@ -40,10 +42,13 @@ def onnx_rollout(plant: Plant, path, motion, seed: int) -> np.ndarray:
 
 
 def assert_same_forces(plant, python_controller, path, motions):
+    """The env supervises the Python controller; the exported graph carries its own supervisor, so it
+    drives the same building without one."""
     env = BuildingEnv(plant)
+    unsupervised = Plant(plant.experiment.model_copy(update={"supervisor": None}))
     for seed, motion in enumerate(motions):
         expected, _ = rollout(env, motion, python_controller, seed=seed)
-        actual = onnx_rollout(plant, path, motion, seed)
+        actual = onnx_rollout(unsupervised, path, motion, seed)
         scale = np.abs(expected.force).max()
         assert scale > 1e3  # the controller acts
         np.testing.assert_allclose(actual, expected.force, rtol=0.0, atol=1e-4 * scale)
@@ -57,8 +62,23 @@ def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
     assert metadata["control_dt_s"] == "0.02" and metadata["actuator_stories"] == "1, 3, 5"
     assert metadata["readings"].startswith("absolute_acceleration floor 1 (m/s^2)")
     digest = hashlib.sha256((COMMITTED / "best_policy.npz").read_bytes()).hexdigest()
-    assert metadata["source"] == f"five_story/best_policy.npz (sha256 {digest})"
+    assert metadata["source"] == f"retired_five_story/best_policy.npz (sha256 {digest})"
     assert str(REPOSITORY) not in onnx.load(path).SerializeToString().decode("latin-1")  # no local path
+
+
+def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
+    """The default model acts behind a trigger and a dissipative rule: the graph applies both (same
+    forces as the supervised env, zero at rest), and its metadata says so."""
+    folder = DEFAULT_MODEL
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    assert plant.experiment.supervisor is not None
+    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+    assert_same_forces(plant, read_policy(folder, "best", plant), path, synthetic_suite(count=2))
+    still = GroundMotion("at rest", plant.control_dt, np.zeros(1001), synthetic=True)
+    forces = onnx_rollout(Plant(plant.experiment.model_copy(update={"supervisor": None})), path, still, 0)
+    assert np.all(forces == 0.0)
+    metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
+    assert metadata["supervisor"] == "trigger 0.25-1 m/s^2 on the peak ground reading; dissipative forces only"
 
 
 def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):

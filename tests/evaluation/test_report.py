@@ -107,7 +107,7 @@ def test_missing_records_exit_2_with_one_line(smoke_run, records, tmp_path):
 def test_default_outputs_go_to_new_folders_under_results_never_into_the_model(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("RLC_RECORDS", raising=False)
-    default = REPOSITORY / "models" / "five_story_model_free_random_search"
+    default = REPOSITORY / "models" / "five_story_every_story"
     committed = {p.name for p in default.iterdir()}
     first = CliRunner().invoke(app, ["compare", "lqg"])
     second = CliRunner().invoke(app, ["compare", "lqg"])
@@ -115,7 +115,7 @@ def test_default_outputs_go_to_new_folders_under_results_never_into_the_model(tm
     for result in (first, second, evaluated):
         assert result.exit_code == 0, result.output
     folders = sorted(p.name for p in (tmp_path / "results").iterdir())
-    name = "five_story_model_free_random_search-"
+    name = "five_story_every_story-"
     assert len(folders) == 3 and sum(folder.startswith(f"compare_lqg-{name}") for folder in folders) == 2
     assert any(folder.startswith(f"evaluate-{name}") for folder in folders)
     assert f"tables and plots in results{os.sep}evaluate-{name}" in evaluated.output
@@ -153,11 +153,11 @@ def test_evaluate_refuses_a_folder_that_is_not_a_run(tmp_path):
 
 @pytest.mark.slow
 def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
-    """`rlc evaluate` without RUN_DIR uses the default model, the model-free random-search policy."""
+    """`rlc evaluate` without RUN_DIR uses the default model, which passed the safety check."""
     result = CliRunner().invoke(app, ["evaluate", "--records", str(records), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert "five_story_model_free_random_search/best_policy.yaml" in result.output
-    assert "FAILED the safety check" in result.output  # said on every use until a shipped model passes
+    assert "five_story_every_story/best_policy.yaml" in result.output
+    assert "safety check" not in result.output  # said only of a controller that failed or was never checked
     summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
     assert summary.loc["RL", "J1"] < 0.5 and summary.loc["RL", "J2"] < 1.0
     assert summary.loc["RL", "J1"] < summary.loc["LQG", "J1"]

@@ -4,7 +4,7 @@ with destabilising feedback; the verdict file round-trips."""
 
 import numpy as np
 import pytest
-from conftest import REPOSITORY
+from conftest import NETWORK_POLICY, REPOSITORY
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
@@ -79,7 +79,7 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
     import shutil
 
     folder = tmp_path / "model"
-    shutil.copytree(REPOSITORY / "models" / "five_story", folder)
+    shutil.copytree(NETWORK_POLICY, folder)
     (folder / "best_check.yaml").unlink()
     result = CliRunner().invoke(app, ["check", str(folder)])
     assert result.exit_code == 1 and "FAILED" in result.output, result.output

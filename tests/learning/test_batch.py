@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from conftest import REPOSITORY
+from conftest import NETWORK_POLICY
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
@@ -78,8 +78,8 @@ def test_small_batches_give_the_same_responses_as_one(monkeypatch):
 
 
 def test_the_policy_acts_on_the_batch_as_on_each_record():
-    plant = Plant(load_experiment(REPOSITORY / "models" / "five_story" / "config.yaml"))
-    controller = read_policy(REPOSITORY / "models" / "five_story", "best", plant)
+    plant = Plant(load_experiment(NETWORK_POLICY / "config.yaml"))
+    controller = read_policy(NETWORK_POLICY, "best", plant)
     motions = mixed_motions()
     batched = batch_rollout(plant, motions, [controller])[0]
     env = BuildingEnv(plant)

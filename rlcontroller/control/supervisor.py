@@ -1,0 +1,65 @@
+"""The supervisory layer between a controller and the actuators (`supervisor:` in an experiment).
+
+Real active control systems do not pass a controller's command straight to the actuators: they stay
+off until the ground shakes noticeably and they guard against a command that would do harm. The
+supervisor does both, from the same observation the controller read, for every controller of an
+experiment alike (LQG, learned, uncontrolled), so comparisons stay fair:
+
+- **trigger** [start, full] (m/s²): the action is scaled by a gain that is 0 while the largest
+  ground reading so far (noise included) is below `start`, rises linearly, and is 1 from `full` on.
+  Sensor noise alone (0.05 m/s² per reading) then never drives the building.
+- **dissipative**: an actuator's force passes only when it takes energy out of the building,
+  u_j (Γ_jᵀ v) ≤ 0 with Γ the actuator matrix and v the filter's estimate of the floor velocities
+  (relative to the ground); otherwise that actuator's action is 0. For an inter-story actuator this
+  is a force opposing the estimated story velocity, as a damper's does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rlcontroller.config import SupervisorConfig
+from rlcontroller.physics.plant import Plant
+
+
+class Supervisor:
+    """The supervisor of `size` buildings of one plant: `reset(members)` at each start, then
+    `__call__(observations, actions)` -> the actions the actuators receive, (size, m) in [-1, 1]."""
+
+    def __init__(self, config: SupervisorConfig, plant: Plant, size: int) -> None:
+        layout, n = plant.layout, plant.building.n_floors
+        self.trigger = config.trigger
+        self.ground, self.ground_scale = layout.ground, layout.ground_scale
+        self.velocity = None
+        if config.dissipative:
+            start = layout.estimate.start + n  # the estimate is [x; v (; ground filter)], scaled
+            self.velocity = slice(start, start + n)
+            self.story_velocity = plant.building.actuator_matrix  # v @ Γ: each actuator's stroke velocity
+        self.peak_ground = np.zeros(size)
+
+    def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
+        self.peak_ground[members] = 0.0
+
+    def gain(self, observations: np.ndarray) -> np.ndarray:
+        """The trigger's gain per building, (size,), after taking in the newest ground readings."""
+        ground = np.abs(observations[:, self.ground] * self.ground_scale)
+        np.maximum(self.peak_ground, ground, out=self.peak_ground)
+        start, full = self.trigger
+        if full == start:
+            return (self.peak_ground >= full).astype(float)
+        return np.clip((self.peak_ground - start) / (full - start), 0.0, 1.0)
+
+    def __call__(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        actions = np.asarray(actions, dtype=float)
+        if self.velocity is not None:
+            stroke_velocity = observations[:, self.velocity] @ self.story_velocity  # scaled: the sign is what counts
+            actions = np.where(actions * stroke_velocity > 0.0, 0.0, actions)
+        if self.trigger is not None:
+            actions = actions * self.gain(observations)[:, None]
+        return actions
+
+
+def supervisor(plant: Plant, size: int) -> Supervisor | None:
+    """The experiment's supervisor for `size` buildings, or None when it has none."""
+    config = plant.experiment.supervisor
+    return None if config is None else Supervisor(config, plant, size)
