@@ -1,8 +1,10 @@
 """rlcontroller: reinforcement-learning active control of buildings under earthquakes."""
 
+from importlib.metadata import version
+
 import gymnasium
 
-__version__ = "0.1.0"
+__version__ = version("rlcontroller")
 
 ENV_ID = "rlcontroller/Building-v0"
 

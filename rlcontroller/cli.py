@@ -15,6 +15,7 @@ from typing import Annotated, Any
 
 import typer
 
+from rlcontroller.assets import DEFAULT_MODEL, DEMO_CONFIG, MODELS, SAFETY_STANDARD, STANDARD_SCENARIOS
 from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.physics.excitation import MotionError
@@ -191,13 +192,6 @@ def train(
         raise typer.Exit(130)
     if not summary.time_limit_reached:
         run_check(summary.run_dir, "best")
-
-
-MODELS = Path(__file__).resolve().parents[1] / "models"
-DEFAULT_MODEL = MODELS / "five_story_every_story"  # the rule: models/README.md
-DEMO_CONFIG = Path(__file__).resolve().parents[1] / "configs" / "demo.yaml"
-STANDARD_SCENARIOS = Path(__file__).resolve().parents[1] / "configs" / "scenarios" / "standard.yaml"
-SAFETY_STANDARD = Path(__file__).resolve().parents[1] / "configs" / "checks" / "standard.yaml"
 
 
 def model_folder(run_dir: Path | None) -> Path:

@@ -436,11 +436,13 @@ class AlgorithmConfig(StrictModel):
     and the training schedule.
 
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
-    gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run in a dummy
-    (same process) or subprocess vector env. `normalize_observations` and `normalize_rewards` add a
-    VecNormalize whose statistics are checkpointed. With `residual_lqg` the policy's action is added to the action of
-    LQG (+ measured ground) computed from the observation's state estimate (needs
-    `sensors.state_estimate`): the agent learns a correction to LQG. `checkpoint_every` and
+    gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run as one batch
+    (`vec_env: batched`, the default: `simulation.batch` stepped as one), or in a dummy (same
+    process) or subprocess vector env. `normalize_observations` and `normalize_rewards` add a
+    VecNormalize whose statistics are checkpointed. With `residual_lqg` the policy's action is added
+    to the action of LQG (+ measured ground, or + ground model with `sensors.ground_model`) computed
+    from the observation's state estimate (needs `sensors.state_estimate`): the agent learns a
+    correction to LQG. `checkpoint_every` and
     `eval_every` count environment steps; `best_model` is the validation with the highest reward, or
     with `select_by: J1` the lowest mean J1 (every validation motion counts alike, weak or strong,
     where the reward is dominated by the strongest). `search` is `rlc tune`'s search space: dotted paths into

@@ -72,6 +72,7 @@ def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
     assert len(rl) > 0 and (rl < 1.0).all()
 
 
+@pytest.mark.slow
 def test_a_user_mistake_at_a_terminal_is_one_line(tmp_path):
     (tmp_path / "bad.yaml").write_text("building: {masses: [1.0e4, .inf]}\n")
     code, output = run_at_a_terminal(["train", "bad.yaml"], tmp_path, timeout_s=120)

@@ -19,8 +19,9 @@ import control
 import numpy as np
 
 from rlcontroller.config import RewardConfig
+from rlcontroller.control.cost import reward_matrices
 from rlcontroller.physics.dynamics import StepMap
-from rlcontroller.physics.plant import Plant, reward_matrices
+from rlcontroller.physics.plant import Plant
 
 DELAYED_ACTION_WEIGHT = 1.0e-4  # sqrt of the vanishing direct weight of a delayed command
 

@@ -20,11 +20,11 @@ from rlcontroller.control.controllers import Controller, LQGController, Uncontro
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import GroundMotion, content_seed, for_control_step
 from rlcontroller.physics.metrics import METRICS, SETTLING_TAIL_S, YIELDING_METRICS, j_metrics, yielding_metrics
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.batch import batch_rollout
 
 OPTIMAL = "optimal (clairvoyant)"
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table

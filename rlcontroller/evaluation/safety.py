@@ -30,9 +30,9 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.files import atomic_write
-from rlcontroller.learning.batch import BuildingBatch, batch_rollout
 from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
 
 ROUNDING = 1e-9  # a controller that never acts equals the uncontrolled building to this relative rounding
 

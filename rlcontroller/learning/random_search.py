@@ -31,9 +31,9 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import ProgressBarCallback
 
 from rlcontroller.control.controllers import LinearFeedback, LQGPrior
-from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
 from rlcontroller.physics.excitation import GroundMotion, generate_suite
+from rlcontroller.simulation.batch import batch_rollout
 
 
 class RandomSearch(BaseAlgorithm):

@@ -15,10 +15,10 @@ import numpy as np
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.physics.excitation import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.batch import batch_rollout
 
 
 class Validator:

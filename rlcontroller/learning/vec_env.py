@@ -17,8 +17,8 @@ from gymnasium.utils import seeding
 from stable_baselines3.common.vec_env import VecEnv
 
 from rlcontroller.control.controllers import LQGPrior, residual_action
-from rlcontroller.learning.batch import BuildingBatch
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.batch import BuildingBatch
 
 
 class BatchedVecEnv(VecEnv):

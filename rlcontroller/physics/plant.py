@@ -32,7 +32,6 @@ from rlcontroller.config import (
     PlantConfig,
     PlantRandomization,
     Quantity,
-    RewardTerm,
     SensorConfig,
     randomized_plant,
 )
@@ -102,24 +101,6 @@ def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
         dead = np.isin(floors_array, faults.dead_floors)
         c[dead], d[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0
     return SensorMatrices(c, d, np.concatenate(scales), noise, bias)
-
-
-def reward_matrices(plant: Plant, terms: list[RewardTerm]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
-    """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
-    so that a term's value is the sum over its rows of |factor * (C x + D u)|^power."""
-    building = plant.building
-    rows_c, rows_d, factors, slices = [], [], [], []
-    start = 0
-    for term in terms:
-        c, d = plant.outputs(term.quantity)
-        rows_c.append(c)
-        rows_d.append(d)
-        factors.append(np.full(c.shape[0], term.weight ** (1.0 / term.power) / term.scale))
-        slices.append(slice(start, start + c.shape[0]))
-        start += c.shape[0]
-    if not terms:
-        return np.zeros((0, plant.n_state)), np.zeros((0, building.n_actuators)), np.zeros(0), []
-    return np.vstack(rows_c), np.vstack(rows_d), np.concatenate(factors), slices
 
 
 def observation_layout(building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray):

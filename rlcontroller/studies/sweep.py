@@ -27,8 +27,6 @@ import yaml
 
 from rlcontroller.config import ConfigError, Experiment, build_experiment, check_seed, with_overrides
 
-ENGINES = ("local", "dask")
-
 
 @dataclass(frozen=True)
 class SweepRun:

@@ -85,6 +85,7 @@ def test_dissipative_forces_take_energy_out_of_the_building():
     assert power["free"] > 0.0 or power["dissipative"] < 0.5 * power["free"]
 
 
+@pytest.mark.slow
 def test_supervised_lqg_passes_a_check_it_fails_without_the_supervisor():
     standard = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
     standard = standard.model_copy(update={"motions": 40, "rest_runs": 2, "rest_duration": 20.0})

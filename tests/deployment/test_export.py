@@ -81,6 +81,7 @@ def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
     assert metadata["supervisor"] == "trigger 0.25-1 m/s^2 on the peak ground reading; dissipative forces only"
 
 
+@pytest.mark.slow
 def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     import torch
 
@@ -143,6 +144,7 @@ def test_a_batch_of_buildings_runs_as_one_each(tmp_path):
             np.testing.assert_allclose(together[i], alone, rtol=1e-9, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_rlc_export_writes_the_file_and_refuses_bad_paths(tmp_path):
     out = tmp_path / "deployed.onnx"
     done = subprocess.run(
@@ -166,6 +168,7 @@ def test_rlc_export_writes_the_file_and_refuses_bad_paths(tmp_path):
     assert again.returncode == 2 and "never overwritten" in again.stderr
 
 
+@pytest.mark.slow
 def test_rlc_export_writes_by_default_under_results_never_into_the_model_folder(tmp_path, monkeypatch):
     from rlcontroller.cli import DEFAULT_MODEL
 
@@ -179,6 +182,7 @@ def test_rlc_export_writes_by_default_under_results_never_into_the_model_folder(
     assert again.returncode == 2 and "never overwritten" in again.stderr
 
 
+@pytest.mark.slow
 def test_rlc_export_refuses_unknown_formats():
     command = [sys.executable, "-m", "rlcontroller", "export", "--format", "tflite"]
     done = subprocess.run(command, capture_output=True, text=True)

@@ -84,6 +84,7 @@ def test_compare_lqg_sweep_and_preview_mark_the_policy(smoke_run, records, tmp_p
     assert "- LQG + ground: J1 =" in (out / "preview.md").read_text()
 
 
+@pytest.mark.slow
 def test_compare_lqg_without_a_run_on_the_synthetic_suite(tmp_path, monkeypatch):
     monkeypatch.delenv("RLC_RECORDS", raising=False)
     result = CliRunner().invoke(app, ["compare", "lqg", "--out", str(tmp_path)])

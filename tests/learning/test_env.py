@@ -221,6 +221,7 @@ RANDOMIZED = {
 }
 
 
+@pytest.mark.slow
 def test_randomised_plants_are_drawn_per_episode_from_the_seed_within_the_ranges():
     from rlcontroller.config import build_experiment
     from rlcontroller.physics.records import synthetic_suite

@@ -112,6 +112,7 @@ def plant_payloads(folder: Path, marker: Path) -> None:
     (folder / "replay_buffer.pkl").write_bytes(payload)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["beside", "weights", "yaml"])
 def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where):
     folder = tmp_path / "shared_model"

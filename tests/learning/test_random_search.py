@@ -10,11 +10,11 @@ from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
 from rlcontroller.control.policy import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
-from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.random_search import RandomSearch
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
+from rlcontroller.simulation.batch import batch_rollout
 
 MODEL_FREE = REPOSITORY / "configs" / "five_story_model_free_random_search.yaml"
 
@@ -86,6 +86,7 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     assert controller.actor.odd and np.all(controller.act(np.zeros(weights.shape[1], np.float32)) == 0.0)
 
 
+@pytest.mark.slow
 def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_path):
     from rlcontroller.control.controllers import LinearFeedback, LQGController
     from rlcontroller.control.lqg import design_lqg_ground_model
@@ -112,6 +113,7 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
     np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
 
 
+@pytest.mark.slow
 def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
     experiment = tiny(total_steps=24000)
     whole = train(experiment, run_dir=tmp_path / "whole")

@@ -36,6 +36,7 @@ def curve(run_dir: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(handle))
 
 
+@pytest.mark.slow
 def test_a_run_folder_has_every_file(tmp_path):
     summary = train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run")
     run = tmp_path / "run"
@@ -75,6 +76,7 @@ def test_runs_are_never_overwritten(tmp_path):
     assert (tmp_path / "run" / "keep.txt").read_text() == "work"
 
 
+@pytest.mark.slow
 def test_same_seed_gives_identical_parameters(tmp_path):
     settings = {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
     train(smoke(**settings), run_dir=tmp_path / "a")
@@ -168,6 +170,7 @@ def test_other_learners_train(tmp_path, name, kwargs):
     assert summary.steps >= 256 and (tmp_path / name / "final_model.zip").is_file()
 
 
+@pytest.mark.slow
 def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
     train(
         smoke(normalize_observations=True, total_steps=300, checkpoint_every=300, eval_every=300),
@@ -247,6 +250,7 @@ def test_a_run_that_fails_to_start_leaves_no_run_folder(tmp_path, monkeypatch):
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.slow
 def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
     run = tmp_path / "run"
     train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0)
@@ -271,6 +275,7 @@ def finished_run(tmp_path_factory):
     return run
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("damaged", "expected"),
     [
@@ -293,6 +298,7 @@ def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finishe
     assert train(resume=run).steps == 900
 
 
+@pytest.mark.slow
 def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_path):
     run = tmp_path / "run"
     shutil.copytree(finished_run, run)
@@ -304,6 +310,7 @@ def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_pa
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_training_on_randomised_plants_validates_on_fixed_draws(tmp_path):
     experiment = smoke(total_steps=600, checkpoint_every=600, eval_every=300)
     randomization = PlantRandomization(stiffness={"low": 0.7, "high": 1.3}, delay_steps=(0, 1))

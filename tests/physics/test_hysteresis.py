@@ -93,6 +93,7 @@ def derivative(time, state, model: BoucWen):
     return np.concatenate([v, acceleration, z_dot])
 
 
+@pytest.mark.slow
 def test_a_record_response_matches_scipy_radau():
     model = bouc_wen(yield_drift=0.005, post_yield_ratio=0.1, exponent=2.0, substeps=8)
     steps = 400  # 8 s of strong motion

@@ -128,6 +128,7 @@ def test_records_variable_names_the_folder(my_records, monkeypatch):
     assert label.startswith("3 records from")
 
 
+@pytest.mark.slow
 def test_rlc_compares_on_a_users_folder_and_on_one_file(my_records, tmp_path):
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["compare", "lqg", "--records", str(my_records), "--out", str(out)])

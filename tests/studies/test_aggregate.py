@@ -73,6 +73,7 @@ def test_runs_on_different_records_are_refused(tmp_path):
         scores([one, other])
 
 
+@pytest.mark.slow
 def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
     runs = [write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.05 * s, 0.6]}) for s in range(3)]
     out = tmp_path / "aggregate"

@@ -43,6 +43,7 @@ def test_the_plan_is_the_cartesian_product_and_checks_every_run_first(tmp_path):
         plan(experiment, [0], [("algorithm.kwargs.gama.x", [1])], tmp_path)
 
 
+@pytest.mark.slow
 def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(tmp_path):
     pytest.importorskip("distributed", reason="the distributed extra: pip install -e '.[distributed]'")
     experiment = Experiment.model_validate(TINY)
@@ -62,6 +63,7 @@ def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(t
     assert "sweep.csv" in {path.name for path in tmp_path.iterdir()}
 
 
+@pytest.mark.slow
 def test_rlc_sweep_on_local_processes(tmp_path):
     config = tmp_path / "tiny.yaml"
     config.write_text(yaml.safe_dump(TINY))
@@ -74,6 +76,7 @@ def test_rlc_sweep_on_local_processes(tmp_path):
     assert refused.returncode == 2 and "--address: only with --engine dask" in refused.stderr
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_leaves_no_worker_training_and_its_run_resumable(tmp_path):
     """SIGKILL to `rlc sweep`: its worker checkpoints and exits instead of training on as an orphan."""
     config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))

@@ -53,6 +53,7 @@ def test_the_search_space_is_checked_and_sampled():
     )
 
 
+@pytest.mark.slow
 def test_two_workers_on_one_study_run_exactly_the_trials_asked(tmp_path):
     config = tmp_path / "tuned.yaml"
     config.write_text(yaml.safe_dump(TUNED))
@@ -81,6 +82,7 @@ def test_two_workers_on_one_study_run_exactly_the_trials_asked(tmp_path):
     }
 
 
+@pytest.mark.slow
 def test_a_killed_worker_s_trial_is_marked_failed_and_the_study_still_completes(tmp_path):
     slow = TUNED | {"algorithm": TUNED["algorithm"] | {"total_steps": 100_000, "eval_every": 100_000}}
     config = tmp_path / "tuned.yaml"
@@ -107,6 +109,7 @@ def test_a_killed_worker_s_trial_is_marked_failed_and_the_study_still_completes(
     assert not [t for t in trials if t.state == TrialState.RUNNING]
 
 
+@pytest.mark.slow
 def test_a_config_without_a_search_space_is_refused(tmp_path):
     config = tmp_path / "plain.yaml"
     config.write_text(yaml.safe_dump({k: v for k, v in TUNED.items() if k != "algorithm"}))

@@ -21,10 +21,10 @@ from numpy.lib.stride_tricks import sliding_window_view
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.supervisor import supervisor
-from rlcontroller.learning.env import noisy_readings, step_outputs
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant
+from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
 
 class BuildingBatch:

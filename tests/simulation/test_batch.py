@@ -12,11 +12,11 @@ from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import read_policy
-from rlcontroller.learning import batch as batch_module
-from rlcontroller.learning.batch import batch_rollout
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
+from rlcontroller.simulation import batch as batch_module
+from rlcontroller.simulation.batch import batch_rollout
 
 PLANTS = {
     "nominal": {},
