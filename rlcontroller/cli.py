@@ -16,7 +16,7 @@ from typing import Annotated, Any
 import typer
 
 from rlcontroller.assets import DEFAULT_MODEL, DEMO_CONFIG, MODELS, SAFETY_STANDARD, STANDARD_SCENARIOS
-from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment
+from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment, with_overrides
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.physics.excitation import MotionError
 
@@ -178,12 +178,10 @@ def train(
                 "or --resume RUN"
             )
         experiment = load_experiment(config)
-        if total_steps is not None:
-            experiment = experiment.model_copy(
-                update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": total_steps})}
-            )
-        if seed is not None:
-            experiment = experiment.model_copy(update={"seed": seed})
+        overrides = {"algorithm.total_steps": total_steps, "seed": seed}
+        given = {key: value for key, value in overrides.items() if value is not None}
+        if given:
+            experiment = with_overrides(experiment, given, "--total-steps/--seed")
         summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress, time_limit_s=limit)
     typer.echo(summary.line())
     if summary.interrupted or summary.time_limit_reached:

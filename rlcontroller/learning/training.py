@@ -24,7 +24,7 @@ import numpy as np
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.files import check_new_folder
-from rlcontroller.learning.algorithms import algorithm_class, build_model, check_algorithm, make_vec_env
+from rlcontroller.learning.algorithms import algorithm_class, build_model, make_vec_env
 from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder, default_run_dir, plot_learning_curve
 from rlcontroller.learning.validation import Validator
@@ -173,7 +173,6 @@ def train(
         experiment = run.experiment()
     else:
         assert experiment is not None
-        check_algorithm(experiment)
         run = RunFolder(run_dir or default_run_dir(experiment))
         check_new_folder(run.path, "run", " (use --resume)")
     torch.set_num_threads(experiment.algorithm.torch_threads)

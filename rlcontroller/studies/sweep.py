@@ -91,8 +91,6 @@ def parse_setting(text: str) -> tuple[str, list[Any]]:
 
 def plan(experiment: Experiment, seeds: list[int], settings: list[tuple[str, list[Any]]], out: Path) -> list[SweepRun]:
     """Every combination of settings' values and seeds, each checked as a whole experiment now."""
-    from rlcontroller.learning.algorithms import check_algorithm
-
     keys = [key for key, _ in settings]
     if len(set(keys)) != len(keys):
         raise ConfigError("--set: a key is set twice; give all its values in one --set KEY=V1,V2")
@@ -103,7 +101,6 @@ def plan(experiment: Experiment, seeds: list[int], settings: list[tuple[str, lis
         for seed in seeds:
             overrides = chosen | {"seed": seed}
             resolved = with_overrides(experiment, overrides, f"--set {group or 'seed'}")
-            check_algorithm(resolved)
             folder = (out / _folder_name(group) if group else out) / f"seed{seed}"
             runs.append(SweepRun(folder, seed, chosen, group or experiment.name, resolved.to_yaml()))
     return runs

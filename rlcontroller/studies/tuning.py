@@ -104,7 +104,6 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
     import optuna
     from optuna.trial import TrialState
 
-    from rlcontroller.learning.algorithms import check_algorithm
     from rlcontroller.learning.training import train
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -136,7 +135,6 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
 
         try:
             resolved = with_overrides(experiment, suggest(trial, experiment.algorithm.search), f"trial {trial.number}")
-            check_algorithm(resolved)
             summary = train(resolved, run_dir=folder, on_validation=report)
         except Exception as error:  # a failed trial, recorded with its reason; the worker goes on
             trial.set_user_attr("error", f"{type(error).__name__}: {error}"[:300])

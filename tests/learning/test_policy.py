@@ -198,25 +198,13 @@ def test_an_empty_actor_arch_gives_a_linear_actor_and_keeps_the_critic(name):
         np.testing.assert_allclose(actor(first + second), actor(first) + actor(second), rtol=1e-4, atol=1e-5)
 
 
-def test_an_odd_policy_is_refused_for_sac():
-    from rlcontroller.config import ConfigError, Experiment
-    from rlcontroller.learning.algorithms import build_model, make_vec_env
-    from rlcontroller.physics.plant import Plant
+def test_an_odd_policy_is_refused_at_loading_for_sac_and_with_centred_observations():
+    from rlcontroller.config import ConfigError, build_experiment
 
-    experiment = Experiment.model_validate({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
     with pytest.raises(ConfigError, match="policy.odd: only for PPO, A2C and RandomSearch"):
-        build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
-
-
-def test_an_odd_policy_is_refused_with_centred_observations():
-    from rlcontroller.config import ConfigError, Experiment
-    from rlcontroller.learning.algorithms import check_algorithm
-
-    experiment = Experiment.model_validate(
-        {"algorithm": {"name": "PPO", "normalize_observations": True, "policy": {"odd": True}}}
-    )
+        build_experiment({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
     with pytest.raises(ConfigError, match="policy.odd: needs normalize_observations: false"):
-        check_algorithm(experiment)
+        build_experiment({"algorithm": {"name": "PPO", "normalize_observations": True, "policy": {"odd": True}}})
 
 
 SHIPPED = sorted(path.name for path in (REPOSITORY / "models").iterdir() if path.is_dir())

@@ -1,0 +1,66 @@
+"""What every controller is judged by and acts behind: the reward (the cost LQG shares) and the supervisor."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import (
+    Field,
+    model_validator,
+)
+
+from rlcontroller.config.base import AccelerationRange, Quantity, Scale, StrictModel
+
+
+class RewardTerm(StrictModel):
+    """weight * sum over components of |quantity / scale|^power, subtracted from the reward.
+
+    `force_change` is the change of each actuator force from the previous step (N). LQG is
+    designed on the quadratic terms of linear quantities (power 2, not force_change) only.
+    """
+
+    quantity: Quantity | Literal["force_change"]
+    weight: Annotated[float, Field(ge=0.0, le=1.0e6)]
+    scale: Scale
+    power: float = Field(2.0, ge=2.0, le=16.0)
+
+    @property
+    def quadratic(self) -> bool:
+        return self.power == 2.0 and self.quantity != "force_change"
+
+    @property
+    def label(self) -> str:
+        return f"reward_{self.quantity}" + ("" if self.power == 2.0 else f"_p{self.power:g}")
+
+
+class RewardConfig(StrictModel):
+    """The terms of the reward. With `per_motion`, each episode's terms are divided by the rms of its
+    ground acceleration (in m/s^2) to each term's power: a linear building's reward then does not
+    depend on the motion's intensity, so weak and strong motions count alike, as in J1-J4 (where the
+    plain reward is dominated by the strongest motions and a learner may act on noise in weak ones).
+    LQG's design is unchanged (every quadratic term is scaled alike)."""
+
+    terms: list[RewardTerm] = Field(
+        default_factory=lambda: [
+            RewardTerm(quantity="drift", weight=1.0, scale=0.01),
+            RewardTerm(quantity="base_shear", weight=0.5, scale=5.0e5),
+            RewardTerm(quantity="force", weight=1.0, scale=1.0e5),
+        ],
+        min_length=1,
+        max_length=50,
+    )
+    per_motion: bool = False
+
+    @model_validator(mode="after")
+    def _something_to_learn(self) -> RewardConfig:
+        if all(term.weight == 0.0 for term in self.terms):
+            raise ValueError("every weight is zero: the reward would be constant; give one term a positive weight")
+        return self
+
+
+class SupervisorConfig(StrictModel):
+    """The control system's supervisory layer: what stands between every controller's action and
+    the actuators (`control.supervisor`). The same for every controller of the experiment."""
+
+    trigger: AccelerationRange | None = None  # m/s^2: [off below, full authority from], on the peak ground reading
+    dissipative: bool = False  # pass only forces that take energy out of the building (estimated velocities)

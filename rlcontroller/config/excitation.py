@@ -1,0 +1,123 @@
+"""Ground motions: the generators (noise + impulses, Kanai-Tajimi, near-fault, mixtures) and the suites they draw."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import (
+    Field,
+    model_validator,
+)
+
+from rlcontroller.config.base import (
+    AccelerationRange,
+    DurationRange,
+    IntRange,
+    Range,
+    Seed,
+    StrictModel,
+    TimeStep,
+    bounded_range,
+)
+
+
+class NoiseImpulsesConfig(StrictModel):
+    """The paper's training motions: white noise plus random half-sine impulses (m/s^2, s)."""
+
+    kind: Literal["noise_impulses"] = "noise_impulses"
+    dt: TimeStep = 0.02
+    duration: DurationRange = (10.0, 20.0)
+    noise_std: AccelerationRange = (0.2, 1.5)
+    impulses: IntRange = (0, 4)
+    impulse_amplitude: AccelerationRange = (1.0, 5.0)
+    impulse_duration: DurationRange = (0.05, 0.5)
+
+
+class KanaiTajimiConfig(StrictModel):
+    """Kanai-Tajimi filtered white noise with a rise-plateau-decay envelope, scaled to a PGA."""
+
+    kind: Literal["kanai_tajimi"] = "kanai_tajimi"
+    dt: TimeStep = 0.02
+    duration: DurationRange = (15.0, 30.0)
+    ground_frequency: bounded_range(0.0, 1000.0, low_open=True) = (8.0, 25.0)  # rad/s
+    ground_damping: bounded_range(0.0, 10.0, low_open=True) = (0.3, 0.7)
+    pga: AccelerationRange = (1.0, 6.0)
+    pga_log: bool = False  # draw the PGA log-uniformly in `pga` (suites spanning weak to strong motions)
+    rise_time: DurationRange = (1.0, 3.0)
+    strong_duration: Range = (4.0, 12.0)
+    decay_rate: Range = (0.2, 0.6)
+
+    @model_validator(mode="after")
+    def _positive_for_log(self) -> KanaiTajimiConfig:
+        if self.pga_log and self.pga[0] <= 0.0:
+            raise ValueError("pga_log needs pga low > 0")
+        return self
+
+
+class NearFaultConfig(StrictModel):
+    """A near-fault motion: a Kanai-Tajimi background (`background`, its PGA ignored) plus a
+    Mavroeidis-Papageorgiou (2003) velocity pulse of period `pulse_period` (s), `pulse_cycles`
+    (their gamma, > 1) and a random phase, whose peak acceleration is `pulse_ratio` times the
+    background's; the sum is scaled to a random PGA (m/s^2)."""
+
+    kind: Literal["near_fault"] = "near_fault"
+    dt: TimeStep = 0.02
+    background: KanaiTajimiConfig = KanaiTajimiConfig()
+    pulse_period: bounded_range(0.0, 100.0, low_open=True) = (0.5, 4.0)
+    pulse_cycles: bounded_range(1.0, 20.0, low_open=True) = (1.5, 3.0)
+    pulse_ratio: bounded_range(0.0, 100.0, low_open=True) = (1.0, 3.0)
+    pga: AccelerationRange = (1.0, 6.0)
+    pga_log: bool = False
+
+    @model_validator(mode="after")
+    def _consistent(self) -> NearFaultConfig:
+        if self.background.dt != self.dt:
+            raise ValueError("background.dt must equal dt")
+        if self.pga_log and self.pga[0] <= 0.0:
+            raise ValueError("pga_log needs pga low > 0")
+        return self
+
+
+SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig, Field(discriminator="kind")]
+
+
+class MixtureComponent(StrictModel):
+    weight: Annotated[float, Field(gt=0.0, le=1.0e6)]
+    generator: SourceConfig
+
+
+class MixtureConfig(StrictModel):
+    """Each motion comes from one component, drawn with probability proportional to its weight."""
+
+    kind: Literal["mixture"] = "mixture"
+    components: list[MixtureComponent] = Field(min_length=1, max_length=50)
+
+
+GeneratorConfig = Annotated[
+    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | MixtureConfig, Field(discriminator="kind")
+]
+
+
+class ExcitationConfig(StrictModel):
+    """Training motions come from `generator`; validation motions are `validation_motions` draws
+    of `validation_generator` (default: the same generator) with the fixed `validation_seed`."""
+
+    generator: GeneratorConfig = NoiseImpulsesConfig()
+    validation_generator: GeneratorConfig | None = None
+    validation_motions: Annotated[int, Field(ge=1, le=1000)] = 8
+    validation_seed: Seed = 10_000
+
+    @property
+    def validation(self) -> GeneratorConfig:
+        """The generator of the validation motions."""
+        return self.validation_generator or self.generator
+
+    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig]:
+        """The generators motions can come from (the components of mixtures), validation included."""
+        sources = []
+        for generator in (self.generator, self.validation_generator):
+            if isinstance(generator, MixtureConfig):
+                sources += [component.generator for component in generator.components]
+            elif generator is not None:
+                sources.append(generator)
+        return sources

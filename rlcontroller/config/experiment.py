@@ -1,0 +1,321 @@
+"""A whole experiment: its parts, loading from YAML files, the checks across parts, overrides."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import yaml
+from pydantic import (
+    Field,
+    PrivateAttr,
+    TypeAdapter,
+    ValidationError,
+)
+
+from rlcontroller.config.base import (
+    ConfigError,
+    Seed,
+    StrictModel,
+    display_path,
+    first_error,
+    format_location,
+    location,
+    read_yaml,
+)
+from rlcontroller.config.building import Actuators, BuildingConfig, SensorConfig, paper_actuators
+from rlcontroller.config.control import RewardConfig, SupervisorConfig
+from rlcontroller.config.excitation import ExcitationConfig
+from rlcontroller.config.learning import (
+    LEARNER_KWARGS,
+    NUMERIC_KWARGS,
+    RESERVED_KWARGS,
+    AlgorithmConfig,
+)
+from rlcontroller.config.plant import (
+    RANDOMIZED_FIELDS,
+    PlantConfig,
+    PlantRandomization,
+    SimulationConfig,
+    randomized_plant,
+)
+
+PARTS: dict[str, Any] = {
+    "building": BuildingConfig,
+    "actuators": Actuators,
+    "sensors": SensorConfig,
+    "reward": RewardConfig,
+    "excitation": ExcitationConfig,
+    "simulation": SimulationConfig,
+    "algorithm": AlgorithmConfig,
+    "plant": PlantConfig,
+    "plant_randomization": PlantRandomization,
+    "supervisor": SupervisorConfig,
+}
+
+
+OPTIONAL_PARTS = ("plant", "plant_randomization", "supervisor")  # may be null: see the fields of Experiment
+
+
+class Experiment(StrictModel):
+    """A whole experiment. `Experiment()` is the paper's five-story case."""
+
+    name: Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z0-9_.+-]+$")] = "paper_sac"
+    seed: Seed = 0
+    building: BuildingConfig = BuildingConfig()
+    actuators: Actuators = Field(default_factory=paper_actuators)
+    sensors: SensorConfig = SensorConfig()
+    reward: RewardConfig = RewardConfig()
+    excitation: ExcitationConfig = ExcitationConfig()
+    simulation: SimulationConfig = SimulationConfig()
+    algorithm: AlgorithmConfig = AlgorithmConfig()
+    plant: PlantConfig | None = None  # None: the simulated building is the design model
+    plant_randomization: PlantRandomization | None = None  # training and validation only
+    supervisor: SupervisorConfig | None = None  # None: actions go to the actuators as they are
+    _origins: dict[str, tuple[str, str]] = PrivateAttr(default_factory=dict)
+
+    def origin(self, part: str) -> tuple[str, str]:
+        """(file, key prefix) of a part, for error messages."""
+        return self._origins.get(part, ("<default>", part))
+
+    def to_yaml(self) -> str:
+        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+def _check_part_type(part: str, value: Any, where: str) -> None:
+    expected = list if part == "actuators" else dict
+    if not isinstance(value, expected):
+        what = "a list of actuators" if expected is list else f"a mapping of {part} keys"
+        got = "text" if isinstance(value, str) else type(value).__name__
+        raise ConfigError(f"{where}: expected {what}, got {got}")
+
+
+def load_experiment(path: str | Path) -> Experiment:
+    """Load an experiment YAML and the part files it names; raise ConfigError on any problem."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping of experiment keys, got {type(raw).__name__}")
+    origins: dict[str, tuple[str, str]] = {}
+    for part in PARTS:
+        value = raw.get(part)
+        if isinstance(value, str):
+            part_path = (path.parent / value).resolve()
+            if not part_path.exists():
+                raise ConfigError(f"{path}: {part}: file not found: {value} (relative to {path.parent})")
+            raw[part] = read_yaml(part_path)
+            origins[part] = (display_path(part_path), "")
+            _check_part_type(part, raw[part], display_path(part_path))
+        else:
+            origins[part] = (str(path), part)
+            if part in raw and not (part in OPTIONAL_PARTS and value is None):
+                _check_part_type(part, value, f"{path}: {part}")
+    return build_experiment(raw, origins, str(path))
+
+
+def build_experiment(
+    raw: dict[str, Any], origins: dict[str, tuple[str, str]] | None = None, file: str = "<config>"
+) -> Experiment:
+    """Validate a raw mapping whose parts are inlined. `origins` maps a part to the file it came
+    from and the key prefix to show in messages (empty when the part has a file of its own)."""
+    origins = origins or {}
+    for part, model in PARTS.items():
+        if part in raw and not (part in OPTIONAL_PARTS and raw[part] is None):
+            part_file, prefix = origins.get(part, (file, part))
+            try:
+                TypeAdapter(model).validate_python(raw[part])
+            except ValidationError as error:
+                raise first_error(error, part_file, prefix) from None
+    try:
+        experiment = Experiment.model_validate(raw)
+    except ValidationError as error:
+        raise first_error(error, file, "") from None
+    experiment._origins.update({part: origins.get(part, (file, part)) for part in PARTS})
+    _check_cross_references(experiment)
+    return experiment
+
+
+def _check_cross_references(experiment: Experiment) -> None:
+    check_algorithm(experiment)
+    if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
+        raise ConfigError(
+            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
+        )
+    supervisor = experiment.supervisor
+    if supervisor is not None and supervisor.dissipative and not experiment.sensors.state_estimate:
+        where = location(*experiment.origin("supervisor"), "dissipative")
+        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
+    if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
+        raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
+    cutoff = experiment.sensors.integration_cutoff
+    if cutoff is not None:
+        where = location(*experiment.origin("sensors"), "integration_cutoff")
+        if experiment.sensors.state_estimate:
+            raise ConfigError(f"{where}: the observation holds either integrated readings or state_estimate, not both")
+        nyquist = 0.5 / experiment.simulation.control_dt
+        if cutoff >= 0.5 * nyquist:
+            raise ConfigError(
+                f"{where}: {cutoff:g} Hz, expected below half the Nyquist frequency ({0.5 * nyquist:g} Hz)"
+            )
+    n_floors = len(experiment.building.masses)
+    file, prefix = experiment.origin("actuators")
+    for index, actuator in enumerate(experiment.actuators):
+        if actuator.story > n_floors:
+            raise ConfigError(
+                f"{file}: {prefix}[{index}].story: story {actuator.story} does not exist, expected 1..{n_floors}"
+            )
+    file, prefix = experiment.origin("sensors")
+    for index, measurement in enumerate(experiment.sensors.measurements):
+        key = format_location(("measurements", index, "floors"), prefix)
+        count = len(experiment.actuators) if measurement.quantity == "force" else n_floors
+        for floor in measurement.floors or []:
+            if floor > count:
+                what = "actuator" if measurement.quantity == "force" else "floor"
+                raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
+    _check_time_steps(experiment)
+    if experiment.plant is not None:
+        check_plant(experiment.plant, experiment, *experiment.origin("plant"))
+    if experiment.plant_randomization is not None:
+        _check_randomization(experiment)
+
+
+def _check_time_steps(experiment: Experiment) -> None:
+    """The control step must hold a whole number of generated samples, and every generated motion
+    at least one control step: otherwise what is simulated is not what was configured."""
+    control_dt = experiment.simulation.control_dt
+    file, prefix = experiment.origin("excitation")
+    for source in experiment.excitation.sources():
+        ratio = control_dt / source.dt
+        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
+            where = location(*experiment.origin("simulation"), "control_dt")
+            raise ConfigError(
+                f"{where}: {control_dt:g} s is not a whole multiple of the {source.kind} generator's "
+                f"dt = {source.dt:g} s; choose control_dt = r * dt"
+            )
+        if source.duration[0] < control_dt:
+            raise ConfigError(
+                f"{location(file, prefix, 'generator.duration')}: {source.duration[0]:g} s is shorter than one "
+                f"control step ({control_dt:g} s)"
+            )
+
+
+def _check_randomization(experiment: Experiment) -> None:
+    """Both ends of every range must make a valid plant for this experiment."""
+    randomization = experiment.plant_randomization
+    file, prefix = experiment.origin("plant_randomization")
+    for key in RANDOMIZED_FIELDS:
+        bounds = getattr(randomization, key)
+        if bounds is None:
+            continue
+        ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
+        for end in ends:
+            try:
+                check_plant(randomized_plant(experiment.plant, {key: end}), experiment, file, prefix)
+            except ValidationError as error:
+                detail = error.errors(include_url=False)[0]["msg"]
+                raise ConfigError(f"{location(file, prefix, key)}: {end:g} gives no valid plant: {detail}") from None
+
+
+def with_overrides(experiment: Experiment, values: dict[str, Any], where: str) -> Experiment:
+    """The experiment with each dotted path (`algorithm.kwargs.gamma`, `reward.terms.0.weight`) set to
+    its value, validated as a whole; errors name `where` (an option or a trial) and the path."""
+    raw = experiment.model_dump(mode="json")
+    for path, value in values.items():
+        keys = path.split(".")
+        node: Any = raw
+        for depth, key in enumerate(keys):
+            last = depth == len(keys) - 1
+            free = keys[:depth] == ["algorithm", "kwargs"]  # the learner's own keyword arguments
+            if isinstance(node, list):
+                if not key.isdigit() or int(key) >= len(node):
+                    raise ConfigError(f"{where}: {path}: {key!r} is not an index below {len(node)}")
+                key = int(key)
+            elif not isinstance(node, dict) or (key not in node and not (free and last)):
+                options = ", ".join(sorted(node)) if isinstance(node, dict) else "nothing: it is a value"
+                raise ConfigError(f"{where}: {path}: no setting {key!r}; expected one of: {options}")
+            if last:
+                node[key] = value
+            else:
+                node = node[key]
+    return build_experiment(raw, {part: (where, part) for part in PARTS}, where)
+
+
+def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
+    """Per-story lists and floor numbers of a plant part must fit the building."""
+    n_floors = len(experiment.building.masses)
+    for key in ("stiffness", "mass"):
+        value = getattr(plant, key)
+        if isinstance(value, list) and len(value) != n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {len(value)} factors, expected 1 or {n_floors}")
+    stories = [(f"damage[{i}].story", d.story) for i, d in enumerate(plant.damage)]
+    stories += [(f"sensors.bias[{i}].floor", b.floor) for i, b in enumerate(plant.sensors.bias)]
+    stories += [("sensors.dead_floors", floor) for floor in plant.sensors.dead_floors]
+    for key, number in stories:
+        if number > n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if plant.hysteresis is not None:
+        drift = plant.hysteresis.yield_drift
+        if isinstance(drift, list) and len(drift) != n_floors:
+            where = location(file, prefix, "hysteresis.yield_drift")
+            raise ConfigError(f"{where}: {len(drift)} values, expected 1 or {n_floors}")
+        if plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0:
+            where = location(file, prefix, "hysteresis")
+            raise ConfigError(f"{where}: yielding stories with actuator dynamics are not supported yet; use one")
+    if plant.actuators.time_constant > 0 and experiment.simulation.method != "exact":
+        raise ConfigError(f"{location(file, prefix, 'actuators.time_constant')}: an actuator lag needs method: exact")
+
+
+def check_algorithm(experiment: Experiment) -> None:
+    """Refuse keyword arguments the learner does not take, naming the file and key."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C", "RandomSearch"):
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not {algorithm.name}"
+        )
+    if algorithm.name == "RandomSearch":
+        _check_random_search(experiment)
+    if algorithm.policy.odd and algorithm.normalize_observations:
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
+            "(centring the observation breaks a(-o) = -a(o)); scale the readings in the sensors part instead"
+        )
+    accepted = LEARNER_KWARGS[algorithm.name]
+    for key, value in algorithm.kwargs.items():
+        where = location(file, prefix, f"kwargs.{key}")
+        if key in RESERVED_KWARGS:
+            raise ConfigError(f"{where}: set by rlc (use 'policy:', 'seed' or --device instead)")
+        if key not in accepted:
+            options = ", ".join(sorted(accepted - RESERVED_KWARGS))
+            raise ConfigError(f"{where}: not a keyword argument of {algorithm.name}; expected one of: {options}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{where}: expected a finite number, got {value!r}")
+        if key in NUMERIC_KWARGS and not _in_range(value, *NUMERIC_KWARGS[key]):
+            low, high, integer = NUMERIC_KWARGS[key]
+            kind = "an integer" if integer else "a number"
+            raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
+
+
+def _check_random_search(experiment: Experiment) -> None:
+    """RandomSearch learns a linear odd actor (a residual with `residual_lqg`) on the batched env's plant."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.actor_arch != [] or not algorithm.policy.odd:
+        raise ConfigError(
+            f"{location(file, prefix, 'policy')}: RandomSearch trains a linear odd actor; "
+            "expected actor_arch: [] and odd: true"
+        )
+    refused = {
+        "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
+        "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),
+    }
+    for key, (wrong, why) in refused.items():
+        if wrong:
+            raise ConfigError(f"{location(file, prefix, key)}: not for RandomSearch ({why})")
+
+
+def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
+    if isinstance(value, bool) or not isinstance(value, int | float) or (integer and not isinstance(value, int)):
+        return False
+    return low <= value <= high

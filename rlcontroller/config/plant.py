@@ -1,0 +1,140 @@
+"""The simulated plant: integration, how it differs from the design model (damage, actuator dynamics,
+sensor faults, yielding) and how training randomises it."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import (
+    AfterValidator,
+    Field,
+    PositiveInt,
+    model_validator,
+)
+
+from rlcontroller.config.base import Factor, IntRange, StrictModel, TimeStep, unique
+
+
+class SimulationConfig(StrictModel):
+    """Control step (s) and the discretisation: exact (ZOH force, FOH ground) or Newmark-beta."""
+
+    control_dt: TimeStep = 0.02
+    method: Literal["exact", "newmark"] = "exact"
+    newmark_beta: float = Field(0.25, gt=0.0, le=0.5)
+    newmark_gamma: float = Field(0.5, ge=0.5, le=1.0)
+
+
+class DamageConfig(StrictModel):
+    """A story that lost stiffness: `stiffness` is the relative change, -0.4 = 40 % less."""
+
+    story: PositiveInt
+    stiffness: float = Field(ge=-0.95, le=0.0)
+
+
+class ActuatorDynamicsConfig(StrictModel):
+    """The delivered force follows the command through a pure delay of `delay_steps` control steps,
+    then a first-order lag with `time_constant` (s; 0: none)."""
+
+    time_constant: float = Field(0.0, ge=0.0, le=1.0)
+    delay_steps: int = Field(0, ge=0, le=50)
+
+
+class SensorBias(StrictModel):
+    floor: PositiveInt
+    value: float = Field(ge=-1.0e6, le=1.0e6)  # in the reading's SI unit
+
+
+class SensorFaultConfig(StrictModel):
+    """Noise std times `noise_factor`; a constant `bias` on some floors' readings; `dead_floors`
+    whose readings are zero. A floor is the reading's floor (its story for drifts)."""
+
+    noise_factor: float = Field(1.0, ge=0.0, le=1.0e3)
+    bias: list[SensorBias] = []
+    dead_floors: Annotated[list[PositiveInt], AfterValidator(unique)] = []
+
+
+class HysteresisConfig(StrictModel):
+    """Yielding stories (Bouc-Wen): story force F = a k d + (1 - a) k d_y z with
+    z' = (d'/d_y) [1 - |z|^n (beta sgn(d' z) + gamma)], beta + gamma = 1 (|z| -> 1 at yield).
+    `yield_drift` d_y (m, scalar or per story), `post_yield_ratio` a (1: linear), `exponent` n
+    (sharper yielding for larger n); `substeps` RK4 steps per ground-sample interval."""
+
+    model: Literal["bouc_wen"] = "bouc_wen"
+    yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
+    post_yield_ratio: float = Field(0.1, ge=0.0, le=1.0)
+    exponent: float = Field(2.0, ge=1.0, le=20.0)
+    beta: float = Field(0.5, ge=0.0, le=1.0)
+    gamma: float = Field(0.5, ge=-1.0, le=1.0)
+    substeps: int = Field(4, ge=1, le=100)
+
+    @model_validator(mode="after")
+    def _yields_at_one(self) -> HysteresisConfig:
+        if abs(self.beta + self.gamma - 1.0) > 1e-9:
+            raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {self.beta + self.gamma:g}")
+        return self
+
+
+class PlantConfig(StrictModel):
+    """How the simulated building differs from the design model (the experiment's building,
+    actuators and sensors, on which every controller is designed). Factors are a scalar or one
+    per story; `damping` scales the damping ratios (a damping matrix is scaled as a whole)."""
+
+    stiffness: Factor | list[Factor] = 1.0
+    mass: Factor | list[Factor] = 1.0
+    damping: Factor = 1.0
+    damage: list[DamageConfig] = []
+    actuators: ActuatorDynamicsConfig = ActuatorDynamicsConfig()
+    sensors: SensorFaultConfig = SensorFaultConfig()
+    hysteresis: HysteresisConfig | None = None  # None: linear stories
+
+
+class RandomRange(StrictModel):
+    """A value drawn per episode, uniformly in [low, high], or log-uniformly with `log: true`."""
+
+    low: float = Field(ge=0.0, le=1.0e3)
+    high: float = Field(ge=0.0, le=1.0e3)
+    log: bool = False
+
+    @model_validator(mode="after")
+    def _ordered(self) -> RandomRange:
+        if self.low > self.high:
+            raise ValueError(f"expected low <= high, got low {self.low:g}, high {self.high:g}")
+        if self.log and self.low <= 0.0:
+            raise ValueError("a log-uniform range needs low > 0")
+        return self
+
+
+class PlantRandomization(StrictModel):
+    """Domain randomisation for training: each episode's plant is the experiment's `plant` part (or
+    the design model) with these fields drawn anew from the env's seed. Factors are scalars on every
+    story; `delay_steps` is a whole number drawn uniformly in [low, high]. Validation draws with the
+    validation motions' fixed seeds, so learning curves stay comparable; evaluation never draws."""
+
+    stiffness: RandomRange | None = None
+    mass: RandomRange | None = None
+    damping: RandomRange | None = None
+    time_constant: RandomRange | None = None  # s
+    delay_steps: IntRange | None = None
+    noise_factor: RandomRange | None = None
+
+
+RANDOMIZED_FIELDS = {
+    "stiffness": "stiffness",
+    "mass": "mass",
+    "damping": "damping",
+    "time_constant": "actuators.time_constant",
+    "delay_steps": "actuators.delay_steps",
+    "noise_factor": "sensors.noise_factor",
+}
+
+
+def randomized_plant(base: PlantConfig | None, values: dict[str, float]) -> PlantConfig:
+    """`base` (or the design model's empty plant part) with the drawn `values` put in."""
+    plant = (base or PlantConfig()).model_dump()
+    for key, value in values.items():
+        *path, leaf = RANDOMIZED_FIELDS[key].split(".")
+        target = plant
+        for step in path:
+            target = target[step]
+        target[leaf] = value
+    return PlantConfig.model_validate(plant)

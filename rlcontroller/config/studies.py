@@ -1,0 +1,79 @@
+"""Files the studies read beside an experiment: robustness scenarios and the safety check's standard."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import (
+    AfterValidator,
+    Field,
+    ValidationError,
+)
+
+from rlcontroller.config.base import ConfigError, Seed, StrictModel, first_error, first_repeat, read_yaml
+from rlcontroller.config.excitation import GeneratorConfig
+from rlcontroller.config.experiment import Experiment, check_plant
+from rlcontroller.config.plant import PlantConfig
+
+
+class Scenario(StrictModel):
+    """A named plant: how the simulated building differs from the design model (none: nominal)."""
+
+    name: Annotated[str, Field(min_length=1, max_length=60)]
+    plant: PlantConfig | None = None
+
+
+def _unique_names(scenarios: list[Scenario]) -> list[Scenario]:
+    names = [scenario.name for scenario in scenarios]
+    repeat = first_repeat(names)
+    if repeat is not None:
+        raise ValueError(f"scenario name {names[repeat[1]]!r} is used twice")
+    return scenarios
+
+
+class ScenarioFile(StrictModel):
+    scenarios: Annotated[list[Scenario], Field(min_length=1, max_length=200), AfterValidator(_unique_names)]
+
+
+def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
+    """The named scenarios of a YAML file, checked against the experiment's building."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with 'scenarios', got {type(raw).__name__}")
+    try:
+        scenarios = ScenarioFile.model_validate(raw).scenarios
+    except ValidationError as error:
+        raise first_error(error, str(path), "") from None
+    for index, scenario in enumerate(scenarios):
+        if scenario.plant is not None:
+            check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
+    return scenarios
+
+
+class SafetyCheckConfig(StrictModel):
+    """The safety check's standard (`evaluation.safety`): a suite of `motions` generated motions drawn
+    with its own `seed`, the drift below which a motion is insignificant (a ratio of the story
+    height; `story_height` (m) where the building gives none), and the at-rest test: `rest_runs`
+    noise realisations of `rest_duration` (s) without ground motion."""
+
+    motions: Annotated[int, Field(ge=1, le=100_000)] = 320
+    seed: Seed = 31_337
+    generator: GeneratorConfig
+    insignificant_drift_ratio: Annotated[float, Field(gt=0.0, le=0.1)] = 2.0e-4
+    story_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 3.0
+    rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
+    rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
+
+
+def load_safety_check(path: str | Path) -> SafetyCheckConfig:
+    """The safety check's standard from a YAML file."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with 'generator', got {type(raw).__name__}")
+    try:
+        return SafetyCheckConfig.model_validate(raw)
+    except ValidationError as error:
+        raise first_error(error, str(path), "") from None

@@ -1,0 +1,46 @@
+"""The learner's settings are checked when an experiment is loaded, against a table of each learner's
+keyword arguments that must match the installed learners' signatures; loading imports no torch."""
+
+import inspect
+import subprocess
+import sys
+
+import pytest
+from conftest import REPOSITORY
+
+from rlcontroller.config import ConfigError, build_experiment
+from rlcontroller.config.learning import LEARNER_KWARGS
+
+
+@pytest.mark.parametrize("name", sorted(LEARNER_KWARGS))
+def test_the_table_of_keyword_arguments_is_the_learners_own(name):
+    from rlcontroller.learning.policy import algorithm_class
+
+    signature = set(inspect.signature(algorithm_class(name).__init__).parameters) - {"self"}
+    assert LEARNER_KWARGS[name] == signature
+
+
+@pytest.mark.parametrize(
+    ("algorithm", "message"),
+    [
+        ({"name": "PPO", "kwargs": {"buffer_size": 10}}, "algorithm.kwargs.buffer_size: not a keyword argument of PPO"),
+        ({"name": "SAC", "kwargs": {"gamma": 1.5}}, "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
+        ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
+        ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
+        ({"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}}, "algorithm.policy: RandomSearch"),
+    ],
+)
+def test_what_a_learner_refuses_is_refused_at_loading(algorithm, message):
+    with pytest.raises(ConfigError) as error:
+        build_experiment({"algorithm": algorithm})
+    assert str(error.value).startswith(f"<config>: {message}") and "\n" not in str(error.value)
+
+
+def test_loading_and_checking_an_experiment_imports_no_torch():
+    code = (
+        "import sys\nfrom rlcontroller.config import load_experiment\n"
+        f"load_experiment({str(REPOSITORY / 'configs' / 'five_story.yaml')!r})\n"
+        "print(sorted(m for m in ('torch', 'stable_baselines3') if m in sys.modules))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "[]"
