@@ -29,6 +29,7 @@ import platform
 import shutil
 import socket
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,34 @@ def package_versions() -> dict[str, str]:
         except importlib.metadata.PackageNotFoundError:
             versions[name] = "not installed"
     return versions
+
+
+@dataclass
+class TrainingState:
+    """What a run carries from one checkpoint to the next, and what this invocation learned on the way.
+
+    Saved in each checkpoint's state.json (with the step count): `wall_time_s` (s, trained in all
+    invocations), `best` (the best validation row so far, `algorithm.select_by`) and `best_steps`
+    (its step). `time_limit_reached` and `stopped_by_validation` say why this invocation stopped."""
+
+    wall_time_s: float = 0.0
+    best: dict[str, float] | None = None
+    best_steps: int | None = None
+    time_limit_reached: bool = False
+    stopped_by_validation: bool = False
+
+    def to_json(self, steps: int) -> dict[str, Any]:
+        return {"wall_time_s": self.wall_time_s, "best_steps": self.best_steps, "best": self.best, "steps": steps}
+
+    @classmethod
+    def from_json(cls, saved: Any) -> TrainingState:
+        """The state a checkpoint saved (a ValueError when it is not one)."""
+        if not isinstance(saved, dict) or not isinstance(saved.get("wall_time_s"), int | float):
+            raise ValueError("expected a mapping with wall_time_s")
+        best, best_steps = saved.get("best"), saved.get("best_steps")
+        if not (best is None or isinstance(best, dict)) or not (best_steps is None or isinstance(best_steps, int)):
+            raise ValueError("expected best as a mapping and best_steps as a whole number")
+        return cls(wall_time_s=float(saved["wall_time_s"]), best=best, best_steps=best_steps)
 
 
 class RunFolder:
@@ -110,7 +139,7 @@ class RunFolder:
         ]
         return sorted(found, key=lambda p: int(p.name.removeprefix("step_")))
 
-    def save_checkpoint(self, model, state: dict[str, Any]) -> Path:
+    def save_checkpoint(self, model, state: TrainingState) -> Path:
         """Write model, replay buffer, normalisation statistics and state; rename when complete."""
         steps = int(model.num_timesteps)
         final = self.checkpoint_root / f"step_{steps:010d}"
@@ -126,7 +155,7 @@ class RunFolder:
             normalize = model.get_vec_normalize_env()
             if normalize is not None:
                 normalize.save(str(temporary / "vecnormalize.pkl"))
-            (temporary / "state.json").write_text(json.dumps({**state, "steps": steps}) + "\n")
+            (temporary / "state.json").write_text(json.dumps(state.to_json(steps)) + "\n")
             os.rename(temporary, final)
         except BaseException:
             shutil.rmtree(temporary, ignore_errors=True)  # the newest complete checkpoint stays the newest

@@ -26,7 +26,7 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.files import check_new_folder
 from rlcontroller.learning.algorithms import algorithm_class, build_model, make_vec_env
 from rlcontroller.learning.policy import policy_controller
-from rlcontroller.learning.run_folder import RunFolder, default_run_dir, plot_learning_curve
+from rlcontroller.learning.run_folder import RunFolder, TrainingState, default_run_dir, plot_learning_curve
 from rlcontroller.learning.validation import Validator
 from rlcontroller.physics.plant import Plant
 
@@ -49,7 +49,7 @@ def _callback(
     experiment: Experiment,
     validator: Validator,
     stop: StopRequest,
-    state: dict[str, Any],
+    state: TrainingState,
     time_limit_s: float | None,
     on_validation: Callable[[dict[str, float]], bool] | None,
 ):
@@ -64,7 +64,7 @@ def _callback(
             self.previous_steps = self.model.num_timesteps
 
         def wall_time(self) -> float:
-            return state["wall_time_s"] + time.perf_counter() - self.session_start
+            return state.wall_time_s + time.perf_counter() - self.session_start
 
         def _on_step(self) -> bool:
             steps, previous = self.num_timesteps, self.previous_steps  # RandomSearch: many steps per call
@@ -74,7 +74,7 @@ def _callback(
             if steps // algorithm.checkpoint_every > previous // algorithm.checkpoint_every:
                 self.checkpoint()
             if time_limit_s is not None and time.perf_counter() - self.started >= time_limit_s:
-                state["time_limit_reached"] = True
+                state.time_limit_reached = True
                 return False
             return self.keep_going and not stop.requested
 
@@ -90,16 +90,16 @@ def _callback(
             row.update(result)
             run.append_curve(row)
             if on_validation is not None and not on_validation(row):
-                state["stopped_by_validation"] = self.keep_going = False
-            best = state["best"]
+                state.stopped_by_validation = self.keep_going = False
+            best = state.best
             if best is None or selection_score(result, algorithm.select_by) > selection_score(
                 best, algorithm.select_by
             ):
-                state.update(best_steps=self.num_timesteps, best=result)
+                state.best_steps, state.best = self.num_timesteps, result
                 run.save_model(self.model, "best", policy, validator.plant)
 
         def checkpoint(self) -> None:
-            state["wall_time_s"] = self.wall_time()
+            state.wall_time_s = self.wall_time()
             self.session_start = time.perf_counter()
             run.save_checkpoint(self.model, state)
 
@@ -202,37 +202,34 @@ def train(
         callback.checkpoint()
     if not stop.requested:
         run.save_model(model, "final", callback.policy(), plant)
-        if state["best"] is None:
+        if state.best is None:
             callback.validate()
         plot_learning_curve(run)
     vec_env.close()
     beat = [row for row in run.read_curve() if row["eval_J1"] < row["lqg_J1"]]
     return TrainingSummary(
-        run.path,
-        int(model.num_timesteps),
-        state["wall_time_s"],
-        state["best"],
-        state["best_steps"],
-        stop.requested,
-        bool(state.get("time_limit_reached")),
-        beat[0] if beat else None,
-        bool(state.get("stopped_by_validation")),
+        run_dir=run.path,
+        steps=int(model.num_timesteps),
+        wall_time_s=state.wall_time_s,
+        best=state.best,
+        best_steps=state.best_steps,
+        interrupted=stop.requested,
+        time_limit_reached=state.time_limit_reached,
+        beat_lqg_at=beat[0] if beat else None,
+        stopped_by_validation=state.stopped_by_validation,
     )
 
 
-def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, dict[str, Any]]:
+def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, TrainingState]:
     """The model and training state: from the newest checkpoint when resuming, else new (and the
     run folder is created, recording the device the model is on)."""
-    state: dict[str, Any] = {"wall_time_s": 0.0, "best_steps": None, "best": None}
     checkpoints = run.checkpoints()
     if resume and checkpoints:
         model = _load_checkpoint(experiment, checkpoints, vec_env, device)
-        state.update(_read_state(checkpoints))
-        state.pop("steps", None)
-        state.pop("time_limit_reached", None)
-        state.pop("stopped_by_validation", None)
+        state = _read_state(checkpoints)
         run.truncate_curve(model.num_timesteps)
         return model, state
+    state = TrainingState()
     tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None
     model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
     if resume:
@@ -248,13 +245,10 @@ def _unreadable(checkpoints: list[Path], path: Path, error: Exception) -> Config
     return ConfigError(f"{path}: unreadable checkpoint file ({type(error).__name__}: {detail}){hint}")
 
 
-def _read_state(checkpoints: list[Path]) -> dict[str, Any]:
+def _read_state(checkpoints: list[Path]) -> TrainingState:
     path = checkpoints[-1] / "state.json"
     try:
-        state = json.loads(path.read_text())
-        if not isinstance(state, dict) or not isinstance(state.get("wall_time_s"), int | float):
-            raise ValueError("expected a mapping with wall_time_s")
-        return state
+        return TrainingState.from_json(json.loads(path.read_text()))
     except (OSError, UnicodeDecodeError, ValueError) as error:
         raise _unreadable(checkpoints, path, error) from None
 
