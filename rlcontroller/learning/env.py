@@ -76,9 +76,6 @@ class BuildingEnv(gym.Env):
         self._randomization = experiment.plant_randomization if randomize else None
         self._use_plant(plant)
         self.layout = layout = plant.layout
-        self._block = self._n_sensors + 1
-        self._estimate_start = layout.estimate.start
-        self._action_start = layout.action.start
         self.kalman = observation_filter(plant)  # the agent's own estimate, designed like LQG's
         self.supervisor = supervisor(plant, 1)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
@@ -178,8 +175,7 @@ class BuildingEnv(gym.Env):
         self._previous_action = np.zeros(self.building.n_actuators)
         if self.supervisor is not None:
             self.supervisor.reset()
-        self._observation[:] = 0.0
-        self._observation[: self._block] = readings[0]
+        self.layout.start(self._observation[None], readings[:1])
         if self.kalman is not None:
             self._estimate = np.zeros(self.kalman.size)
             self._previous_ground = 0.0
@@ -194,7 +190,7 @@ class BuildingEnv(gym.Env):
             self._estimate, readings[:-1] * layout.reading_scale, held_action, ground, self._previous_ground
         )
         self._previous_ground = ground
-        self._observation[self._estimate_start : self._action_start] = self._estimate / layout.estimate_scale
+        self._observation[layout.estimate] = layout.scaled_estimate(self._estimate)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         k = self._k
@@ -212,14 +208,10 @@ class BuildingEnv(gym.Env):
         outputs = new[n_state:]
         self._k = k = k + 1
 
-        observation, block, last = self._observation, self._block, self._action_start
-        observation[block:last] = observation[: last - block]
-        observation[:block] = outputs[rows.readings]
+        observation = self._observation
+        self.layout.advance(observation[None], outputs[rows.readings][None], clipped[None])
         if self.kalman is not None:
             self._update_estimate(outputs[rows.readings], clipped)
-        m = clipped.size
-        observation[last + m :] = observation[last : observation.size - m]  # older actions, if kept
-        observation[last : last + m] = clipped
 
         terms = rows.reward_terms(outputs, clipped, self._previous_action)
         self._previous_action[:] = clipped

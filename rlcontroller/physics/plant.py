@@ -2,7 +2,8 @@
 
 From the experiment's building, actuators, sensors and simulation: the `Building` (M, K, C, Gamma,
 force limits), its control-step maps (cached per number of ground sub-steps), the sensor matrices
-(readings = C x + D u, with their scales, noise and bias) and the observation layout. The env
+(readings = C x + D u, with their scales, noise and bias) and the observation layout
+(`physics.observation`). The env
 simulates a plant; LQG, the Kalman filters, the residual prior and the optimal reference are
 designed on one; none of them rebuilds it.
 
@@ -48,7 +49,8 @@ from rlcontroller.physics.dynamics import (
 )
 from rlcontroller.physics.excitation import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
-from rlcontroller.physics.structure import Building, build
+from rlcontroller.physics.observation import observation_layout
+from rlcontroller.physics.structure import build
 
 
 @dataclass(frozen=True)
@@ -60,22 +62,6 @@ class SensorMatrices:
     scale: np.ndarray
     noise_std: np.ndarray
     bias: np.ndarray  # constant added to each reading (SI), zero without sensor faults
-
-
-@dataclass(frozen=True)
-class ObservationLayout:
-    """Where the newest readings, ground reading, state estimate and last action sit in an
-    observation, and the scales that turn them back into SI units."""
-
-    readings: slice
-    ground: int
-    estimate: slice  # empty without `sensors.state_estimate` or `sensors.integration_cutoff`
-    action: slice  # the newest action
-    actions: slice  # the last `sensors.action_history` actions, newest first
-    reading_scale: np.ndarray
-    ground_scale: float
-    estimate_scale: np.ndarray
-    size: int
 
 
 def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
@@ -101,35 +87,6 @@ def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
         dead = np.isin(floors_array, faults.dead_floors)
         c[dead], d[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0
     return SensorMatrices(c, d, np.concatenate(scales), noise, bias)
-
-
-def observation_layout(building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray):
-    """H blocks of (readings, ground reading), newest first, the state estimate or the integrated
-    readings if configured, then the last actions, newest first."""
-    n = building.n_floors
-    estimate_scale = np.zeros(0)
-    if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
-        channels = n_readings + 1
-        estimate_scale = np.repeat(
-            [sensors.velocity_scale, sensors.displacement_scale, sensors.velocity_scale], channels
-        )
-    if sensors.state_estimate:
-        estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
-        if sensors.ground_model:
-            estimate_scale = np.append(estimate_scale, GroundModel().state_scale(sensors.ground_scale))
-    estimate_start = sensors.history * (n_readings + 1)
-    action_start = estimate_start + estimate_scale.size
-    return ObservationLayout(
-        readings=slice(0, n_readings),
-        ground=n_readings,
-        estimate=slice(estimate_start, action_start),
-        action=slice(action_start, action_start + building.n_actuators),
-        actions=slice(action_start, action_start + sensors.action_history * building.n_actuators),
-        reading_scale=reading_scale,
-        ground_scale=sensors.ground_scale,
-        estimate_scale=estimate_scale,
-        size=action_start + sensors.action_history * building.n_actuators,
-    )
 
 
 def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:

@@ -63,7 +63,6 @@ class BuildingBatch:
         self.term_factors = np.ones((size, len(self.rows.reward_names)))  # `reward.per_motion`
         self.observations = np.zeros((size, layout.size), dtype=np.float32)
         self.previous_action = np.zeros((size, self.m))
-        self._block = layout.ground + 1
         self._n_outputs = self.rows.c.shape[0]
         self._state_size = plant.n_state  # S: every member's state is zero-padded to it
         self.states = np.zeros((size, plant.n_state + self.m))
@@ -135,9 +134,7 @@ class BuildingBatch:
         self.previous_action[member] = 0.0
         if self.supervisor is not None:
             self.supervisor.reset(member)
-        observation = self.observations[member]
-        observation[:] = 0.0
-        observation[: self._block] = readings[0]
+        self.layout.start(self.observations[member : member + 1], readings[:1])
         if self.kalman is not None:
             self.estimates[member] = 0.0
             self.previous_ground[member] = 0.0
@@ -167,7 +164,7 @@ class BuildingBatch:
         )
         self.estimates[members] = estimates
         self.previous_ground[members] = ground
-        self.observations[members, layout.estimate] = estimates / layout.estimate_scale
+        self.observations[members, layout.estimate] = layout.scaled_estimate(estimates)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply `actions` (N, m), clipped to [-1, 1]; returns the new observations (N, obs) float32 (a
@@ -183,14 +180,10 @@ class BuildingBatch:
         outputs = new[:, size:]
         self.k += 1
 
-        observations, block, last = self.observations, self._block, self.layout.action.start
-        observations[:, block:last] = observations[:, : last - block]
-        readings = outputs[:, self.rows.readings]
-        observations[:, :block] = readings
+        observations, readings = self.observations, outputs[:, self.rows.readings]
+        self.layout.advance(observations, readings, clipped)
         if self.kalman is not None:
             self._update_estimates(readings, clipped, slice(None))
-        observations[:, last + self.m :] = observations[:, last : self.layout.size - self.m]  # older actions
-        observations[:, last : last + self.m] = clipped
         terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
         self.previous_action[:] = clipped
         return observations, -(terms * self.term_factors).sum(axis=1), self.k == self.steps
