@@ -1,5 +1,6 @@
 """Validation references are the controllers as deployed: designed on the design model."""
 
+import numpy as np
 from conftest import REPOSITORY
 
 from rlcontroller.config import PlantConfig, load_experiment
@@ -22,5 +23,8 @@ def test_the_lqg_references_are_designed_on_the_design_model_and_run_on_the_plan
 def test_the_ground_model_reference_exists_with_actuator_delays_on_the_plant():
     experiment = load_experiment(REPOSITORY / "configs" / "smoke.yaml")
     delayed = Plant(experiment.model_copy(update={"plant": PlantConfig(actuators={"delay_steps": 1})}))
-    reference = Validator(delayed).reference
-    assert all(value == value for value in reference.values())  # no NaN: every design exists
+    reference, nominal = Validator(delayed).reference, Validator(Plant(experiment)).reference
+    assert set(reference) == set(nominal) and all(np.isfinite(value) for value in reference.values())
+    # every design exists, acts (J1 < 1) and is simulated with the delay: a delayed plant is harder to control
+    for design in ("lqg", "lqg_ground", "lqg_ground_model"):
+        assert nominal[f"{design}_J1"] < reference[f"{design}_J1"] < 1.0
