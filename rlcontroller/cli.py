@@ -280,7 +280,7 @@ def comparison(experiment: Experiment, run_dir: Path | None, model: str, records
 
 
 def print_summary(evaluation, out: Path) -> None:
-    from rlcontroller.evaluation.report import improvement_table, j1_by_pga, markdown_table, summary_table
+    from rlcontroller.evaluation.tables import improvement_table, j1_by_pga, markdown_table, summary_table
 
     typer.echo(f"# {evaluation.label}")
     for name, source in evaluation.sources.items():
@@ -415,9 +415,10 @@ def robustness(
     """Every controller on every scenario's plant and every record: how each copes with model error."""
     from rlcontroller.config import load_scenarios
     from rlcontroller.control.policy import read_policy
-    from rlcontroller.evaluation.report import markdown_table, write_robustness
+    from rlcontroller.evaluation.report import write_robustness
     from rlcontroller.evaluation.robustness import robustness as run_robustness
     from rlcontroller.evaluation.robustness import summary
+    from rlcontroller.evaluation.tables import markdown_table
     from rlcontroller.physics.plant import Plant
 
     folder = model_folder(run_dir)

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_experiment
-from rlcontroller.evaluation import report
+from rlcontroller.evaluation import report, tables
 from rlcontroller.learning.training import train
 
 
@@ -198,7 +198,7 @@ def test_the_same_inputs_give_byte_identical_j_tables(smoke_run, tmp_path, monke
 
 def test_markdown_table_rounds_percentages_to_one_decimal():
     frame = pd.DataFrame({"J1": [0.45678], "J1 reduction %": [54.3219]}, index=pd.Index(["RL"], name="controller"))
-    assert report.markdown_table(frame).splitlines() == [
+    assert tables.markdown_table(frame).splitlines() == [
         "| controller | J1 | J1 reduction % |",
         "|---|---|---|",
         "| RL | 0.457 | 54.3 |",
@@ -230,7 +230,7 @@ def test_equivalent_preview_reads_the_preview_curve_backwards():
 def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
     from rlcontroller.control.controllers import Uncontrolled
     from rlcontroller.evaluation.evaluation import evaluate
-    from rlcontroller.evaluation.report import j1_by_pga
+    from rlcontroller.evaluation.tables import j1_by_pga
     from rlcontroller.physics.excitation import STANDARD_GRAVITY, scale_to_pga
     from rlcontroller.physics.plant import Plant
     from rlcontroller.physics.records import synthetic_suite
