@@ -592,7 +592,7 @@ def export(
         raise ConfigError(f"--out {out}: expected a file path in an existing folder")
     warn_unchecked(folder, model)
     export_onnx(folder, model, out)
-    typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see README 'Deployment'")
+    typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md")
 
 
 @app.command()

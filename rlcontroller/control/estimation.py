@@ -14,9 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
-import control
 import numpy as np
 import scipy.linalg
+from scipy.linalg import solve_discrete_are
 
 from rlcontroller.physics.plant import Plant
 
@@ -74,7 +74,7 @@ class KalmanFilter:
 
 def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
     """Steady-state measurement-update gain L for x+ = phi x + w (cov process), y = c x + v (cov measurement)."""
-    prior, _, _ = control.dare(phi.T, c.T, process, measurement, method="scipy")
+    prior = solve_discrete_are(phi.T, c.T, process, measurement)
     return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
 
 

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
+from scipy.linalg import solve, solve_discrete_are
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.cost import reward_matrices
@@ -67,8 +67,10 @@ def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tu
     n = cost.state.T @ cost.action
     if np.linalg.matrix_rank(r) < r.shape[0]:
         raise ValueError("the reward does not penalise every actuator force (R is singular); add a force term")
-    gain, riccati, _ = control.dlqr(step.phi, step.force_gain * force_limits, q, r, n, method="scipy")
-    return np.asarray(gain), np.asarray(riccati)
+    b = step.force_gain * force_limits
+    riccati = solve_discrete_are(step.phi, b, q, r, s=n)
+    gain = solve(b.T @ riccati @ b + r, b.T @ riccati @ step.phi + n.T)
+    return gain, riccati
 
 
 def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, length: int) -> np.ndarray:

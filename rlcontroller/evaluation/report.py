@@ -15,7 +15,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
 
 from rlcontroller.evaluation.evaluation import OPTIMAL, Evaluation  # noqa: E402
 from rlcontroller.evaluation.tables import (  # noqa: E402
@@ -136,36 +135,33 @@ def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Pa
 
 
 def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
-    controllers = [c for c in evaluation.controllers if c != "uncontrolled"]
-    figure, axes = plt.subplots(4, len(controllers), figsize=(4.2 * len(controllers), 11), sharey="row", squeeze=False)
+    """J1-J4 per story (J3 per actuator), the mean over records, one line per controller."""
     frame = evaluation.metrics
-    for column, controller in enumerate(controllers):
-        for row, metric in enumerate(METRICS):
-            axis = axes[row, column]
-            chosen = frame[(frame["controller"] == controller) & (frame["metric"] == metric)]
-            table = chosen.pivot_table(index="index", columns="record", values="value", sort=False)
-            for record in table.columns:
-                axis.plot(
-                    table.index, table[record], color=COLOURS.get(controller, "tab:green"), alpha=0.35, linewidth=0.8
-                )
+    figure, axes = plt.subplots(1, 4, figsize=(16, 4.2))
+    for axis, metric in zip(axes, METRICS, strict=True):
+        chosen = frame[frame["metric"] == metric]
+        for controller in evaluation.controllers:
+            means = chosen[chosen["controller"] == controller].groupby("index", sort=True)["value"].mean()
             axis.plot(
-                table.index, table.mean(axis=1), color=COLOURS.get(controller, "tab:green"), linewidth=2.5, label="mean"
+                means.index,
+                means.values,
+                marker="o",
+                markersize=3,
+                color=COLOURS.get(controller, "tab:orange"),
+                linestyle=LINE_STYLES.get(controller, "-"),
+                linewidth=1.8 if controller == "RL" else 1.0,
+                label=controller,
             )
-            axis.set_xticks(table.index)
-            if metric == "J3":
-                axis.set_xticklabels([str(evaluation.experiment.actuators[i - 1].story) for i in table.index])
-            if metric != "J3":
-                axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
-            axis.grid(alpha=0.3)
-            if row == 0:
-                axis.set_title(controller)
-            if column == 0:
-                axis.set_ylabel(METRIC_NAMES[metric] + (" (C/UC)" if metric != "J3" else " (E_u / E_Vb,UC)"))
-            if row == 3 or metric == "J3":
-                axis.set_xlabel("story of the actuator" if metric == "J3" else "story")
-    legend = [Line2D([], [], color="0.4", alpha=0.5, linewidth=0.8), Line2D([], [], color="0.2", linewidth=2.5)]
-    axes[0, 0].legend(legend, ["one record", "mean over records"], loc="upper right", fontsize=8)
-    figure.suptitle(f"J1–J4 per story: thin lines one record each, bold the mean — {evaluation.label}", fontsize=11)
+            axis.set_xticks(means.index)
+        if metric == "J3":
+            axis.set_xticklabels([str(evaluation.experiment.actuators[i - 1].story) for i in axis.get_xticks()])
+        axis.set(
+            xlabel="story of the actuator" if metric == "J3" else "story",
+            title=METRIC_NAMES[metric] + (" (E_u / E_Vb,UC)" if metric == "J3" else " (C / UC)"),
+        )
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    figure.suptitle(f"J1–J4 per story, mean over records — {evaluation.label}", fontsize=11)
     figure.tight_layout()
     path = atomic_savefig(figure, out / "metrics_per_story.png")
     plt.close(figure)

@@ -14,7 +14,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import scipy.signal
 
 from rlcontroller.config import (
     MAX_DURATION,
@@ -262,6 +261,8 @@ def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: 
 def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str = "kanai_tajimi") -> GroundMotion:
     """Kanai-Tajimi filtered white noise, H(s) = (2 z w s + w^2) / (s^2 + 2 z w s + w^2), times a
     rise-plateau-decay envelope, scaled to a random PGA (m/s^2)."""
+    import scipy.signal  # here, not at import: it takes 0.6 s, and most commands generate no motion
+
     omega, zeta = _uniform(rng, config.ground_frequency), _uniform(rng, config.ground_damping)
     rise, strong, decay = (
         _uniform(rng, config.rise_time),
