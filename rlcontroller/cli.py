@@ -7,7 +7,8 @@ import importlib.metadata
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from enum import Enum
 from functools import wraps
 from pathlib import Path
@@ -24,7 +25,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     rich_markup_mode=None,
-    help="Reinforcement-learning active control of buildings.",
+    help="Reinforcement-learning active control of buildings under earthquakes. New here? Start with 'rlc demo'.",
 )
 
 USER_ERRORS = (ConfigError, MotionError)
@@ -56,6 +57,9 @@ def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
         except USER_ERRORS as error:
             typer.echo(f"error: {error}", err=True)
             raise typer.Exit(2) from None
+        except BrokenPipeError:  # `rlc info | head -3`: the reader has what it wanted
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            raise typer.Exit(0) from None
         except OSError as error:
             where = f"{error.filename}: " if error.filename else ""
             typer.echo(f"error: {where}{error.strerror or error}", err=True)
@@ -104,7 +108,7 @@ def load(config: Path | None) -> Experiment:
     return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config)
 
 
-@app.command()
+@app.command(short_help="An experiment resolved: building, periods, actuators.")
 @user_errors
 def info(
     config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
@@ -138,7 +142,7 @@ def info(
         )
 
 
-@app.command()
+@app.command(short_help="Train a controller on generated motions.")
 @user_errors
 def train(
     config: Annotated[
@@ -165,6 +169,11 @@ def train(
 
     if device not in ("cpu", "cuda", "auto"):
         raise ConfigError(f"--device: expected cpu, cuda or auto, got {device!r}")
+    if device == "cuda":
+        import torch
+
+        if not torch.cuda.is_available():
+            raise ConfigError("--device cuda: no CUDA GPU is visible to torch here; use --device cpu (or auto)")
     limit = None if time_limit is None else 60.0 * time_limit
     progress = show_progress(progress)
     if resume is not None:
@@ -189,19 +198,30 @@ def train(
     if summary.interrupted:
         raise typer.Exit(130)
     if not summary.time_limit_reached:
-        run_check(summary.run_dir, "best")
+        run_check(summary.run_dir, "best", progress=progress)
 
 
 def model_folder(run_dir: Path | None) -> Path:
     """The run folder given, or the committed default model."""
     folder = run_dir or DEFAULT_MODEL
+    if folder.is_file() and folder.suffix in (".yaml", ".yml"):
+        raise ConfigError(
+            f"{folder}: an experiment YAML, expected a run or model folder: train it first "
+            f"('rlc train {folder}'), or compare LQG on it with 'rlc compare lqg --config {folder}'"
+        )
     if not (folder / "config.yaml").is_file():
         hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
         raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
     return folder
 
 
-def run_check(folder: Path, model: str, standard: Path = SAFETY_STANDARD, scenarios: Path = STANDARD_SCENARIOS):
+def run_check(
+    folder: Path,
+    model: str,
+    standard: Path = SAFETY_STANDARD,
+    scenarios: Path = STANDARD_SCENARIOS,
+    progress: bool = False,
+):
     """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
@@ -216,7 +236,9 @@ def run_check(folder: Path, model: str, standard: Path = SAFETY_STANDARD, scenar
         f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated motions, "
         f"{checking.rest_runs} runs at rest, closed-loop stability..."
     )
-    verdict = safety_check(plant, policy, checking, load_scenarios(scenarios, experiment))
+    named = load_scenarios(scenarios, experiment)
+    with progress_bar(progress, "safety check", 3) as advance:
+        verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
     path = write_verdict(verdict, folder, model)
     for line in verdict.lines():
         typer.echo(line)
@@ -244,6 +266,35 @@ def show_progress(progress: bool | None) -> bool:
     return sys.stdout.isatty() if progress is None else progress
 
 
+@contextmanager
+def progress_bar(enabled: bool, description: str, total: int) -> Iterator[Callable[..., None]]:
+    """A bar on stderr while a long step runs (what it does, done/total, elapsed, time left), gone
+    when it ends; nothing when not `enabled`. Yields `advance(amount=1, label="")`."""
+    if not enabled:
+        yield lambda amount=1, label="": None
+        return
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    with Progress(
+        *columns, TextColumn("left"), TimeRemainingColumn(), console=Console(stderr=True), transient=True
+    ) as bar:
+        task = bar.add_task(description, total=total)
+
+        def advance(amount: int = 1, label: str = "") -> None:
+            bar.update(task, advance=amount, description=f"{description}: {label}" if label else description)
+
+        yield advance
+
+
 def output_folder(out: Path | None, default_name: str) -> Path:
     """`out`, or a new folder results/NAME-TIME (never an existing one, never a tracked folder)."""
     if out is not None:
@@ -267,7 +318,14 @@ def motion_suite(records: Path | None, scale_pga: float | None):
     return choose_motions(records, scale_pga)
 
 
-def comparison(experiment: Experiment, run_dir: Path | None, model: str, records: Path | None, scale_pga: float | None):
+def comparison(
+    experiment: Experiment,
+    run_dir: Path | None,
+    model: str,
+    records: Path | None,
+    scale_pga: float | None,
+    progress: bool = False,
+):
     """The plant, the motions and the evaluation of every controller (the run's policy if given)."""
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.evaluation import compare
@@ -276,7 +334,8 @@ def comparison(experiment: Experiment, run_dir: Path | None, model: str, records
     plant = Plant(experiment)
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     motions, label = motion_suite(records, scale_pga)
-    return plant, motions, compare(plant, motions, label, policy)
+    with progress_bar(progress, f"evaluating {len(motions)} motions", len(motions)) as advance:
+        return plant, motions, compare(plant, motions, label, policy, on_motions=advance)
 
 
 def print_summary(evaluation, out: Path) -> None:
@@ -290,10 +349,13 @@ def print_summary(evaluation, out: Path) -> None:
     if improvement is not None:
         typer.echo(markdown_table(improvement, digits=1))
     typer.echo(markdown_table(j1_by_pga(evaluation)))
-    typer.echo(f"evaluated {len(evaluation.records)} motions in {evaluation.seconds:.1f} s; tables and plots in {out}")
+    count = len(evaluation.records)
+    typer.echo(
+        f"evaluated {count} motion{'s' if count != 1 else ''} in {evaluation.seconds:.1f} s; tables and plots in {out}"
+    )
 
 
-@app.command()
+@app.command(short_help="A controller against LQG and no control on records.")
 @user_errors
 def evaluate(
     run_dir: Annotated[
@@ -303,6 +365,7 @@ def evaluate(
     out: OutOption = None,
     scale_pga: ScaleOption = None,
     model: ModelOption = "best",
+    progress: ProgressOption = None,
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
     from rlcontroller.evaluation.report import write_report
@@ -311,13 +374,14 @@ def evaluate(
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
     warn_unchecked(folder, model)
-    _, _, evaluation = comparison(load_experiment(folder / "config.yaml"), folder, model, records, scale_pga)
+    experiment = load_experiment(folder / "config.yaml")
+    _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, show_progress(progress))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     print_summary(evaluation, out)
 
 
-@app.command()
+@app.command(short_help="Start here: train, evaluate and check a small controller.")
 @user_errors
 def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
     """The main job end to end: train a small controller (configs/demo.yaml, about 30 s), evaluate it
@@ -327,7 +391,8 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
     from rlcontroller.physics.records import choose_motions
 
     choose_motions(records)  # a bad --records stops here, before training
-    summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=show_progress(progress))
+    progress = show_progress(progress)
+    summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=progress)
     typer.echo(summary.line())
     _, _, evaluation = comparison(
         load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
@@ -336,15 +401,15 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     print_summary(evaluation, out)
-    if not run_check(summary.run_dir, "best").passed:
+    if not run_check(summary.run_dir, "best", progress=progress).passed:
         typer.echo("this run's controller failed the safety check: docs/safety_check.md says what that means")
 
 
-compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers.")
+compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers: LQG with the same cost (rlc compare lqg).")
 app.add_typer(compare_app, name="compare")
 
 
-@compare_app.command("lqg")
+@compare_app.command("lqg", short_help="LQG with the same cost: its J tables and trade-off curve.")
 @user_errors
 def compare_lqg(
     run_dir: Annotated[
@@ -394,7 +459,7 @@ def compare_lqg(
             typer.echo((out / name).read_text())
 
 
-@app.command()
+@app.command(short_help="Every controller on plants that differ from the design.")
 @user_errors
 def robustness(
     run_dir: Annotated[
@@ -411,6 +476,7 @@ def robustness(
     out: OutOption = None,
     scale_pga: ScaleOption = None,
     model: ModelOption = "best",
+    progress: ProgressOption = None,
 ) -> None:
     """Every controller on every scenario's plant and every record: how each copes with model error."""
     from rlcontroller.config import load_scenarios
@@ -428,7 +494,8 @@ def robustness(
     out = output_folder(out, f"robustness-{folder.resolve().name}")
     check_new_folder(out)
     motions, label = motion_suite(records, scale_pga)
-    table, seconds = run_robustness(experiment, named, motions, label, policy)
+    with progress_bar(show_progress(progress), f"{len(named)} scenarios", len(named)) as advance:
+        table, seconds = run_robustness(experiment, named, motions, label, policy, lambda name: advance(1, name))
     with new_folder(out) as staging:
         write_robustness(table, named, staging, label, seconds)
     typer.echo(f"# {label}")
@@ -441,7 +508,7 @@ class Engine(str, Enum):
     dask = "dask"
 
 
-@app.command()
+@app.command(short_help="Search hyperparameters with Optuna.")
 @user_errors
 def tune(
     config: Annotated[Path, typer.Argument(help="Experiment YAML whose algorithm part has a 'search' space.")],
@@ -467,7 +534,7 @@ def tune(
     typer.echo(f"{ran} trials run here; study {name!r}: trials.csv, best.yaml and plots in {folder}")
 
 
-@app.command()
+@app.command(short_help="Train and evaluate seeds x settings, then aggregate.")
 @user_errors
 def sweep(
     config: Annotated[Path, typer.Argument(help="Experiment YAML.")],
@@ -519,7 +586,7 @@ def sweep(
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(short_help="Statistics over runs: mean, IQM, bootstrap intervals.")
 @user_errors
 def aggregate(
     runs: Annotated[list[Path], typer.Argument(help="Run folders (with evaluation/) or evaluation folders.")],
@@ -543,7 +610,7 @@ def aggregate(
         typer.echo(f"aggregate.csv, aggregate.md and aggregate.png in {out}")
 
 
-@app.command()
+@app.command(short_help="The shipped controllers and their safety verdicts.")
 @user_errors
 def models() -> None:
     """The shipped controllers: learner, training steps, safety verdict; the default is marked."""
@@ -566,7 +633,7 @@ class ExportFormat(str, Enum):
     onnx = "onnx"
 
 
-@app.command()
+@app.command(short_help="The controller as one ONNX file.")
 @user_errors
 def export(
     run_dir: Annotated[
@@ -595,7 +662,7 @@ def export(
     typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md")
 
 
-@app.command()
+@app.command(short_help="The safety check: never worse than no control.")
 @user_errors
 def check(
     run_dir: Annotated[
@@ -610,16 +677,17 @@ def check(
         Path,
         typer.Option(help="Plants for the stability report.", show_default="configs/scenarios/standard.yaml"),
     ] = STANDARD_SCENARIOS,
+    progress: ProgressOption = None,
 ) -> None:
     """The safety check a controller passes before it is shipped: never worse than no control on a
     broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
     the folder; exit code 1 when it fails."""
     folder = model_folder(run_dir)
-    if not run_check(folder, model, standard, scenarios).passed:
+    if not run_check(folder, model, standard, scenarios, show_progress(progress)).passed:
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(short_help="Convert an old run's stable-baselines3 zips to policy data.")
 @user_errors
 def convert(
     run_dir: Annotated[Path, typer.Argument(help="Run folder with best_model.zip / final_model.zip.")],

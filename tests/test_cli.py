@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from conftest import REPOSITORY
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
@@ -136,3 +137,40 @@ def test_compare_lqg_takes_a_run_or_a_config_not_both(tmp_path):
     model = DEFAULT_MODEL
     result = CliRunner().invoke(app, ["compare", "lqg", str(model), "--config", str(model / "config.yaml")])
     assert result.exit_code == 2 and "either a run folder or --config" in result.output
+
+
+@pytest.mark.slow
+def test_a_long_command_shows_its_progress_at_a_terminal_and_nothing_when_captured(tmp_path):
+    scenarios = tmp_path / "two.yaml"
+    scenarios.write_text("scenarios:\n  - {name: nominal}\n  - {name: softer, plant: {stiffness: 0.8}}\n")
+    arguments = ["robustness", "--scenarios", str(scenarios)]
+    code, output = run_at_a_terminal([*arguments, "--out", str(tmp_path / "pty")], tmp_path, timeout_s=240)
+    assert code == 0 and "2 scenarios" in output and "━" in output and "/2" in output, output
+    captured = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", *arguments, "--out", str(tmp_path / "captured")],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert captured.returncode == 0 and "━" not in captured.stdout + captured.stderr
+
+
+def test_top_level_help_cuts_nothing_and_says_where_to_start():
+    result = CliRunner().invoke(app, ["--help"], terminal_width=80)
+    commands = result.output.split("Commands:")[1].strip().splitlines()
+    assert result.exit_code == 0 and "…" not in result.output and len(commands) == 13
+    assert not any(line.endswith("...") for line in commands) and "Start with 'rlc demo'" in result.output
+
+
+def test_an_experiment_yaml_given_as_a_run_folder_says_what_to_do(tmp_path):
+    config = REPOSITORY / "configs" / "five_story.yaml"
+    result = CliRunner().invoke(app, ["evaluate", str(config), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2 and "an experiment YAML, expected a run or model folder" in result.output
+    assert f"rlc compare lqg --config {config}" in result.output
+
+
+def test_output_cut_short_by_the_reader_is_no_error():
+    head = subprocess.run(
+        f"{sys.executable} -m rlcontroller info | head -1", shell=True, capture_output=True, text=True, check=False
+    )
+    assert head.stdout == "# resolved configuration\n" and "error" not in head.stderr

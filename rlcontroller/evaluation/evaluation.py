@@ -9,6 +9,7 @@ order); the clairvoyant optimal controller is the reference no causal controller
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -86,14 +87,17 @@ def evaluate(
     controllers: list[Controller],
     label: str,
     include_optimal: bool = True,
+    on_motions: Callable[[int], None] | None = None,
 ) -> Evaluation:
-    """Run the uncontrolled building, every controller and (optionally) the optimal reference."""
+    """Run the uncontrolled building, every controller and (optionally) the optimal reference;
+    `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
     start = time.perf_counter()
     yielding = plant.yielding
     include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant, simulated)
-    controlled = batch_rollout(plant, simulated, controllers, seeds=[content_seed(motion) for motion in motions])
+    seeds = [content_seed(motion) for motion in motions]
+    controlled = batch_rollout(plant, simulated, controllers, seeds=seeds, on_motions=on_motions)
     optimal = optimal_responses(plant, simulated) if include_optimal else []
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
@@ -121,7 +125,11 @@ def evaluate(
 
 
 def compare(
-    plant: Plant, motions: list[GroundMotion], label: str, policy: PolicyController | None = None
+    plant: Plant,
+    motions: list[GroundMotion],
+    label: str,
+    policy: PolicyController | None = None,
+    on_motions: Callable[[int], None] | None = None,
 ) -> Evaluation:
     """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), the
     saved `policy` (if given) and the optimal reference, on every motion. The LQGs are designed on
@@ -135,7 +143,7 @@ def compare(
     if policy is not None:
         controllers.append(policy)
         sources[policy.name] = f"{display_path(Path(policy.source))} ({policy.steps:,} training steps)"
-    evaluation = evaluate(plant, motions, controllers, label)
+    evaluation = evaluate(plant, motions, controllers, label, on_motions=on_motions)
     evaluation.sources.update(sources)
     return evaluation
 

@@ -15,6 +15,7 @@ taken against the uncontrolled *plant*.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import pandas as pd
 
@@ -39,8 +40,10 @@ def robustness(
     motions: list[GroundMotion],
     label: str,
     policy: PolicyController | None = None,
+    on_scenario: Callable[[str], None] | None = None,
 ) -> tuple[pd.DataFrame, float]:
-    """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken."""
+    """J1-J4 in long form (scenario, controller, record, metric, index, value) and the seconds taken;
+    `on_scenario(name)` is called as each scenario is done (a progress bar)."""
     start = time.perf_counter()
     model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
     designed: list[Controller] = [  # designed once, without knowing the plant
@@ -60,6 +63,8 @@ def robustness(
         controllers = [*designed, oracle, *robust, *learned]
         result = evaluate(plant, motions, controllers, label, include_optimal=False)
         frames.append(result.metrics.assign(scenario=scenario.name))
+        if on_scenario is not None:
+            on_scenario(scenario.name)
     table = pd.concat(frames, ignore_index=True)
     columns = ["scenario", "controller", "record", "metric", "index", "value"]
     return table[columns], time.perf_counter() - start

@@ -19,6 +19,7 @@ The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the po
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -67,16 +68,26 @@ def drift_bounds(plant: Plant, standard: SafetyCheckConfig) -> np.ndarray:
 
 
 def safety_check(
-    plant: Plant, controller: Controller, standard: SafetyCheckConfig, scenarios: list[Scenario]
+    plant: Plant,
+    controller: Controller,
+    standard: SafetyCheckConfig,
+    scenarios: list[Scenario],
+    on_criterion: Callable[[str], None] | None = None,
 ) -> Verdict:
-    """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`."""
+    """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`;
+    `on_criterion(name)` is called as each criterion is judged (a progress bar)."""
     bounds = drift_bounds(plant, standard)
-    criteria = {
-        "check suite": suite_criterion(plant, controller, standard, bounds),
-        "at rest": rest_criterion(plant, controller, standard, bounds),
+    judges = {
+        "check suite": lambda: suite_criterion(plant, controller, standard, bounds),
+        "at rest": lambda: rest_criterion(plant, controller, standard, bounds),
     }
     if isinstance(controller, PolicyController):
-        criteria["closed-loop stability"] = stability_criterion(plant, controller, scenarios)
+        judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios)
+    criteria = {}
+    for name, judge in judges.items():
+        criteria[name] = judge()
+        if on_criterion is not None:
+            on_criterion(name)
     passed = all(item["passed"] for item in criteria.values())
     return Verdict(controller.name, passed, criteria)
 

@@ -14,6 +14,8 @@ its outputs are not used.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from gymnasium.utils import seeding
 from numpy.lib.stride_tricks import sliding_window_view
@@ -234,11 +236,13 @@ def batch_rollout(
     controllers: list[Controller],
     seeds: list[int] | None = None,
     randomize: bool = False,
+    on_motions: Callable[[int], None] | None = None,
 ) -> list[list[tuple[Response, float]]]:
     """Run every controller on every motion (motion i with its noise, and with `randomize` its plant,
     drawn from seeds[i], default i, the same for every controller): the (response, total reward) that
     `rollout` gives on each motion in turn, computed in batches of motions of similar length, all
-    controllers stepping together; one list per controller."""
+    controllers stepping together; one list per controller. `on_motions(count)` is called as each
+    batch of `count` motions is done (a progress bar)."""
     if not controllers:
         return []
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
@@ -256,6 +260,8 @@ def batch_rollout(
         for c, runs in enumerate(responses):
             for index, response in zip(chunk, runs, strict=True):
                 results[c][index] = response
+        if on_motions is not None:
+            on_motions(len(chunk))
     return results
 
 
