@@ -21,6 +21,6 @@ def _folder(name: str) -> Path:
 CONFIGS = _folder("configs")
 MODELS = _folder("models")
 DEFAULT_MODEL = MODELS / "five_story_every_story"  # the rule: models/README.md
-DEMO_CONFIG = CONFIGS / "demo.yaml"
+DEMO_CONFIG = CONFIGS / "experiments" / "demo.yaml"
 STANDARD_SCENARIOS = CONFIGS / "scenarios" / "standard.yaml"
 SAFETY_STANDARD = CONFIGS / "checks" / "standard.yaml"

@@ -183,7 +183,7 @@ def train(
     else:
         if config is None:
             raise ConfigError(
-                "rlc train: expected an experiment YAML (e.g. configs/demo.yaml; configs/README.md lists them) "
+                "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; configs/README.md lists them) "
                 "or --resume RUN"
             )
         experiment = load_experiment(config)
@@ -384,7 +384,7 @@ def evaluate(
 @app.command(short_help="Start here: train, evaluate and check a small controller.")
 @user_errors
 def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
-    """The main job end to end: train a small controller (configs/demo.yaml, about 30 s), evaluate it
+    """The main job end to end: train a small controller (configs/experiments/demo.yaml, about 30 s), evaluate it
     against LQG and the uncontrolled building, and run the safety check on it."""
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.learning.training import train as run_training

@@ -1,6 +1,6 @@
 """Diagnostic: can a fixed linear map of the model-free observation control as well as LQG?
 
-Usage: python scripts/linear_clone.py [--config configs/five_story_model_free.yaml] [--motions 96] [--seed 777]
+Usage: python scripts/linear_clone.py [--config configs/experiments/five_story_model_free.yaml] [--motions 96] [--seed 777]
                                       [--records ../shared/records]
 
 LQG + measured ground (designed on the design model; the teacher) runs on `--motions` training
@@ -57,7 +57,9 @@ def teacher_data(plant: Plant, teacher: LQGController, count: int, seed: int) ->
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", type=Path, default=REPOSITORY / "configs" / "five_story_model_free.yaml")
+    parser.add_argument(
+        "--config", type=Path, default=REPOSITORY / "configs" / "experiments" / "five_story_model_free.yaml"
+    )
     parser.add_argument("--motions", type=int, default=96)
     parser.add_argument("--seed", type=int, default=777)
     parser.add_argument("--ridge", type=float, default=1e-3)

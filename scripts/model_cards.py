@@ -35,13 +35,13 @@ ABOUT = {
         "(off until the ground reading reaches 0.25 m/s^2, full authority from 1 m/s^2; only forces that take "
         "energy out of the building), a linear odd correction on LQG + ground model found by random search "
         "with LQG's own cost. Shipped as the default: it passes the safety check with the lowest mean J1.",
-        "configs/five_story_every_story.yaml",
+        "configs/experiments/five_story_every_story.yaml",
         "104-164 s per seed",
     ),
     "five_story_every_story_robust": (
         "The same controller trained and selected on randomised plants (stiffness, mass, damping, actuator "
         "lag and delay, sensor noise). Shipped as the controller for buildings whose properties are uncertain.",
-        "configs/five_story_every_story_robust.yaml",
+        "configs/experiments/five_story_every_story_robust.yaml",
         "199-269 s per seed",
     ),
 }

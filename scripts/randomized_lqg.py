@@ -1,6 +1,6 @@
 """The three LQGs, designed on the design model, on generated motions each run on its own random plant.
 
-Usage: python scripts/randomized_lqg.py [--config configs/five_story_robust.yaml] [--count 200] [--seed 20000]
+Usage: python scripts/randomized_lqg.py [--config configs/experiments/five_story_robust.yaml] [--count 200] [--seed 20000]
 
 The motions are `count` draws of the experiment's validation generator with seed `seed`; motion i
 runs on a plant drawn from the experiment's `plant_randomization` with seed i, noise included, as
@@ -47,7 +47,9 @@ def randomized_lqg(experiment: Experiment, count: int, seed: int) -> tuple[list[
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", type=Path, default=REPOSITORY / "configs" / "five_story_robust.yaml")
+    parser.add_argument(
+        "--config", type=Path, default=REPOSITORY / "configs" / "experiments" / "five_story_robust.yaml"
+    )
     parser.add_argument("--count", type=int, default=200)
     parser.add_argument("--seed", type=int, default=20_000)
     arguments = parser.parse_args()

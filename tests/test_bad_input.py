@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 
-SMOKE = REPOSITORY / "configs" / "smoke.yaml"
+SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
 DAMPING = "building:\n  damping: {{matrix: {matrix}}}\n"
 ZEROS = [[0.0] * 5 for _ in range(5)]
 
@@ -217,7 +217,14 @@ STUDY_CASES = {
     "address_without_dask": (["sweep", str(SMOKE), "--address", "tcp://h:1"], "--address: only with --engine dask"),
     "tune_without_space": (["tune", str(SMOKE), "--trials", "2"], "search: empty"),
     "tune_bad_storage": (
-        ["tune", str(REPOSITORY / "configs" / "five_story.yaml"), "--trials", "2", "--storage", "nonsense://x"],
+        [
+            "tune",
+            str(REPOSITORY / "configs" / "experiments" / "five_story.yaml"),
+            "--trials",
+            "2",
+            "--storage",
+            "nonsense://x",
+        ],
         "--storage nonsense://x",
     ),
     "aggregate_not_evaluated": (["aggregate", str(REPOSITORY / "configs")], "no evaluation/metrics.csv"),

@@ -163,7 +163,7 @@ def test_top_level_help_cuts_nothing_and_says_where_to_start():
 
 
 def test_an_experiment_yaml_given_as_a_run_folder_says_what_to_do(tmp_path):
-    config = REPOSITORY / "configs" / "five_story.yaml"
+    config = REPOSITORY / "configs" / "experiments" / "five_story.yaml"
     result = CliRunner().invoke(app, ["evaluate", str(config), "--out", str(tmp_path / "out")])
     assert result.exit_code == 2 and "an experiment YAML, expected a run or model folder" in result.output
     assert f"rlc compare lqg --config {config}" in result.output

@@ -21,7 +21,10 @@ def cost_to_go(step, cost, gain, limits, start: np.ndarray, steps: int = 20_000)
 
 
 def test_the_riccati_solution_is_the_summed_cost_of_the_closed_loop_and_the_least():
-    for experiment in (Experiment(), load_experiment(REPOSITORY / "configs" / "five_story_every_story.yaml")):
+    for experiment in (
+        Experiment(),
+        load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_every_story.yaml"),
+    ):
         plant = Plant(experiment)
         step, limits = plant.step_map(1), plant.force_limits
         cost = quadratic_cost(plant, experiment.reward, step)

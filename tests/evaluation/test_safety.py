@@ -86,3 +86,20 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
     assert read_verdict(folder, "best") is False
     warned = CliRunner().invoke(app, ["export", str(folder), "--out", str(tmp_path / "c.onnx")])
     assert warned.exit_code == 0 and "FAILED the safety check" in warned.output
+
+
+@pytest.mark.slow
+def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
+    """`rlc demo`'s experiment: every story actuated behind the standard supervisor, a residual on
+    LQG + ground model; its trained policy passes the whole standard check."""
+    from rlcontroller.config import load_experiment, load_scenarios
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.learning.training import train
+
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "demo.yaml")
+    summary = train(experiment, run_dir=tmp_path / "demo")
+    plant = Plant(experiment)
+    policy = read_policy(summary.run_dir, "best", plant)
+    scenarios = load_scenarios(REPOSITORY / "configs" / "scenarios" / "standard.yaml", experiment)
+    verdict = safety_check(plant, policy, load_safety_check(STANDARD), scenarios)
+    assert verdict.passed, verdict.lines()

@@ -43,7 +43,7 @@ def test_gymnasium_make_builds_the_paper_case_or_a_config():
     env = gym.make(ENV_ID)
     assert env.observation_space.shape == (5 * 5 + 5 + 3,)
     assert env.action_space.shape == (3,)
-    env = gym.make(ENV_ID, config=REPOSITORY / "configs" / "five_story.yaml")
+    env = gym.make(ENV_ID, config=REPOSITORY / "configs" / "experiments" / "five_story.yaml")
     assert env.unwrapped.building.n_floors == 5
 
 

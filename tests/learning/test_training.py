@@ -21,7 +21,7 @@ from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 
-SMOKE = REPOSITORY / "configs" / "smoke.yaml"
+SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
 
 
 def smoke(**algorithm):
@@ -361,7 +361,7 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
 
     monkeypatch.setattr(run_folder, "KEPT_CHECKPOINTS", 100)
     monkeypatch.setattr(training, "Validator", ScriptedValidator)
-    experiment = load_experiment(REPOSITORY / "configs" / "tiny.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": select_by}
     experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
     summary = train(experiment, run_dir=tmp_path / "run", device="cpu")

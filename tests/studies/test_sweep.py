@@ -14,7 +14,7 @@ from conftest import REPOSITORY
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.studies.sweep import parse_seeds, parse_setting, plan, sweep
 
-TINY = yaml.safe_load((REPOSITORY / "configs" / "tiny.yaml").read_text())  # a run of a few seconds
+TINY = yaml.safe_load((REPOSITORY / "configs" / "experiments" / "tiny.yaml").read_text())  # a run of a few seconds
 
 
 def test_seeds_and_settings_parse_as_a_user_writes_them():

@@ -16,7 +16,7 @@ from optuna.trial import TrialState
 from rlcontroller.config import Experiment, SearchRange
 from rlcontroller.studies.tuning import storage, suggest
 
-TINY = yaml.safe_load((REPOSITORY / "configs" / "tiny.yaml").read_text())  # a run of a few seconds
+TINY = yaml.safe_load((REPOSITORY / "configs" / "experiments" / "tiny.yaml").read_text())  # a run of a few seconds
 SEARCH = {
     "algorithm.kwargs.learning_rate": {"low": 1.0e-5, "high": 1.0e-2, "log": True},
     "algorithm.kwargs.gamma": {"low": 0.9, "high": 0.999},
