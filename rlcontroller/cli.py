@@ -183,8 +183,8 @@ def train(
     else:
         if config is None:
             raise ConfigError(
-                "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; configs/README.md lists them) "
-                "or --resume RUN"
+                "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; configs/README.md "
+                "lists them) or --resume RUN"
             )
         experiment = load_experiment(config)
         overrides = {"algorithm.total_steps": total_steps, "seed": seed}
