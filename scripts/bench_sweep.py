@@ -3,9 +3,9 @@
 Usage: python scripts/bench_sweep.py [--runs 8] [--workers 2]
 
 The same sweep of tiny runs (configs/experiments/tiny.yaml: PPO, 256 steps; evaluated on the
-synthetic suite) on each engine, in a new folder each time. The overhead per run is the worker time not spent inside runs, (wall time x
-workers - sum of the runs' own times) / runs: engine start-up, fresh worker processes importing
-torch and stable-baselines3, scheduling, and the final aggregate.
+synthetic suite) on each engine, in a new folder each time. The overhead per run is the worker time
+not spent inside runs, (wall time x workers - sum of the runs' own times) / runs: engine start-up,
+fresh worker processes importing torch and stable-baselines3, scheduling, and the final aggregate.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Diagnostic: can a fixed linear map of the model-free observation control as well as LQG?
 
-Usage: python scripts/linear_clone.py [--config configs/experiments/five_story_model_free.yaml] [--motions 96] [--seed 777]
-                                      [--records ../shared/records]
+Usage: python scripts/linear_clone.py [--config configs/experiments/five_story_model_free.yaml]
+                                      [--motions 96] [--seed 777] [--records ../shared/records]
 
 LQG + measured ground (designed on the design model; the teacher) runs on `--motions` training
 motions (the experiment's generator, its own seed); a linear map W (no bias, so odd) from the

@@ -1,6 +1,7 @@
 """The three LQGs, designed on the design model, on generated motions each run on its own random plant.
 
-Usage: python scripts/randomized_lqg.py [--config configs/experiments/five_story_robust.yaml] [--count 200] [--seed 20000]
+Usage: python scripts/randomized_lqg.py [--config configs/experiments/five_story_robust.yaml]
+                                        [--count 200] [--seed 20000]
 
 The motions are `count` draws of the experiment's validation generator with seed `seed`; motion i
 runs on a plant drawn from the experiment's `plant_randomization` with seed i, noise included, as
