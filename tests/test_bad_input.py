@@ -203,7 +203,10 @@ def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     (tmp_path / "s.yaml").write_text("scenarios: [{name: soft, plant: {stiffness: 0.7, colour: red}}]\n")
     line = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "s.yaml"]))
-    assert line == "error: s.yaml: scenarios[0].plant.colour: unknown key"
+    assert line == (
+        "error: s.yaml: scenarios[0].plant.colour: unknown key; "
+        "expected one of: stiffness, mass, damping, damage, actuators, sensors, hysteresis"
+    )
     missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
     assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()
 
@@ -239,3 +242,22 @@ def test_bad_study_and_export_arguments_stop_before_any_work(tmp_path, arguments
     )
     assert expected in one_error_line(result)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("building: {mases: [1.0e4]}\n", "building.mases: unknown key; did you mean 'masses'?"),
+        ("actuators: [{story: 1, limit: 3}]\n", "actuators[0].limit: unknown key; did you mean 'force_limit'?"),
+        (
+            "excitation: {generator: {kind: kanai_tajimi, pgaa: [1, 2]}}\n",
+            "generator.pgaa: unknown key; did you mean 'pga'?",
+        ),
+        ("nam: x\n", "nam: unknown key; did you mean 'name'?"),
+    ],
+)
+def test_a_misspelt_key_gets_the_closest_known_one(tmp_path, text, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    line = one_error_line(CliRunner().invoke(app, ["info", str(path)]))
+    assert line.startswith(f"error: {path}") and line.endswith(expected)

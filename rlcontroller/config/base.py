@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from types import UnionType
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import yaml
 from pydantic import (
@@ -150,15 +152,53 @@ def _short(value: Any, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def first_error(error: ValidationError, file: str, prefix: str) -> ConfigError:
+def first_error(error: ValidationError, file: str, prefix: str, model: Any = None) -> ConfigError:
+    """The first problem of a validation as one line; for an unknown key of `model` (the type that was
+    validated), the closest known key or the list of them."""
     detail = error.errors(include_url=False)[0]
     key = format_location(tuple(detail["loc"]), prefix)
     message = detail["msg"].removeprefix("Value error, ")
     if detail["type"] == "extra_forbidden":
-        message = "unknown key"
+        message = "unknown key" + _known_keys_hint(str(detail["loc"][-1]), _keys_at(model, tuple(detail["loc"][:-1])))
     elif detail["type"] != "value_error" and not isinstance(detail.get("input"), dict | type(None)):
         message += f" (got {_short(detail['input'])})"
     return ConfigError(f"{file}: {key}: {message}")
+
+
+def _known_keys_hint(key: str, known: list[str]) -> str:
+    if not known:
+        return ""
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else f"; expected one of: {', '.join(known)}"
+
+
+def _unwrap(annotation: Any) -> Any:
+    """The type inside Annotated[...] and Optional[...]."""
+    while get_origin(annotation) is Annotated:
+        annotation = get_args(annotation)[0]
+    members = [member for member in get_args(annotation) if member is not type(None)]
+    if get_origin(annotation) in (Union, UnionType) and len(members) == 1:
+        return _unwrap(members[0])
+    return annotation
+
+
+def _keys_at(model: Any, location: tuple[Any, ...]) -> list[str]:
+    """The keys the mapping at `location` inside `model` takes (empty when that cannot be told)."""
+    current = model
+    for item in location:
+        current = _unwrap(current)
+        if get_origin(current) is list and isinstance(item, int):
+            current = get_args(current)[0]
+        elif get_origin(current) in (Union, UnionType):  # a generator: the location names its kind
+            kinds = [m for m in get_args(current) if isinstance(m, type) and "kind" in getattr(m, "model_fields", {})]
+            chosen = [m for m in kinds if m.model_fields["kind"].default == item]
+            current = chosen[0] if chosen else None
+        elif isinstance(current, type) and issubclass(current, BaseModel) and item in current.model_fields:
+            current = current.model_fields[item].annotation
+        else:
+            return []
+    current = _unwrap(current)
+    return list(current.model_fields) if isinstance(current, type) and issubclass(current, BaseModel) else []
 
 
 def _depth(value: Any) -> int:

@@ -126,11 +126,11 @@ def build_experiment(
             try:
                 TypeAdapter(model).validate_python(raw[part])
             except ValidationError as error:
-                raise first_error(error, part_file, prefix) from None
+                raise first_error(error, part_file, prefix, model) from None
     try:
         experiment = Experiment.model_validate(raw)
     except ValidationError as error:
-        raise first_error(error, file, "") from None
+        raise first_error(error, file, "", Experiment) from None
     experiment._origins.update({part: origins.get(part, (file, part)) for part in PARTS})
     _check_cross_references(experiment)
     return experiment

@@ -45,7 +45,7 @@ def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
     try:
         scenarios = ScenarioFile.model_validate(raw).scenarios
     except ValidationError as error:
-        raise first_error(error, str(path), "") from None
+        raise first_error(error, str(path), "", ScenarioFile) from None
     for index, scenario in enumerate(scenarios):
         if scenario.plant is not None:
             check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
@@ -76,4 +76,4 @@ def load_safety_check(path: str | Path) -> SafetyCheckConfig:
     try:
         return SafetyCheckConfig.model_validate(raw)
     except ValidationError as error:
-        raise first_error(error, str(path), "") from None
+        raise first_error(error, str(path), "", SafetyCheckConfig) from None

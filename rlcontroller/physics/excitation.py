@@ -28,7 +28,9 @@ from rlcontroller.config import (
 )
 
 STANDARD_GRAVITY = 9.80665  # m/s^2
-UNITS_TO_SI = {"g": STANDARD_GRAVITY, "m/s2": 1.0, "m/s^2": 1.0, "cm/s2": 0.01, "cm/s^2": 0.01, "gal": 0.01}
+UNITS_TO_SI = {"g": STANDARD_GRAVITY, "gal": 0.01}  # and the common spellings of m/s^2 and cm/s^2:
+UNITS_TO_SI |= {f"m{per}": 1.0 for per in ("/s2", "/s^2", "/s²", "/s/s", "_s2", "ps2")}
+UNITS_TO_SI |= {f"cm{per}": 0.01 for per in ("/s2", "/s^2", "/s²", "/s/s", "_s2", "ps2")}
 
 
 class MotionError(ValueError):
@@ -128,7 +130,8 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
     """Read a two-column CSV (time in s, acceleration) with a header row.
 
     The unit is `unit` or taken from the second header, e.g. 'acceleration [g]', 'acc_m/s2';
-    known units: g, m/s2, cm/s2 (gal). Unevenly spaced times are interpolated to their median step.
+    known units: g, m/s2 and cm/s2 (gal), also written /s^2, /s², /s/s, _s2 or ps2. Unevenly spaced
+    times are interpolated to their median step.
     """
     path = Path(path)
     try:

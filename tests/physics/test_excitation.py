@@ -100,7 +100,17 @@ def test_truncated_header(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("header", "factor"), [("acceleration [g]", STANDARD_GRAVITY), ("acc_m/s2", 1.0), ("a (cm/s2)", 0.01)]
+    ("header", "factor"),
+    [
+        ("acceleration [g]", STANDARD_GRAVITY),
+        ("acc_m/s2", 1.0),
+        ("a (cm/s2)", 0.01),
+        ("acc_cm_s2", 0.01),
+        ("accel_m_s2", 1.0),
+        ("a [cm/s/s]", 0.01),
+        ("a (m/s²)", 1.0),
+        ("a_gal", 0.01),
+    ],
 )
 def test_csv_units(tmp_path, header, factor):
     path = write(tmp_path / "m.csv", f"time,{header}\n0.0,0.0\n0.01,1.0\n0.02,-2.0\n")
