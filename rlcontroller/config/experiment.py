@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
 from typing import Annotated, Any
@@ -287,8 +288,10 @@ def check_algorithm(experiment: Experiment) -> None:
         if key in RESERVED_KWARGS:
             raise ConfigError(f"{where}: set by rlc (use 'policy:', 'seed' or --device instead)")
         if key not in accepted:
-            options = ", ".join(sorted(accepted - RESERVED_KWARGS))
-            raise ConfigError(f"{where}: not a keyword argument of {algorithm.name}; expected one of: {options}")
+            options = sorted(accepted - RESERVED_KWARGS)
+            close = difflib.get_close_matches(key, options, n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]!r}?" if close else f"expected one of: {', '.join(options)}"
+            raise ConfigError(f"{where}: not a keyword argument of {algorithm.name}; {hint}")
         if isinstance(value, float) and not math.isfinite(value):
             raise ConfigError(f"{where}: expected a finite number, got {value!r}")
         if key in NUMERIC_KWARGS and not _in_range(value, *NUMERIC_KWARGS[key]):

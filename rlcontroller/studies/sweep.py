@@ -100,7 +100,8 @@ def plan(experiment: Experiment, seeds: list[int], settings: list[tuple[str, lis
         group = ",".join(f"{key.split('.')[-1]}={_short(value)}" for key, value in chosen.items())
         for seed in seeds:
             overrides = chosen | {"seed": seed}
-            resolved = with_overrides(experiment, overrides, f"--set {group or 'seed'}")
+            given = ",".join(f"{key}={_short(value)}" for key, value in chosen.items())
+            resolved = with_overrides(experiment, overrides, f"--set {given}" if given else "--seeds")
             folder = (out / _folder_name(group) if group else out) / f"seed{seed}"
             runs.append(SweepRun(folder, seed, chosen, group or experiment.name, resolved.to_yaml()))
     return runs

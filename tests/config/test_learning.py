@@ -24,6 +24,10 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(name):
     ("algorithm", "message"),
     [
         ({"name": "PPO", "kwargs": {"buffer_size": 10}}, "algorithm.kwargs.buffer_size: not a keyword argument of PPO"),
+        (
+            {"name": "PPO", "kwargs": {"gama": 0.9}},
+            "algorithm.kwargs.gama: not a keyword argument of PPO; did you mean 'gamma'?",
+        ),
         ({"name": "SAC", "kwargs": {"gamma": 1.5}}, "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
         ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
