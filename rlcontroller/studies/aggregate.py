@@ -32,6 +32,13 @@ def metrics_file(run: Path) -> Path:
     for candidate in (run / "evaluation" / "metrics.csv", run / "metrics.csv", run / "robustness.csv"):
         if candidate.is_file():
             return candidate
+    inner = sorted(folder.name for folder in run.glob("*/") if any(folder.glob("**/metrics.csv")))
+    if inner:
+        raise ConfigError(
+            f"{run}: a folder of runs ({', '.join(inner[:4])}...); give the runs: 'rlc aggregate {run}/*/'"
+        )
+    if not (run / "config.yaml").is_file():
+        raise ConfigError(f"{run}: not a run folder nor an evaluation or robustness folder (no metrics.csv)")
     raise ConfigError(
         f"{run}: no evaluation/metrics.csv; evaluate it first with 'rlc evaluate {run} --out {run}/evaluation'"
     )

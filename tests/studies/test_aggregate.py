@@ -115,3 +115,19 @@ def test_robustness_results_aggregate_per_scenario_and_over_all_scenarios(tmp_pa
     assert frame.loc["soft", "mean"] == pytest.approx(0.865)
     assert frame.loc["all scenarios", "mean"] == pytest.approx(0.665)
     assert frame.loc["all scenarios", "std"] == pytest.approx(np.std([0.615, 0.715], ddof=1))
+
+
+def test_a_folder_of_runs_or_of_nothing_is_refused_with_the_way_out(tmp_path):
+    from typer.testing import CliRunner
+
+    from rlcontroller.cli import app
+
+    (tmp_path / "sweep" / "seed0" / "evaluation").mkdir(parents=True)
+    (tmp_path / "sweep" / "seed0" / "evaluation" / "metrics.csv").write_text("")
+    (tmp_path / "empty").mkdir()
+    for folder, expected in (
+        ("sweep", "a folder of runs (seed0); give the runs: 'rlc aggregate"),
+        ("empty", "no metrics.csv"),
+    ):
+        result = CliRunner().invoke(app, ["aggregate", str(tmp_path / folder), "--out", str(tmp_path / "out")])
+        assert result.exit_code == 2 and expected in result.output and "rlc evaluate" not in result.output
