@@ -34,9 +34,8 @@ def metrics_file(run: Path) -> Path:
             return candidate
     inner = sorted(folder.name for folder in run.glob("*/") if any(folder.glob("**/metrics.csv")))
     if inner:
-        raise ConfigError(
-            f"{run}: a folder of runs ({', '.join(inner[:4])}...); give the runs: 'rlc aggregate {run}/*/'"
-        )
+        names = ", ".join(inner[:4]) + (", ..." if len(inner) > 4 else "")
+        raise ConfigError(f"{run}: a folder of runs ({names}); give the runs: 'rlc aggregate {run}/*/'")
     if not (run / "config.yaml").is_file():
         raise ConfigError(f"{run}: not a run folder nor an evaluation or robustness folder (no metrics.csv)")
     raise ConfigError(
