@@ -339,12 +339,13 @@ def comparison(
 
 
 def print_summary(evaluation, out: Path) -> None:
-    from rlcontroller.evaluation.tables import improvement_table, j1_by_pga, markdown_table, summary_table
+    from rlcontroller.evaluation.tables import LEGEND, improvement_table, j1_by_pga, markdown_table, summary_table
 
     typer.echo(f"# {evaluation.label}")
     for name, source in evaluation.sources.items():
         typer.echo(f"{name}: {source}")
     typer.echo(markdown_table(summary_table(evaluation)))
+    typer.echo(LEGEND)
     improvement = improvement_table(evaluation)
     if improvement is not None:
         typer.echo(markdown_table(improvement, digits=1))

@@ -19,6 +19,7 @@ import pandas as pd  # noqa: E402
 from rlcontroller.evaluation.evaluation import OPTIMAL, Evaluation  # noqa: E402
 from rlcontroller.evaluation.tables import (  # noqa: E402
     FAIRNESS,
+    LEGEND,
     METRIC_NAMES,
     improvement_table,
     j1_by_pga,
@@ -53,7 +54,7 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     text = [f"# Summary: {evaluation.label}", ""]
     text += [f"Experiment: {evaluation.experiment.name} (seed {evaluation.experiment.seed})."]
     text += [f"Evaluated {name}: {source}." for name, source in evaluation.sources.items()]
-    text += ["", f"Mean over records and stories (J3: over actuators). {FAIRNESS}", ""]
+    text += ["", f"{LEGEND} {FAIRNESS}", ""]
     text += [markdown_table(summary), ""]
     if improvement is not None:
         text += [markdown_table(improvement, digits=1), ""]

@@ -21,6 +21,11 @@ METRIC_NAMES = {
 }
 
 
+LEGEND = (
+    "J1 peak inter-story drift, J2 peak absolute floor acceleration, J3 energy of the actuator force over "
+    "that of the uncontrolled base shear, J4 peak story shear: each controlled over uncontrolled on the same "
+    "record, the mean over stories (J3: actuators) and records; lower is better."
+)
 FAIRNESS = (
     "LQG is designed on the quadratic part of the RL reward (same weights and scales), with a Kalman "
     "filter on the same noisy floor accelerations, and runs in the same simulator with the same force limits."

@@ -63,6 +63,8 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
     assert "RL better than LQG (%)" in summary and f"7 records from {records}" in summary
     assert f"Evaluated RL: {smoke_run / 'best_policy.yaml'} (" in summary and "training steps)" in summary
     assert "RL better than LQG" in result.output
+    assert "J1 peak inter-story drift, J2 peak absolute floor acceleration" in summary
+    assert "J3 energy of the actuator force over that of the uncontrolled base shear" in result.output
     reductions = [line for line in summary.splitlines() if line.startswith("| LQG |")][0].split("|")[2:-1]
     assert [len(cell.strip().split(".")[1]) for cell in reductions] == [3, 3, 3, 3, 1, 1, 1]
 
