@@ -179,6 +179,7 @@ def train(
     if resume is not None:
         if config is not None or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
+        typer.echo(resume_line(resume))
         summary = run_training(resume=resume, device=device, progress_bar=progress, time_limit_s=limit)
     else:
         if config is None:
@@ -199,6 +200,20 @@ def train(
         raise typer.Exit(130)
     if not summary.time_limit_reached:
         run_check(summary.run_dir, "best", progress=progress)
+
+
+def resume_line(run: Path) -> str:
+    """Where a resumed run continues from: its newest complete checkpoint, or the start."""
+    from rlcontroller.learning.run_folder import RunFolder
+
+    if not (run / "config.yaml").is_file():
+        return f"resuming {run}"
+    total = load_experiment(run / "config.yaml").algorithm.total_steps
+    checkpoints = RunFolder(run).checkpoints()
+    step = int(checkpoints[-1].name.removeprefix("step_")) if checkpoints else 0
+    return f"resuming {run} at step {step:,} of {total:,}" + (
+        "" if checkpoints else " (no checkpoint yet: from the start)"
+    )
 
 
 def model_folder(run_dir: Path | None) -> Path:

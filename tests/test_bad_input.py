@@ -230,7 +230,7 @@ STUDY_CASES = {
         ],
         "--storage nonsense://x",
     ),
-    "aggregate_not_evaluated": (["aggregate", str(REPOSITORY / "configs")], "no evaluation/metrics.csv"),
+    "aggregate_not_evaluated": (["aggregate", str(REPOSITORY / "configs")], "no metrics.csv"),
     "export_not_a_run": (["export", str(REPOSITORY / "configs")], "not a run folder"),
 }
 

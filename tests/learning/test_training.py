@@ -92,7 +92,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     config = yaml.safe_load(SMOKE.read_text())
     config.update(
         {
-            key: f"{REPOSITORY}/configs/{value}"
+            key: f"{REPOSITORY}/configs/experiments/{value}"
             for key, value in config.items()
             if isinstance(value, str) and value.endswith(".yaml")
         }
@@ -113,6 +113,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     assert steps_at_kill < 2000
     result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
     assert result.exit_code == 0, result.output
+    assert result.output.startswith(f"resuming {run} at step {steps_at_kill:,} of 2,000\n")
     assert "trained: 2000 steps" in result.output
     steps = [int(r["steps"]) for r in curve(run)]
     assert steps == list(range(250, 2001, 250))  # continuous: no gap, no duplicate
