@@ -188,12 +188,14 @@ def _plots(study, out: Path, complete: int) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
     from optuna.visualization import matplotlib as optuna_plots
 
     written = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # Optuna marks its matplotlib plots experimental
         axes = optuna_plots.plot_optimization_history(study, target_name="validation J1")
+        axes.xaxis.set_major_locator(MaxNLocator(integer=True))  # trial numbers, never 1.5
         written.append(atomic_savefig(axes.figure, out / "optimization_history.png"))
         plt.close(axes.figure)
         if complete >= 2 and study.best_trial.params:
@@ -201,6 +203,8 @@ def _plots(study, out: Path, complete: int) -> list[Path]:
                 axes = optuna_plots.plot_param_importances(study)
             except (RuntimeError, ValueError):  # too few distinct trials for importances
                 return written
+            axes.figure.set_size_inches(9, 1.5 + 0.45 * len(study.best_trial.params))
+            axes.figure.tight_layout()  # room for the dotted parameter names on the left
             written.append(atomic_savefig(axes.figure, out / "param_importances.png"))
             plt.close(axes.figure)
     return written
