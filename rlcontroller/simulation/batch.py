@@ -270,9 +270,9 @@ def _rollout_chunk(
 ) -> list[list[tuple[Response, float]]]:
     count = len(motions)
     batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
-    for c in range(len(controllers)):
-        for i, (motion, seed) in enumerate(zip(motions, seeds, strict=True)):
-            batch.start(c * count + i, seeding.np_random(seed)[0], motion)
+    for member in reversed(range(batch.size)):  # the longest motion first: the batch is sized once
+        motion = member % count
+        batch.start(member, seeding.np_random(seeds[motion])[0], motions[motion])
     n_steps = int(batch.steps.max())
     states = np.zeros((n_steps + 1, batch.size, batch.plant_states().shape[1]))
     commands = np.zeros((n_steps + 1, batch.size, batch.m))
