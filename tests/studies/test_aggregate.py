@@ -88,7 +88,7 @@ def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
         [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")], capture_output=True, text=True
     )
     assert (
-        missing.returncode == 2 and "no evaluation/metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
+        missing.returncode == 2 and "no metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
     )
 
 
