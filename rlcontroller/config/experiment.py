@@ -104,7 +104,10 @@ def load_experiment(path: str | Path) -> Experiment:
         if isinstance(value, str):
             part_path = (path.parent / value).resolve()
             if not part_path.exists():
-                raise ConfigError(f"{path}: {part}: file not found: {value} (relative to {path.parent})")
+                raise ConfigError(
+                    f"{path}: {part}: file not found: {value} (relative to {path.parent}); a part's path is "
+                    "relative to the experiment file: copy the parts along with it, or give absolute paths"
+                )
             raw[part] = read_yaml(part_path)
             origins[part] = (display_path(part_path), "")
             _check_part_type(part, raw[part], display_path(part_path))

@@ -93,7 +93,7 @@ def test_errors_in_a_part_file_name_that_file(tmp_path):
     path = write(tmp_path, "building: building.yaml\nactuators: [{story: 1}]\n")
     with pytest.raises(ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than or equal"):
         load_experiment(path)
-    with pytest.raises(ConfigError, match="building: file not found: nowhere.yaml"):
+    with pytest.raises(ConfigError, match="building: file not found: nowhere.yaml .*copy the parts along with it"):
         load_experiment(write(tmp_path, "building: nowhere.yaml\n"))
 
 
