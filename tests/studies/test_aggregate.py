@@ -87,9 +87,7 @@ def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
     missing = subprocess.run(
         [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")], capture_output=True, text=True
     )
-    assert (
-        missing.returncode == 2 and "no metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
-    )
+    assert missing.returncode == 2 and "no metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
 
 
 def test_robustness_results_aggregate_per_scenario_and_over_all_scenarios(tmp_path):
