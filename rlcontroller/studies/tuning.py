@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import os
 import socket
+import sys
 import warnings
 from pathlib import Path
 from typing import Any
@@ -146,6 +147,8 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
     def after_trial(study, trial) -> None:
         fail_dead_trials(study)
         write_outputs(study, experiment, out)
+        result = f"validation J1 {trial.value:.3f}" if trial.value is not None else trial.state.name.lower()
+        print(f"trial {trial.number}: {result}; {counted(study)} of {trials} trials done", file=sys.stderr, flush=True)
         recent = [t.state for t in study.get_trials(deepcopy=False) if t.number in mine[-FAILURES_IN_A_ROW:]]
         if counted(study) >= trials or (len(recent) == FAILURES_IN_A_ROW and set(recent) == {TrialState.FAIL}):
             study.stop()

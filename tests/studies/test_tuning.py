@@ -2,6 +2,7 @@
 trial is marked failed and the study still reaches its count, and the outputs are written."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -64,6 +65,7 @@ def test_two_workers_on_one_study_run_exactly_the_trials_asked(tmp_path):
     ]
     outputs = [worker.communicate(timeout=600) for worker in workers]
     assert [worker.returncode for worker in workers] == [0, 0], outputs
+    assert all(re.search(r"trial \d+: .*; \d+ of 6 trials done", stderr) for _, stderr in outputs)  # progress
     trials = study_trials(out)
     finished = [t for t in trials if t.state in (TrialState.COMPLETE, TrialState.PRUNED)]
     assert len(finished) == 6 and not [t for t in trials if t.state == TrialState.RUNNING]
