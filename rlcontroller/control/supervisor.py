@@ -34,7 +34,7 @@ class Supervisor:
         if config.dissipative:
             start = layout.estimate.start + n  # the estimate is [x; v (; ground filter)], scaled
             self.velocity = slice(start, start + n)
-            self.story_velocity = plant.building.actuator_matrix  # v @ Γ: each actuator's stroke velocity
+            self.actuator_matrix = plant.building.actuator_matrix  # Γ: v @ Γ is each actuator's stroke velocity
         self.peak_ground = np.zeros(size)
 
     def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
@@ -52,7 +52,7 @@ class Supervisor:
     def __call__(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
         actions = np.asarray(actions, dtype=float)
         if self.velocity is not None:
-            stroke_velocity = observations[:, self.velocity] @ self.story_velocity  # scaled: the sign is what counts
+            stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled: the sign is what counts
             actions = np.where(actions * stroke_velocity > 0.0, 0.0, actions)
         if self.trigger is not None:
             actions = actions * self.gain(observations)[:, None]
