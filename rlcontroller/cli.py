@@ -162,6 +162,14 @@ def train(
         ),
     ] = None,
     progress: ProgressOption = None,
+    tensorboard: Annotated[
+        bool,
+        typer.Option(
+            "--tensorboard",
+            help="Also log to RUN/tensorboard (stable-baselines3's logger and the validation J1/J2 with the LQG "
+            "references); follow with 'tensorboard --logdir runs'. Needs rlcontroller[tensorboard].",
+        ),
+    ] = False,
 ) -> None:
     """Train a controller (SAC, PPO, TD3, DDPG, A2C or random search) on generated ground motions;
     checkpoints resume."""
@@ -180,7 +188,9 @@ def train(
         if config is not None or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
         typer.echo(resume_line(resume))
-        summary = run_training(resume=resume, device=device, progress_bar=progress, time_limit_s=limit)
+        summary = run_training(
+            resume=resume, device=device, progress_bar=progress, time_limit_s=limit, tensorboard=tensorboard
+        )
     else:
         if config is None:
             raise ConfigError(
@@ -192,7 +202,14 @@ def train(
         given = {key: value for key, value in overrides.items() if value is not None}
         if given:
             experiment = with_overrides(experiment, given, "--total-steps/--seed")
-        summary = run_training(experiment, run_dir=run_dir, device=device, progress_bar=progress, time_limit_s=limit)
+        summary = run_training(
+            experiment,
+            run_dir=run_dir,
+            device=device,
+            progress_bar=progress,
+            time_limit_s=limit,
+            tensorboard=tensorboard,
+        )
     typer.echo(summary.line())
     if summary.interrupted or summary.time_limit_reached:
         typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
@@ -237,7 +254,8 @@ def run_check(
     scenarios: Path = STANDARD_SCENARIOS,
     progress: bool = False,
 ):
-    """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml."""
+    """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml
+    there, or for a shipped model (whose files stay as shipped) in a new folder under results/."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.safety import safety_check, write_verdict
@@ -254,7 +272,11 @@ def run_check(
     named = load_scenarios(scenarios, experiment)
     with progress_bar(progress, "safety check", 3) as advance:
         verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
-    path = write_verdict(verdict, folder, model)
+    target = folder
+    if folder.resolve().is_relative_to(MODELS.resolve()):
+        target = output_folder(None, f"check-{folder.name}")
+        target.mkdir(parents=True)
+    path = write_verdict(verdict, target, model)
     for line in verdict.lines():
         typer.echo(line)
     typer.echo(f"verdict in {path}")
@@ -609,6 +631,7 @@ def aggregate(
     out: Annotated[
         Path | None, typer.Option(help="New folder for aggregate.csv/.md/.png (default: print only).")
     ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Per controller and metric over runs: mean, std, interquartile mean, 95 % stratified-bootstrap intervals."""
     from rlcontroller.studies.aggregate import aggregate as statistics
@@ -616,7 +639,10 @@ def aggregate(
 
     if out is not None:
         check_new_folder(out)
-    table = statistics(scores(runs))
+    table = scores(runs)
+    groups = table.groupby([c for c in ("group", "controller", "metric") if c in table.columns]).ngroups
+    with progress_bar(show_progress(progress), "bootstrap intervals", groups) as advance:
+        table = statistics(table, advance=advance)
     title = f"{len(runs)} runs: mean over records and stories, statistics over runs"
     if out is not None:
         with new_folder(out) as staging:
@@ -697,7 +723,7 @@ def check(
 ) -> None:
     """The safety check a controller passes before it is shipped: never worse than no control on a
     broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
-    the folder; exit code 1 when it fails."""
+    the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
     folder = model_folder(run_dir)
     if not run_check(folder, model, standard, scenarios, show_progress(progress)).passed:
         raise typer.Exit(1)

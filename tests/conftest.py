@@ -1,4 +1,10 @@
 import os
+import pty
+import re
+import select
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -36,3 +42,42 @@ def sdof(mass: float, stiffness: float, damping: float, force_limit: float = 1.0
 
     config = BuildingConfig(masses=[mass], stiffnesses=[stiffness], damping={"matrix": [[damping]]})
     return build(config, [ActuatorConfig(story=1, force_limit=force_limit)])
+
+
+ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+
+
+def run_at_a_terminal(arguments: list[str], cwd: Path, timeout_s: float = 300.0) -> tuple[int, str]:
+    """Run `python -m rlcontroller ARGUMENTS` with a pseudo-terminal as stdin, stdout and stderr,
+    as a user's shell does; return the exit code and everything it printed (colours removed)."""
+    primary, secondary = pty.openpty()
+    environment = {**os.environ, "COLUMNS": "100", "LINES": "40", "TERM": "xterm-256color"}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rlcontroller", *arguments],
+        stdin=secondary,
+        stdout=secondary,
+        stderr=secondary,
+        cwd=cwd,
+        env=environment,
+        close_fds=True,
+    )
+    os.close(secondary)
+    chunks, deadline = [], time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([primary], [], [], 1.0)
+        if ready:
+            try:
+                data = os.read(primary, 65536)
+            except OSError:  # the terminal closed: the program ended
+                break
+            if not data:
+                break
+            chunks.append(data)
+        elif process.poll() is not None:
+            break
+    else:
+        process.kill()
+        raise AssertionError(f"rlc {' '.join(arguments)} did not finish in {timeout_s} s")
+    os.close(primary)
+    code = process.wait(timeout=30)
+    return code, ANSI.sub("", b"".join(chunks).decode(errors="replace"))

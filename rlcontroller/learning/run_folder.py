@@ -15,7 +15,7 @@ A run folder holds:
     best_policy.yaml/.npz  the same policies as data (`control.policy`): what evaluate, check and
     final_policy.yaml/.npz export read, never unpickling
     best_check.yaml        the safety check's verdict on the best policy (`rlc train`, `evaluation.safety`)
-    learning_curve.png     written at the end; tensorboard/ when tensorboard is installed
+    learning_curve.png     written at the end; tensorboard/ with `rlc train --tensorboard`
 """
 
 from __future__ import annotations

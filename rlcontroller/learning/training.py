@@ -89,6 +89,10 @@ def _callback(
             row["episode_reward"] = float(np.mean(episodes)) if episodes else float("nan")
             row.update(result)
             run.append_curve(row)
+            for key, value in row.items():  # TensorBoard's scalars when it is on; dropped otherwise
+                if key not in ("steps", "wall_time_s"):
+                    self.logger.record(f"validation/{key.removeprefix('eval_')}", value)
+            self.logger.dump(self.num_timesteps)
             if on_validation is not None and not on_validation(row):
                 state.stopped_by_validation = self.keep_going = False
             best = state.best
@@ -156,16 +160,22 @@ def train(
     progress_bar: bool = False,
     time_limit_s: float | None = None,
     on_validation: Callable[[dict[str, float]], bool] | None = None,
+    tensorboard: bool = False,
 ) -> TrainingSummary:
     """Train a new run (from `experiment`) or resume one (`resume` = its run folder).
 
     With `time_limit_s`, training stops (as finished, and resumable) once this call has trained
     that long; a new run that fails before its first checkpoint leaves no run folder.
     `on_validation(row)` sees each learning-curve row as it is logged; returning False stops
-    training the same way (a tuner's pruner).
+    training the same way (a tuner's pruner). With `tensorboard`, stable-baselines3's logger also
+    writes TensorBoard event files to RUN/tensorboard, the validation row included.
     """
     import torch
 
+    if tensorboard and importlib.util.find_spec("tensorboard") is None:
+        raise ConfigError(
+            "--tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
+        )
     if resume is not None:
         run = RunFolder(resume)
         if not (resume / "config.yaml").is_file():
@@ -180,7 +190,7 @@ def train(
     vec_env = make_vec_env(plant, experiment.seed)
     created = False
     try:
-        model, state = _start(run, experiment, vec_env, device, resume is not None)
+        model, state = _start(run, experiment, vec_env, device, resume is not None, tensorboard)
         created = resume is None
         policy_controller(model, None)  # a policy that cannot be saved as data stops before training
         stop = StopRequest()
@@ -220,18 +230,21 @@ def train(
     )
 
 
-def _start(run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool) -> tuple[Any, TrainingState]:
+def _start(
+    run: RunFolder, experiment: Experiment, vec_env, device: str, resume: bool, tensorboard: bool
+) -> tuple[Any, TrainingState]:
     """The model and training state: from the newest checkpoint when resuming, else new (and the
     run folder is created, recording the device the model is on)."""
+    log = run.path / "tensorboard" if tensorboard else None
     checkpoints = run.checkpoints()
     if resume and checkpoints:
         model = _load_checkpoint(experiment, checkpoints, vec_env, device)
+        model.tensorboard_log = str(log) if log else None  # this invocation's choice, not the saved one
         state = _read_state(checkpoints)
         run.truncate_curve(model.num_timesteps)
         return model, state
     state = TrainingState()
-    tensorboard = run.path / "tensorboard" if importlib.util.find_spec("tensorboard") else None
-    model = build_model(experiment, vec_env, experiment.seed, device, tensorboard)
+    model = build_model(experiment, vec_env, experiment.seed, device, log)
     if resume:
         run.truncate_curve(0)
     else:

@@ -12,6 +12,7 @@ the runs' mean scores.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -94,9 +95,11 @@ def stratified_bootstrap(matrix: np.ndarray, rng: np.random.Generator, reps: int
     }
 
 
-def aggregate(table: pd.DataFrame, seed: int = 0, reps: int = BOOTSTRAP_REPS) -> pd.DataFrame:
+def aggregate(
+    table: pd.DataFrame, seed: int = 0, reps: int = BOOTSTRAP_REPS, advance: Callable[[], None] | None = None
+) -> pd.DataFrame:
     """Per group (if a `group` column), controller and metric: runs, mean, std over runs, IQM, and
-    their 95 % stratified-bootstrap intervals."""
+    their 95 % stratified-bootstrap intervals. `advance()` is called after each of them (a progress bar)."""
     keys = (["group"] if "group" in table.columns else []) + ["controller", "metric"]
     rng = np.random.default_rng(seed)
     rows = []
@@ -111,6 +114,8 @@ def aggregate(table: pd.DataFrame, seed: int = 0, reps: int = BOOTSTRAP_REPS) ->
             "iqm": interquartile_mean(matrix),
         }
         rows.append(row | stratified_bootstrap(matrix, rng, reps))
+        if advance is not None:
+            advance()
     frame = pd.DataFrame(rows)
     order = [m for m in METRICS if m in set(frame["metric"])] + sorted(set(frame["metric"]) - set(METRICS))
     frame["metric"] = pd.Categorical(frame["metric"], order, ordered=True)

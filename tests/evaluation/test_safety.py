@@ -103,3 +103,21 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     scenarios = load_scenarios(REPOSITORY / "configs" / "scenarios" / "standard.yaml", experiment)
     verdict = safety_check(plant, policy, load_safety_check(STANDARD), scenarios)
     assert verdict.passed, verdict.lines()
+
+
+def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypatch):
+    import yaml
+
+    from rlcontroller.assets import DEFAULT_MODEL
+
+    shipped = (DEFAULT_MODEL / "best_check.yaml").read_bytes()
+    quick = tmp_path / "quick_standard.yaml"
+    standard = yaml.safe_load((REPOSITORY / "configs" / "checks" / "standard.yaml").read_text())
+    quick.write_text(yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0}))
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["check", "--standard", str(quick)])
+    assert result.exit_code == 0, result.output
+    (written,) = (tmp_path / "results").glob("check-five_story_every_story-*/best_check.yaml")
+    assert f"verdict in {written.relative_to(tmp_path)}" in result.output
+    assert yaml.safe_load(written.read_text())["passed"] is True
+    assert (DEFAULT_MODEL / "best_check.yaml").read_bytes() == shipped

@@ -371,3 +371,44 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
     saved = PPO.load(tmp_path / "run" / "checkpoints" / f"step_{best_steps:010d}" / "model.zip", device="cpu")
     for ours, theirs in zip(best.policy.parameters(), saved.policy.parameters(), strict=True):
         assert ours.detach().equal(theirs.detach())
+
+
+def tensorboard_scalars(run: Path) -> dict[str, list[tuple[int, float]]]:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    scalars: dict[str, list[tuple[int, float]]] = {}
+    for folder in sorted((run / "tensorboard").iterdir()):
+        events = EventAccumulator(str(folder))
+        events.Reload()
+        for tag in events.Tags()["scalars"]:
+            scalars.setdefault(tag, []).extend((e.step, e.value) for e in events.Scalars(tag))
+    return scalars
+
+
+@pytest.mark.slow
+def test_tensorboard_gets_the_validation_row_and_a_resume_continues_it(tmp_path):
+    pytest.importorskip("tensorboard")
+    run = tmp_path / "run"
+    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0, tensorboard=True)
+    train(resume=run, tensorboard=True)
+    scalars = tensorboard_scalars(run)
+    rows = curve(run)
+    for tag, column in (("validation/J1", "eval_J1"), ("validation/J2", "eval_J2"), ("validation/lqg_J1", "lqg_J1")):
+        assert [step for step, _ in scalars[tag]] == [int(row["steps"]) for row in rows]
+        assert [value for _, value in scalars[tag]] == pytest.approx([float(row[column]) for row in rows], rel=1e-6)
+    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "off"), "--total-steps", "300"])
+    assert result.exit_code == 0, result.output
+    assert not (tmp_path / "off" / "tensorboard").exists()  # off unless asked for
+
+
+def test_tensorboard_without_the_package_is_one_line(tmp_path, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "tensorboard" else real(name, *a))
+    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--tensorboard"])
+    assert result.exit_code == 2
+    assert result.output.strip() == (
+        "error: --tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
+    )
+    assert not (tmp_path / "run").exists()

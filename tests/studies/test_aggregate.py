@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import run_at_a_terminal
 
 from rlcontroller.config import ConfigError
 from rlcontroller.studies.aggregate import aggregate, interquartile_mean, scores, stratified_bootstrap
@@ -129,3 +130,10 @@ def test_a_folder_of_runs_or_of_nothing_is_refused_with_the_way_out(tmp_path):
     ):
         result = CliRunner().invoke(app, ["aggregate", str(tmp_path / folder), "--out", str(tmp_path / "out")])
         assert result.exit_code == 2 and expected in result.output and "rlc evaluate" not in result.output
+
+
+@pytest.mark.slow
+def test_aggregate_shows_its_bootstrap_progress_at_a_terminal(tmp_path):
+    runs = [write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.05 * s, 0.6]}) for s in range(3)]
+    code, output = run_at_a_terminal(["aggregate", *map(str, runs)], tmp_path, timeout_s=120)
+    assert code == 0 and "bootstrap intervals" in output and "━" in output, output
