@@ -46,7 +46,7 @@ CONFIG_CASES = {
     "damping_nan": (DAMPING.format(matrix=matrix({(2, 2): ".nan"})), "building.damping.matrix[2][2]: Input should be"),
     "actuator_twice": ("actuators: [{story: 1}, {story: 3}, {story: 1}]\n", "actuators: story 1 is listed twice"),
     "force_limit_inf": ("actuators: [{story: 1, force_limit: .inf}]\n", "actuators[0].force_limit: Input should be a"),
-    "no_actuators": ("actuators: []\n", "actuators: List should have at least 1 item"),
+    "no_actuators": ("actuators: []\n", "actuators: no actuators and no devices: expected at least one"),
     "history_1e9": ("sensors: {history: 1000000000}\n", "sensors.history: Input should be less than or equal to 500"),
     "floors_empty": (
         "sensors:\n  measurements: [{quantity: drift, floors: [], scale: 1}]\n",
@@ -132,7 +132,7 @@ def test_an_empty_actuator_list_in_its_own_file_blames_that_file(tmp_path):
     (tmp_path / "actuators.yaml").write_text("[]\n")
     (tmp_path / "bad.yaml").write_text("actuators: actuators.yaml\n")
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
-    assert "actuators.yaml: (top level): List should have at least 1 item" in line and "bad.yaml" not in line
+    assert "actuators.yaml: no actuators and no devices: expected at least one" in line and "bad.yaml" not in line
 
 
 @pytest.mark.parametrize(

@@ -63,13 +63,17 @@ from rlcontroller.config.base import (  # noqa: F401
     unique,
 )
 from rlcontroller.config.building import (  # noqa: F401
+    ActiveMassConfig,
     ActuatorConfig,
     Actuators,
     BuildingConfig,
     DampingConfig,
+    DeviceConfig,
+    Devices,
     MeasurementConfig,
     RayleighPair,
     SensorConfig,
+    TunedMassConfig,
     paper_actuators,
 )
 from rlcontroller.config.control import (  # noqa: F401

@@ -100,7 +100,8 @@ Quantity = Literal[
     "absolute_acceleration",  # absolute floor acceleration (m/s^2), one per floor
     "story_shear",  # story shear V_i = sum_{j>=i} m_j a_j (N), one per story
     "base_shear",  # V_1 (N)
-    "force",  # actuator force (N), one per actuator
+    "force",  # actuator force (N), one per commanded device (actuators, then active masses)
+    "stroke",  # an auxiliary mass' displacement relative to its floor (m), one per mass device
 ]
 
 

@@ -109,7 +109,39 @@ def _one_per_story(actuators: list[ActuatorConfig]) -> list[ActuatorConfig]:
     return actuators
 
 
-Actuators = Annotated[list[ActuatorConfig], Field(min_length=1), AfterValidator(_one_per_story)]
+Actuators = Annotated[list[ActuatorConfig], AfterValidator(_one_per_story)]  # may be empty when there are devices
+
+
+class TunedMassConfig(StrictModel):
+    """A passive tuned mass damper: an auxiliary mass on `floor`, joined to it by a spring and a
+    dashpot; its stroke is its displacement relative to the floor (m).
+
+    `mass_ratio` is its mass over the modal mass of the target `mode` (shape scaled to 1 at
+    `floor`). `frequency_ratio` (its frequency over the mode's) and `damping_ratio` default to
+    Warburton's optimum for an undamped primary under base acceleration, `tuning` random (white
+    noise, least mean-square displacement) or harmonic (least peak of the frequency response)."""
+
+    type: Literal["tuned_mass"]
+    floor: PositiveInt
+    mass_ratio: Annotated[float, Field(gt=0.0, le=0.5)]
+    mode: PositiveInt = 1
+    tuning: Literal["random", "harmonic"] = "random"
+    frequency_ratio: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
+    damping_ratio: Annotated[float, Field(ge=0.0, lt=1.0)] | None = None
+    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)] | None = None  # m, reported against
+
+
+class ActiveMassConfig(TunedMassConfig):
+    """An active mass driver (active tuned mass damper): a tuned mass with an actuator between the
+    floor and the mass, commanded like an actuator, with a force limit (N) and a stroke limit (m)."""
+
+    type: Literal["active_mass"]  # type: ignore[assignment]
+    force_limit: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
+    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)]  # type: ignore[assignment]
+
+
+DeviceConfig = Annotated[TunedMassConfig | ActiveMassConfig, Field(discriminator="type")]
+Devices = Annotated[list[DeviceConfig], Field(max_length=MAX_FLOORS)]
 
 
 def paper_actuators() -> list[ActuatorConfig]:

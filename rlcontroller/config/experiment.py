@@ -25,7 +25,7 @@ from rlcontroller.config.base import (
     location,
     read_yaml,
 )
-from rlcontroller.config.building import Actuators, BuildingConfig, SensorConfig, paper_actuators
+from rlcontroller.config.building import Actuators, BuildingConfig, Devices, SensorConfig, paper_actuators
 from rlcontroller.config.control import RewardConfig, SupervisorConfig
 from rlcontroller.config.excitation import ExcitationConfig
 from rlcontroller.config.learning import (
@@ -45,6 +45,7 @@ from rlcontroller.config.plant import (
 PARTS: dict[str, Any] = {
     "building": BuildingConfig,
     "actuators": Actuators,
+    "devices": Devices,
     "sensors": SensorConfig,
     "reward": RewardConfig,
     "excitation": ExcitationConfig,
@@ -66,6 +67,7 @@ class Experiment(StrictModel):
     seed: Seed = 0
     building: BuildingConfig = BuildingConfig()
     actuators: Actuators = Field(default_factory=paper_actuators)
+    devices: Devices = []  # tuned masses and active mass drivers (see config.building)
     sensors: SensorConfig = SensorConfig()
     reward: RewardConfig = RewardConfig()
     excitation: ExcitationConfig = ExcitationConfig()
@@ -85,9 +87,9 @@ class Experiment(StrictModel):
 
 
 def _check_part_type(part: str, value: Any, where: str) -> None:
-    expected = list if part == "actuators" else dict
+    expected = list if part in ("actuators", "devices") else dict
     if not isinstance(value, expected):
-        what = "a list of actuators" if expected is list else f"a mapping of {part} keys"
+        what = f"a list of {part}" if expected is list else f"a mapping of {part} keys"
         got = "text" if isinstance(value, str) else type(value).__name__
         raise ConfigError(f"{where}: expected {what}, got {got}")
 
@@ -164,24 +166,45 @@ def _check_cross_references(experiment: Experiment) -> None:
             )
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
+    if not experiment.actuators and not experiment.devices:
+        raise ConfigError(f"{location(file, prefix, '')}: no actuators and no devices: expected at least one")
     for index, actuator in enumerate(experiment.actuators):
         if actuator.story > n_floors:
             raise ConfigError(
                 f"{file}: {prefix}[{index}].story: story {actuator.story} does not exist, expected 1..{n_floors}"
             )
+    _check_devices(experiment)
     file, prefix = experiment.origin("sensors")
+    commanded = len(experiment.actuators) + sum(d.type == "active_mass" for d in experiment.devices)
+    counts = {"force": (commanded, "commanded device"), "stroke": (len(experiment.devices), "mass device")}
     for index, measurement in enumerate(experiment.sensors.measurements):
         key = format_location(("measurements", index, "floors"), prefix)
-        count = len(experiment.actuators) if measurement.quantity == "force" else n_floors
+        count, what = counts.get(measurement.quantity, (n_floors, "floor"))
+        if count == 0:
+            raise ConfigError(f"{file}: {format_location(('measurements', index), prefix)}: there is no {what}")
         for floor in measurement.floors or []:
             if floor > count:
-                what = "actuator" if measurement.quantity == "force" else "floor"
                 raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
     _check_time_steps(experiment)
     if experiment.plant is not None:
         check_plant(experiment.plant, experiment, *experiment.origin("plant"))
     if experiment.plant_randomization is not None:
         _check_randomization(experiment)
+
+
+def _check_devices(experiment: Experiment) -> None:
+    """Each mass device on an existing floor, tuned to an existing mode; no yielding stories with them."""
+    n_floors = len(experiment.building.masses)
+    file, prefix = experiment.origin("devices")
+    for index, device in enumerate(experiment.devices):
+        where = format_location((index,), prefix)
+        if device.floor > n_floors:
+            raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
+        if device.mode > n_floors:
+            raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
+    if experiment.devices and experiment.plant is not None and experiment.plant.hysteresis is not None:
+        where = location(*experiment.origin("plant"), "hysteresis")
+        raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")
 
 
 def _check_time_steps(experiment: Experiment) -> None:

@@ -27,7 +27,7 @@ class Supervisor:
     `__call__(observations, actions)` -> the actions the actuators receive, (size, m) in [-1, 1]."""
 
     def __init__(self, config: SupervisorConfig, plant: Plant, size: int) -> None:
-        layout, n = plant.layout, plant.building.n_floors
+        layout, n = plant.layout, plant.building.n_dofs
         self.trigger = config.trigger
         self.ground, self.ground_scale = layout.ground, layout.ground_scale
         self.velocity = None

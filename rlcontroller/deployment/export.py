@@ -158,7 +158,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
 def _supervised(g: _Graph, plant: Plant, observation: str, action: str) -> tuple[str, str | None]:
     """The supervisor's action and the new peak ground reading (None without a trigger), computed as
     `control.supervisor` does from the observation as the env stores it (float32)."""
-    layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_floors
+    layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_dofs
     stored = g.node(
         "Cast", [g.node("Cast", [observation], "observation_f32", to=FLOAT)], "stored_observation", to=DOUBLE
     )

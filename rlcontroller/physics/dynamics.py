@@ -43,7 +43,7 @@ class StateSpace:
 
 
 def state_space(building: Building) -> StateSpace:
-    n = building.n_floors
+    n = building.n_dofs
     mass_inverse = np.linalg.inv(building.mass)
     a = np.block(
         [
@@ -92,7 +92,7 @@ def newmark_substep(building: Building, dt: float, beta: float = 0.25, gamma: fl
 
     The load is p = -M 1 a_g + Gamma u with the same held u at both ends of the step.
     """
-    n = building.n_floors
+    n = building.n_dofs
     mass, damping, stiffness = building.mass, building.damping, building.stiffness
     identity, zero = np.eye(n), np.zeros((n, n))
     # Each quantity is a matrix acting on w = [x0, v0, p0, p1].
@@ -179,28 +179,38 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
-def output_matrices(building: Building, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
-    """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] and actuator forces u."""
-    n, m = building.n_floors, building.n_actuators
-    zero_state, zero_force = np.zeros((n, n)), np.zeros((n, m))
-    drift_matrix = np.eye(n) - np.eye(n, k=-1)
-    shear_sum = np.triu(np.ones((n, n)))  # V_i = sum_{j >= i} m_j a_j
+def output_matrices(building: Building, quantity: str) -> tuple[np.ndarray, np.ndarray]:
+    """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] over the degrees of freedom and the
+    commanded forces u: a `Quantity`, or `stroke_velocity` (per mass device) and `device_velocity`
+    (the velocity across each commanded device, Gamma' x', whose product with u is its power)."""
+    n, floors, m = building.n_dofs, building.n_floors, building.n_actuators
+    zero_state, zero_force = np.zeros((floors, n)), np.zeros((floors, m))
+    drift_matrix = (np.eye(n) - np.eye(n, k=-1))[:floors]
+    # V_i = sum of m_j a_j over the degrees of freedom on floor i and above (devices on their floor)
+    shear_sum = (building.dof_floors[None, :] >= np.arange(1, floors + 1)[:, None]).astype(float)
     if quantity == "displacement":
-        return np.hstack([np.eye(n), zero_state]), zero_force
+        return np.hstack([np.eye(n)[:floors], zero_state]), zero_force
     if quantity == "velocity":
-        return np.hstack([zero_state, np.eye(n)]), zero_force
+        return np.hstack([zero_state, np.eye(n)[:floors]]), zero_force
     if quantity == "drift":
         return np.hstack([drift_matrix, zero_state]), zero_force
     if quantity == "absolute_acceleration":
         mass_inverse = np.linalg.inv(building.mass)
         c = np.hstack([-mass_inverse @ building.stiffness, -mass_inverse @ building.damping])
-        return c, mass_inverse @ building.actuator_matrix
+        return c[:floors], (mass_inverse @ building.actuator_matrix)[:floors]
     if quantity in ("story_shear", "base_shear"):
         c = shear_sum @ np.hstack([-building.stiffness, -building.damping])
         d = shear_sum @ building.actuator_matrix
         return (c, d) if quantity == "story_shear" else (c[:1], d[:1])
     if quantity == "force":
         return np.zeros((m, 2 * n)), np.eye(m)
+    strokes = building.stroke_matrix()
+    if quantity == "stroke":
+        return np.hstack([strokes, np.zeros_like(strokes)]), np.zeros((strokes.shape[0], m))
+    if quantity == "stroke_velocity":
+        return np.hstack([np.zeros_like(strokes), strokes]), np.zeros((strokes.shape[0], m))
+    if quantity == "device_velocity":
+        return np.hstack([np.zeros((m, n)), building.actuator_matrix.T]), np.zeros((m, m))
     raise ValueError(f"unknown quantity {quantity!r}, expected one of {QUANTITIES}")
 
 
@@ -222,6 +232,9 @@ class Response:
     base_shear: np.ndarray
     force: np.ndarray
     hysteretic_force: np.ndarray | None = None  # yielding stories: (1 - a) k d_y z per story (N)
+    stroke: np.ndarray | None = None  # mass devices: displacement relative to the floor (m)
+    stroke_velocity: np.ndarray | None = None  # mass devices (m/s)
+    device_velocity: np.ndarray | None = None  # across each commanded device (m/s): power = force x this
 
     def quantity(self, name: str) -> np.ndarray:
         return getattr(self, name)
@@ -232,7 +245,7 @@ def response(
 ) -> Response:
     """Outputs from states (K+1, 2n) and the forces held just before each instant (K+1, m)."""
     values = {}
-    for quantity in QUANTITIES:
+    for quantity in (*QUANTITIES, "stroke_velocity", "device_velocity"):
         c, d = output_matrices(building, quantity)
         values[quantity] = states @ c.T + held_forces @ d.T
     values["base_shear"] = values["base_shear"][:, 0]

@@ -75,7 +75,7 @@ def observation_layout(
     building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray
 ) -> ObservationLayout:
     """The layout of the table above for `building`, `sensors` and its n_readings readings."""
-    n = building.n_floors
+    n = building.n_dofs
     estimate_scale = np.zeros(0)
     if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
         channels = n_readings + 1

@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import (
+    ActuatorConfig,
     BuildingConfig,
     Experiment,
     PlantConfig,
@@ -50,7 +51,7 @@ from rlcontroller.physics.dynamics import (
 from rlcontroller.physics.excitation import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
-from rlcontroller.physics.structure import build
+from rlcontroller.physics.structure import build, tune_devices, with_devices
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,9 @@ class Plant:
         self.config = experiment.plant
         building = experiment.building if self.config is None else true_building(experiment.building, self.config)
         self.building = build(building, experiment.actuators)
+        if experiment.devices:  # tuned on the design model's floors, attached to this plant's
+            design = self.building if self.config is None else build(experiment.building, experiment.actuators)
+            self.building = with_devices(self.building, tune_devices(design, experiment.devices))
         hysteresis = self.config.hysteresis if self.config is not None else None
         stiffness = np.asarray(building.stiffnesses, dtype=float)
         self.yielding = None if hysteresis is None else BoucWen.of(self.building, hysteresis, stiffness)
@@ -163,7 +167,7 @@ class Plant:
         dynamics = self.config.actuators if self.config is not None else None
         self.time_constant = dynamics.time_constant if dynamics else 0.0
         self.delay_steps = dynamics.delay_steps if dynamics else 0
-        n, m = self.building.n_floors, self.building.n_actuators
+        n, m = self.building.n_dofs, self.building.n_actuators
         lag = m if self.time_constant > 0 else 0
         held = m if self.delay_steps > 0 and not lag else 0
         self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
@@ -173,6 +177,7 @@ class Plant:
         self._maps: dict[tuple[str, int], StepMap] = {}  # (which map, sub-steps) -> map
         self._design = self if self.config is None else None
         self._elastic: Plant | None = None
+        self._bare = None if experiment.devices else self
 
     @property
     def design(self) -> Plant:
@@ -180,6 +185,20 @@ class Plant:
         if self._design is None:
             self._design = Plant(self.experiment.model_copy(update={"plant": None}))
         return self._design
+
+    @property
+    def bare(self) -> Plant:
+        """This plant without its mass devices: the uncontrolled building every J is taken against.
+        (Its sensors are the floors' only; with no actuators it gets one that is never commanded.)"""
+        if self._bare is None:
+            experiment = self.experiment
+            kept = [m for m in experiment.sensors.measurements if m.quantity not in ("stroke", "force")]
+            sensors = experiment.sensors.model_copy(update={"measurements": kept or SensorConfig().measurements})
+            update = {"devices": [], "sensors": sensors, "supervisor": None}
+            if not experiment.actuators:
+                update["actuators"] = [ActuatorConfig(story=1)]
+            self._bare = Plant(experiment.model_copy(update=update))
+        return self._bare
 
     @property
     def elastic(self) -> Plant:
@@ -202,7 +221,7 @@ class Plant:
         c, d = output_matrices(self.building, quantity)
         if not self.has_actuator_dynamics:
             return c, d
-        n, m = self.building.n_floors, self.building.n_actuators
+        n, m = self.building.n_dofs, self.building.n_actuators
         full = np.zeros((c.shape[0], self.n_state))
         full[:, : 2 * n] = c
         if self.time_constant > 0:
@@ -229,7 +248,8 @@ class Plant:
         """Time histories from this plant's states x (K+1, n_state) and the forces (N) held just before
         each instant; for yielding plants also the story hysteretic forces (1 - a) k d_y z (N)."""
         values = {}
-        for quantity in ("displacement", "velocity", "drift", "absolute_acceleration", "story_shear", "force"):
+        quantities = ("displacement", "velocity", "drift", "absolute_acceleration", "story_shear", "force", "stroke")
+        for quantity in (*quantities, "stroke_velocity", "device_velocity"):
             c, d = self.outputs(quantity)
             values[quantity] = states @ c.T + held_forces @ d.T
         c, d = self.outputs("base_shear")
@@ -258,7 +278,7 @@ class Plant:
         return self._maps[key]
 
     def _actuator_step_map(self, substeps: int) -> StepMap:
-        n, m = self.building.n_floors, self.building.n_actuators
+        n, m = self.building.n_dofs, self.building.n_actuators
         if self.time_constant > 0:  # [z; f] with tau f' = u - f, exact over each sub-step
             system = state_space(self.building)
             a = np.zeros((2 * n + m, 2 * n + m))

@@ -1,30 +1,55 @@
-"""Linear shear building: mass, stiffness, damping and actuator matrices.
+"""Linear shear building: mass, stiffness, damping and actuator matrices, with its mass devices.
 
 Conventions (see design.md): n floors, floor 0 is the ground. Story i joins floor i-1 and
-floor i; mass m_i sits at floor i and story i has stiffness k_i. Coordinates are floor
-displacements relative to the ground, so
+floor i; mass m_i sits at floor i and story i has stiffness k_i. Coordinates are displacements
+relative to the ground, so
 
     M x'' + C x' + K x = -M 1 a_g + Gamma u.
 
-Units: kg, N/m, N*s/m, N, s.
+Mass devices (tuned masses, active mass drivers) add one degree of freedom each after the n
+floors: a mass m_d joined to its floor by k_d and c_d; an active one adds a column to Gamma
+(+1 on the mass, -1 on its floor). The commanded forces u are the actuators' then the active
+masses'. Units: kg, N/m, N*s/m, N, s.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
 
-from rlcontroller.config import ActuatorConfig, BuildingConfig
+from rlcontroller.config import ActuatorConfig, BuildingConfig, DeviceConfig
+
+
+@dataclass(frozen=True)
+class MassDevice:
+    """A tuned mass (active or not) as built: on `floor` (1-based), mass (kg), stiffness (N/m) and
+    damping (N*s/m) to its floor, the tuning it came from, and its limits."""
+
+    kind: str  # tuned_mass | active_mass
+    floor: int
+    mass: float
+    stiffness: float
+    damping: float
+    frequency_ratio: float
+    damping_ratio: float
+    mass_ratio: float
+    stroke_limit: float | None
+    force_limit: float | None  # active masses only
+
+    @property
+    def active(self) -> bool:
+        return self.kind == "active_mass"
 
 
 @dataclass(frozen=True)
 class Building:
-    """A shear building with its actuators.
+    """A shear building with its actuators and mass devices.
 
-    `actuator_matrix` (Gamma, n x m) maps actuator forces u (N) to floor forces (N);
-    `force_limits` (m,) are the actuators' force limits (N).
+    `mass`, `stiffness`, `damping` are over the degrees of freedom: the floors, then one per mass
+    device. `actuator_matrix` (Gamma, dofs x m) maps the commanded forces u (N) to forces on the
+    degrees of freedom (N); `force_limits` (m,) are their limits (N).
     """
 
     mass: np.ndarray
@@ -33,10 +58,16 @@ class Building:
     actuator_matrix: np.ndarray
     force_limits: np.ndarray
     story_heights: np.ndarray | None = None
+    devices: tuple[MassDevice, ...] = ()
+
+    @property
+    def n_dofs(self) -> int:
+        """Degrees of freedom: the floors, then the mass devices."""
+        return self.mass.shape[0]
 
     @property
     def n_floors(self) -> int:
-        return self.mass.shape[0]
+        return self.mass.shape[0] - len(self.devices)
 
     @property
     def n_actuators(self) -> int:
@@ -45,7 +76,20 @@ class Building:
     @property
     def floor_masses(self) -> np.ndarray:
         """Floor masses m_i (kg), floor 1 first."""
-        return np.diag(self.mass).copy()
+        return np.diag(self.mass)[: self.n_floors].copy()
+
+    @property
+    def dof_floors(self) -> np.ndarray:
+        """The floor (1-based) of each degree of freedom: its own, or the one a device sits on."""
+        return np.array([*range(1, self.n_floors + 1), *(device.floor for device in self.devices)])
+
+    def stroke_matrix(self) -> np.ndarray:
+        """S (devices x dofs) with stroke = S x: each device's displacement relative to its floor."""
+        matrix = np.zeros((len(self.devices), self.n_dofs))
+        for index, device in enumerate(self.devices):
+            matrix[index, self.n_floors + index] = 1.0
+            matrix[index, device.floor - 1] = -1.0
+        return matrix
 
     def modes(self) -> tuple[np.ndarray, np.ndarray]:
         """Natural circular frequencies (rad/s, ascending) and mass-normalised mode shapes."""
@@ -101,8 +145,81 @@ def actuator_matrix(n_floors: int, actuators: list[ActuatorConfig]) -> np.ndarra
     return gamma
 
 
+def warburton_optimum(mass_ratio: float, tuning: str = "random") -> tuple[float, float]:
+    """Warburton's optimum (frequency ratio, damping ratio) of a tuned mass on an undamped primary
+    under base acceleration (Warburton 1982, Earthquake Eng. Struct. Dyn. 10, 381-401, Table I):
+    the same frequency ratio sqrt(1 - mu/2) / (1 + mu) for both; damping for white-noise
+    (`random`, least mean-square displacement) sqrt(mu (1 - mu/4) / (4 (1 + mu)(1 - mu/2))), for
+    `harmonic` excitation (least peak response) sqrt(3 mu / (8 (1 + mu)(1 - mu/2)))."""
+    mu = mass_ratio
+    frequency = np.sqrt(1.0 - mu / 2.0) / (1.0 + mu)
+    if tuning == "random":
+        return float(frequency), float(np.sqrt(mu * (1.0 - mu / 4.0) / (4.0 * (1.0 + mu) * (1.0 - mu / 2.0))))
+    if tuning == "harmonic":
+        return float(frequency), float(np.sqrt(3.0 * mu / (8.0 * (1.0 + mu) * (1.0 - mu / 2.0))))
+    raise ValueError(f"unknown tuning {tuning!r}, expected random or harmonic")
+
+
+def tune_devices(building: Building, devices: list[DeviceConfig]) -> tuple[MassDevice, ...]:
+    """The mass devices' masses, stiffnesses and damping, tuned on `building` (the design model:
+    a plant that differs from it gets a detuned device, as a real one would): the mass is
+    mass_ratio x the modal mass of the target mode with its shape scaled to 1 at the device's floor."""
+    omega, shapes = natural_modes(building.mass, building.stiffness)
+    tuned = []
+    for device in devices:
+        shape = shapes[:, device.mode - 1] / shapes[device.floor - 1, device.mode - 1]
+        mass = device.mass_ratio * float(shape @ building.mass @ shape)
+        frequency_ratio, damping_ratio = warburton_optimum(device.mass_ratio, device.tuning)
+        frequency_ratio = device.frequency_ratio if device.frequency_ratio is not None else frequency_ratio
+        damping_ratio = device.damping_ratio if device.damping_ratio is not None else damping_ratio
+        frequency = frequency_ratio * omega[device.mode - 1]
+        tuned.append(
+            MassDevice(
+                kind=device.type,
+                floor=device.floor,
+                mass=mass,
+                stiffness=mass * frequency**2,
+                damping=2.0 * damping_ratio * mass * frequency,
+                frequency_ratio=frequency_ratio,
+                damping_ratio=damping_ratio,
+                mass_ratio=device.mass_ratio,
+                stroke_limit=device.stroke_limit,
+                force_limit=getattr(device, "force_limit", None),
+            )
+        )
+    return tuple(tuned)
+
+
+def with_devices(building: Building, devices: tuple[MassDevice, ...]) -> Building:
+    """`building` (without devices) with the mass devices added as degrees of freedom after its
+    floors, the active ones' forces after its actuators'."""
+    n, count = building.n_dofs, len(devices)
+    size = n + count
+    mass, stiffness, damping = (np.zeros((size, size)) for _ in range(3))
+    mass[:n, :n], stiffness[:n, :n], damping[:n, :n] = building.mass, building.stiffness, building.damping
+    active = [index for index, device in enumerate(devices) if device.active]
+    gamma = np.zeros((size, building.n_actuators + len(active)))
+    gamma[:n, : building.n_actuators] = building.actuator_matrix
+    for index, device in enumerate(devices):
+        dof, floor = n + index, device.floor - 1
+        mass[dof, dof] = device.mass
+        for matrix, value in ((stiffness, device.stiffness), (damping, device.damping)):
+            matrix[dof, dof] += value
+            matrix[floor, floor] += value
+            matrix[dof, floor] -= value
+            matrix[floor, dof] -= value
+    for column, index in enumerate(active, start=building.n_actuators):
+        gamma[n + index, column], gamma[devices[index].floor - 1, column] = 1.0, -1.0
+    limits = np.concatenate([building.force_limits, [devices[index].force_limit for index in active]])
+    return replace(
+        building, mass=mass, stiffness=stiffness, damping=damping, actuator_matrix=gamma, force_limits=limits,
+        devices=devices,
+    )  # fmt: skip
+
+
 def build(building: BuildingConfig, actuators: list[ActuatorConfig]) -> Building:
-    """Assemble M, K, C and Gamma from the validated configuration."""
+    """Assemble M, K, C and Gamma of the floors and actuators from the validated configuration
+    (`with_devices` adds the mass devices)."""
     mass = np.diag(np.asarray(building.masses, dtype=float))
     stiffness = shear_stiffness_matrix(np.asarray(building.stiffnesses, dtype=float))
     if building.damping.matrix is not None:
