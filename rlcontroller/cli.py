@@ -16,7 +16,14 @@ from typing import Annotated, Any
 
 import typer
 
-from rlcontroller.assets import DEFAULT_MODEL, DEMO_CONFIG, MODELS, SAFETY_STANDARD, STANDARD_SCENARIOS
+from rlcontroller.assets import (
+    DEFAULT_MODEL,
+    DEMO_CONFIG,
+    DEVICE_SCENARIOS,
+    MODELS,
+    SAFETY_STANDARD,
+    STANDARD_SCENARIOS,
+)
 from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment, with_overrides
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.physics.excitation import MotionError
@@ -114,16 +121,19 @@ def info(
     config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
-    the simulated plant when there is a plant part) and actuator layout."""
+    the simulated plant when there is a plant part), actuator layout and mass devices."""
+    import numpy as np
+
     from rlcontroller.physics.plant import Plant
 
     experiment = load(config)
     plant = Plant(experiment)
     typer.echo("# resolved configuration")
     typer.echo(experiment.to_yaml())
-    buildings = [("design model", plant.design.building)]
+    floors_only = " (floors only, without the devices)" if experiment.devices else ""
+    buildings = [(f"design model{floors_only}", plant.design.bare.building)]
     if experiment.plant is not None:
-        buildings.append(("simulated plant (the plant part, elastic)", plant.elastic.building))
+        buildings.append((f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building))
     for title, building in buildings:
         typer.echo(f"# modes of the {title}")
         typer.echo(f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}")
@@ -140,6 +150,23 @@ def info(
         typer.echo(
             f"{index + 1}: story {actuator.story}, {actuator.mount}, limit {actuator.force_limit / 1e3:g} kN ({floors})"
         )
+    if experiment.devices:
+        typer.echo("\n# mass devices (tuned on the design model)")
+        total = float(np.sum(plant.design.building.floor_masses))
+        commanded = len(experiment.actuators)
+        for index, (config, device) in enumerate(zip(experiment.devices, plant.design.building.devices, strict=True)):
+            frequency = np.sqrt(device.stiffness / device.mass) / (2 * np.pi)
+            text = (
+                f"{index + 1}: {device.kind} on floor {device.floor}, {device.mass / 1e3:.4g} t ({device.mass_ratio:g} "
+                f"of mode {config.mode}'s modal mass, {device.mass / total:.3%} of the building's), {frequency:.4g} Hz "
+                f"(ratio {device.frequency_ratio:.4f}), damping ratio {device.damping_ratio:.4f}"
+            )
+            if device.stroke_limit is not None:
+                text += f", stroke limit {device.stroke_limit:g} m"
+            if device.active:
+                commanded += 1
+                text += f", force limit {device.force_limit / 1e3:g} kN (command {commanded})"
+            typer.echo(text)
 
 
 @app.command(short_help="Train a controller on generated motions.")
@@ -251,7 +278,7 @@ def run_check(
     folder: Path,
     model: str,
     standard: Path = SAFETY_STANDARD,
-    scenarios: Path = STANDARD_SCENARIOS,
+    scenarios: Path | None = None,
     progress: bool = False,
 ):
     """The safety check of a folder's saved policy: prints the verdict and writes MODEL_check.yaml
@@ -269,7 +296,7 @@ def run_check(
         f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated motions, "
         f"{checking.rest_runs} runs at rest, closed-loop stability..."
     )
-    named = load_scenarios(scenarios, experiment)
+    named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
     with progress_bar(progress, "safety check", 3) as advance:
         verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
     target = folder
@@ -281,6 +308,14 @@ def run_check(
         typer.echo(line)
     typer.echo(f"verdict in {path}")
     return verdict
+
+
+def standard_scenarios(experiment: Experiment) -> Path:
+    """The standard robustness scenarios, or with mass devices their own (no yielding stories, detuned devices)."""
+    return DEVICE_SCENARIOS if experiment.devices else STANDARD_SCENARIOS
+
+
+SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices"
 
 
 def warn_unchecked(folder: Path, model: str) -> None:
@@ -443,7 +478,11 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
         typer.echo("this run's controller failed the safety check: docs/safety_check.md says what that means")
 
 
-compare_app = typer.Typer(no_args_is_help=True, help="Compare controllers: LQG with the same cost (rlc compare lqg).")
+compare_app = typer.Typer(
+    no_args_is_help=True,
+    short_help="The classical answers: LQG, passive devices.",
+    help="The classical answers: LQG with the same cost (rlc compare lqg), passive devices (rlc compare passive).",
+)
 app.add_typer(compare_app, name="compare")
 
 
@@ -476,6 +515,8 @@ def compare_lqg(
         experiment = load_experiment(run_dir / "config.yaml")
     else:
         experiment = load_experiment(config)
+    if not experiment.command_labels():
+        raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga)
@@ -497,6 +538,33 @@ def compare_lqg(
             typer.echo((out / name).read_text())
 
 
+@compare_app.command("passive", short_help="The building with its mass devices passive, and without them.")
+@user_errors
+def compare_passive(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML with a devices part.")],
+    records: RecordsOption = None,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+) -> None:
+    """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
+    active mass drivers as the tuned masses they are without a command; strokes and damper energy."""
+    from rlcontroller.evaluation.evaluation import evaluate
+    from rlcontroller.evaluation.report import write_report
+    from rlcontroller.physics.plant import Plant
+
+    experiment = load_experiment(config)
+    if not experiment.devices:
+        raise ConfigError(f"{config}: devices: none, so nothing passive to compare")
+    out = output_folder(out, f"compare_passive-{experiment.name}")
+    check_new_folder(out)
+    plant = Plant(experiment)
+    motions, label = motion_suite(records, scale_pga)
+    evaluation = evaluate(plant, motions, [], label, include_optimal=False)
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
+    print_summary(evaluation, out)
+
+
 @app.command(short_help="Every controller on plants that differ from the design.")
 @user_errors
 def robustness(
@@ -505,12 +573,11 @@ def robustness(
     ] = None,
     records: RecordsOption = None,
     scenarios: Annotated[
-        Path,
+        Path | None,
         typer.Option(
-            help="Scenario YAML: named plants that differ from the design model.",
-            show_default="configs/scenarios/standard.yaml",
+            help="Scenario YAML: named plants that differ from the design model.", show_default=SCENARIOS_DEFAULT
         ),
-    ] = STANDARD_SCENARIOS,
+    ] = None,
     out: OutOption = None,
     scale_pga: ScaleOption = None,
     model: ModelOption = "best",
@@ -527,7 +594,7 @@ def robustness(
 
     folder = model_folder(run_dir)
     experiment = load_experiment(folder / "config.yaml")
-    named = load_scenarios(scenarios, experiment)
+    named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
     policy = read_policy(folder, model, Plant(experiment))
     out = output_folder(out, f"robustness-{folder.resolve().name}")
     check_new_folder(out)
@@ -716,9 +783,8 @@ def check(
         typer.Option(help="The check's standard: suite, seed, bounds.", show_default="configs/checks/standard.yaml"),
     ] = SAFETY_STANDARD,
     scenarios: Annotated[
-        Path,
-        typer.Option(help="Plants for the stability report.", show_default="configs/scenarios/standard.yaml"),
-    ] = STANDARD_SCENARIOS,
+        Path | None, typer.Option(help="Plants for the stability report.", show_default=SCENARIOS_DEFAULT)
+    ] = None,
     progress: ProgressOption = None,
 ) -> None:
     """The safety check a controller passes before it is shipped: never worse than no control on a

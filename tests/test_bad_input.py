@@ -94,6 +94,48 @@ CONFIG_CASES = {
         "algorithm: {total_steps: 1000000000000000000000000000000}\n",
         "algorithm.total_steps: Input should be less than or equal to 1000000000",
     ),
+    "device_floor_9": (
+        "devices: [{type: tuned_mass, floor: 9, mass_ratio: 0.02}]\n",
+        "devices[0].floor: floor 9 does not exist, expected 1..5",
+    ),
+    "device_mode_7": (
+        "devices: [{type: tuned_mass, floor: 5, mode: 7, mass_ratio: 0.02}]\n",
+        "devices[0].mode: mode 7 does not exist, expected 1..5",
+    ),
+    "device_mass_ratio_0": (
+        "devices: [{type: tuned_mass, floor: 5, mass_ratio: 0}]\n",
+        "devices[0].tuned_mass.mass_ratio: Input should be greater than 0",
+    ),
+    "device_mass_ratio_negative": (
+        "devices: [{type: tuned_mass, floor: 5, mass_ratio: -0.02}]\n",
+        "devices[0].tuned_mass.mass_ratio: Input should be greater than 0",
+    ),
+    "device_frequency_inf": (
+        "devices: [{type: tuned_mass, floor: 5, mass_ratio: 0.02, frequency_ratio: .inf}]\n",
+        "devices[0].tuned_mass.frequency_ratio: Input should be a finite number",
+    ),
+    "device_unknown_type": (
+        "devices: [{type: magic, floor: 5, mass_ratio: 0.02}]\n",
+        "devices[0]: Input tag 'magic' found using 'type' does not match any of the expected tags",
+    ),
+    "device_without_type": ("devices: [{floor: 5, mass_ratio: 0.02}]\n", "devices[0]: Unable to extract tag using"),
+    "driver_stroke_limit_0": (
+        "devices: [{type: active_mass, floor: 5, mass_ratio: 0.02, force_limit: 1e4, stroke_limit: 0}]\n",
+        "devices[0].active_mass.stroke_limit: Input should be greater than 0",
+    ),
+    "driver_without_force_limit": (
+        "devices: [{type: active_mass, floor: 5, mass_ratio: 0.02, stroke_limit: 1}]\n",
+        "devices[0].active_mass.force_limit: Field required",
+    ),
+    "devices_not_a_list": ("devices: {type: tuned_mass}\n", "devices: expected a list of devices, got dict"),
+    "devices_with_yielding": (
+        "devices: [{type: tuned_mass, floor: 5, mass_ratio: 0.02}]\nplant: {hysteresis: {yield_drift: 0.03}}\n",
+        "plant.hysteresis: yielding stories with mass devices are not modelled",
+    ),
+    "stroke_sensor_without_devices": (
+        "sensors: {measurements: [{quantity: stroke, scale: 0.1}]}\n",
+        "sensors.measurements[0]: there is no mass device",
+    ),
     "seed_negative": ("seed: -1\n", "seed: Input should be greater than or equal to 0"),
     "seed_1e30": ("seed: 1000000000000000000000000000000\n", "seed: Input should be less than or equal to 4294967295"),
     "name_with_path": ("name: ../../elsewhere\n", "name: String should match pattern"),
@@ -205,7 +247,7 @@ def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypa
     line = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "s.yaml"]))
     assert line == (
         "error: s.yaml: scenarios[0].plant.colour: unknown key; "
-        "expected one of: stiffness, mass, damping, damage, actuators, sensors, hysteresis"
+        "expected one of: stiffness, mass, damping, damage, actuators, sensors, hysteresis, devices"
     )
     missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
     assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()

@@ -82,6 +82,12 @@ class Experiment(StrictModel):
         """(file, key prefix) of a part, for error messages."""
         return self._origins.get(part, ("<default>", part))
 
+    def command_labels(self) -> list[str]:
+        """Short labels of the commanded devices, in the order of the action: each actuator's story,
+        then each active mass driver's floor ("AMD 5")."""
+        labels = [str(actuator.story) for actuator in self.actuators]
+        return labels + [f"AMD {device.floor}" for device in self.devices if device.type == "active_mass"]
+
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
 
@@ -193,7 +199,7 @@ def _check_cross_references(experiment: Experiment) -> None:
 
 
 def _check_devices(experiment: Experiment) -> None:
-    """Each mass device on an existing floor, tuned to an existing mode; no yielding stories with them."""
+    """Each mass device on an existing floor, tuned to an existing mode."""
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("devices")
     for index, device in enumerate(experiment.devices):
@@ -202,9 +208,6 @@ def _check_devices(experiment: Experiment) -> None:
             raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
         if device.mode > n_floors:
             raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
-    if experiment.devices and experiment.plant is not None and experiment.plant.hysteresis is not None:
-        where = location(*experiment.origin("plant"), "hysteresis")
-        raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")
 
 
 def _check_time_steps(experiment: Experiment) -> None:
@@ -281,6 +284,9 @@ def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: s
     for key, number in stories:
         if number > n_floors:
             raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if plant.hysteresis is not None and experiment.devices:
+        where = location(file, prefix, "hysteresis")
+        raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")
     if plant.hysteresis is not None:
         drift = plant.hysteresis.yield_drift
         if isinstance(drift, list) and len(drift) != n_floors:

@@ -74,6 +74,14 @@ class HysteresisConfig(StrictModel):
         return self
 
 
+class DeviceFactors(StrictModel):
+    """Every mass device as built differs from its tuning: its frequency times `frequency` (the
+    spring times its square: detuning) and its dashpot times `damping`."""
+
+    frequency: Factor = 1.0
+    damping: Factor = 1.0
+
+
 class PlantConfig(StrictModel):
     """How the simulated building differs from the design model (the experiment's building,
     actuators and sensors, on which every controller is designed). Factors are a scalar or one
@@ -86,6 +94,7 @@ class PlantConfig(StrictModel):
     actuators: ActuatorDynamicsConfig = ActuatorDynamicsConfig()
     sensors: SensorFaultConfig = SensorFaultConfig()
     hysteresis: HysteresisConfig | None = None  # None: linear stories
+    devices: DeviceFactors = DeviceFactors()
 
 
 class RandomRange(StrictModel):

@@ -145,7 +145,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     metadata = {
         "control_dt_s": repr(plant.control_dt),
         "readings": "; ".join(_reading_names(plant)),
-        "actuator_stories": ", ".join(str(a.story) for a in experiment.actuators),
+        "actuator_stories": ", ".join(experiment.command_labels()),
         "force_limits_N": ", ".join(repr(float(f)) for f in plant.force_limits),
         "state_size": str(state_size),
         "supervisor": _supervisor_text(supervisor),

@@ -23,18 +23,27 @@ from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import GroundMotion, content_seed, for_control_step
-from rlcontroller.physics.metrics import METRICS, SETTLING_TAIL_S, YIELDING_METRICS, j_metrics, yielding_metrics
+from rlcontroller.physics.metrics import (
+    DEVICE_METRICS,
+    METRICS,
+    SETTLING_TAIL_S,
+    YIELDING_METRICS,
+    device_metrics,
+    j_metrics,
+    yielding_metrics,
+)
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import batch_rollout
 
 OPTIMAL = "optimal (clairvoyant)"
+PASSIVE = "passive devices"  # the mass devices with no command: tuned masses as tuned, drivers as tuned masses
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
 def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Response]:
-    """The bare building: whole-record simulations with the step map, or a batch through the
-    non-linear step for yielding stories."""
+    """`plant` with no command (`plant.bare` is the building without its devices): whole-record
+    simulations with the step map, or a batch through the non-linear step for yielding stories."""
     if plant.yielding is not None:
         return [
             response for response, _ in batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
@@ -75,10 +84,12 @@ class Evaluation:
 
     def summary(self) -> pd.DataFrame:
         """Mean over records, then over stories (actuators for J3), per controller; for yielding
-        plants also the ductility, residual drift and hysteretic energy (means per story)."""
+        plants also the ductility, residual drift and hysteretic energy (means per story); with mass
+        devices their strokes, dissipated energy and the commanded devices' power (means per device)."""
         per_index = self.metrics.groupby(["controller", "metric", "index"], sort=False)["value"].mean()
         table = per_index.groupby(["controller", "metric"], sort=False).mean().unstack("metric")
-        return table.loc[self.controllers, [m for m in (*METRICS, *YIELDING_METRICS) if m in table.columns]]
+        columns = (*METRICS, *YIELDING_METRICS, *DEVICE_METRICS)
+        return table.loc[self.controllers, [m for m in columns if m in table.columns]]
 
 
 def evaluate(
@@ -95,14 +106,16 @@ def evaluate(
     yielding = plant.yielding
     include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
-    bare = uncontrolled_responses(plant, simulated)
+    bare = uncontrolled_responses(plant.bare, simulated)
+    devices = plant.building.devices
+    passive = uncontrolled_responses(plant, simulated) if devices else []
     seeds = [content_seed(motion) for motion in motions]
     controlled = batch_rollout(plant, simulated, controllers, seeds=seeds, on_motions=on_motions)
     optimal = optimal_responses(plant, simulated) if include_optimal else []
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):
-        results = [("uncontrolled", bare[number])]
+        results = [("uncontrolled", bare[number])] + ([(PASSIVE, passive[number])] if devices else [])
         results += [(controller.name, run[number][0]) for controller, run in zip(controllers, controlled, strict=True)]
         if include_optimal:
             results.append((OPTIMAL, optimal[number]))
@@ -111,6 +124,8 @@ def evaluate(
             metrics = j_metrics(result, bare[number])
             if yielding is not None:
                 metrics |= yielding_metrics(result, yielding.yield_drift)
+            if devices and name != "uncontrolled":
+                metrics |= device_metrics(result, np.array([device.damping for device in devices]))
             for metric, values in metrics.items():
                 rows.extend(
                     {"controller": name, "record": motion.name, "metric": metric, "index": i + 1, "value": float(v)}
@@ -197,7 +212,7 @@ def preview_study(
     the rows bound what better sensing (full state) and prediction of the ground can buy.
     """
     dt = plant.control_dt
-    bare = uncontrolled_responses(plant, motions)
+    bare = uncontrolled_responses(plant.bare, motions)
     rows = []
     for horizon in seconds:
         steps = None if horizon is None else round(horizon / dt)

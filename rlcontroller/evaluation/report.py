@@ -63,9 +63,9 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     text += ["Mean J1 by the record's PGA (number of records in the band):", "", markdown_table(by_pga), ""]
     text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
     atomic_write(out / "summary.md", "\n".join(text))
-    stories = ", ".join(str(a.story) for a in evaluation.experiment.actuators)
+    stories = ", ".join(evaluation.experiment.command_labels())
     detail = [f"# J1-J4 per record and story: {evaluation.label}", ""]
-    detail += [f"Columns: story (J3: actuator, on stories {stories}).", ""]
+    detail += [f"Columns: story (J3: commanded device, on stories {stories}).", ""]
     detail += [f"- {name}: {text}" for name, text in evaluation.descriptions.items() if text] + [""]
     for metric in [m for m in METRIC_NAMES if m in set(evaluation.metrics["metric"])]:
         for controller in evaluation.controllers:
@@ -155,9 +155,10 @@ def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
             )
             axis.set_xticks(means.index)
         if metric == "J3":
-            axis.set_xticklabels([str(evaluation.experiment.actuators[i - 1].story) for i in axis.get_xticks()])
+            labels = evaluation.experiment.command_labels()
+            axis.set_xticklabels([labels[i - 1] for i in axis.get_xticks()])
         axis.set(
-            xlabel="story of the actuator" if metric == "J3" else "story",
+            xlabel="story of the commanded device" if metric == "J3" else "story",
             title=METRIC_NAMES[metric] + (" (E_u / E_Vb,UC)" if metric == "J3" else " (C / UC)"),
         )
         axis.grid(alpha=0.3)

@@ -185,6 +185,11 @@ def train(
         assert experiment is not None
         run = RunFolder(run_dir or default_run_dir(experiment))
         check_new_folder(run.path, "run", " (use --resume)")
+    if not experiment.command_labels():
+        where = experiment.origin("actuators")[0]
+        raise ConfigError(
+            f"{where}: nothing to command (no actuators, no active devices): a passive building is not trained"
+        )
     torch.set_num_threads(experiment.algorithm.torch_threads)
     plant = Plant(experiment)
     vec_env = make_vec_env(plant, experiment.seed)

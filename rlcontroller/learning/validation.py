@@ -29,8 +29,9 @@ class Validator:
         excitation = plant.experiment.excitation
         self.motions = generate_suite(excitation.validation, excitation.validation_motions, excitation.validation_seed)
         self.prior = LQGPrior.design(plant) if plant.experiment.algorithm.residual_lqg else None
-        bare = Uncontrolled(plant.building.n_actuators)
-        self.uncontrolled = [response for response, _ in self._rollouts(bare)]
+        bare = plant.bare  # without its mass devices
+        uncontrolled = batch_rollout(bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True)
+        self.uncontrolled = [response for response, _ in uncontrolled[0]]
         self.reference = {}
         model = plant.design
         designs = {

@@ -17,6 +17,7 @@ from rlcontroller.physics.dynamics import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
 YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J")  # per story, yielding plants
+DEVICE_METRICS = ("stroke_m", "stroke_rms_m", "damper_energy_J", "power_peak_W", "power_rms_W")  # with mass devices
 SETTLING_TAIL_S = 20.0  # s of zero ground motion after a record on a yielding plant
 RESIDUAL_WINDOW_S = 5.0  # the residual drift is the mean drift over the tail's last seconds
 
@@ -39,6 +40,22 @@ def j_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndar
         "J2": peak(controlled.absolute_acceleration) / peak(uncontrolled.absolute_acceleration),
         "J3": energy(controlled.force, dt) / energy(uncontrolled.base_shear, dt),
         "J4": peak(controlled.story_shear) / peak(uncontrolled.story_shear),
+    }
+
+
+def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarray]:
+    """Per mass device (dashpot coefficients `damping`, N*s/m): peak and RMS stroke (m) and the
+    energy its dashpot dissipated (J); per commanded device: peak and RMS power (W), force times
+    the velocity across it, at the control steps (the force held over the step ending there)."""
+    dt = float(result.time[1] - result.time[0])
+    duration = dt * (result.time.size - 1)
+    power = result.force * result.device_velocity
+    return {
+        "stroke_m": peak(result.stroke),
+        "stroke_rms_m": np.sqrt(energy(result.stroke, dt) / duration),
+        "damper_energy_J": damping * energy(result.stroke_velocity, dt),
+        "power_peak_W": peak(power),
+        "power_rms_W": np.sqrt(energy(power, dt) / duration),
     }
 
 

@@ -158,7 +158,14 @@ class Plant:
         self.building = build(building, experiment.actuators)
         if experiment.devices:  # tuned on the design model's floors, attached to this plant's
             design = self.building if self.config is None else build(experiment.building, experiment.actuators)
-            self.building = with_devices(self.building, tune_devices(design, experiment.devices))
+            devices = tune_devices(design, experiment.devices)
+            if self.config is not None:
+                factors = self.config.devices
+                devices = tuple(
+                    replace(d, stiffness=d.stiffness * factors.frequency**2, damping=d.damping * factors.damping)
+                    for d in devices
+                )
+            self.building = with_devices(self.building, devices)
         hysteresis = self.config.hysteresis if self.config is not None else None
         stiffness = np.asarray(building.stiffnesses, dtype=float)
         self.yielding = None if hysteresis is None else BoucWen.of(self.building, hysteresis, stiffness)
@@ -189,12 +196,15 @@ class Plant:
     @property
     def bare(self) -> Plant:
         """This plant without its mass devices: the uncontrolled building every J is taken against.
-        (Its sensors are the floors' only; with no actuators it gets one that is never commanded.)"""
+        (Its sensors and reward are the floors' only; with no actuators it gets one that is never
+        commanded.)"""
         if self._bare is None:
             experiment = self.experiment
             kept = [m for m in experiment.sensors.measurements if m.quantity not in ("stroke", "force")]
             sensors = experiment.sensors.model_copy(update={"measurements": kept or SensorConfig().measurements})
-            update = {"devices": [], "sensors": sensors, "supervisor": None}
+            terms = [term for term in experiment.reward.terms if term.quantity != "stroke"]
+            reward = experiment.reward.model_copy(update={"terms": terms})
+            update = {"devices": [], "sensors": sensors, "reward": reward, "supervisor": None}
             if not experiment.actuators:
                 update["actuators"] = [ActuatorConfig(story=1)]
             self._bare = Plant(experiment.model_copy(update=update))

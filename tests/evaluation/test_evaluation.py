@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
+from conftest import REPOSITORY
 
-from rlcontroller.config import Experiment
+from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import (
@@ -13,9 +14,9 @@ from rlcontroller.evaluation.evaluation import (
     uncontrolled_responses,
 )
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import read_at2
+from rlcontroller.physics.excitation import for_control_step, read_at2
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import SYNTHETIC_LABEL, synthetic_suite
+from rlcontroller.physics.records import SYNTHETIC_LABEL, load_records, synthetic_suite
 
 
 def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
@@ -86,3 +87,49 @@ def test_a_records_numbers_do_not_depend_on_the_folder_or_order_it_is_evaluated_
     alone = kobe_rows(kobe)  # batching changes only the rounding (a different noise changed J1 by 1e-2)
     np.testing.assert_allclose(kobe_rows(motions), alone, rtol=1e-9)
     np.testing.assert_allclose(kobe_rows(motions[::-1]), alone, rtol=1e-9)
+
+
+def test_a_tuned_mass_dampers_energy_balances(records):
+    """Ground input = the building's damping + the TMD's dashpot (the `damper_energy_J` metric) +
+    what is left at the end, on real records: a conservation law the device metrics must obey."""
+    from rlcontroller.physics.dynamics import simulate
+    from rlcontroller.physics.metrics import device_metrics
+
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_tmd.yaml"))
+    building, floors = plant.building, plant.bare.building
+    for motion in load_records(records)[0][:3]:
+        samples, substeps = for_control_step(motion, plant.control_dt)
+        result = simulate(building, plant.step_map(substeps), samples)
+        dt = plant.control_dt
+        ground_input = np.trapezoid(-result.ground * (result.velocity @ floors.floor_masses), dx=dt)
+        mass_velocity = result.velocity[:, 4] + result.stroke_velocity[:, 0]
+        ground_input -= np.trapezoid(result.ground * mass_velocity * building.devices[0].mass, dx=dt)
+        floor_damping = np.trapezoid(np.einsum("ki,ij,kj->k", result.velocity, floors.damping, result.velocity), dx=dt)
+        damper = device_metrics(result, np.array([building.devices[0].damping]))["damper_energy_J"][0]
+        x = np.append(result.displacement[-1], result.displacement[-1, 4] + result.stroke[-1, 0])
+        v = np.append(result.velocity[-1], mass_velocity[-1])
+        left = 0.5 * v @ building.mass @ v + 0.5 * x @ building.stiffness @ x
+        assert floor_damping + damper + left == pytest.approx(ground_input, rel=3e-3)
+        assert damper > 0.2 * ground_input  # the TMD's share is large enough for the balance to test it
+
+
+def test_with_mass_devices_uncontrolled_is_the_bare_building_and_passive_the_tuned_one(records):
+    from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
+    from rlcontroller.physics.dynamics import simulate
+
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_amd.yaml")
+    plant = Plant(experiment)
+    motions = load_records(records)[0][:2]
+    evaluation = evaluate(plant, motions, [], "two records", include_optimal=False)
+    assert evaluation.controllers == ["uncontrolled", PASSIVE]
+    bare = Plant(Experiment())
+    for motion in motions:
+        samples, substeps = for_control_step(motion, plant.control_dt)
+        expected = simulate(bare.building, bare.step_map(substeps), samples)
+        drift = evaluation.responses["uncontrolled", motion.name].drift
+        np.testing.assert_allclose(drift, expected.drift, rtol=0, atol=1e-12 * np.max(np.abs(expected.drift)))
+        passive = simulate(plant.building, plant.step_map(substeps), samples)
+        np.testing.assert_array_equal(evaluation.responses[PASSIVE, motion.name].stroke, passive.stroke)
+    summary = evaluation.summary()
+    assert summary.loc[PASSIVE, "J1"] < 0.9 and summary.loc[PASSIVE, "power_peak_W"] == 0.0
+    assert np.isnan(summary.loc["uncontrolled", "stroke_m"])

@@ -153,3 +153,15 @@ def test_the_tuning_is_the_design_models_so_a_softer_plant_detunes_it():
     omega = np.sqrt(scipy.linalg.eigh(design.bare.building.stiffness, design.bare.building.mass)[0][0])
     tmd = design.building.devices[0]
     assert np.sqrt(tmd.stiffness / tmd.mass) / omega == pytest.approx(warburton_optimum(0.02)[0], rel=1e-12)
+
+
+def test_a_detuned_plant_changes_only_the_devices_spring_and_dashpot():
+    devices = [{"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1e4, "stroke_limit": 1.0}]
+    raw = experiment_with(devices, actuators=[]).model_dump()
+    nominal = Plant(Experiment.model_validate(raw)).building
+    raw["plant"] = {"devices": {"frequency": 0.9, "damping": 2.0}}
+    built = Plant(Experiment.model_validate(raw)).building
+    (tuned,), (detuned,) = nominal.devices, built.devices
+    assert detuned.stiffness == pytest.approx(0.81 * tuned.stiffness) and detuned.damping == 2.0 * tuned.damping
+    assert detuned.mass == tuned.mass and np.array_equal(built.actuator_matrix, nominal.actuator_matrix)
+    np.testing.assert_array_equal(built.mass, nominal.mass)
