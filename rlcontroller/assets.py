@@ -24,4 +24,5 @@ DEFAULT_MODEL = MODELS / "five_story_every_story"  # the rule: models/README.md
 DEMO_CONFIG = CONFIGS / "experiments" / "demo.yaml"
 STANDARD_SCENARIOS = CONFIGS / "scenarios" / "standard.yaml"
 DEVICE_SCENARIOS = CONFIGS / "scenarios" / "devices.yaml"  # the standard's for buildings with mass devices
+DAMPER_SCENARIOS = CONFIGS / "scenarios" / "dampers.yaml"  # and with semi-active dampers
 SAFETY_STANDARD = CONFIGS / "checks" / "standard.yaml"

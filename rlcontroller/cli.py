@@ -19,6 +19,7 @@ import typer
 from rlcontroller.assets import (
     DEFAULT_MODEL,
     DEMO_CONFIG,
+    DAMPER_SCENARIOS,
     DEVICE_SCENARIOS,
     MODELS,
     SAFETY_STANDARD,
@@ -311,11 +312,14 @@ def run_check(
 
 
 def standard_scenarios(experiment: Experiment) -> Path:
-    """The standard robustness scenarios, or with mass devices their own (no yielding stories, detuned devices)."""
+    """The standard robustness scenarios, or with devices their own (no yielding stories; devices as built
+    differing from their design; no actuator dynamics with semi-active dampers)."""
+    if experiment.has_dampers:
+        return DAMPER_SCENARIOS
     return DEVICE_SCENARIOS if experiment.devices else STANDARD_SCENARIOS
 
 
-SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices"
+SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices, dampers.yaml with dampers"
 
 
 def warn_unchecked(folder: Path, model: str) -> None:
@@ -768,7 +772,9 @@ def export(
         raise ConfigError(f"--out {out}: expected a file path in an existing folder")
     warn_unchecked(folder, model)
     export_onnx(folder, model, out)
-    typer.echo(f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md")
+    dampers = load_experiment(folder / "config.yaml").has_dampers
+    outputs = "forces (N) and damper commands" if dampers else "forces (N)"
+    typer.echo(f"wrote {out}: readings (SI) and state in, {outputs} out; see docs/deployment.md")
 
 
 @app.command(short_help="The safety check: never worse than no control.")

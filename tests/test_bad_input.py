@@ -136,6 +136,38 @@ CONFIG_CASES = {
         "sensors: {measurements: [{quantity: stroke, scale: 0.1}]}\n",
         "sensors.measurements[0]: there is no mass device",
     ),
+    "damper_story_9": (
+        "actuators: []\ndevices: [{type: mr_damper, story: 9, capacity: 1e5}]\n",
+        "devices[0].story: story 9 does not exist, expected 1..5",
+    ),
+    "damper_on_an_actuator_story": (
+        "actuators: [{story: 1}]\ndevices: [{type: mr_damper, story: 1, capacity: 1e5}]\n",
+        "devices[0].story: story 1 already has an actuator",
+    ),
+    "two_dampers_one_story": (
+        "actuators: []\ndevices: [{type: mr_damper, story: 2, capacity: 1e5}, "
+        "{type: variable_damper, story: 2, damping_min: 0, damping_max: 1e6, capacity: 1e5}]\n",
+        "devices[1].story: story 2 already has a damper (devices[0])",
+    ),
+    "damper_capacity_negative": (
+        "actuators: []\ndevices: [{type: mr_damper, story: 1, capacity: -1e5}]\n",
+        "devices[0].mr_damper.capacity: Input should be greater than 0",
+    ),
+    "variable_damper_reversed": (
+        "actuators: []\ndevices: [{type: variable_damper, story: 1, damping_min: 2e6, damping_max: 1e6, "
+        "capacity: 1e5}]\n",
+        "damping_min 2e+06 must be below damping_max 1e+06",
+    ),
+    "dampers_with_actuator_lag": (
+        "actuators: []\ndevices: [{type: mr_damper, story: 1, capacity: 1e5}]\n"
+        "plant: {actuators: {time_constant: 0.02}}\n",
+        "plant.actuators: actuator dynamics with semi-active dampers are not modelled",
+    ),
+    "dampers_with_a_residual_on_lqg": (
+        "actuators: []\ndevices: [{type: mr_damper, story: 1, capacity: 1e5}]\n"
+        "sensors: {state_estimate: true}\nalgorithm: {residual_lqg: true}\n",
+        "algorithm.residual_lqg: not with semi-active dampers",
+    ),
     "seed_negative": ("seed: -1\n", "seed: Input should be greater than or equal to 0"),
     "seed_1e30": ("seed: 1000000000000000000000000000000\n", "seed: Input should be less than or equal to 4294967295"),
     "name_with_path": ("name: ../../elsewhere\n", "name: String should match pattern"),

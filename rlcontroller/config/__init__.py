@@ -63,6 +63,7 @@ from rlcontroller.config.base import (  # noqa: F401
     unique,
 )
 from rlcontroller.config.building import (  # noqa: F401
+    SEMI_ACTIVE,
     ActiveMassConfig,
     ActuatorConfig,
     Actuators,
@@ -70,10 +71,12 @@ from rlcontroller.config.building import (  # noqa: F401
     DampingConfig,
     DeviceConfig,
     Devices,
+    MRDamperConfig,
     MeasurementConfig,
     RayleighPair,
     SensorConfig,
     TunedMassConfig,
+    VariableDamperConfig,
     paper_actuators,
 )
 from rlcontroller.config.control import (  # noqa: F401

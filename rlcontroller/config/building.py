@@ -140,7 +140,41 @@ class ActiveMassConfig(TunedMassConfig):
     stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)]  # type: ignore[assignment]
 
 
-DeviceConfig = Annotated[TunedMassConfig | ActiveMassConfig, Field(discriminator="type")]
+class VariableDamperConfig(StrictModel):
+    """A semi-active ideal variable damper on `story`: force c (drift velocity), c commanded in
+    [damping_min, damping_max] (N*s/m); it can only dissipate. `capacity` (N) is the force the
+    clipped-optimal controller's LQG designs with (its force limit)."""
+
+    type: Literal["variable_damper"]
+    story: PositiveInt
+    damping_min: Annotated[float, Field(ge=0.0, le=MAX_STIFFNESS)]
+    damping_max: Annotated[float, Field(gt=0.0, le=MAX_STIFFNESS)]
+    capacity: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
+
+    @model_validator(mode="after")
+    def _ordered(self) -> VariableDamperConfig:
+        if self.damping_min >= self.damping_max:
+            raise ValueError(f"damping_min {self.damping_min:g} must be below damping_max {self.damping_max:g}")
+        return self
+
+
+class MRDamperConfig(StrictModel):
+    """A semi-active magnetorheological damper on `story`: Spencer, Dyke, Sain and Carlson's (1997)
+    phenomenological model (`physics.semi_active`), its force parameters scaled so that the
+    damper's yield-like force alpha(V_max) z_max is `capacity` (N); commanded in voltage,
+    0..`max_voltage` (V), through the current driver's first-order lag (`eta`, 1/s)."""
+
+    type: Literal["mr_damper"]
+    story: PositiveInt
+    capacity: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
+    max_voltage: Annotated[float, Field(gt=0.0, le=10.0)] = 2.25
+    eta: Annotated[float, Field(gt=0.0, le=1.0e4)] = 190.0
+
+
+DeviceConfig = Annotated[
+    TunedMassConfig | ActiveMassConfig | VariableDamperConfig | MRDamperConfig, Field(discriminator="type")
+]
+SEMI_ACTIVE = ("variable_damper", "mr_damper")
 Devices = Annotated[list[DeviceConfig], Field(max_length=MAX_FLOORS)]
 
 

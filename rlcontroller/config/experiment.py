@@ -25,7 +25,7 @@ from rlcontroller.config.base import (
     location,
     read_yaml,
 )
-from rlcontroller.config.building import Actuators, BuildingConfig, Devices, SensorConfig, paper_actuators
+from rlcontroller.config.building import SEMI_ACTIVE, Actuators, BuildingConfig, Devices, SensorConfig, paper_actuators
 from rlcontroller.config.control import RewardConfig, SupervisorConfig
 from rlcontroller.config.excitation import ExcitationConfig
 from rlcontroller.config.learning import (
@@ -82,11 +82,18 @@ class Experiment(StrictModel):
         """(file, key prefix) of a part, for error messages."""
         return self._origins.get(part, ("<default>", part))
 
+    @property
+    def has_dampers(self) -> bool:
+        """Semi-active dampers among the devices."""
+        return any(device.type in SEMI_ACTIVE for device in self.devices)
+
     def command_labels(self) -> list[str]:
         """Short labels of the commanded devices, in the order of the action: each actuator's story,
-        then each active mass driver's floor ("AMD 5")."""
+        each active mass driver's floor ("AMD 5"), each damper's story ("MR 1", "VD 1")."""
         labels = [str(actuator.story) for actuator in self.actuators]
-        return labels + [f"AMD {device.floor}" for device in self.devices if device.type == "active_mass"]
+        labels += [f"AMD {device.floor}" for device in self.devices if device.type == "active_mass"]
+        short = {"mr_damper": "MR", "variable_damper": "VD"}
+        return labels + [f"{short[device.type]} {device.story}" for device in self.devices if device.type in short]
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
@@ -181,8 +188,8 @@ def _check_cross_references(experiment: Experiment) -> None:
             )
     _check_devices(experiment)
     file, prefix = experiment.origin("sensors")
-    commanded = len(experiment.actuators) + sum(d.type == "active_mass" for d in experiment.devices)
-    counts = {"force": (commanded, "commanded device"), "stroke": (len(experiment.devices), "mass device")}
+    masses = sum(d.type in ("tuned_mass", "active_mass") for d in experiment.devices)
+    counts = {"force": (len(experiment.command_labels()), "commanded device"), "stroke": (masses, "mass device")}
     for index, measurement in enumerate(experiment.sensors.measurements):
         key = format_location(("measurements", index, "floors"), prefix)
         count, what = counts.get(measurement.quantity, (n_floors, "floor"))
@@ -199,15 +206,29 @@ def _check_cross_references(experiment: Experiment) -> None:
 
 
 def _check_devices(experiment: Experiment) -> None:
-    """Each mass device on an existing floor, tuned to an existing mode."""
+    """Each mass device on an existing floor, tuned to an existing mode; each semi-active damper on
+    an existing story without another damper or an actuator; no residual on LQG with dampers."""
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("devices")
+    taken = {actuator.story: "an actuator" for actuator in experiment.actuators}
     for index, device in enumerate(experiment.devices):
         where = format_location((index,), prefix)
+        if device.type in SEMI_ACTIVE:
+            if device.story > n_floors:
+                raise ConfigError(f"{file}: {where}.story: story {device.story} does not exist, expected 1..{n_floors}")
+            if device.story in taken:
+                raise ConfigError(f"{file}: {where}.story: story {device.story} already has {taken[device.story]}")
+            taken[device.story] = f"a damper (devices[{index}])"
+            continue
         if device.floor > n_floors:
             raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
         if device.mode > n_floors:
             raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
+    if experiment.has_dampers and experiment.algorithm.residual_lqg:
+        raise ConfigError(
+            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: not with semi-active dampers "
+            "(an LQG force is not a damper command)"
+        )
 
 
 def _check_time_steps(experiment: Experiment) -> None:
@@ -284,6 +305,9 @@ def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: s
     for key, number in stories:
         if number > n_floors:
             raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if experiment.has_dampers and (plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0):
+        where = location(file, prefix, "actuators")
+        raise ConfigError(f"{where}: actuator dynamics with semi-active dampers are not modelled; drop one of them")
     if plant.hysteresis is not None and experiment.devices:
         where = location(file, prefix, "hysteresis")
         raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")

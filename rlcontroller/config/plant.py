@@ -75,11 +75,13 @@ class HysteresisConfig(StrictModel):
 
 
 class DeviceFactors(StrictModel):
-    """Every mass device as built differs from its tuning: its frequency times `frequency` (the
-    spring times its square: detuning) and its dashpot times `damping`."""
+    """The devices as built differ from their design: every mass device's frequency times
+    `frequency` (the spring times its square: detuning) and its dashpot times `damping`; every
+    semi-active damper's force times `force` (an MR damper's capacity, a variable damper's range)."""
 
     frequency: Factor = 1.0
     damping: Factor = 1.0
+    force: Factor = 1.0
 
 
 class PlantConfig(StrictModel):

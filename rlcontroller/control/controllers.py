@@ -122,3 +122,69 @@ class LQGPrior:
             -(observation[..., self._estimate] @ self.feedback.T)
             - observation[..., self._ground, None] * self.feedforward
         )
+
+
+class ConstantCommand:
+    """Every commanded device held at one action: for dampers, passive-off (-1: the least voltage
+    or damping) and passive-on (+1: the most)."""
+
+    def __init__(self, value: float, n_commands: int, name: str) -> None:
+        self.value, self.n_commands, self.name = value, n_commands, name
+
+    def reset(self) -> None:
+        pass
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(observation)[:-1] + (self.n_commands,), self.value)
+
+
+class ClippedOptimal:
+    """Clipped-optimal control of semi-active dampers (Dyke, Spencer, Sain and Carlson 1996, Smart
+    Mater. Struct. 5, 565-575): an LQG + ground model with the experiment's cost, designed as if
+    each damper were an ideal actuator of its capacity (`Plant.active_equivalent`), whose Kalman
+    filter takes the measured damper forces as the applied ones; each damper is switched fully on
+    (+1) when (f_desired - f_measured) f_measured > 0, else off (-1). Needs every damper's force
+    among the sensors (`quantity: force`)."""
+
+    def __init__(self, plant: Plant, name: str = "clipped-optimal") -> None:
+        self.name = name
+        equivalent = plant.active_equivalent
+        self.design = design_lqg_ground_model(equivalent)
+        self.capacity = equivalent.force_limits
+        self.layout = plant.layout
+        self.force_rows = _force_rows(plant)
+        self.reset()
+
+    def reset(self) -> None:
+        self.estimate: np.ndarray | None = None
+        self._previous_ground = np.zeros(())
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        layout, design = self.layout, self.design
+        observation = np.asarray(observation, dtype=float)
+        readings = observation[..., layout.readings] * layout.reading_scale
+        ground = observation[..., layout.ground] * layout.ground_scale
+        measured = readings[..., self.force_rows]  # N, on the floor above (an actuator's sign)
+        if self.estimate is None:
+            self.estimate = np.zeros(observation.shape[:-1] + (design.filter.size,))
+        held = measured / self.capacity
+        self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
+        self._previous_ground = ground
+        desired = -(self.estimate @ design.feedback.T) * self.capacity
+        return np.where((desired - measured) * measured > 0.0, 1.0, -1.0)
+
+
+def _force_rows(plant: Plant) -> np.ndarray:
+    """The reading row of each commanded device's force; a clear error when one is not measured."""
+    rows: dict[int, int] = {}
+    start = 0
+    for measurement in plant.experiment.sensors.measurements:
+        count = plant.outputs(measurement.quantity)[0].shape[0]
+        chosen = list(range(count)) if measurement.floors is None else [f - 1 for f in measurement.floors]
+        if measurement.quantity == "force":
+            rows.update({device: start + i for i, device in enumerate(chosen)})
+        start += len(chosen)
+    missing = [k + 1 for k in range(plant.building.n_actuators) if k not in rows]
+    if missing:
+        raise ValueError(f"clipped-optimal control needs the force of every damper measured; not of {missing}")
+    return np.array([rows[k] for k in range(plant.building.n_actuators)])

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from rlcontroller.config import Experiment, display_path
-from rlcontroller.control.controllers import Controller, LQGController, Uncontrolled
+from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
@@ -44,7 +44,7 @@ PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Response]:
     """`plant` with no command (`plant.bare` is the building without its devices): whole-record
     simulations with the step map, or a batch through the non-linear step for yielding stories."""
-    if plant.yielding is not None:
+    if plant.nonlinear is not None:
         return [
             response for response, _ in batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
         ]
@@ -104,7 +104,7 @@ def evaluate(
     `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
     start = time.perf_counter()
     yielding = plant.yielding
-    include_optimal = include_optimal and yielding is None and not plant.has_actuator_dynamics
+    include_optimal = include_optimal and plant.nonlinear is None and not plant.has_actuator_dynamics
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant.bare, simulated)
     devices = plant.building.devices
@@ -124,7 +124,7 @@ def evaluate(
             metrics = j_metrics(result, bare[number])
             if yielding is not None:
                 metrics |= yielding_metrics(result, yielding.yield_drift)
-            if devices and name != "uncontrolled":
+            if (devices or plant.building.dampers) and name != "uncontrolled":
                 metrics |= device_metrics(result, np.array([device.damping for device in devices]))
             for metric, values in metrics.items():
                 rows.extend(
@@ -146,14 +146,9 @@ def compare(
     policy: PolicyController | None = None,
     on_motions: Callable[[int], None] | None = None,
 ) -> Evaluation:
-    """Uncontrolled, the three LQGs (accelerations only; + measured ground; + ground model), the
-    saved `policy` (if given) and the optimal reference, on every motion. The LQGs are designed on
-    the design model and run on the plant."""
-    design = plant.design
-    designs = [design_lqg(design), design_lqg(design, known_ground=True), design_lqg_ground_model(design)]
-    controllers: list[Controller] = [
-        LQGController(lqg, design, name) for lqg, name in zip(designs, LQG_VARIANTS, strict=True)
-    ]
+    """Uncontrolled, the classical controllers (`classical_controllers`), the saved `policy` (if
+    given) and the optimal reference, on every motion."""
+    controllers = classical_controllers(plant)
     sources = {}
     if policy is not None:
         controllers.append(policy)
@@ -161,6 +156,22 @@ def compare(
     evaluation = evaluate(plant, motions, controllers, label, on_motions=on_motions)
     evaluation.sources.update(sources)
     return evaluation
+
+
+def classical_controllers(plant: Plant) -> list[Controller]:
+    """The field's answers for the experiment's devices, designed on the design model and run on the
+    plant: the three LQGs (accelerations only; + measured ground; + ground model) for actuators and
+    active mass drivers; passive-off, passive-on and clipped-optimal control for semi-active dampers."""
+    design = plant.design
+    if design.semi_active is not None:
+        count = design.building.n_actuators
+        return [
+            ConstantCommand(-1.0, count, "passive-off"),
+            ConstantCommand(1.0, count, "passive-on"),
+            ClippedOptimal(design),
+        ]
+    designs = [design_lqg(design), design_lqg(design, known_ground=True), design_lqg_ground_model(design)]
+    return [LQGController(lqg, design, name) for lqg, name in zip(designs, LQG_VARIANTS, strict=True)]
 
 
 def percent_better(candidate: float, reference: float) -> float:

@@ -6,7 +6,8 @@ LQG + ground model designed on the design model (it also reads the ground accele
 the ground motion, as the learned controllers may); LQG re-designed on the true plant (its
 stiffness, mass, damping, damage, sensor faults, and the actuator lag and delay as states of its
 model; for yielding stories, their initial stiffness) — the oracle, the room a perfect linear model
-would give; when the run was trained with `plant_randomization`, LQG designed on the centre of its
+would give; for semi-active dampers instead passive-off, passive-on and clipped-optimal control
+designed on the design model, and clipped-optimal re-designed on the plant as the oracle; when the run was trained with `plant_randomization`, LQG designed on the centre of its
 structural and sensor ranges with the nominal actuator dynamics, the robust classical design an
 engineer would deploy without knowing the plant; and the RL policy of a run, if given. J1-J4 are
 taken against the uncontrolled *plant*.
@@ -20,7 +21,7 @@ from collections.abc import Callable
 import pandas as pd
 
 from rlcontroller.config import Experiment, Scenario
-from rlcontroller.control.controllers import Controller, LQGController
+from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
@@ -31,6 +32,8 @@ from rlcontroller.physics.plant import Plant, centre_of_ranges
 NOMINAL_LQG = "LQG (nominal design)"
 NOMINAL_GROUND_MODEL = "LQG + ground model (nominal design)"
 ORACLE_LQG = "LQG (re-designed on the plant)"
+NOMINAL_CLIPPED = "clipped-optimal (nominal design)"
+ORACLE_CLIPPED = "clipped-optimal (re-designed on the plant)"
 CENTRE_LQG = "LQG (centre of the ranges)"
 
 
@@ -46,12 +49,17 @@ def robustness(
     `on_scenario(name)` is called as each scenario is done (a progress bar)."""
     start = time.perf_counter()
     model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
+    dampers = model.semi_active is not None
     designed: list[Controller] = [  # designed once, without knowing the plant
         LQGController(design_lqg(model), model, NOMINAL_LQG),
         LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
-    ]
+    ] if not dampers else [
+        ConstantCommand(-1.0, model.building.n_actuators, "passive-off"),
+        ConstantCommand(1.0, model.building.n_actuators, "passive-on"),
+        ClippedOptimal(model, NOMINAL_CLIPPED),
+    ]  # fmt: skip
     robust: list[Controller] = []
-    if experiment.plant_randomization is not None:
+    if experiment.plant_randomization is not None and not dampers:
         part = centre_of_ranges(experiment.plant_randomization, experiment.plant)
         centre = Plant(experiment.model_copy(update={"plant": part, "plant_randomization": None})).elastic
         robust.append(LQGController(design_lqg(centre), centre, CENTRE_LQG))
@@ -59,7 +67,10 @@ def robustness(
     frames = []
     for scenario in scenarios:
         plant = Plant(experiment.model_copy(update={"plant": scenario.plant}))
-        oracle = LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG)
+        if dampers:
+            oracle: Controller = ClippedOptimal(plant, ORACLE_CLIPPED)
+        else:
+            oracle = LQGController(design_lqg(plant.elastic), plant.elastic, ORACLE_LQG)
         controllers = [*designed, oracle, *robust, *learned]
         result = evaluate(plant, motions, controllers, label, include_optimal=False)
         frames.append(result.metrics.assign(scenario=scenario.name))

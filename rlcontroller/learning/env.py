@@ -132,24 +132,23 @@ class BuildingEnv(gym.Env):
         self._forcing = np.hstack([ground_terms, ground_terms @ self._outputs.c.T])
         self._advance = self._advance_linear
 
-    def _prepare_yielding(self, samples: np.ndarray, substeps: int) -> None:
+    def _prepare_nonlinear(self, samples: np.ndarray, substeps: int) -> None:
         """The non-linear step: x_{k+1} from the integrator, then the outputs, linear in x_{k+1} and u."""
         self._windows = sliding_window_view(samples, substeps + 1)[::substeps]
         self._n_steps = self._windows.shape[0]
         self._forcing = np.zeros((self._n_steps, self.plant.n_state + self._outputs.c.shape[0]))
-        self._floor_gain = self.building.actuator_matrix * self.force_limits
         self._output_ct = self._outputs.c.T.copy()
         self._output_dt = (self._outputs.d * self.force_limits).T.copy()
-        self._advance = self._advance_yielding
+        self._advance = self._advance_nonlinear
 
     def _advance_linear(self, k: int, clipped: np.ndarray) -> np.ndarray:
         outputs = self._state_action @ self._transition
         outputs += self._forcing[k]
         return outputs
 
-    def _advance_yielding(self, k: int, clipped: np.ndarray) -> np.ndarray:
-        state = self.plant.yielding.step(
-            self._state_action[: self._n_state], self._floor_gain @ clipped, self._windows[k], self.control_dt
+    def _advance_nonlinear(self, k: int, clipped: np.ndarray) -> np.ndarray:
+        state = self.plant.nonlinear.step(
+            self._state_action[: self._n_state], self.force_limits * clipped, self._windows[k], self.control_dt
         )
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
 
@@ -161,10 +160,10 @@ class BuildingEnv(gym.Env):
         motion = (options or {}).get("motion") or self._draw_motion()
         self.motion = motion
         samples, substeps = for_control_step(motion, self.control_dt)
-        if self.plant.yielding is None:
+        if self.plant.nonlinear is None:
             self._prepare_linear(samples, substeps)
         else:
-            self._prepare_yielding(samples, substeps)
+            self._prepare_nonlinear(samples, substeps)
         self.ground_samples = samples[::substeps][: self._n_steps + 1]
         self._term_factors = self._outputs.term_factors(self.ground_samples)
         readings = noisy_readings(self.plant, self.ground_samples, self.np_random)

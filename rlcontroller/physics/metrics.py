@@ -17,7 +17,14 @@ from rlcontroller.physics.dynamics import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
 YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J")  # per story, yielding plants
-DEVICE_METRICS = ("stroke_m", "stroke_rms_m", "damper_energy_J", "power_peak_W", "power_rms_W")  # with mass devices
+DEVICE_METRICS = (  # with devices: per mass device, then per commanded device
+    "stroke_m",
+    "stroke_rms_m",
+    "damper_energy_J",
+    "power_peak_W",
+    "power_rms_W",
+    "dissipated_energy_J",
+)
 SETTLING_TAIL_S = 20.0  # s of zero ground motion after a record on a yielding plant
 RESIDUAL_WINDOW_S = 5.0  # the residual drift is the mean drift over the tail's last seconds
 
@@ -46,7 +53,8 @@ def j_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndar
 def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarray]:
     """Per mass device (dashpot coefficients `damping`, N*s/m): peak and RMS stroke (m) and the
     energy its dashpot dissipated (J); per commanded device: peak and RMS power (W), force times
-    the velocity across it, at the control steps (the force held over the step ending there)."""
+    the velocity across it, at the control steps (the force held over the step ending there), and
+    the energy it took out of the building (J; negative: it put energy in)."""
     dt = float(result.time[1] - result.time[0])
     duration = dt * (result.time.size - 1)
     power = result.force * result.device_velocity
@@ -56,6 +64,7 @@ def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarra
         "damper_energy_J": damping * energy(result.stroke_velocity, dt),
         "power_peak_W": peak(power),
         "power_rms_W": np.sqrt(energy(power, dt) / duration),
+        "dissipated_energy_J": -np.sum(power[1:], axis=0) * dt,
     }
 
 

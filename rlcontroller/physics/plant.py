@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import (
+    SEMI_ACTIVE,
     ActuatorConfig,
     BuildingConfig,
     Experiment,
@@ -51,7 +52,8 @@ from rlcontroller.physics.dynamics import (
 from rlcontroller.physics.excitation import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
-from rlcontroller.physics.structure import build, tune_devices, with_devices
+from rlcontroller.physics.semi_active import SemiActiveDampers
+from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,16 @@ def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfi
         damping = damping.model_copy(update={"matrix": (np.asarray(damping.matrix) * plant.damping).tolist()})
     return building.model_copy(
         update={"masses": masses.tolist(), "stiffnesses": stiffness.tolist(), "damping": damping}
+    )
+
+
+def scaled_damper(damper, factor: float):
+    """A semi-active damper's config with its force times `factor`: an MR damper's capacity, a variable
+    damper's damping range."""
+    if damper.type == "mr_damper":
+        return damper.model_copy(update={"capacity": damper.capacity * factor})
+    return damper.model_copy(
+        update={"damping_min": damper.damping_min * factor, "damping_max": damper.damping_max * factor}
     )
 
 
@@ -166,9 +178,17 @@ class Plant:
                     for d in devices
                 )
             self.building = with_devices(self.building, devices)
+        if experiment.has_dampers:
+            dampers = [d for d in experiment.devices if d.type in SEMI_ACTIVE]
+            factor = self.config.devices.force if self.config is not None else 1.0
+            if factor != 1.0:  # as built: stronger or weaker than designed
+                dampers = [scaled_damper(d, factor) for d in dampers]
+            self.building = with_dampers(self.building, dampers)
         hysteresis = self.config.hysteresis if self.config is not None else None
         stiffness = np.asarray(building.stiffnesses, dtype=float)
         self.yielding = None if hysteresis is None else BoucWen.of(self.building, hysteresis, stiffness)
+        self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
+        self.nonlinear = self.yielding or self.semi_active  # the integrator, when the step is not linear
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
         dynamics = self.config.actuators if self.config is not None else None
@@ -178,6 +198,7 @@ class Plant:
         lag = m if self.time_constant > 0 else 0
         held = m if self.delay_steps > 0 and not lag else 0
         self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
+        self.n_state += self.semi_active.size if self.semi_active is not None else 0
         self.sensors = sensor_matrices(self, experiment.sensors)
         self.layout = observation_layout(self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale)
         self.ground_model = GroundModel()
@@ -211,6 +232,20 @@ class Plant:
         return self._bare
 
     @property
+    def active_equivalent(self) -> Plant:
+        """This plant with each semi-active damper replaced by an ideal actuator whose force limit is the
+        damper's capacity: what clipped-optimal control designs its LQG on (on the design model, or
+        on the plant itself for the robustness study's oracle)."""
+        experiment = self.experiment
+        dampers = [d for d in experiment.devices if d.type in SEMI_ACTIVE]
+        actuators = [*experiment.actuators, *(ActuatorConfig(story=d.story, force_limit=d.capacity) for d in dampers)]
+        masses = [d for d in experiment.devices if d.type not in SEMI_ACTIVE]
+        active_masses = [d for d in masses if d.type == "active_mass"]
+        if active_masses:  # the action's order: actuators, active masses, dampers
+            raise ValueError("clipped-optimal control with active mass drivers and dampers together is not built")
+        return Plant(experiment.model_copy(update={"actuators": actuators, "devices": masses}))
+
+    @property
     def elastic(self) -> Plant:
         """This plant with linear stories (its initial stiffness): what a linear design can know."""
         if self.yielding is None:
@@ -228,6 +263,8 @@ class Plant:
         """(C, D) with quantity = C x + D u on this plant's state x and command u (N)."""
         if self.yielding is not None:
             return self._yielding_outputs(quantity)
+        if self.semi_active is not None:
+            return self._damper_outputs(quantity)
         c, d = output_matrices(self.building, quantity)
         if not self.has_actuator_dynamics:
             return c, d
@@ -254,6 +291,20 @@ class Plant:
             z_columns = -(np.triu(np.ones((n, n))) @ hysteretic)[: c.shape[0]]
         return np.hstack([c, z_columns]), d
 
+    def _damper_outputs(self, quantity: str) -> tuple[np.ndarray, np.ndarray]:
+        """Outputs on [z; per damper (y, z, u, F)]: a damper's column of D moves onto its force register
+        (its action commands the damper, it applies no force itself); its "force" is the force it puts
+        on its floor, -F, in the sign of an actuator's."""
+        c, d = output_matrices(self.building, quantity)
+        first, count = self.semi_active.first_command, len(self.building.dampers)
+        full = np.zeros((c.shape[0], self.n_state))
+        full[:, : c.shape[1]] = c
+        registers = c.shape[1] + 4 * np.arange(count) + 3
+        full[:, registers] = -d[:, first:]  # the damper pushes its floor with -F
+        d = d.copy()
+        d[:, first:] = 0.0
+        return full, d
+
     def response(self, states: np.ndarray, held_forces: np.ndarray, time: np.ndarray, ground: np.ndarray) -> Response:
         """Time histories from this plant's states x (K+1, n_state) and the forces (N) held just before
         each instant; for yielding plants also the story hysteretic forces (1 - a) k d_y z (N)."""
@@ -272,6 +323,8 @@ class Plant:
     def structure_step_map(self, substeps: int = 1) -> StepMap:
         """The building's own control-step map on z (no actuator dynamics), for `substeps` ground
         samples per step (cached)."""
+        if self.semi_active is not None:
+            raise ValueError("a building with semi-active dampers has no linear step map")
         key = ("structure", substeps)
         if key not in self._maps:
             self._maps[key] = step_map(self.building, self.experiment.simulation, substeps)

@@ -44,6 +44,17 @@ class MassDevice:
 
 
 @dataclass(frozen=True)
+class Damper:
+    """A semi-active damper on `story` (1-based), as configured (`config.VariableDamperConfig` or
+    `config.MRDamperConfig`); `capacity` (N) is the force clipped-optimal control designs with."""
+
+    kind: str  # variable_damper | mr_damper
+    story: int
+    capacity: float
+    config: object
+
+
+@dataclass(frozen=True)
 class Building:
     """A shear building with its actuators and mass devices.
 
@@ -59,6 +70,7 @@ class Building:
     force_limits: np.ndarray
     story_heights: np.ndarray | None = None
     devices: tuple[MassDevice, ...] = ()
+    dampers: tuple[Damper, ...] = ()  # their forces are the last columns of Gamma
 
     @property
     def n_dofs(self) -> int:
@@ -167,6 +179,8 @@ def tune_devices(building: Building, devices: list[DeviceConfig]) -> tuple[MassD
     omega, shapes = natural_modes(building.mass, building.stiffness)
     tuned = []
     for device in devices:
+        if device.type not in ("tuned_mass", "active_mass"):
+            continue
         shape = shapes[:, device.mode - 1] / shapes[device.floor - 1, device.mode - 1]
         mass = device.mass_ratio * float(shape @ building.mass @ shape)
         frequency_ratio, damping_ratio = warburton_optimum(device.mass_ratio, device.tuning)
@@ -215,6 +229,18 @@ def with_devices(building: Building, devices: tuple[MassDevice, ...]) -> Buildin
         building, mass=mass, stiffness=stiffness, damping=damping, actuator_matrix=gamma, force_limits=limits,
         devices=devices,
     )  # fmt: skip
+
+
+def with_dampers(building: Building, dampers: list[DeviceConfig]) -> Building:
+    """`building` with its semi-active dampers: an inter-story column of Gamma each, after the other
+    commanded devices, with a unit "limit" (the action itself is the damper's command)."""
+    gamma = actuator_matrix(building.n_dofs, [ActuatorConfig(story=damper.story) for damper in dampers])
+    return replace(
+        building,
+        actuator_matrix=np.hstack([building.actuator_matrix, gamma]),
+        force_limits=np.concatenate([building.force_limits, np.ones(len(dampers))]),
+        dampers=tuple(Damper(d.type, d.story, d.capacity, d) for d in dampers),
+    )
 
 
 def build(building: BuildingConfig, actuators: list[ActuatorConfig]) -> Building:

@@ -72,7 +72,7 @@ class BuildingBatch:
         self._stacked: np.ndarray | None = None  # the transitions of all members, padded to S
         self._transitions: list[np.ndarray | None] = [None] * size  # each member's own T (unpadded)
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
-        self._windows: list[np.ndarray | None] = [None] * size  # yielding members: ground per step
+        self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
         self._members = np.arange(size)
 
     def _resize(self, state_size: int, length: int) -> None:
@@ -109,7 +109,7 @@ class BuildingBatch:
         forcing = self._forcing[member]
         forcing[:] = 0.0
         rows = self.rows if plant is self.plant else step_outputs(plant)
-        if plant.yielding is None:
+        if plant.nonlinear is None:
             step = plant.step_map(substeps)
             ground_terms = step.ground_terms(samples)
             forcing[:n_steps, : plant.n_state] = ground_terms
@@ -193,7 +193,7 @@ class BuildingBatch:
     def _advance(self, clipped: np.ndarray) -> np.ndarray:
         """[x_{k+1} | outputs_{k+1}] without the forcing, for every member."""
         if self._windows[0] is not None:
-            return self._advance_yielding(clipped)
+            return self._advance_nonlinear(clipped)
         if self._stacked is None:
             first = self._transitions[0]
             if all(t is first for t in self._transitions):
@@ -204,15 +204,14 @@ class BuildingBatch:
             return self.states @ self._stacked
         return np.matmul(self.states[:, None, :], self._stacked)[:, 0, :]
 
-    def _advance_yielding(self, clipped: np.ndarray) -> np.ndarray:
+    def _advance_nonlinear(self, clipped: np.ndarray) -> np.ndarray:
         size = self._state_size
         new = np.zeros((self.size, size + self._n_outputs))
         for member, plant in enumerate(self.plants):
             n, windows = plant.n_state, self._windows[member]
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
-            floor_force = (plant.building.actuator_matrix * limits) @ clipped[member]
-            state = plant.yielding.step(self.states[member, :n], floor_force, windows[k], self.control_dt)
+            state = plant.nonlinear.step(self.states[member, :n], limits * clipped[member], windows[k], self.control_dt)
             rows = self.rows if plant is self.plant else step_outputs(plant)
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T

@@ -88,3 +88,46 @@ def test_the_residual_rule_clips_the_policy_then_the_sum():
     prior = np.array([0.1, -0.8, 3.0])
     np.testing.assert_allclose(residual_action(policy, prior), [1.0, -1.0, 1.0])
     np.testing.assert_allclose(residual_action(np.zeros(3), np.array([0.3, -0.2, 0.0])), [0.3, -0.2, 0.0])
+
+
+def mr_plant(**sensors) -> Plant:
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import load_experiment
+
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
+    if sensors:
+        experiment = experiment.model_copy(update={"sensors": experiment.sensors.model_copy(update=sensors)})
+    return Plant(experiment)
+
+
+def test_clipped_optimal_switches_a_damper_on_only_to_push_toward_the_desired_force():
+    """Dyke et al.'s law: on when (f_desired - f_measured) f_measured > 0, else off."""
+    from types import SimpleNamespace
+
+    from rlcontroller.control.controllers import ClippedOptimal
+
+    plant = mr_plant()
+    controller = ClippedOptimal(plant)
+    measured = np.array([1.0e3, 1.0e3, -1.0e3])
+    desired = np.array([2.0e3, 0.5e3, -3.0e3])  # larger, smaller, larger (negative) than measured
+    size = controller.design.filter.size
+    estimate = np.zeros(size)
+    estimate[0] = 1.0
+    feedback = np.zeros((3, size))
+    feedback[:, 0] = -desired / controller.capacity
+    controller.design = SimpleNamespace(
+        filter=SimpleNamespace(size=size, update=lambda *args: estimate), feedback=feedback
+    )
+    observation = np.zeros(plant.layout.size)
+    observation[controller.force_rows] = measured / plant.layout.reading_scale[controller.force_rows]
+    np.testing.assert_array_equal(controller.act(observation), [1.0, -1.0, 1.0])
+
+
+def test_clipped_optimal_needs_every_damper_force_measured():
+    from rlcontroller.config import MeasurementConfig
+    from rlcontroller.control.controllers import ClippedOptimal
+
+    plant = mr_plant(measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0)])
+    with pytest.raises(ValueError, match=r"needs the force of every damper measured; not of \[1, 2, 3\]"):
+        ClippedOptimal(plant)

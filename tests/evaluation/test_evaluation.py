@@ -133,3 +133,17 @@ def test_with_mass_devices_uncontrolled_is_the_bare_building_and_passive_the_tun
     summary = evaluation.summary()
     assert summary.loc[PASSIVE, "J1"] < 0.9 and summary.loc[PASSIVE, "power_peak_W"] == 0.0
     assert np.isnan(summary.loc["uncontrolled", "stroke_m"])
+
+
+def test_semi_active_dampers_are_compared_with_passive_off_on_and_clipped_optimal(records):
+    from rlcontroller.evaluation.evaluation import compare
+
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
+    motions = load_records(records)[0][:2]
+    evaluation = compare(plant, motions, "two records")
+    assert evaluation.controllers == ["uncontrolled", "passive-off", "passive-on", "clipped-optimal"]
+    summary = evaluation.summary()
+    assert (summary.loc[["passive-off", "passive-on", "clipped-optimal"], "J1"] < 0.8).all()
+    off, on = (evaluation.responses[name, motions[0].name].force for name in ("passive-off", "passive-on"))
+    assert np.abs(on).max() > 1.5 * np.abs(off).max()  # more voltage, more force
+    assert summary.loc["passive-on", "dissipated_energy_J"] > 0.0
