@@ -17,9 +17,9 @@ from typing import Annotated, Any
 import typer
 
 from rlcontroller.assets import (
+    DAMPER_SCENARIOS,
     DEFAULT_MODEL,
     DEMO_CONFIG,
-    DAMPER_SCENARIOS,
     DEVICE_SCENARIOS,
     MODELS,
     SAFETY_STANDARD,

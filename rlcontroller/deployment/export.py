@@ -148,8 +148,11 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         "actuator_stories": ", ".join(experiment.command_labels()),
         "force_limits_N": ", ".join(repr(float(f)) for f in plant.force_limits),
         "outputs": "force (N) per actuator and active mass driver"
-        + ("; per semi-active damper its command in [-1, 1] (-1: least voltage or damping, +1: most)"
-           if plant.building.dampers else ""),
+        + (
+            "; per semi-active damper its command in [-1, 1] (-1: least voltage or damping, +1: most)"
+            if plant.building.dampers
+            else ""
+        ),
         "state_size": str(state_size),
         "supervisor": _supervisor_text(supervisor),
         "source": source,

@@ -1,16 +1,16 @@
 """Robustness: every controller on every scenario's plant and every record, through `evaluate`.
 
 Controllers, all run on the scenario's plant (the real building) with the same sensors, noise and
-records: the uncontrolled building; LQG designed on the design model, as deployed in practice;
-LQG + ground model designed on the design model (it also reads the ground accelerometer and models
-the ground motion, as the learned controllers may); LQG re-designed on the true plant (its
-stiffness, mass, damping, damage, sensor faults, and the actuator lag and delay as states of its
-model; for yielding stories, their initial stiffness) — the oracle, the room a perfect linear model
-would give; for semi-active dampers instead passive-off, passive-on and clipped-optimal control
-designed on the design model, and clipped-optimal re-designed on the plant as the oracle; when the run was trained with `plant_randomization`, LQG designed on the centre of its
-structural and sensor ranges with the nominal actuator dynamics, the robust classical design an
-engineer would deploy without knowing the plant; and the RL policy of a run, if given. J1-J4 are
-taken against the uncontrolled *plant*.
+records: the uncontrolled building; LQG designed on the design model, as deployed in practice; LQG +
+ground model designed on the design model (it also reads the ground accelerometer and models the
+ground motion, as the learned controllers may); LQG re-designed on the true plant (its stiffness,
+mass, damping, damage, sensor faults, and the actuator lag and delay as states of its model; for
+yielding stories, their initial stiffness) — the oracle, the room a perfect linear model would give;
+for semi-active dampers instead passive-off, passive-on and clipped-optimal control designed on the
+design model, and clipped-optimal re-designed on the plant as the oracle; when the run was trained
+with `plant_randomization`, LQG designed on the centre of its structural and sensor ranges with the
+nominal actuator dynamics, the robust classical design an engineer would deploy without knowing the
+plant; and the RL policy of a run, if given. J1-J4 are taken against the uncontrolled *plant*.
 """
 
 from __future__ import annotations

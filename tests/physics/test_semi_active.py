@@ -40,8 +40,10 @@ MR = [{"type": "mr_damper", "story": story, "capacity": 1.0e5} for story in (1, 
 
 
 def first_seconds(records, seconds: float):
+    from dataclasses import replace
+
     motion = load_records(records)[0][0]
-    return motion.__class__(**{**motion.__dict__, "acceleration": motion.acceleration[: round(seconds / motion.dt) + 1]})
+    return replace(motion, acceleration=motion.acceleration[: round(seconds / motion.dt) + 1])
 
 
 def test_mr_dampers_in_the_building_match_radau_on_spencers_equations(records):
@@ -49,7 +51,7 @@ def test_mr_dampers_in_the_building_match_radau_on_spencers_equations(records):
     motion = first_seconds(records, 6.0)
     steps = round(6.0 / plant.control_dt)
     actions = np.random.default_rng(5).choice([-1.0, 0.0, 1.0], size=(steps, 3))
-    (result, _), = batch_rollout(plant, [motion], [Commands(actions)])[0]
+    ((result, _),) = batch_rollout(plant, [motion], [Commands(actions)])[0]
 
     floors = Plant(Experiment())
     mass = floors.building.floor_masses
@@ -81,9 +83,9 @@ def test_mr_dampers_in_the_building_match_radau_on_spencers_equations(records):
     for k in range(steps):
         volts = 2.25 * (actions[k] + 1.0) / 2.0
         span = (k * plant.control_dt, (k + 1) * plant.control_dt)
-        state = scipy.integrate.solve_ivp(
-            rates, span, state, method="Radau", args=(volts,), rtol=1e-8, atol=1e-11
-        ).y[:, -1]
+        state = scipy.integrate.solve_ivp(rates, span, state, method="Radau", args=(volts,), rtol=1e-8, atol=1e-11).y[
+            :, -1
+        ]
         drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
         x, v = state[:5], state[5:10]
         drift = x[stories] - np.concatenate([[0.0], x])[stories]
@@ -105,7 +107,7 @@ def test_a_variable_damper_never_injects_energy(records):
     plant = damper_plant(devices)
     motion = load_records(records)[0][0]
     actions = np.random.default_rng(2).uniform(-1.0, 1.0, size=(4000, 3))
-    (result, _), = batch_rollout(plant, [motion], [Commands(actions)])[0]
+    ((result, _),) = batch_rollout(plant, [motion], [Commands(actions)])[0]
     power = result.force * result.device_velocity  # into the building: force on the floor x velocity across
     assert np.all(power <= 1e-9 * np.abs(power).max()) and np.abs(power).max() > 0.0
 
@@ -115,7 +117,7 @@ def test_an_mr_building_s_energy_balances(records):
     force times the drift velocity) + what is left, on a real record at full voltage."""
     plant = damper_plant(MR)
     motion = load_records(records)[0][1]
-    (result, _), = batch_rollout(plant, [motion], [Commands(np.ones((1, 3)))])[0]
+    ((result, _),) = batch_rollout(plant, [motion], [Commands(np.ones((1, 3)))])[0]
     dt = plant.control_dt
     floors = Plant(Experiment()).building
     velocity = result.velocity
@@ -149,7 +151,7 @@ def sinusoid_test(volts_action: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     displacement = 0.015 * envelope * np.sin(omega * time)
     acceleration = np.gradient(np.gradient(displacement, dt), dt)
     motion = GroundMotion(name="sinusoid", dt=dt, acceleration=acceleration)
-    (result, _), = batch_rollout(plant, [motion], [Commands(np.full((1, 1), volts_action))])[0]
+    ((result, _),) = batch_rollout(plant, [motion], [Commands(np.full((1, 1), volts_action))])[0]
     last = result.time >= 1.2  # two cycles after the start-up
     return -result.force[last, 0], result.drift[last, 0], result.device_velocity[last, 0]
 
