@@ -1,11 +1,12 @@
-"""Benchmark: environment step() rate against Gymnasium's Pendulum-v1, whole-record simulation, and
-the five-story building with yielding (Bouc-Wen) stories.
+"""Benchmark: environment step() rate against Gymnasium's Pendulum-v1, whole-record simulation, the
+five-story building with yielding (Bouc-Wen) stories and with three MR dampers, single and batched.
 
 Usage: python scripts/bench_env.py [--steps N]
 Both environments are built with gymnasium.make (the same wrappers) and driven by a random
 policy in the same process, alternately, three rounds; the best round of each is reported. The
 yielding env is measured with its numba-compiled step and, in a child process with
-NUMBA_DISABLE_JIT=1, with the same code run by the interpreter.
+NUMBA_DISABLE_JIT=1, with the same code run by the interpreter. The batched rates are control steps
+of 16 buildings stepped together (`simulation.batch`), per second, on 16 generated motions.
 """
 
 from __future__ import annotations
@@ -21,10 +22,14 @@ import gymnasium as gym
 import numpy as np
 
 import rlcontroller
-from rlcontroller.config import Experiment
+from rlcontroller.assets import CONFIGS
+from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.physics.dynamics import simulate, step_map
 from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import build
+from rlcontroller.simulation.batch import batch_rollout
 
 
 def steps_per_second(env: gym.Env, steps: int, seed: int = 0) -> float:
@@ -59,6 +64,27 @@ def yielding_rate(steps: int) -> float:
     return max(steps_per_second(env, steps) for _ in range(3))
 
 
+def mr_experiment() -> Experiment:
+    return load_experiment(CONFIGS / "experiments" / "five_story_mr.yaml")
+
+
+def mr_rate(steps: int) -> float:
+    env = gym.make(rlcontroller.ENV_ID, config=mr_experiment())
+    steps_per_second(env, 100)
+    return max(steps_per_second(env, steps) for _ in range(3))
+
+
+def batch_rate(experiment: Experiment, members: int = 16) -> float:
+    """Control steps per second of `members` buildings stepped together, on as many generated motions."""
+    plant = Plant(experiment)
+    motions = generate_suite(experiment.excitation.generator, members, seed=2)
+    controller = ConstantCommand(0.0, plant.building.n_actuators, "half")
+    batch_rollout(plant, motions[:1], [controller])  # compile
+    start = time.perf_counter()
+    runs = batch_rollout(plant, motions, [controller])[0]
+    return sum(response.time.size - 1 for response, _ in runs) / (time.perf_counter() - start)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=50_000)
@@ -86,6 +112,9 @@ def main() -> None:
     interpreted = float(subprocess.check_output(command, env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, text=True))
     print(f"yielding stories step() (numba):  {compiled:,.0f} steps/s")
     print(f"yielding stories, interpreted:    {interpreted:,.0f} steps/s ({compiled / interpreted:.0f}x slower)")
+    print(f"3 MR dampers step() (numba):      {mr_rate(arguments.steps):,.0f} steps/s")
+    print(f"yielding stories, batch of 16:    {batch_rate(Experiment(plant=YIELDING)):,.0f} steps/s")
+    print(f"3 MR dampers, batch of 16:        {batch_rate(mr_experiment()):,.0f} steps/s")
 
 
 if __name__ == "__main__":

@@ -148,7 +148,7 @@ class BuildingEnv(gym.Env):
 
     def _advance_nonlinear(self, k: int, clipped: np.ndarray) -> np.ndarray:
         state = self.plant.nonlinear.step(
-            self._state_action[: self._n_state], self.force_limits * clipped, self._windows[k], self.control_dt
+            self._state_action[: self._n_state], clipped, self._windows[k], self.control_dt
         )
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
 

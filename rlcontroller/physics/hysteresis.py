@@ -29,7 +29,7 @@ from rlcontroller.physics.structure import Building
 class BoucWen:
     """Bouc-Wen stories of a building: everything the integrator needs, as arrays (SI)."""
 
-    actuator_matrix: np.ndarray  # Gamma (n, m): commands (N) to floor forces
+    floor_gain: np.ndarray  # Gamma times the force limits (n, m): actions to floor forces (N)
     mass_inverse: np.ndarray  # (n,) 1/m_i
     damping: np.ndarray  # C (n, n)
     linear_stiffness: np.ndarray  # a k_i (n,)
@@ -46,7 +46,7 @@ class BoucWen:
         yield_drift = np.broadcast_to(np.asarray(config.yield_drift, dtype=float), n).copy()
         alpha = config.post_yield_ratio
         return cls(
-            actuator_matrix=building.actuator_matrix,
+            floor_gain=building.actuator_matrix * building.force_limits,
             mass_inverse=1.0 / np.diag(building.mass),
             damping=building.damping,
             linear_stiffness=alpha * story_stiffness,
@@ -58,12 +58,12 @@ class BoucWen:
             substeps=config.substeps,
         )
 
-    def step(self, state: np.ndarray, command: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
-        """The state after one control step: the commands u (N) held, `ground` the r + 1 ground
-        samples (m/s^2) spanning the step."""
+    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+        """The state after one control step: the action (forces / force limits) held, `ground` the
+        r + 1 ground samples (m/s^2) spanning the step."""
         return bouc_wen_step(
             state,
-            self.actuator_matrix @ command,
+            self.floor_gain @ action,
             ground,
             control_dt,
             self.substeps,

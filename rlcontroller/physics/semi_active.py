@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
+from rlcontroller.physics.dynamics import StateSpace, exact_substep, state_space
 from rlcontroller.physics.structure import Building
 
 VARIABLE_DAMPER, MR_DAMPER = 0, 1
@@ -104,8 +105,6 @@ class SemiActiveDampers:
 
     def _substep_maps(self, intervals: int, control_dt: float) -> tuple[np.ndarray, ...]:
         """The building's exact map over one sub-step for forces on its degrees of freedom (cached)."""
-        from rlcontroller.physics.dynamics import StateSpace, exact_substep, state_space
-
         if intervals not in self._maps:
             per_interval = int(np.ceil(control_dt / intervals / SUBSTEP_S - 1e-9))
             system = state_space(self.building)
@@ -120,16 +119,17 @@ class SemiActiveDampers:
             self._maps[intervals] = (per_interval, *(np.ascontiguousarray(m) for m in maps))
         return self._maps[intervals]
 
-    def step(self, state: np.ndarray, command: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
-        """The state after one control step: `command` (N for the active devices, the dampers' actions
-        in [-1, 1]) held, `ground` the r + 1 ground samples (m/s^2) spanning the step."""
+    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+        """The state after one control step: the action held (the active devices' forces / force
+        limits, the dampers' commands in [-1, 1]), `ground` the r + 1 ground samples (m/s^2) spanning
+        the step."""
         per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(ground.size - 1, control_dt)
-        first = self.first_command
-        active = self.building.actuator_matrix[:, :first] @ command[:first]
+        first, building = self.first_command, self.building
+        active = (building.actuator_matrix[:, :first] * building.force_limits[:first]) @ action[:first]
         return damper_step(
             state,
             active,
-            command[first:],
+            action[first:],
             ground,
             per_interval,
             control_dt / ((ground.size - 1) * per_interval),

@@ -211,7 +211,7 @@ class BuildingBatch:
             n, windows = plant.n_state, self._windows[member]
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
-            state = plant.nonlinear.step(self.states[member, :n], limits * clipped[member], windows[k], self.control_dt)
+            state = plant.nonlinear.step(self.states[member, :n], clipped[member], windows[k], self.control_dt)
             rows = self.rows if plant is self.plant else step_outputs(plant)
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T

@@ -17,12 +17,12 @@ BUILDING = build(EXPERIMENT.building, EXPERIMENT.actuators)
 MOTION = synthetic_suite(count=1)[0]  # 0.02 s samples, PGA 2-6 m/s^2
 
 
-def run(model: BoucWen, steps: int, command: np.ndarray | None = None) -> np.ndarray:
-    """Drift history of the yielding building under MOTION (actuator forces held, 0.02 s control steps)."""
-    force = np.zeros(3) if command is None else command
+def run(model: BoucWen, steps: int, force: np.ndarray | None = None) -> np.ndarray:
+    """Drift history of the yielding building under MOTION (actuator forces (N) held, 0.02 s control steps)."""
+    action = np.zeros(3) if force is None else force / BUILDING.force_limits
     state, drifts = np.zeros(15), []
     for k in range(steps):
-        state = model.step(state, force, MOTION.acceleration[k : k + 2], 0.02)
+        state = model.step(state, action, MOTION.acceleration[k : k + 2], 0.02)
         drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
     return np.array(drifts)
 

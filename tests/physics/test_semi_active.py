@@ -168,3 +168,38 @@ def test_mr_loops_have_a_voltage_dependent_plateau_and_hysteresis():
     turning = np.where(np.diff(np.sign(velocity)) != 0)[0]  # the last sample before the velocity changes sign
     assert turning.size >= 3 and np.all(np.abs(velocity[turning]) < 0.4 * np.abs(velocity).max())
     assert np.all(np.abs(on_force[turning]) > 0.6 * np.abs(on_force).max())
+
+
+def test_variable_dampers_in_the_building_match_radau(records):
+    """c = c_min + (c_max - c_min)(a + 1)/2 held over each control step, F = c d' on stories 2 and 4."""
+    devices = [
+        {"type": "variable_damper", "story": s, "damping_min": 2e4, "damping_max": 8e5, "capacity": 1e5} for s in (2, 4)
+    ]
+    plant = damper_plant(devices)
+    motion = first_seconds(records, 6.0)
+    steps = round(6.0 / plant.control_dt)
+    actions = np.random.default_rng(7).uniform(-1.0, 1.0, size=(steps, 2))
+    ((result, _),) = batch_rollout(plant, [motion], [Commands(actions)])[0]
+    floors = Plant(Experiment()).building
+    time = np.arange(motion.acceleration.size) * motion.dt
+    stories = np.array([2, 4]) - 1
+
+    def rates(t, s, c):
+        x, v = s[:5], s[5:]
+        velocity = v[stories] - v[stories - 1]
+        floor_force = np.zeros(5)
+        floor_force[stories] -= c * velocity
+        floor_force[stories - 1] += c * velocity
+        a_g = np.interp(t, time, motion.acceleration)
+        return np.concatenate(
+            [v, (floor_force - floors.stiffness @ x - floors.damping @ v) / floors.floor_masses - a_g]
+        )
+
+    state, drifts = np.zeros(10), [np.zeros(5)]
+    for k in range(steps):
+        c = 2e4 + (8e5 - 2e4) * (actions[k] + 1.0) / 2.0
+        span = (k * plant.control_dt, (k + 1) * plant.control_dt)
+        state = scipy.integrate.solve_ivp(rates, span, state, method="Radau", args=(c,), rtol=1e-9, atol=1e-12).y[:, -1]
+        drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
+    drifts = np.array(drifts)
+    np.testing.assert_allclose(result.drift, drifts, atol=0.01 * np.abs(drifts).max())
