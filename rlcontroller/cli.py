@@ -122,9 +122,7 @@ def info(
     config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
-    the simulated plant when there is a plant part), actuator layout and mass devices."""
-    import numpy as np
-
+    the simulated plant when there is a plant part), actuator layout and devices."""
     from rlcontroller.physics.plant import Plant
 
     experiment = load(config)
@@ -152,22 +150,47 @@ def info(
             f"{index + 1}: story {actuator.story}, {actuator.mount}, limit {actuator.force_limit / 1e3:g} kN ({floors})"
         )
     if experiment.devices:
-        typer.echo("\n# mass devices (tuned on the design model)")
-        total = float(np.sum(plant.design.building.floor_masses))
-        commanded = len(experiment.actuators)
-        for index, (config, device) in enumerate(zip(experiment.devices, plant.design.building.devices, strict=True)):
-            frequency = np.sqrt(device.stiffness / device.mass) / (2 * np.pi)
-            text = (
-                f"{index + 1}: {device.kind} on floor {device.floor}, {device.mass / 1e3:.4g} t ({device.mass_ratio:g} "
-                f"of mode {config.mode}'s modal mass, {device.mass / total:.3%} of the building's), {frequency:.4g} Hz "
-                f"(ratio {device.frequency_ratio:.4f}), damping ratio {device.damping_ratio:.4f}"
+        typer.echo("\n# devices (mass devices tuned on the design model)")
+        for index, line in enumerate(device_lines(experiment, plant.design.building), 1):
+            typer.echo(f"{index}: {line}")
+
+
+def device_lines(experiment: Experiment, building) -> list[str]:
+    """One line per device of `experiment` as built in `building` (the design model), in config order."""
+    import numpy as np
+
+    total = float(np.sum(building.floor_masses))
+    labels = experiment.command_labels()
+    masses = iter(building.devices)
+    lines = []
+    for config in experiment.devices:
+        if config.type == "mr_damper":
+            command = labels.index(f"MR {config.story}") + 1
+            lines.append(
+                f"mr_damper on story {config.story}, capacity {config.capacity / 1e3:g} kN, "
+                f"0-{config.max_voltage:g} V, eta {config.eta:g} 1/s (command {command})"
             )
-            if device.stroke_limit is not None:
-                text += f", stroke limit {device.stroke_limit:g} m"
-            if device.active:
-                commanded += 1
-                text += f", force limit {device.force_limit / 1e3:g} kN (command {commanded})"
-            typer.echo(text)
+            continue
+        if config.type == "variable_damper":
+            command = labels.index(f"VD {config.story}") + 1
+            lines.append(
+                f"variable_damper on story {config.story}, c {config.damping_min:g}-{config.damping_max:g} N*s/m, "
+                f"capacity {config.capacity / 1e3:g} kN (command {command})"
+            )
+            continue
+        device = next(masses)
+        frequency = np.sqrt(device.stiffness / device.mass) / (2 * np.pi)
+        text = (
+            f"{device.kind} on floor {device.floor}, {device.mass / 1e3:.4g} t ({device.mass_ratio:g} of mode "
+            f"{config.mode}'s modal mass, {device.mass / total:.3%} of the building's), {frequency:.4g} Hz "
+            f"(ratio {device.frequency_ratio:.4f}), damping ratio {device.damping_ratio:.4f}"
+        )
+        if device.stroke_limit is not None:
+            text += f", stroke limit {device.stroke_limit:g} m"
+        if device.active:
+            text += f", force limit {device.force_limit / 1e3:g} kN (command {labels.index(f'AMD {device.floor}') + 1})"
+        lines.append(text)
+    return lines
 
 
 @app.command(short_help="Train a controller on generated motions.")

@@ -131,3 +131,13 @@ def test_output_cut_short_by_the_reader_is_no_error():
         f"{sys.executable} -m rlcontroller info | head -1", shell=True, capture_output=True, text=True, check=False
     )
     assert head.stdout == "# resolved configuration\n" and "error" not in head.stderr
+
+
+@pytest.mark.parametrize("name", ["five_story_tmd", "five_story_amd", "five_story_mr"])
+def test_info_lists_each_device_as_built(name):
+    result = CliRunner().invoke(app, ["info", str(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")])
+    assert result.exit_code == 0, result.output
+    devices = result.output.split("# devices")[1].strip().splitlines()[1:]
+    expected = {"five_story_tmd": ["tuned_mass on floor 5, 0.9195 t"], "five_story_amd": ["active_mass on floor 5"]}
+    expected["five_story_mr"] = [f"mr_damper on story {s}, capacity 100 kN" for s in (1, 3, 5)]
+    assert [line.split(": ", 1)[1][: len(e)] for line, e in zip(devices, expected[name], strict=True)] == expected[name]
