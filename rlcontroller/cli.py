@@ -544,6 +544,10 @@ def compare_lqg(
         experiment = load_experiment(config)
     if not experiment.command_labels():
         raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
+    if experiment.has_dampers and (sweep or preview):
+        raise ConfigError(
+            "--sweep/--preview: LQG's trade-off and the preview bound need a plant without semi-active dampers"
+        )
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga)

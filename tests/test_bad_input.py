@@ -335,3 +335,11 @@ def test_a_misspelt_key_gets_the_closest_known_one(tmp_path, text, expected):
     path.write_text(text)
     line = one_error_line(CliRunner().invoke(app, ["info", str(path)]))
     assert line.startswith(f"error: {path}") and line.endswith(expected)
+
+
+def test_a_trade_off_sweep_of_a_damper_experiment_is_refused_before_any_work(tmp_path):
+    config = str(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
+    out = tmp_path / "out"
+    line = one_error_line(CliRunner().invoke(app, ["compare", "lqg", "--config", config, "--sweep", "--out", str(out)]))
+    assert "--sweep/--preview: LQG's trade-off and the preview bound need a plant without semi-active dampers" in line
+    assert not out.exists()
