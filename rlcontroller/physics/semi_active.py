@@ -168,25 +168,30 @@ def damper_step(
     parameters,
 ):  # fmt: skip
     """One control step of the building and its dampers (see the module docstring)."""
-    n = phi.shape[0] // 2
+    size = phi.shape[0]
+    n = size // 2
     dampers = stories.size
     s = state.copy()
+    new = np.empty(size)
+    held_term = force_gain @ active_force  # the active devices' forces, held over the whole step
+    damper_gain = np.zeros((size, dampers))  # z per newton of each damper's force F (-F above, +F below)
+    for k in range(dampers):
+        floor = stories[k] - 1
+        for i in range(size):
+            damper_gain[i, k] = -force_gain[i, floor] + (force_gain[i, floor - 1] if floor > 0 else 0.0)
     intervals = ground.size - 1
     for interval in range(intervals):
         for j in range(per_interval):
-            fraction0 = j / per_interval
-            fraction1 = (j + 1) / per_interval
-            a0 = ground[interval] + fraction0 * (ground[interval + 1] - ground[interval])
-            a1 = ground[interval] + fraction1 * (ground[interval + 1] - ground[interval])
-            forces = active_force.copy()
-            for k in range(dampers):
-                floor = stories[k] - 1
-                held = s[2 * n + 4 * k + 3]
-                forces[floor] -= held
-                if floor > 0:
-                    forces[floor - 1] += held
-            z = s[: 2 * n]
-            s[: 2 * n] = phi @ z + force_gain @ forces + ground_start * a0 + ground_end * a1
+            a0 = ground[interval] + j / per_interval * (ground[interval + 1] - ground[interval])
+            a1 = ground[interval] + (j + 1) / per_interval * (ground[interval + 1] - ground[interval])
+            for i in range(size):
+                total = held_term[i] + ground_start[i] * a0 + ground_end[i] * a1
+                for col in range(size):
+                    total += phi[i, col] * s[col]
+                for k in range(dampers):
+                    total += damper_gain[i, k] * s[size + 4 * k + 3]
+                new[i] = total
+            s[:size] = new
             for k in range(dampers):
                 floor = stories[k] - 1
                 drift = s[floor] - (s[floor - 1] if floor > 0 else 0.0)

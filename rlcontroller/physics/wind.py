@@ -1,0 +1,113 @@
+"""Turbulent along-wind loads on a building's floors, generated with a seed.
+
+The wind at height z is U(z) + u(z, t): a logarithmic mean profile U(z) = (u*/kappa) ln(z / z0) set by
+the terrain's roughness length z0 and the mean speed at a reference height, and a zero-mean turbulent
+part u with
+
+- Kaimal's spectrum, n S_u(z, n) / u*^2 = 200 f / (1 + 50 f)^(5/3), f = n z / U(z) (one-sided, n in
+  Hz): it varies with height, which matters over a 300 m tower, where Davenport's spectrum does not;
+- Davenport's coherence between heights, coh(z_i, z_j, n) = exp(-C n |z_i - z_j| / U_ij), U_ij the
+  mean of U(z_i) and U(z_j), C = `decay`.
+
+The field is simulated by the spectral representation method (Shinozuka and Deodatis 1991, 1996):
+with the cross-spectral matrix S(n) = H(n) H(n)^T (Cholesky, real because the coherence is real),
+
+    u_j(t) = sum_l sum_m 2 H_jm(n_l) sqrt(S-scale dn) cos(2 pi n_l t + phi_ml),
+
+phi uniform and independent, n_l = (l + 1/2) dn below `cutoff` Hz; every realisation has the target
+cross-spectra in expectation, summed by one inverse FFT per record. The forces are quasi-steady:
+F_i(t) = 1/2 rho C_D A_i (U_i + u_i)^2, linearised to 1/2 rho C_D A_i U_i^2 + rho C_D A_i U_i u_i (the
+mean and the fluctuating force), A_i the floor's tributary area (width x story height).
+Units: m, s, m/s, N.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+KARMAN = 0.4
+AIR_DENSITY = 1.22  # kg/m^3, the standard atmosphere near sea level (ASCE 7 uses 1.225)
+
+
+@dataclass(frozen=True)
+class WindField:
+    """What the generator needs: the heights (m) of the loaded points, the mean speed `speed` (m/s)
+    at `reference_height` (m), the roughness length `roughness` (m), the coherence decay, and the
+    loads' drag coefficient, width (m) and tributary heights (m)."""
+
+    heights: np.ndarray
+    speed: float
+    reference_height: float
+    roughness: float
+    decay: float = 10.0
+    drag_coefficient: float = 1.3
+    width: float = 42.0
+    tributary_heights: np.ndarray | None = None
+
+    @property
+    def friction_velocity(self) -> float:
+        """u* (m/s) of the log law through `speed` at `reference_height`."""
+        return KARMAN * self.speed / np.log(self.reference_height / self.roughness)
+
+    def mean_speed(self, heights: np.ndarray | None = None) -> np.ndarray:
+        """U(z) (m/s) of the log law at the loaded heights (or at `heights`)."""
+        z = self.heights if heights is None else np.asarray(heights, dtype=float)
+        return self.friction_velocity / KARMAN * np.log(z / self.roughness)
+
+    def spectrum(self, frequencies: np.ndarray) -> np.ndarray:
+        """Kaimal's one-sided auto-spectra S_u(z_j, n) (m^2/s^2/Hz), shape (frequencies, heights)."""
+        n = np.asarray(frequencies, dtype=float)[:, None]
+        reduced = n * self.heights / self.mean_speed()
+        return self.friction_velocity**2 * 200.0 * reduced / (1.0 + 50.0 * reduced) ** (5.0 / 3.0) / n
+
+    def coherence(self, frequencies: np.ndarray) -> np.ndarray:
+        """Davenport's coherence between every pair of heights, shape (frequencies, heights, heights)."""
+        n = np.asarray(frequencies, dtype=float)[:, None, None]
+        speed = self.mean_speed()
+        separation = np.abs(self.heights[:, None] - self.heights[None, :])
+        mean = 0.5 * (speed[:, None] + speed[None, :])
+        return np.exp(-self.decay * n * separation / mean)
+
+    def cross_spectra(self, frequencies: np.ndarray) -> np.ndarray:
+        """The target one-sided cross-spectral matrices, shape (frequencies, heights, heights)."""
+        root = np.sqrt(self.spectrum(frequencies))
+        return root[:, :, None] * root[:, None, :] * self.coherence(frequencies)
+
+    def areas(self) -> np.ndarray:
+        """Each loaded point's tributary area (m^2): the width times its tributary height."""
+        if self.tributary_heights is not None:
+            return self.width * np.asarray(self.tributary_heights, dtype=float)
+        edges = np.concatenate([[0.0], 0.5 * (self.heights[1:] + self.heights[:-1]), [self.heights[-1]]])
+        return self.width * np.diff(edges)
+
+
+def turbulence(
+    field: WindField, duration: float, dt: float, rng: np.random.Generator, cutoff: float = 2.0
+) -> np.ndarray:
+    """One realisation of u(z_j, t) (m/s) at t = 0, dt, ..., shape (samples, heights): the spectral
+    representation with frequencies n_l = (l + 1/2) dn, dn = 1 / (samples dt), below `cutoff` Hz
+    (and below the Nyquist frequency 1 / (2 dt))."""
+    samples = int(round(duration / dt)) + 1
+    length = 2 * samples  # the record repeats after length * dt: longer than the record
+    dn = 1.0 / (length * dt)
+    count = int(min(cutoff, 0.5 / dt) / dn)
+    frequencies = (np.arange(count) + 0.5) * dn
+    factor = np.linalg.cholesky(field.cross_spectra(frequencies) * dn + 1e-12 * np.eye(field.heights.size))
+    phases = np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, size=(count, field.heights.size)))
+    # u_j(t) = Re sum_l B_jl e^(2 pi i n_l t), B_l = sqrt(2) H(n_l) e^(i phi_l) (one-sided spectra)
+    amplitudes = np.sqrt(2.0) * np.einsum("ljm,lm->lj", factor, phases)
+    spectrum = np.zeros((length, field.heights.size), dtype=complex)
+    spectrum[:count] = amplitudes
+    time = np.arange(length) * dt
+    series = np.fft.ifft(spectrum, axis=0) * length * np.exp(1j * np.pi * dn * time)[:, None]
+    return series.real[:samples]
+
+
+def wind_forces(field: WindField, duration: float, dt: float, rng: np.random.Generator) -> np.ndarray:
+    """The along-wind force (N) on every loaded point at t = 0, dt, ..., shape (samples, heights):
+    the mean 1/2 rho C_D A U^2 plus the fluctuating rho C_D A U u (quasi-steady, linearised)."""
+    speed = field.mean_speed()
+    pressure = AIR_DENSITY * field.drag_coefficient * field.areas()
+    return 0.5 * pressure * speed**2 + pressure * speed * turbulence(field, duration, dt, rng)

@@ -1,0 +1,67 @@
+"""The wind field: over many realisations its auto-spectra are Kaimal's, its coherence Davenport's and
+its variance the spectrum's integral; the mean force is the mean profile's; a seed fixes it."""
+
+import numpy as np
+import pytest
+import scipy.signal
+
+from rlcontroller.physics.wind import AIR_DENSITY, WindField, turbulence, wind_forces
+
+FIELD = WindField(heights=np.array([40.0, 80.0, 160.0, 300.0]), speed=25.0, reference_height=10.0, roughness=0.3)
+DT, DURATION, REALISATIONS = 0.25, 1800.0, 24
+
+
+@pytest.fixture(scope="module")
+def spectra():
+    """Welch estimates of the one-sided cross-spectra, averaged over the realisations."""
+    rng = np.random.default_rng(11)
+    total = None
+    for _ in range(REALISATIONS):
+        u = turbulence(FIELD, DURATION, DT, rng, cutoff=1.0)
+        frequencies, cross = scipy.signal.csd(u[:, :, None], u[:, None, :], fs=1.0 / DT, nperseg=1024, axis=0)
+        total = cross if total is None else total + cross
+    return frequencies, total / REALISATIONS
+
+
+def bands(frequencies):
+    return [(frequencies > low) & (frequencies < 1.5 * low) for low in (0.01, 0.03, 0.08, 0.2, 0.5)]
+
+
+def test_the_auto_spectra_are_kaimals(spectra):
+    frequencies, cross = spectra
+    target = FIELD.spectrum(frequencies[1:])
+    for band in bands(frequencies[1:]):
+        estimate = np.real(np.diagonal(cross[1:][band], axis1=1, axis2=2)).mean(axis=0)
+        np.testing.assert_allclose(estimate, target[band].mean(axis=0), rtol=0.12)
+
+
+def test_the_coherence_is_davenports(spectra):
+    frequencies, cross = spectra
+    auto = np.real(np.diagonal(cross, axis1=1, axis2=2))
+    target = FIELD.coherence(frequencies[1:])
+    for i, j in ((0, 1), (1, 2), (2, 3), (0, 3)):
+        normalised = np.real(cross[1:, i, j]) / np.sqrt(auto[1:, i] * auto[1:, j])
+        for band in bands(frequencies[1:]):
+            assert normalised[band].mean() == pytest.approx(target[band, i, j].mean(), abs=0.06)
+
+
+def test_the_variance_is_the_spectrum_integral_and_the_mean_is_zero():
+    rng = np.random.default_rng(3)
+    u = np.stack([turbulence(FIELD, DURATION, DT, rng, cutoff=1.0) for _ in range(8)])
+    dn = 1.0 / (2 * (round(DURATION / DT) + 1) * DT)
+    frequencies = (np.arange(int(1.0 / dn)) + 0.5) * dn
+    expected = FIELD.spectrum(frequencies).sum(axis=0) * dn
+    np.testing.assert_allclose(u.var(axis=(0, 1)), expected, rtol=0.08)
+    assert np.all(np.abs(u.mean(axis=(0, 1))) < 0.1 * np.sqrt(expected))
+    assert expected[-1] / FIELD.friction_velocity**2 == pytest.approx(6.0, rel=0.1)  # Kaimal: sigma_u^2 ~ 6 u*^2
+
+
+def test_the_mean_force_is_the_mean_profiles_and_a_seed_fixes_the_record():
+    forces = wind_forces(FIELD, DURATION, DT, np.random.default_rng(5))
+    mean = 0.5 * AIR_DENSITY * FIELD.drag_coefficient * FIELD.areas() * FIELD.mean_speed() ** 2
+    records = [wind_forces(FIELD, DURATION, DT, np.random.default_rng(seed)) for seed in range(12)]
+    np.testing.assert_allclose(np.mean([f.mean(axis=0) for f in records], axis=0), mean, rtol=0.02)
+    np.testing.assert_array_equal(forces, wind_forces(FIELD, DURATION, DT, np.random.default_rng(5)))
+    assert not np.array_equal(forces, wind_forces(FIELD, DURATION, DT, np.random.default_rng(6)))
+    assert FIELD.mean_speed(np.array([10.0]))[0] == pytest.approx(25.0)  # the reference speed at its height
+    np.testing.assert_allclose(FIELD.areas().sum(), 42.0 * 300.0)  # the tributary areas cover the facade
