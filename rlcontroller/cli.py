@@ -128,7 +128,7 @@ def info(
     experiment = load(config)
     plant = Plant(experiment)
     typer.echo("# resolved configuration")
-    typer.echo(experiment.to_yaml())
+    typer.echo(resolved_text(experiment))
     floors_only = " (floors only, without the devices)" if experiment.devices else ""
     buildings = [(f"design model{floors_only}", plant.design.bare.building)]
     if experiment.plant is not None:
@@ -153,6 +153,19 @@ def info(
         typer.echo("\n# devices (mass devices tuned on the design model)")
         for index, line in enumerate(device_lines(experiment, plant.design.building), 1):
             typer.echo(f"{index}: {line}")
+
+
+def resolved_text(experiment: Experiment) -> str:
+    """The resolved experiment as YAML, a building's matrices shown by their size and source."""
+    import yaml
+
+    raw = experiment.model_dump(mode="json")
+    building = raw["building"]
+    for key in ("mass_matrix", "stiffness_matrix", "damping_matrix"):
+        if building.get(key) is not None:
+            size = len(building[key])
+            building[key] = f"({size} x {size}, SI, from {building.get('source') or 'the config'})"
+    return yaml.safe_dump(raw, sort_keys=False)
 
 
 def device_lines(experiment: Experiment, building) -> list[str]:

@@ -5,6 +5,7 @@ Never a traceback, never a hang, never silent acceptance of nonsense, never a ha
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import REPOSITORY
 from typer.testing import CliRunner
@@ -343,3 +344,64 @@ def test_a_trade_off_sweep_of_a_damper_experiment_is_refused_before_any_work(tmp
     line = one_error_line(CliRunner().invoke(app, ["compare", "lqg", "--config", config, "--sweep", "--out", str(out)]))
     assert "--sweep/--preview: LQG's trade-off and the preview bound need a plant without semi-active dampers" in line
     assert not out.exists()
+
+
+def chain(n: int = 3, fixed: bool = True) -> np.ndarray:
+    """A shear chain's stiffness matrix (kN/m); without the ground spring it is singular."""
+    k = np.diag([2.0] * n) - np.diag([1.0] * (n - 1), 1) - np.diag([1.0] * (n - 1), -1)
+    k[-1, -1] = 1.0
+    if not fixed:
+        k[0, 0] = 1.0
+    return 1e3 * k
+
+
+MATRIX_CASES = {
+    "not_symmetric": ({"K": chain() + np.triu(np.ones((3, 3)), 1)}, "stiffness_matrix must be symmetric"),
+    "ground_not_fixed": ({"K": chain(fixed=False)}, "stiffness_matrix must be positive definite"),
+    "mass_nan": ({"M": np.diag([1.0, np.nan, 1.0])}, "building.mass_matrix[1][1]: Input should be a finite number"),
+    "wrong_size": ({"K": chain(4)}, "stiffness_matrix is 4 x 4, expected 3 x 3 like mass_matrix"),
+    "no_stiffness": ({"K": None}, "no array 'K'; expected M, K and C or modal_damping"),
+    "unknown_array": ({"X": np.eye(3)}, "unknown arrays ['X'], expected M, K, C, modal_damping"),
+    "no_damping": ({"C": None}, "give exactly one of damping_matrix (C) and modal_damping"),
+    "negative_mass": ({"M": np.diag([1.0, -1.0, 1.0])}, "mass_matrix must be positive definite"),
+}
+
+
+@pytest.mark.parametrize(("arrays", "expected"), list(MATRIX_CASES.values()), ids=list(MATRIX_CASES))
+def test_bad_building_matrices_give_one_line(tmp_path, arrays, expected):
+    given = {"M": np.eye(3), "K": chain(), "C": 0.01 * chain()} | arrays
+    np.savez(tmp_path / "m.npz", **{key: value for key, value in given.items() if value is not None})
+    (tmp_path / "bad.yaml").write_text(
+        "building: {matrices: m.npz, units: {mass: t, force: kN, length: m}, story_heights: [3, 3, 3]}\n"
+        "actuators: [{story: 1}]\n"
+    )
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert expected in line and str(tmp_path) in line
+
+
+@pytest.mark.parametrize(
+    ("building", "expected"),
+    [
+        ("{matrices: m.npz, units: {mass: lb, force: kN, length: m}, story_heights: [3, 3, 3]}", "units.mass: 'lb'"),
+        ("{matrices: m.npz, story_heights: [3, 3, 3]}", "units: expected {mass, force, length}"),
+        ("{matrices: text.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "cannot read"),
+        ("{matrices: m.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "'story_heights' has 1"),
+        ("{matrices: gone.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "cannot read"),
+    ],
+)
+def test_bad_building_matrix_parts_give_one_line(tmp_path, building, expected):
+    np.savez(tmp_path / "m.npz", M=np.eye(3), K=chain(), C=0.01 * chain())
+    (tmp_path / "text.npz").write_text("not an archive")
+    (tmp_path / "bad.yaml").write_text(f"building: {building}\nactuators: [{{story: 1}}]\n")
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert expected in line
+
+
+def test_a_plant_part_with_stories_is_refused_for_a_matrix_building(tmp_path):
+    np.savez(tmp_path / "m.npz", M=np.eye(3), K=chain(), C=0.01 * chain())
+    (tmp_path / "bad.yaml").write_text(
+        "building: {matrices: m.npz, units: {mass: t, force: kN, length: m}, story_heights: [3, 3, 3]}\n"
+        "actuators: [{story: 1}]\nplant: {damage: [{story: 1, stiffness: -0.3}]}\n"
+    )
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert "plant.damage: a building given by matrices takes scalar factors only" in line

@@ -71,6 +71,7 @@ from rlcontroller.config.building import (  # noqa: F401
     DampingConfig,
     DeviceConfig,
     Devices,
+    MatrixBuildingConfig,
     MeasurementConfig,
     MRDamperConfig,
     RayleighPair,

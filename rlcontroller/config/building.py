@@ -93,6 +93,74 @@ def _check_damping_matrix(matrix: np.ndarray) -> None:
         raise ValueError(f"damping 'matrix' must be positive semi-definite (an eigenvalue is {lowest:g})")
 
 
+Matrix = list[list[float]]
+MASS_UNITS = {"kg": 1.0, "t": 1.0e3}
+FORCE_UNITS = {"N": 1.0, "kN": 1.0e3, "MN": 1.0e6}
+LENGTH_UNITS = {"m": 1.0, "mm": 1.0e-3, "cm": 1.0e-2}
+
+
+class MatrixBuildingConfig(StrictModel):
+    """A building given by its matrices, one translational degree of freedom per floor (floor 1 first,
+    the ground fixed): mass (kg), stiffness (N/m) and damping (N*s/m, or `modal_damping` ratios, one
+    per mode from the first, the last repeated for the higher modes), with the story heights (m).
+    Written in a building part as `matrices: FILE.npz` (arrays M, K and C or modal_damping) and
+    `units: {mass, force, length}`; `rlc info` prints it resolved, in SI (`config.matrices`)."""
+
+    name: str = "building from matrices"
+    source: str = ""  # the file the matrices came from
+    mass_matrix: Matrix
+    stiffness_matrix: Matrix
+    damping_matrix: Matrix | None = None
+    modal_damping: list[Annotated[float, Field(ge=0.0, lt=1.0)]] | None = None
+    story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]]
+
+    @property
+    def masses(self) -> list[float]:
+        """The floor masses: the diagonal of M (kg)."""
+        return [row[i] for i, row in enumerate(self.mass_matrix)]
+
+    @model_validator(mode="after")
+    def _consistent(self) -> MatrixBuildingConfig:
+        check_matrices(self)
+        return self
+
+
+def check_matrices(building) -> None:
+    """Square matrices of one size, finite, symmetric; M positive definite, K positive definite with
+    the ground fixed, C positive semi-definite; exactly one of a damping matrix and modal ratios."""
+    mass = _square(building.mass_matrix, "mass_matrix")
+    n = mass.shape[0]
+    if n > MAX_FLOORS:
+        raise ValueError(f"mass_matrix: {n} degrees of freedom, expected at most {MAX_FLOORS}")
+    stiffness = _square(building.stiffness_matrix, "stiffness_matrix", n)
+    if (building.damping_matrix is None) == (building.modal_damping is None):
+        raise ValueError("give exactly one of damping_matrix (C) and modal_damping")
+    matrices = [("mass_matrix", mass, True), ("stiffness_matrix", stiffness, True)]
+    if building.damping_matrix is not None:
+        matrices.append(("damping_matrix", _square(building.damping_matrix, "damping_matrix", n), False))
+    for name, matrix, definite in matrices:
+        size = float(np.max(np.abs(matrix))) or 1.0
+        if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=1e-12 * size):
+            raise ValueError(f"{name} must be symmetric")
+        lowest = float(np.min(np.linalg.eigvalsh(0.5 * (matrix + matrix.T))))
+        if lowest <= 1e-9 * size if definite else lowest < -1e-9 * size:
+            kind = "positive definite" if definite else "positive semi-definite"
+            raise ValueError(f"{name} must be {kind} (an eigenvalue is {lowest:g})")
+    if len(building.story_heights) != n:
+        raise ValueError(f"'story_heights' has {len(building.story_heights)} values, expected {n}")
+
+
+def _square(rows, name: str, size: int | None = None) -> np.ndarray:
+    matrix = np.asarray(rows, dtype=float)
+    if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        raise ValueError(f"{name} must be a square matrix, got shape {matrix.shape}")
+    if size is not None and matrix.shape[0] != size:
+        raise ValueError(f"{name} is {matrix.shape[0]} x {matrix.shape[0]}, expected {size} x {size} like mass_matrix")
+    if not np.all(np.isfinite(matrix)):
+        raise ValueError(f"{name} has a value that is not finite")
+    return matrix
+
+
 class ActuatorConfig(StrictModel):
     """An actuator on `story` with a force limit (N); inter-story mount pushes floors j and j-1."""
 

@@ -25,7 +25,15 @@ from rlcontroller.config.base import (
     location,
     read_yaml,
 )
-from rlcontroller.config.building import SEMI_ACTIVE, Actuators, BuildingConfig, Devices, SensorConfig, paper_actuators
+from rlcontroller.config.building import (
+    SEMI_ACTIVE,
+    Actuators,
+    BuildingConfig,
+    Devices,
+    MatrixBuildingConfig,
+    SensorConfig,
+    paper_actuators,
+)
 from rlcontroller.config.control import RewardConfig, SupervisorConfig
 from rlcontroller.config.excitation import ExcitationConfig
 from rlcontroller.config.learning import (
@@ -34,6 +42,7 @@ from rlcontroller.config.learning import (
     RESERVED_KWARGS,
     AlgorithmConfig,
 )
+from rlcontroller.config.matrices import read_matrix_part
 from rlcontroller.config.plant import (
     RANDOMIZED_FIELDS,
     PlantConfig,
@@ -65,7 +74,7 @@ class Experiment(StrictModel):
 
     name: Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z0-9_.+-]+$")] = "paper_sac"
     seed: Seed = 0
-    building: BuildingConfig = BuildingConfig()
+    building: BuildingConfig | MatrixBuildingConfig = BuildingConfig()
     actuators: Actuators = Field(default_factory=paper_actuators)
     devices: Devices = []  # tuned masses and active mass drivers (see config.building)
     sensors: SensorConfig = SensorConfig()
@@ -126,10 +135,14 @@ def load_experiment(path: str | Path) -> Experiment:
             raw[part] = read_yaml(part_path)
             origins[part] = (display_path(part_path), "")
             _check_part_type(part, raw[part], display_path(part_path))
+            folder, where = part_path.parent, display_path(part_path)
         else:
             origins[part] = (str(path), part)
             if part in raw and not (part in OPTIONAL_PARTS and value is None):
                 _check_part_type(part, value, f"{path}: {part}")
+            folder, where = path.parent, f"{path}: {part}"
+        if part == "building" and isinstance(raw.get(part), dict) and "matrices" in raw[part]:
+            raw[part] = read_matrix_part(raw[part], folder, where)
     return build_experiment(raw, origins, str(path))
 
 
@@ -142,6 +155,8 @@ def build_experiment(
     for part, model in PARTS.items():
         if part in raw and not (part in OPTIONAL_PARTS and raw[part] is None):
             part_file, prefix = origins.get(part, (file, part))
+            if part == "building" and isinstance(raw[part], dict) and "mass_matrix" in raw[part]:
+                model = MatrixBuildingConfig
             try:
                 TypeAdapter(model).validate_python(raw[part])
             except ValidationError as error:
@@ -293,8 +308,15 @@ def with_overrides(experiment: Experiment, values: dict[str, Any], where: str) -
 
 
 def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
-    """Per-story lists and floor numbers of a plant part must fit the building."""
+    """Per-story lists and floor numbers of a plant part must fit the building; a building given by
+    matrices takes scalar factors only, no damage and no yielding stories."""
     n_floors = len(experiment.building.masses)
+    if isinstance(experiment.building, MatrixBuildingConfig):
+        per_story = [key for key in ("stiffness", "mass") if isinstance(getattr(plant, key), list)]
+        per_story += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)
+        if per_story:
+            where = location(file, prefix, per_story[0])
+            raise ConfigError(f"{where}: a building given by matrices takes scalar factors only (no stories)")
     for key in ("stiffness", "mass"):
         value = getattr(plant, key)
         if isinstance(value, list) and len(value) != n_floors:

@@ -32,6 +32,7 @@ from rlcontroller.config import (
     ActuatorConfig,
     BuildingConfig,
     Experiment,
+    MatrixBuildingConfig,
     PlantConfig,
     PlantRandomization,
     Quantity,
@@ -94,7 +95,18 @@ def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
 
 def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:
     """The design building changed by the plant part: factors and damage on stiffness, factors on
-    mass, the damping ratios (or the damping matrix) times the damping factor."""
+    mass, the damping ratios (or the damping matrix) times the damping factor. A building given by
+    matrices takes scalar factors only (checked at loading)."""
+    if isinstance(building, MatrixBuildingConfig):
+        update = {
+            "mass_matrix": (np.asarray(building.mass_matrix) * plant.mass).tolist(),
+            "stiffness_matrix": (np.asarray(building.stiffness_matrix) * plant.stiffness).tolist(),
+        }
+        if building.damping_matrix is not None:
+            update["damping_matrix"] = (np.asarray(building.damping_matrix) * plant.damping).tolist()
+        else:
+            update["modal_damping"] = [ratio * plant.damping for ratio in building.modal_damping]
+        return building.model_copy(update=update)
     n = len(building.masses)
     stiffness = np.asarray(building.stiffnesses) * np.broadcast_to(np.asarray(plant.stiffness, dtype=float), n)
     for damage in plant.damage:
@@ -185,8 +197,9 @@ class Plant:
                 dampers = [scaled_damper(d, factor) for d in dampers]
             self.building = with_dampers(self.building, dampers)
         hysteresis = self.config.hysteresis if self.config is not None else None
-        stiffness = np.asarray(building.stiffnesses, dtype=float)
-        self.yielding = None if hysteresis is None else BoucWen.of(self.building, hysteresis, stiffness)
+        self.yielding = None
+        if hysteresis is not None:  # a shear building's (checked at loading)
+            self.yielding = BoucWen.of(self.building, hysteresis, np.asarray(building.stiffnesses, dtype=float))
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
         self.nonlinear = self.yielding or self.semi_active  # the integrator, when the step is not linear
         self.force_limits = self.building.force_limits

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from rlcontroller.config import ActuatorConfig, BuildingConfig, DeviceConfig
+from rlcontroller.config import ActuatorConfig, BuildingConfig, DeviceConfig, MatrixBuildingConfig
 
 
 @dataclass(frozen=True)
@@ -243,9 +243,37 @@ def with_dampers(building: Building, dampers: list[DeviceConfig]) -> Building:
     )
 
 
+def modal_damping_matrix(mass: np.ndarray, stiffness: np.ndarray, ratios: list[float]) -> np.ndarray:
+    """The classical damping matrix with the given ratio for each mode (the last ratio for the higher
+    modes): C = M Phi diag(2 zeta_i omega_i) Phi' M, with M-normalised Phi."""
+    omega, shapes = natural_modes(mass, stiffness)
+    zeta = np.array([ratios[min(i, len(ratios) - 1)] for i in range(omega.size)])
+    return mass @ shapes @ np.diag(2.0 * zeta * omega) @ shapes.T @ mass
+
+
+def from_matrices(building: MatrixBuildingConfig, actuators: list[ActuatorConfig]) -> Building:
+    """A building given by its matrices (SI), one translational degree of freedom per floor."""
+    mass = np.asarray(building.mass_matrix, dtype=float)
+    stiffness = np.asarray(building.stiffness_matrix, dtype=float)
+    if building.damping_matrix is not None:
+        damping = np.asarray(building.damping_matrix, dtype=float)
+    else:
+        damping = modal_damping_matrix(mass, stiffness, building.modal_damping)
+    return Building(
+        mass=mass,
+        stiffness=stiffness,
+        damping=damping,
+        actuator_matrix=actuator_matrix(mass.shape[0], actuators),
+        force_limits=np.array([a.force_limit for a in actuators], dtype=float),
+        story_heights=np.asarray(building.story_heights, dtype=float),
+    )
+
+
 def build(building: BuildingConfig, actuators: list[ActuatorConfig]) -> Building:
     """Assemble M, K, C and Gamma of the floors and actuators from the validated configuration
     (`with_devices` adds the mass devices)."""
+    if isinstance(building, MatrixBuildingConfig):
+        return from_matrices(building, actuators)
     mass = np.diag(np.asarray(building.masses, dtype=float))
     stiffness = shear_stiffness_matrix(np.asarray(building.stiffnesses, dtype=float))
     if building.damping.matrix is not None:

@@ -53,3 +53,45 @@ def test_force_limits_and_stories(paper_building):
 def test_story_heights_are_optional(heights):
     building = build(BuildingConfig(story_heights=heights), [ActuatorConfig(story=1)])
     assert (building.story_heights is None) == (heights is None)
+
+
+def test_the_seventy_six_story_benchmark_has_its_published_frequencies_and_damping(tmp_path):
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import load_experiment
+
+    experiment = tmp_path / "tower.yaml"
+    building = REPOSITORY / "configs" / "buildings" / "seventy_six_story.yaml"
+    experiment.write_text(f"building: {building}\nactuators: [{{story: 76}}]\n")
+    tower = build(load_experiment(experiment).building, [ActuatorConfig(story=76)])
+    frequencies = 1.0 / tower.periods()
+    np.testing.assert_allclose(frequencies[:3], [0.160, 0.765, 1.992], atol=5e-4)  # Hz, Yang et al. 2004
+    np.testing.assert_allclose(tower.modal_damping_ratios()[:5], 0.01, rtol=2e-3)
+    assert tower.n_floors == 76 and np.sum(tower.mass) == pytest.approx(2.10863e8, rel=1e-5)  # kg (1' M 1)
+    assert tower.story_heights.sum() == pytest.approx(306.0, rel=1e-3)
+
+
+def test_a_shear_building_written_as_matrices_is_the_same_building(tmp_path):
+    from rlcontroller.config import load_experiment
+
+    shear = build(BuildingConfig(), [ActuatorConfig(story=1)])
+    np.savez(tmp_path / "five.npz", M=shear.mass / 1e3, K=shear.stiffness / 1e3, C=shear.damping / 1e3)
+    (tmp_path / "e.yaml").write_text(
+        "building: {matrices: five.npz, units: {mass: t, force: kN, length: m}, story_heights: [3, 3, 3, 3, 3]}\n"
+        "actuators: [{story: 1}]\n"
+    )
+    matrices = build(load_experiment(tmp_path / "e.yaml").building, [ActuatorConfig(story=1)])
+    for name in ("mass", "stiffness", "damping", "actuator_matrix"):
+        np.testing.assert_allclose(getattr(matrices, name), getattr(shear, name), rtol=1e-12)
+    np.testing.assert_allclose(matrices.periods(), shear.periods(), rtol=1e-12)
+
+
+def test_modal_damping_gives_each_mode_its_ratio():
+    from rlcontroller.physics.structure import modal_damping_matrix
+
+    shear = build(BuildingConfig(), [ActuatorConfig(story=1)])
+    damping = modal_damping_matrix(shear.mass, shear.stiffness, [0.02, 0.03])
+    omega, shapes = shear.modes()
+    np.testing.assert_allclose(
+        shapes.T @ damping @ shapes, np.diag(2 * omega * [0.02, 0.03, 0.03, 0.03, 0.03]), atol=1e-12
+    )
