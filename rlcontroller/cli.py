@@ -430,6 +430,10 @@ def motion_suite(records: Path | None, scale_pga: float | None):
     return choose_motions(records, scale_pga)
 
 
+def motions_text(count: int) -> str:
+    return f"{count} motion{'s' if count != 1 else ''}"
+
+
 def comparison(
     experiment: Experiment,
     run_dir: Path | None,
@@ -446,7 +450,7 @@ def comparison(
     plant = Plant(experiment)
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     motions, label = motion_suite(records, scale_pga)
-    with progress_bar(progress, f"evaluating {len(motions)} motions", len(motions)) as advance:
+    with progress_bar(progress, f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         return plant, motions, compare(plant, motions, label, policy, on_motions=advance)
 
 
@@ -464,7 +468,7 @@ def print_summary(evaluation, out: Path) -> None:
     typer.echo(markdown_table(j1_by_pga(evaluation)))
     count = len(evaluation.records)
     typer.echo(
-        f"evaluated {count} motion{'s' if count != 1 else ''} in {evaluation.seconds:.1f} s; tables and plots in {out}"
+        f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}"
     )
 
 
@@ -541,11 +545,19 @@ def compare_lqg(
         bool, typer.Option(help="Full-state LQR knowing the ground 0-1 s ahead: what prediction could buy.")
     ] = False,
     model: ModelOption = "best",
+    progress: ProgressOption = None,
 ) -> None:
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
     import numpy as np
 
-    from rlcontroller.evaluation.evaluation import LQG_VARIANTS, OPTIMAL, lqg_sweep, mean_metric, preview_study
+    from rlcontroller.evaluation.evaluation import (
+        LQG_VARIANTS,
+        OPTIMAL,
+        PREVIEW_SECONDS,
+        lqg_sweep,
+        mean_metric,
+        preview_study,
+    )
     from rlcontroller.evaluation.report import write_preview, write_report, write_sweep
 
     if config is not None and run_dir is not None:
@@ -563,19 +575,24 @@ def compare_lqg(
         )
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
-    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga)
+    progress = show_progress(progress)
+    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, progress)
     label = evaluation.label
     with new_folder(out) as staging:
         write_report(evaluation, staging)
         if sweep:
-            table = lqg_sweep(plant, motions, label, np.logspace(-2, 2, 9))
+            multipliers = np.logspace(-2, 2, 9)
+            with progress_bar(progress, "LQG trade-off", multipliers.size) as advance:
+                table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
             names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
             points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
             write_sweep(table, staging, label, points)
         if preview:
             names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
             references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
-            write_preview(preview_study(plant, motions), staging, label, references)
+            with progress_bar(progress, "preview horizons", len(PREVIEW_SECONDS)) as advance:
+                study = preview_study(plant, motions, on_horizon=lambda: advance())
+            write_preview(study, staging, label, references)
     print_summary(evaluation, out)
     for name, wanted in (("lqg_sweep.md", sweep), ("preview.md", preview)):
         if wanted:
@@ -589,6 +606,7 @@ def compare_passive(
     records: RecordsOption = None,
     out: OutOption = None,
     scale_pga: ScaleOption = None,
+    progress: ProgressOption = None,
 ) -> None:
     """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
     active mass drivers as the tuned masses they are without a command; strokes and damper energy."""
@@ -603,7 +621,8 @@ def compare_passive(
     check_new_folder(out)
     plant = Plant(experiment)
     motions, label = motion_suite(records, scale_pga)
-    evaluation = evaluate(plant, motions, [], label, include_optimal=False)
+    with progress_bar(show_progress(progress), f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
+        evaluation = evaluate(plant, motions, [], label, include_optimal=False, on_motions=advance)
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     print_summary(evaluation, out)

@@ -141,3 +141,17 @@ def test_info_lists_each_device_as_built(name):
     expected = {"five_story_tmd": ["tuned_mass on floor 5, 0.9195 t"], "five_story_amd": ["active_mass on floor 5"]}
     expected["five_story_mr"] = [f"mr_damper on story {s}, capacity 100 kN" for s in (1, 3, 5)]
     assert [line.split(": ", 1)[1][: len(e)] for line, e in zip(devices, expected[name], strict=True)] == expected[name]
+
+
+@pytest.mark.slow
+def test_compare_lqg_shows_its_evaluation_and_sweep_progress_at_a_terminal(tmp_path, records):
+    kobe = str(records / "RSN1106_KOBE_KJM000.AT2")
+    arguments = ["compare", "lqg", "--records", kobe, "--sweep", "--out", str(tmp_path / "out")]
+    code, output = run_at_a_terminal(arguments, tmp_path, timeout_s=240)
+    assert (
+        code == 0
+        and "evaluating 1 motion " in output
+        and "1 motions" not in output
+        and "LQG trade-off" in output
+        and "9/9" in output
+    ), output

@@ -191,9 +191,10 @@ def lqg_sweep(
     label: str,
     multipliers: np.ndarray,
     known_ground: bool = False,
+    on_point: Callable[[], None] | None = None,
 ) -> pd.DataFrame:
     """LQG's trade-off: mean J1..J4 for the reward's force weights times each multiplier (LQG
-    designed on the design model, run on the plant)."""
+    designed on the design model, run on the plant); `on_point()` after each (a progress bar)."""
     experiment, design = plant.experiment, plant.design
     if not any(term.quantity == "force" for term in experiment.reward.terms):
         raise ValueError("the reward has no force term to sweep")
@@ -208,6 +209,8 @@ def lqg_sweep(
         result = evaluate(plant, motions, [controller], label, include_optimal=False)
         summary = result.summary().loc["LQG"]
         rows.append({"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in METRICS}})
+        if on_point is not None:
+            on_point()
     return pd.DataFrame(rows)
 
 
@@ -215,6 +218,7 @@ def preview_study(
     plant: Plant,
     motions: list[GroundMotion],
     seconds: tuple[float | None, ...] = PREVIEW_SECONDS,
+    on_horizon: Callable[[], None] | None = None,
 ) -> pd.DataFrame:
     """How much knowing the coming ground motion is worth: mean J1..J4 of full-state LQR with the
     optimal feed-forward on the next `s` seconds of ground motion (None: the whole record).
@@ -238,4 +242,6 @@ def preview_study(
                 **{metric: float(np.mean(np.mean(values[metric], axis=0))) for metric in METRICS},
             }
         )
+        if on_horizon is not None:
+            on_horizon()
     return pd.DataFrame(rows)
