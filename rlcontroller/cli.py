@@ -467,9 +467,7 @@ def print_summary(evaluation, out: Path) -> None:
         typer.echo(markdown_table(improvement, digits=1))
     typer.echo(markdown_table(j1_by_pga(evaluation)))
     count = len(evaluation.records)
-    typer.echo(
-        f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}"
-    )
+    typer.echo(f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}")
 
 
 @app.command(short_help="A controller against LQG and no control on records.")

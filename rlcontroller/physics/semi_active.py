@@ -142,6 +142,32 @@ class SemiActiveDampers:
             self.parameters,
         )
 
+    def step_many(self, states: np.ndarray, actions: np.ndarray, grounds: np.ndarray, control_dt: float) -> np.ndarray:
+        """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds (N, r + 1)),
+        in one compiled call."""
+        per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(grounds.shape[1] - 1, control_dt)
+        first, building = self.first_command, self.building
+        active = actions[:, :first] @ (building.actuator_matrix[:, :first] * building.force_limits[:first]).T
+        h = control_dt / ((grounds.shape[1] - 1) * per_interval)
+        return damper_step_many(
+            states, active, np.ascontiguousarray(actions[:, first:]), grounds, per_interval, h, phi, force_gain,
+            ground_start, ground_end, self.stories, self.kinds, self.parameters,
+        )  # fmt: skip
+
+
+@numba.njit(cache=True)
+def damper_step_many(
+    states, active, actions, grounds, per_interval, h, phi, force_gain, ground_start, ground_end, stories, kinds,
+    parameters,
+):  # fmt: skip
+    new = np.empty_like(states)
+    for member in range(states.shape[0]):
+        new[member] = damper_step(
+            states[member], active[member], actions[member], grounds[member], per_interval, h, phi, force_gain,
+            ground_start, ground_end, stories, kinds, parameters,
+        )  # fmt: skip
+    return new
+
 
 @numba.njit(cache=True)
 def _z_implicit(z0, h, drift, velocity, y, alpha, c0, c1, k0, gamma, beta, a):

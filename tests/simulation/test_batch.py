@@ -87,3 +87,25 @@ def test_the_policy_acts_on_the_batch_as_on_each_record():
         alone, _ = rollout(env, motion, controller, seed=index)
         scale = np.abs(alone.force).max()
         np.testing.assert_allclose(result.force, alone.force, rtol=1e-4, atol=1e-4 * scale)
+
+
+def test_a_batch_of_mr_damper_buildings_gives_each_record_s_rollout():
+    """Members of one damper plant step in one compiled call per sampling; each as the env alone."""
+    from conftest import REPOSITORY
+
+    from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand
+
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
+    motions = mixed_motions()
+    controllers = [ConstantCommand(0.3, 3, "constant"), ClippedOptimal(plant)]
+    batched = batch_rollout(plant, motions, controllers, seeds=[5, 6, 7])
+    env = BuildingEnv(plant)
+    for controller, runs in zip(controllers, batched, strict=True):
+        for motion, seed, (result, reward) in zip(motions, [5, 6, 7], runs, strict=True):
+            alone, alone_reward = rollout(env, motion, controller, seed=seed)
+            assert reward == pytest.approx(alone_reward, rel=1e-9)
+            for quantity in ("drift", "absolute_acceleration", "force"):
+                expected = alone.quantity(quantity)
+                np.testing.assert_allclose(
+                    result.quantity(quantity), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max()
+                )
