@@ -22,7 +22,7 @@ from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
-from rlcontroller.physics.excitation import GroundMotion, content_seed, for_control_step
+from rlcontroller.physics.excitation import GroundMotion, content_seed, floor_forces_for_control_step, for_control_step
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -51,7 +51,8 @@ def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Re
     responses = []
     for motion in motions:
         samples, substeps = for_control_step(motion, plant.control_dt)
-        responses.append(simulate(plant.building, plant.structure_step_map(substeps), samples))
+        loads = floor_forces_for_control_step(motion, plant.control_dt)
+        responses.append(simulate(plant.building, plant.structure_step_map(substeps), samples, floor_forces=loads))
     return responses
 
 
@@ -105,6 +106,7 @@ def evaluate(
     start = time.perf_counter()
     yielding = plant.yielding
     include_optimal = include_optimal and plant.nonlinear is None and not plant.has_actuator_dynamics
+    include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant.bare, simulated)
     devices = plant.building.devices

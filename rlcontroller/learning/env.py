@@ -44,7 +44,7 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
+from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
@@ -164,6 +164,14 @@ class BuildingEnv(gym.Env):
             self._prepare_linear(samples, substeps)
         else:
             self._prepare_nonlinear(samples, substeps)
+        self.floor_forces = None
+        loads = floor_forces_for_control_step(motion, self.control_dt)
+        if loads is not None:  # wind: the floors' forcing, and its direct share in the outputs
+            terms = self.plant.load_map(substeps).terms(loads)
+            outputs = terms @ self._outputs.c.T + loads[substeps::substeps][: self._n_steps] @ self._outputs.load.T
+            self._forcing[:, : self._n_state] += terms
+            self._forcing[:, self._n_state :] += outputs
+            self.floor_forces = loads[::substeps][: self._n_steps + 1]
         self.ground_samples = samples[::substeps][: self._n_steps + 1]
         self._term_factors = self._outputs.term_factors(self.ground_samples)
         readings = noisy_readings(self.plant, self.ground_samples, self.np_random)
@@ -241,4 +249,4 @@ def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed
         states[k] = env.plant_state
         commands[k] = env.command
     time = np.arange(n_steps + 1) * env.control_dt
-    return env.plant.response(states, commands, time, env.ground_samples), total_reward
+    return env.plant.response(states, commands, time, env.ground_samples, env.floor_forces), total_reward

@@ -179,6 +179,53 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
+@dataclass(frozen=True)
+class LoadMap:
+    """Floor forces F (N), linear between their samples, over one control step of r sub-steps:
+    z_{k+1} gains sum_j gain[:, j, :] @ F[k r + j], j = 0..r (exact discretisation)."""
+
+    gain: np.ndarray  # (2 n_dofs, r + 1, floors)
+
+    def terms(self, forces: np.ndarray) -> np.ndarray:
+        """The floor forces' contribution to every control step, (steps, 2 n_dofs), for samples (.., floors)."""
+        r = self.gain.shape[1] - 1
+        windows = sliding_window_view(forces, r + 1, axis=0)[::r]  # (steps, floors, r + 1)
+        return np.einsum("sfj,ijf->si", windows, self.gain)
+
+
+def load_map(building: Building, control_dt: float, substeps: int = 1) -> LoadMap:
+    """The exact `LoadMap` of forces on the floors (not on mass devices), r = `substeps`."""
+    system = state_space(building)
+    n, floors = building.n_dofs, building.n_floors
+    size = 2 * n
+    dt = control_dt / substeps
+    inputs = np.vstack([np.zeros((n, floors)), np.linalg.inv(building.mass)[:, :floors]])
+    augmented = np.zeros((size + 2 * floors, size + 2 * floors))
+    augmented[:size, :size] = system.a
+    augmented[:size, size : size + floors] = inputs
+    augmented[size : size + floors, size + floors :] = np.eye(floors)  # dF/dt = slope
+    exponential = scipy.linalg.expm(augmented * dt)
+    phi = exponential[:size, :size]
+    value, slope = exponential[:size, size : size + floors], exponential[:size, size + floors :]
+    start, end = value - slope / dt, slope / dt
+    gain = np.zeros((size, substeps + 1, floors))
+    for i in range(substeps):  # chain the sub-steps: earlier contributions pass through phi
+        gain = np.einsum("ab,bjf->ajf", phi, gain)
+        gain[:, i] += start
+        gain[:, i + 1] += end
+    return LoadMap(gain=gain)
+
+
+def load_feedthrough(building: Building, quantity: str) -> np.ndarray:
+    """How floor forces (N) enter a quantity directly, (rows, floors): absolute accelerations only
+    (a = M^-1 (... + F)); story shears are the restoring forces and do not feel them."""
+    c, _ = output_matrices(building, quantity)
+    floors = building.n_floors
+    if quantity != "absolute_acceleration":
+        return np.zeros((c.shape[0], floors))
+    return np.linalg.inv(building.mass)[:floors, :floors]
+
+
 def output_matrices(building: Building, quantity: str) -> tuple[np.ndarray, np.ndarray]:
     """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] over the degrees of freedom and the
     commanded forces u: a `Quantity`, or `stroke_velocity` (per mass device) and `device_velocity`
@@ -241,28 +288,45 @@ class Response:
 
 
 def response(
-    building: Building, states: np.ndarray, held_forces: np.ndarray, time: np.ndarray, ground: np.ndarray
+    building: Building,
+    states: np.ndarray,
+    held_forces: np.ndarray,
+    time: np.ndarray,
+    ground: np.ndarray,
+    floor_forces: np.ndarray | None = None,
 ) -> Response:
-    """Outputs from states (K+1, 2n) and the forces held just before each instant (K+1, m)."""
+    """Outputs from states (K+1, 2n), the forces held just before each instant (K+1, m) and the floor
+    forces at each instant (K+1, floors), if any."""
     values = {}
     for quantity in (*QUANTITIES, "stroke_velocity", "device_velocity"):
         c, d = output_matrices(building, quantity)
         values[quantity] = states @ c.T + held_forces @ d.T
+        if floor_forces is not None:
+            values[quantity] += floor_forces @ load_feedthrough(building, quantity).T
     values["base_shear"] = values["base_shear"][:, 0]
     return Response(time=time, ground=ground, **values)
 
 
-def simulate(building: Building, step: StepMap, ground: np.ndarray, forces: np.ndarray | None = None) -> Response:
+def simulate(
+    building: Building,
+    step: StepMap,
+    ground: np.ndarray,
+    forces: np.ndarray | None = None,
+    floor_forces: np.ndarray | None = None,
+) -> Response:
     """Whole-record open-loop simulation from rest.
 
     `ground` holds a_g (m/s^2) at the sub-step interval control_dt / substeps; `forces` (K, m)
-    are held over each control step (zero when None). K = (len(ground) - 1) // substeps.
+    are held over each control step (zero when None); `floor_forces` (N, same samples x floors), if
+    any, load the floors (exactly discretised whatever the method). K = (len(ground) - 1) // substeps.
     """
     ground_terms = step.ground_terms(ground)
     n_steps = ground_terms.shape[0]
     if forces is None:
         forces = np.zeros((n_steps, building.n_actuators))
     forcing = ground_terms + forces @ step.force_gain.T
+    if floor_forces is not None:
+        forcing = forcing + load_map(building, step.control_dt, step.substeps).terms(floor_forces)
     states = np.zeros((n_steps + 1, step.phi.shape[0]))
     phi_t = step.phi.T
     for k in range(n_steps):
@@ -270,4 +334,5 @@ def simulate(building: Building, step: StepMap, ground: np.ndarray, forces: np.n
     held = np.vstack([np.zeros((1, building.n_actuators)), forces])
     samples = ground[:: step.substeps][: n_steps + 1]
     time = np.arange(n_steps + 1) * step.control_dt
-    return response(building, states, held, time, samples)
+    at_steps = None if floor_forces is None else floor_forces[:: step.substeps][: n_steps + 1]
+    return response(building, states, held, time, samples, at_steps)

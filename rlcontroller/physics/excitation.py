@@ -39,13 +39,15 @@ class MotionError(ValueError):
 
 @dataclass(frozen=True)
 class GroundMotion:
-    """A ground acceleration history (m/s^2) sampled every `dt` seconds from t = 0."""
+    """A ground acceleration history (m/s^2) sampled every `dt` seconds from t = 0; for a load on the
+    floors instead (wind), `floor_forces` (samples, floors) in N, with a ground acceleration of zero."""
 
     name: str
     dt: float
     acceleration: np.ndarray = field(repr=False)
     synthetic: bool = False
     description: str = ""  # e.g. event and station, from a manifest
+    floor_forces: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def duration(self) -> float:
@@ -203,7 +205,10 @@ def resample(motion: GroundMotion, dt: float) -> GroundMotion:
         return motion
     count = int(math.floor(motion.duration / dt + 1e-9)) + 1
     grid = np.arange(count) * dt
-    return replace(motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration))
+    forces = motion.floor_forces
+    if forces is not None:
+        forces = np.stack([np.interp(grid, motion.time, column) for column in forces.T], axis=1)
+    return replace(motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration), floor_forces=forces)
 
 
 def scale_to_pga(motion: GroundMotion, pga: float) -> GroundMotion:
@@ -222,6 +227,14 @@ def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarra
         )
     substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
     return resample(motion, control_dt / substeps).acceleration, substeps
+
+
+def floor_forces_for_control_step(motion: GroundMotion, control_dt: float) -> np.ndarray | None:
+    """The floor forces (N) on the grid of `for_control_step`, or None for a ground motion."""
+    if motion.floor_forces is None:
+        return None
+    substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
+    return resample(motion, control_dt / substeps).floor_forces
 
 
 @dataclass(frozen=True)
@@ -336,6 +349,8 @@ def content_seed(motion: GroundMotion, seed: int = 0) -> int:
     """A seed fixed by the motion's samples and time step and by `seed`, not by its name, file or
     position in a suite: the same record gets the same sensor noise wherever it is evaluated."""
     content = np.float64(motion.dt).tobytes() + np.ascontiguousarray(motion.acceleration, dtype=np.float64).tobytes()
+    if motion.floor_forces is not None:
+        content += np.ascontiguousarray(motion.floor_forces, dtype=np.float64).tobytes()
     digest = hashlib.sha256(content + int(seed).to_bytes(8, "little", signed=False)).digest()
     return int.from_bytes(digest[:8], "little") >> 1
 

@@ -40,12 +40,15 @@ from rlcontroller.config import (
     randomized_plant,
 )
 from rlcontroller.physics.dynamics import (
+    LoadMap,
     Response,
     StateSpace,
     StepMap,
     compose,
     exact_substep,
     ground_model_step,
+    load_feedthrough,
+    load_map,
     output_matrices,
     state_space,
     step_map,
@@ -59,10 +62,12 @@ from rlcontroller.physics.structure import build, tune_devices, with_dampers, wi
 
 @dataclass(frozen=True)
 class SensorMatrices:
-    """The readings y = c z + d u (SI units, one row per reading), their scales and noise std."""
+    """The readings y = c z + d u + load F (SI units, one row per reading; F the floor forces, N),
+    their scales and noise std."""
 
     c: np.ndarray
     d: np.ndarray  # per newton of actuator force
+    load: np.ndarray  # per newton of floor force (absolute accelerations only)
     scale: np.ndarray
     noise_std: np.ndarray
     bias: np.ndarray  # constant added to each reading (SI), zero without sensor faults
@@ -71,16 +76,17 @@ class SensorMatrices:
 def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
     """The measurement rows of `sensors` on the plant's state: y = C x + D u, one row per reading,
     with the plant's sensor faults (dead floors read zero, noise times a factor, constant bias)."""
-    rows_c, rows_d, scales, noises, floors = [], [], [], [], []
+    rows_c, rows_d, rows_load, scales, noises, floors = [], [], [], [], [], []
     for measurement in sensors.measurements:
         c, d = plant.outputs(measurement.quantity)
         index = list(range(c.shape[0])) if measurement.floors is None else [f - 1 for f in measurement.floors]
         rows_c.append(c[index])
         rows_d.append(d[index])
+        rows_load.append(load_feedthrough(plant.building, measurement.quantity)[index])
         scales.append(np.full(len(index), measurement.scale))
         noises.append(np.full(len(index), measurement.noise_std))
         floors.extend(i + 1 for i in index)
-    c, d, noise = np.vstack(rows_c), np.vstack(rows_d), np.concatenate(noises)
+    c, d, load, noise = np.vstack(rows_c), np.vstack(rows_d), np.vstack(rows_load), np.concatenate(noises)
     bias = np.zeros(c.shape[0])
     faults = plant.config.sensors if plant.config is not None else None
     if faults is not None:
@@ -89,8 +95,8 @@ def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
         for entry in faults.bias:
             bias[floors_array == entry.floor] += entry.value
         dead = np.isin(floors_array, faults.dead_floors)
-        c[dead], d[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0
-    return SensorMatrices(c, d, np.concatenate(scales), noise, bias)
+        c[dead], d[dead], load[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0, 0.0
+    return SensorMatrices(c, d, load, np.concatenate(scales), noise, bias)
 
 
 def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:
@@ -318,14 +324,24 @@ class Plant:
         d[:, first:] = 0.0
         return full, d
 
-    def response(self, states: np.ndarray, held_forces: np.ndarray, time: np.ndarray, ground: np.ndarray) -> Response:
-        """Time histories from this plant's states x (K+1, n_state) and the forces (N) held just before
-        each instant; for yielding plants also the story hysteretic forces (1 - a) k d_y z (N)."""
+    def response(
+        self,
+        states: np.ndarray,
+        held_forces: np.ndarray,
+        time: np.ndarray,
+        ground: np.ndarray,
+        floor_forces: np.ndarray | None = None,
+    ) -> Response:
+        """Time histories from this plant's states x (K+1, n_state), the forces (N) held just before
+        each instant and the floor forces (N) at each instant, if any; for yielding plants also the
+        story hysteretic forces (1 - a) k d_y z (N)."""
         values = {}
         quantities = ("displacement", "velocity", "drift", "absolute_acceleration", "story_shear", "force", "stroke")
         for quantity in (*quantities, "stroke_velocity", "device_velocity"):
             c, d = self.outputs(quantity)
             values[quantity] = states @ c.T + held_forces @ d.T
+            if floor_forces is not None:
+                values[quantity] += floor_forces @ load_feedthrough(self.building, quantity).T
         c, d = self.outputs("base_shear")
         values["base_shear"] = (states @ c.T + held_forces @ d.T)[:, 0]
         if self.yielding is not None:
@@ -386,6 +402,18 @@ class Plant:
         ground_gain = np.zeros((size, core.ground_gain.shape[1]))
         ground_gain[:inner] = core.ground_gain
         return StepMap(phi=phi, force_gain=force_gain, ground_gain=ground_gain, control_dt=self.control_dt)
+
+    def load_map(self, substeps: int = 1) -> LoadMap:
+        """Floor forces over a control step on this plant's state x (cached); linear plants only."""
+        if self.nonlinear is not None:
+            raise ValueError("loads on the floors (wind) with yielding stories or dampers are not modelled")
+        key = ("load", substeps)
+        if key not in self._maps:
+            gain = load_map(self.building, self.control_dt, substeps).gain
+            full = np.zeros((self.n_state, *gain.shape[1:]))
+            full[: gain.shape[0]] = gain  # actuator states do not feel the wind
+            self._maps[key] = LoadMap(gain=full)
+        return self._maps[key]
 
     def ground_model_step(self) -> StepMap:
         """Exact control-step map of the building and its Kanai-Tajimi ground model (cached)."""

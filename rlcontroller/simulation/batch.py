@@ -24,7 +24,7 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, for_control_step, generate
+from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step, generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
@@ -62,6 +62,7 @@ class BuildingBatch:
         self.steps = np.zeros(size, dtype=int)
         self.k = np.zeros(size, dtype=int)
         self.ground_samples: list[np.ndarray] = [np.zeros(1)] * size
+        self.floor_forces: list[np.ndarray | None] = [None] * size  # the floor loads at the control steps (N)
         self.term_factors = np.ones((size, len(self.rows.reward_names)))  # `reward.per_motion`
         self.observations = np.zeros((size, layout.size), dtype=np.float32)
         self.previous_action = np.zeros((size, self.m))
@@ -125,6 +126,13 @@ class BuildingBatch:
             self._transitions[member] = None
             self._windows[member] = sliding_window_view(samples, substeps + 1)[::substeps]
         self._stacked = None
+        self.floor_forces[member] = None
+        loads = floor_forces_for_control_step(motion, self.control_dt)
+        if loads is not None:  # wind: the floors' forcing, and its direct share in the outputs
+            terms = plant.load_map(substeps).terms(loads)
+            forcing[:n_steps, : plant.n_state] += terms
+            forcing[:n_steps, size:] += terms @ rows.c.T + loads[substeps::substeps][:n_steps] @ rows.load.T
+            self.floor_forces[member] = loads[::substeps][: n_steps + 1]
         ground = samples[::substeps][: n_steps + 1]
         readings = noisy_readings(plant, ground, rng)
         forcing[:n_steps, size:][:, self.rows.readings] += readings[1:]
@@ -313,6 +321,7 @@ def _rollout_chunk(
                 commands[: steps + 1, member],
                 np.arange(steps + 1) * plant.control_dt,
                 batch.ground_samples[member],
+                batch.floor_forces[member],
             )
             runs.append((response, float(rewards[member])))
         responses.append(runs)

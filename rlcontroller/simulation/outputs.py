@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.control.cost import reward_matrices
-from rlcontroller.physics.dynamics import StepMap
+from rlcontroller.physics.dynamics import StepMap, load_feedthrough
 from rlcontroller.physics.plant import Plant
 
 
@@ -24,6 +24,7 @@ class StepOutputs:
 
     c: np.ndarray
     d: np.ndarray
+    load: np.ndarray  # per newton of floor force (rows x floors)
     readings: slice  # scaled readings and the ground reading
     reward: slice
     drift: slice
@@ -90,11 +91,17 @@ def step_outputs(plant: Plant) -> StepOutputs:
         plant.outputs("base_shear"),
         plant.outputs("force"),
     ]
+    loads = [sensors.load / sensors.scale[:, None], np.zeros((1, n))]
+    for term, rows in zip(linear_terms, reward_slices, strict=True):
+        loads.append(load_feedthrough(plant.building, term.quantity) * reward_factor[rows, None])
+    loads += [load_feedthrough(plant.building, q) for q in ("drift", "absolute_acceleration", "base_shear")]
+    loads.append(np.zeros((m, n)))
     p, r = sensors.c.shape[0], reward_c.shape[0]
     shear = p + 1 + r + 2 * n
     return StepOutputs(
         c=np.vstack([c for c, _ in blocks]),
         d=np.vstack([d for _, d in blocks]),
+        load=np.vstack(loads),
         readings=slice(0, p + 1),
         reward=slice(p + 1, p + 1 + r),
         drift=slice(p + 1 + r, p + 1 + r + n),
