@@ -92,8 +92,8 @@ def stamp() -> str:
 RecordsOption = Annotated[
     Path | None,
     typer.Option(
-        help="A folder of .AT2/.csv records (with an optional manifest.csv) or one record file "
-        "(default $RLC_RECORDS, else a synthetic suite)."
+        help="A folder of .AT2/.csv records (with an optional manifest.csv), one record file, or a wind "
+        "suite (.yaml, kind: wind; configs/loads/) (default $RLC_RECORDS, else a synthetic suite)."
     ),
 ]
 ScaleOption = Annotated[
@@ -419,10 +419,26 @@ def output_folder(out: Path | None, default_name: str) -> Path:
     return path
 
 
-def motion_suite(records: Path | None, scale_pga: float | None):
-    """The motions to evaluate on and their label; says so when it falls back to the synthetic suite."""
+def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
+    """The motions to evaluate on and their label; says so when it falls back to the synthetic suite.
+    `records` may be a wind suite (a YAML file with kind: wind), generated on `plant`'s floors."""
     from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 
+    if records is not None and records.suffix in (".yaml", ".yml"):
+        from rlcontroller.config import load_wind_suite
+        from rlcontroller.physics.wind import wind_suite
+
+        suite = load_wind_suite(records)
+        if plant is None:
+            raise ConfigError(f"--records {records}: a wind suite is not taken by this command")
+        if scale_pga is not None:
+            raise ConfigError("--scale-pga: a wind suite has no ground acceleration to scale")
+        speeds = ", ".join(f"{speed:g}" for speed in suite.speeds)
+        label = (
+            f"{len(suite.speeds) * suite.records_per_speed} generated wind records of {suite.duration:g} s "
+            f"({speeds} m/s at {suite.reference_height:g} m, seed {suite.seed}), from {records}"
+        )
+        return wind_suite(suite, plant.building), label
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
             "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
@@ -449,7 +465,7 @@ def comparison(
 
     plant = Plant(experiment)
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
-    motions, label = motion_suite(records, scale_pga)
+    motions, label = motion_suite(records, scale_pga, plant)
     with progress_bar(progress, f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         return plant, motions, compare(plant, motions, label, policy, on_motions=advance)
 
@@ -618,7 +634,7 @@ def compare_passive(
     out = output_folder(out, f"compare_passive-{experiment.name}")
     check_new_folder(out)
     plant = Plant(experiment)
-    motions, label = motion_suite(records, scale_pga)
+    motions, label = motion_suite(records, scale_pga, plant)
     with progress_bar(show_progress(progress), f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = evaluate(plant, motions, [], label, include_optimal=False, on_motions=advance)
     with new_folder(out) as staging:
@@ -656,10 +672,11 @@ def robustness(
     folder = model_folder(run_dir)
     experiment = load_experiment(folder / "config.yaml")
     named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
-    policy = read_policy(folder, model, Plant(experiment))
+    plant = Plant(experiment)
+    policy = read_policy(folder, model, plant)
     out = output_folder(out, f"robustness-{folder.resolve().name}")
     check_new_folder(out)
-    motions, label = motion_suite(records, scale_pga)
+    motions, label = motion_suite(records, scale_pga, plant)
     with progress_bar(show_progress(progress), f"{len(named)} scenarios", len(named)) as advance:
         table, seconds = run_robustness(experiment, named, motions, label, policy, lambda name: advance(1, name))
     with new_folder(out) as staging:

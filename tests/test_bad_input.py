@@ -405,3 +405,41 @@ def test_a_plant_part_with_stories_is_refused_for_a_matrix_building(tmp_path):
     )
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
     assert "plant.damage: a building given by matrices takes scalar factors only" in line
+
+
+WIND_CASES = {
+    "no_speeds": ("kind: wind\nspeeds: []\n", "speeds: List should have at least 1 item"),
+    "negative_speed": ("kind: wind\nspeeds: [-3]\n", "speeds[0]: Input should be greater than 0"),
+    "infinite_duration": ("kind: wind\nspeeds: [20]\nduration: .inf\n", "duration: Input should be a finite number"),
+    "rough_above_reference": (
+        "kind: wind\nspeeds: [20]\nroughness: 4\nreference_height: 2\n",
+        "roughness must be below reference_height",
+    ),
+    "unknown_key": ("kind: wind\nspeeds: [20]\nspeed_ms: 3\n", "speed_ms: unknown key"),
+    "not_wind": ("kind: snow\nspeeds: [20]\n", "kind: Input should be 'wind'"),
+}
+
+
+@pytest.mark.parametrize(("text", "expected"), list(WIND_CASES.values()), ids=list(WIND_CASES))
+def test_bad_wind_suites_give_one_line_before_any_work(tmp_path, text, expected):
+    (tmp_path / "wind.yaml").write_text(text)
+    out = tmp_path / "out"
+    arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    line = one_error_line(CliRunner().invoke(app, arguments))
+    assert expected in line and "wind.yaml" in line and not out.exists()
+
+
+def test_a_wind_suite_cannot_be_scaled_to_a_pga(tmp_path):
+    (tmp_path / "wind.yaml").write_text("kind: wind\nspeeds: [20]\nduration: 10\n")
+    arguments = [
+        "compare",
+        "lqg",
+        "--config",
+        str(SMOKE),
+        "--records",
+        str(tmp_path / "wind.yaml"),
+        "--scale-pga",
+        "0.3",
+    ]
+    line = one_error_line(CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "out")]))
+    assert "--scale-pga: a wind suite has no ground acceleration to scale" in line

@@ -94,6 +94,8 @@ from rlcontroller.config.excitation import (  # noqa: F401
     NearFaultConfig,
     NoiseImpulsesConfig,
     SourceConfig,
+    WindSuiteConfig,
+    load_wind_suite,
 )
 from rlcontroller.config.experiment import (  # noqa: F401
     OPTIONAL_PARTS,

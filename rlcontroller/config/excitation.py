@@ -1,16 +1,20 @@
-"""Ground motions: the generators (noise + impulses, Kanai-Tajimi, near-fault, mixtures) and the suites they draw."""
+"""Loads: the ground-motion generators (noise + impulses, Kanai-Tajimi, near-fault, mixtures) and the
+suites they draw; suites of generated wind loads."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, Literal
 
 from pydantic import (
     Field,
+    ValidationError,
     model_validator,
 )
 
 from rlcontroller.config.base import (
     AccelerationRange,
+    ConfigError,
     DurationRange,
     IntRange,
     Range,
@@ -18,6 +22,8 @@ from rlcontroller.config.base import (
     StrictModel,
     TimeStep,
     bounded_range,
+    first_error,
+    read_yaml,
 )
 
 
@@ -121,3 +127,41 @@ class ExcitationConfig(StrictModel):
             elif generator is not None:
                 sources.append(generator)
         return sources
+
+
+class WindSuiteConfig(StrictModel):
+    """A suite of generated along-wind load records (`physics.wind`): `records_per_speed` records of
+    `duration` s at each mean speed (m/s at `reference_height`, m) over terrain of roughness length
+    `roughness` (m: about 0.01 open sea, 0.03 open country, 0.3 suburbs, 1 city centres), forces
+    with `drag_coefficient` on a facade `width` (m) wide, sampled every `dt` s up to `cutoff` Hz, from
+    one `seed`. Used as `--records FILE.yaml`."""
+
+    kind: Literal["wind"]
+    speeds: Annotated[list[Annotated[float, Field(gt=0.0, le=100.0)]], Field(min_length=1, max_length=20)]
+    records_per_speed: Annotated[int, Field(ge=1, le=100)] = 3
+    duration: Annotated[float, Field(gt=0.0, le=7200.0)] = 600.0
+    dt: Annotated[float, Field(ge=0.005, le=1.0)] = 0.1
+    reference_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 10.0
+    roughness: Annotated[float, Field(gt=0.0, le=5.0)] = 0.3
+    drag_coefficient: Annotated[float, Field(gt=0.0, le=5.0)] = 1.3
+    width: Annotated[float, Field(gt=0.0, le=1000.0)] = 20.0
+    decay: Annotated[float, Field(gt=0.0, le=100.0)] = 10.0
+    cutoff: Annotated[float, Field(gt=0.0, le=50.0)] = 1.0
+    seed: Seed = 2026
+
+    @model_validator(mode="after")
+    def _rough_below_reference(self) -> WindSuiteConfig:
+        if self.roughness >= self.reference_height:
+            raise ValueError("roughness must be below reference_height (the log law's zero is at the roughness length)")
+        return self
+
+
+def load_wind_suite(path: str | Path) -> WindSuiteConfig:
+    """A wind suite from a YAML file; one-line errors naming the file and the key."""
+    raw = read_yaml(Path(path))
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with kind: wind, got {type(raw).__name__}")
+    try:
+        return WindSuiteConfig.model_validate(raw)
+    except ValidationError as error:
+        raise first_error(error, str(path), "", WindSuiteConfig) from None

@@ -27,6 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rlcontroller.config import WindSuiteConfig
+from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.structure import Building
+
 KARMAN = 0.4
 AIR_DENSITY = 1.22  # kg/m^3, the standard atmosphere near sea level (ASCE 7 uses 1.225)
 
@@ -105,9 +109,41 @@ def turbulence(
     return series.real[:samples]
 
 
-def wind_forces(field: WindField, duration: float, dt: float, rng: np.random.Generator) -> np.ndarray:
+def wind_forces(
+    field: WindField, duration: float, dt: float, rng: np.random.Generator, cutoff: float = 2.0
+) -> np.ndarray:
     """The along-wind force (N) on every loaded point at t = 0, dt, ..., shape (samples, heights):
     the mean 1/2 rho C_D A U^2 plus the fluctuating rho C_D A U u (quasi-steady, linearised)."""
     speed = field.mean_speed()
     pressure = AIR_DENSITY * field.drag_coefficient * field.areas()
-    return 0.5 * pressure * speed**2 + pressure * speed * turbulence(field, duration, dt, rng)
+    return 0.5 * pressure * speed**2 + pressure * speed * turbulence(field, duration, dt, rng, cutoff)
+
+
+DEFAULT_STORY_HEIGHT = 3.0  # m, for buildings whose story heights are not given
+
+
+def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]:
+    """The suite's wind load records on `building`'s floors (at the tops of its stories; 3 m stories
+    when it gives none), as motions with floor forces and no ground acceleration, all from one seed."""
+    stories = building.story_heights
+    if stories is None:
+        stories = np.full(building.n_floors, DEFAULT_STORY_HEIGHT)
+    rng = np.random.default_rng(suite.seed)
+    records = []
+    for speed in suite.speeds:
+        field = WindField(
+            heights=np.cumsum(stories),
+            speed=speed,
+            reference_height=suite.reference_height,
+            roughness=suite.roughness,
+            decay=suite.decay,
+            drag_coefficient=suite.drag_coefficient,
+            width=suite.width,
+            tributary_heights=np.asarray(stories, dtype=float),
+        )
+        for number in range(suite.records_per_speed):
+            forces = wind_forces(field, suite.duration, suite.dt, rng, suite.cutoff)
+            name = f"wind_{speed:g}ms_{number + 1}"
+            zero = np.zeros(forces.shape[0])
+            records.append(GroundMotion(name, suite.dt, zero, synthetic=True, floor_forces=forces))
+    return records
