@@ -27,9 +27,11 @@ from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
     SETTLING_TAIL_S,
+    WIND_METRICS,
     YIELDING_METRICS,
     device_metrics,
     j_metrics,
+    wind_metrics,
     yielding_metrics,
 )
 from rlcontroller.physics.plant import Plant
@@ -89,7 +91,7 @@ class Evaluation:
         devices their strokes, dissipated energy and the commanded devices' power (means per device)."""
         per_index = self.metrics.groupby(["controller", "metric", "index"], sort=False)["value"].mean()
         table = per_index.groupby(["controller", "metric"], sort=False).mean().unstack("metric")
-        columns = (*METRICS, *YIELDING_METRICS, *DEVICE_METRICS)
+        columns = (*METRICS, *YIELDING_METRICS, *WIND_METRICS, *DEVICE_METRICS)
         return table.loc[self.controllers, [m for m in columns if m in table.columns]]
 
 
@@ -126,6 +128,8 @@ def evaluate(
             metrics = j_metrics(result, bare[number])
             if yielding is not None:
                 metrics |= yielding_metrics(result, yielding.yield_drift)
+            if motion.floor_forces is not None:
+                metrics |= wind_metrics(result, bare[number])
             if (devices or plant.building.dampers) and name != "uncontrolled":
                 metrics |= device_metrics(result, np.array([device.damping for device in devices]))
             for metric, values in metrics.items():

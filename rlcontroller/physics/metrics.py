@@ -14,9 +14,11 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.physics.dynamics import Response
+from rlcontroller.physics.excitation import STANDARD_GRAVITY
 
 METRICS = ("J1", "J2", "J3", "J4")
 YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J")  # per story, yielding plants
+WIND_METRICS = ("rms_acceleration", "rms_top_displacement", "peak_acceleration_mg")  # under floor loads
 DEVICE_METRICS = (  # with devices: per mass device, then per commanded device
     "stroke_m",
     "stroke_rms_m",
@@ -47,6 +49,22 @@ def j_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndar
         "J2": peak(controlled.absolute_acceleration) / peak(uncontrolled.absolute_acceleration),
         "J3": energy(controlled.force, dt) / energy(uncontrolled.base_shear, dt),
         "J4": peak(controlled.story_shear) / peak(uncontrolled.story_shear),
+    }
+
+
+def wind_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.ndarray]:
+    """Occupant comfort under wind, per floor: RMS absolute acceleration (C / UC) and its peak in
+    milli-g (the unit comfort criteria use); for the top floor, RMS displacement (C / UC). The RMS is
+    about the record's mean (the mean wind's static part removed)."""
+
+    def rms(history: np.ndarray) -> np.ndarray:
+        return np.std(history[1:], axis=0)
+
+    top = controlled.displacement[:, -1:], uncontrolled.displacement[:, -1:]
+    return {
+        "rms_acceleration": rms(controlled.absolute_acceleration) / rms(uncontrolled.absolute_acceleration),
+        "rms_top_displacement": rms(top[0]) / rms(top[1]),
+        "peak_acceleration_mg": peak(controlled.absolute_acceleration) / STANDARD_GRAVITY * 1e3,
     }
 
 

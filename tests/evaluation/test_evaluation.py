@@ -172,3 +172,7 @@ def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_s
     j1 = metrics[metrics["metric"] == "J1"].groupby("controller")["value"].mean()
     assert j1["uncontrolled"] == 1.0 and j1["LQG + ground model"] < 0.9
     assert metrics["record"].nunique() == 2
+    comfort = metrics[metrics["metric"] == "rms_acceleration"].groupby("controller")["value"].mean()
+    assert comfort["uncontrolled"] == 1.0 and comfort["LQG + ground model"] < 0.9
+    top = metrics[metrics["metric"] == "rms_top_displacement"]
+    assert top["index"].unique().tolist() == [1] and (top["value"] > 0).all()

@@ -44,3 +44,20 @@ def test_uncontrolled_against_itself_is_one():
     for name in ("J1", "J2", "J4"):
         np.testing.assert_array_equal(metrics[name], 1.0)
     np.testing.assert_array_equal(metrics["J3"], 0.0)
+
+
+def test_wind_metrics_are_rms_about_the_mean_and_peaks_in_milli_g():
+    from rlcontroller.physics.dynamics import Response
+    from rlcontroller.physics.metrics import wind_metrics
+
+    time = np.linspace(0.0, 10.0, 1001)
+
+    def response(scale: float) -> Response:
+        wave = scale * np.sin(2 * np.pi * time)[:, None] * np.ones((1, 2))
+        fields = {name: wave + 5.0 for name in ("displacement", "velocity", "drift", "story_shear", "force")}
+        return Response(time=time, ground=0 * time, absolute_acceleration=wave + 5.0, base_shear=wave[:, 0], **fields)
+
+    metrics = wind_metrics(response(0.5), response(1.0))
+    np.testing.assert_allclose(metrics["rms_acceleration"], 0.5, rtol=1e-3)  # the constant 5 does not count
+    np.testing.assert_allclose(metrics["rms_top_displacement"], [0.5], rtol=1e-3)
+    np.testing.assert_allclose(metrics["peak_acceleration_mg"], 5.5 / 9.80665 * 1e3, rtol=1e-6)
