@@ -29,6 +29,9 @@ def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
 def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(path: Path):
     experiment = load_experiment(path)
     assert experiment.name == path.stem
+    if path.stem.startswith("seventy_six_story"):  # the wind benchmark's building, given by matrices
+        assert len(experiment.building.masses) == 76 and experiment.devices[0].floor == 75
+        return
     stories = [a.story for a in experiment.actuators]
     assert experiment.building == Experiment().building and stories in ([1, 3, 5], [1, 2, 3, 4, 5], [])
     assert (experiment.supervisor is not None) == (stories == [1, 2, 3, 4, 5])  # the layout that passes the check
