@@ -443,3 +443,43 @@ def test_a_wind_suite_cannot_be_scaled_to_a_pga(tmp_path):
     ]
     line = one_error_line(CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "out")]))
     assert "--scale-pga: a wind suite has no ground acceleration to scale" in line
+
+
+def force_csv(path, header="time,floor 1 [kN],floor 2 [kN],floor 3 [kN],floor 4 [kN],floor 5 [kN]", rows=None):
+    rows = rows or [
+        f"{0.05 * k:.2f}," + ",".join(f"{10 * np.sin(k / 7 + f):.3f}" for f in range(5)) for k in range(400)
+    ]
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+FORCE_CASES = {
+    "mixed_units": ("time,f1 [kN],f2 [N],f3 [kN],f4 [kN],f5 [kN]", None, "need one unit"),
+    "no_unit": ("time,f1,f2,f3,f4,f5", None, "need one unit"),
+    "short_row": (None, ["0,1,2,3,4,5", "0.05,1,2,3"], "expected 6 columns (time and 5 floors), got 4"),
+    "nan": (None, ["0,1,2,3,4,5", "0.05,1,nan,3,4,5", "0.1,1,2,3,4,5"], ":3: every value must be a finite number"),
+    "uneven_times": (None, ["0,1,2,3,4,5", "0.05,1,2,3,4,5", "0.2,1,2,3,4,5"], "must be evenly spaced"),
+    "all_zero": (None, ["0,0,0,0,0,0", "0.05,0,0,0,0,0", "0.1,0,0,0,0,0"], "every force is zero"),
+    "four_floors": (
+        "time,f1 [kN],f2 [kN],f3 [kN],f4 [kN]",
+        ["0,1,2,3,4", "0.05,1,2,3,4", "0.1,1,2,3,4"],
+        "forces on 4",
+    ),
+    "huge": (None, ["0,1,2,3,4,5", "0.05,1,2,3,4,1e12", "0.1,1,2,3,4,5"], "expected at most 1e+09 N"),
+}
+
+
+@pytest.mark.parametrize(("header", "rows", "expected"), list(FORCE_CASES.values()), ids=list(FORCE_CASES))
+def test_bad_floor_force_records_give_one_line(tmp_path, header, rows, expected):
+    kwargs = {key: value for key, value in (("header", header), ("rows", rows)) if value is not None}
+    path = force_csv(tmp_path / "wind.csv", **kwargs)
+    arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(path), "--out", str(tmp_path / "out")]
+    line = one_error_line(CliRunner().invoke(app, arguments))
+    assert expected in line and "wind" in line and not (tmp_path / "out").exists()
+
+
+def test_a_floor_force_record_cannot_be_scaled_to_a_pga(tmp_path):
+    path = force_csv(tmp_path / "wind.csv")
+    arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(path), "--scale-pga", "0.3"]
+    line = one_error_line(CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "out")]))
+    assert "has no ground acceleration to scale" in line

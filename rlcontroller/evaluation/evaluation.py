@@ -22,7 +22,13 @@ from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
-from rlcontroller.physics.excitation import GroundMotion, content_seed, floor_forces_for_control_step, for_control_step
+from rlcontroller.physics.excitation import (
+    GroundMotion,
+    MotionError,
+    content_seed,
+    floor_forces_for_control_step,
+    for_control_step,
+)
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -106,6 +112,10 @@ def evaluate(
     """Run the uncontrolled building, every controller and (optionally) the optimal reference;
     `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
     start = time.perf_counter()
+    for motion in motions:
+        if motion.floor_forces is not None and motion.floor_forces.shape[1] != plant.building.n_floors:
+            floors = motion.floor_forces.shape[1]
+            raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {plant.building.n_floors}")
     yielding = plant.yielding
     include_optimal = include_optimal and plant.nonlinear is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only

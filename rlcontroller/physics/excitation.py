@@ -145,6 +145,8 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
     if len(rows) < 3:
         raise MotionError(f"{path}: expected a header row and at least two samples")
     header = [cell.strip().lower() for cell in rows[0]]
+    if len(header) > 2:
+        return read_force_csv(path, rows)
     if unit is None:
         found = [u for u in UNITS_TO_SI if len(header) > 1 and re.search(rf"[\s_\[(]{re.escape(u)}[\])]?$", header[1])]
         if not found:
@@ -188,6 +190,59 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
 MOTION_SUFFIXES = (".at2", ".csv")
 
 
+FORCE_UNITS = {"n": 1.0, "kn": 1.0e3, "mn": 1.0e6}
+FORCE_UNIT = re.compile(r"[\s_\[(](n|kn|mn)[\])]?$")  # the unit at the end of a column's header
+MAX_FLOOR_FORCE = 1.0e9  # N per floor: beyond it a value is a unit mistake
+
+
+def read_force_csv(path: Path, rows: list[list[str]]) -> GroundMotion:
+    """A record of measured floor forces: a header `time, floor 1 [kN], floor 2 [kN], ...` (N, kN or
+    MN, one column per floor from floor 1, the same unit for all) and evenly spaced times (s)."""
+    header = [cell.strip().lower() for cell in rows[0]]
+    matches = [FORCE_UNIT.search(cell) for cell in header[1:]]
+    units = {match.group(1) for match in matches if match}
+    if len(units) != 1 or not all(matches):
+        raise MotionError(
+            f"{path}:1: floor-force columns need one unit, e.g. 'floor 1 [kN]' (N, kN or MN), got {rows[0]!r}"
+        )
+    columns = len(header)
+    values = []
+    for number, row in enumerate(rows[1:], start=2):
+        if not row or not "".join(row).strip():
+            continue
+        if len(row) != columns:
+            raise MotionError(
+                f"{path}:{number}: expected {columns} columns (time and {columns - 1} floors), got {len(row)}"
+            )
+        try:
+            values.append([float(cell) for cell in row])
+        except ValueError:
+            raise MotionError(f"{path}:{number}: expected {columns} numbers, got {row!r}") from None
+    table = np.asarray(values)
+    if table.shape[0] < 2:
+        raise MotionError(f"{path}: {table.shape[0]} samples, expected at least 2")
+    if not np.all(np.isfinite(table)):
+        line = int(np.argmax(~np.all(np.isfinite(table), axis=1))) + 2
+        raise MotionError(f"{path}:{line}: every value must be a finite number")
+    times, forces = table[:, 0], table[:, 1:] * FORCE_UNITS[units.pop()]
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        raise MotionError(f"{path}:{int(np.argmax(steps <= 0)) + 3}: time must increase strictly")
+    dt = float(np.median(steps))
+    if not np.allclose(steps, dt, rtol=1e-6, atol=0.0):
+        raise MotionError(f"{path}: the times must be evenly spaced (median step {dt:g} s)")
+    if not (MIN_TIME_STEP <= dt <= MAX_TIME_STEP):
+        raise MotionError(f"{path}: time step {dt:g} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
+    if times[-1] - times[0] > MAX_DURATION:
+        raise MotionError(f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s")
+    if np.max(np.abs(forces)) > MAX_FLOOR_FORCE:
+        raise MotionError(f"{path}: a force of {np.max(np.abs(forces)):.3g} N, expected at most {MAX_FLOOR_FORCE:g} N")
+    if not np.any(forces):
+        raise MotionError(f"{path}: every force is zero: nothing loads the building")
+    zero = np.zeros(times.size)
+    return GroundMotion(name=path.stem, dt=dt, acceleration=zero, floor_forces=forces)
+
+
 def read_motion(path: str | Path) -> GroundMotion:
     """Read a .AT2 or .csv ground-motion file by its extension."""
     path = Path(path)
@@ -213,6 +268,8 @@ def resample(motion: GroundMotion, dt: float) -> GroundMotion:
 
 def scale_to_pga(motion: GroundMotion, pga: float) -> GroundMotion:
     """The motion scaled to a peak ground acceleration `pga` (m/s^2)."""
+    if motion.floor_forces is not None:
+        raise MotionError(f"{motion.name}: a record of floor forces has no ground acceleration to scale")
     return replace(motion, acceleration=motion.acceleration * (pga / motion.pga))
 
 

@@ -104,3 +104,14 @@ def test_the_floor_loads_need_a_linear_plant():
     raw["plant"] = {"hysteresis": {"yield_drift": 0.01}}
     with pytest.raises(ValueError, match="loads on the floors"):
         Plant(Experiment.model_validate(raw)).load_map(1)
+
+
+def test_a_measured_floor_force_record_loads_the_floors_in_si(tmp_path):
+    from rlcontroller.physics.excitation import read_motion
+
+    rows = ["time_s,floor 1 [kN],floor 2 [kN],floor 3 [kN],floor 4 [kN],floor 5 [kN]"]
+    rows += [f"{0.01 * k:.2f},{k % 7},{-(k % 5)},0,1.5,{k % 3}" for k in range(50)]
+    (tmp_path / "gust.csv").write_text("\n".join(rows) + "\n")
+    record = read_motion(tmp_path / "gust.csv")
+    assert abs(record.dt - 0.01) < 1e-12 and record.floor_forces.shape == (50, 5) and not record.acceleration.any()
+    np.testing.assert_array_equal(record.floor_forces[8], [1e3, -3e3, 0.0, 1.5e3, 2e3])  # kN to N
