@@ -123,28 +123,11 @@ class SemiActiveDampers:
         """The state after one control step: the action held (the active devices' forces / force
         limits, the dampers' commands in [-1, 1]), `ground` the r + 1 ground samples (m/s^2) spanning
         the step."""
-        per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(ground.size - 1, control_dt)
-        first, building = self.first_command, self.building
-        active = (building.actuator_matrix[:, :first] * building.force_limits[:first]) @ action[:first]
-        return damper_step(
-            state,
-            active,
-            action[first:],
-            ground,
-            per_interval,
-            control_dt / ((ground.size - 1) * per_interval),
-            phi,
-            force_gain,
-            ground_start,
-            ground_end,
-            self.stories,
-            self.kinds,
-            self.parameters,
-        )
+        return self.step_many(state[None], action[None], ground[None], control_dt)[0]
 
     def step_many(self, states: np.ndarray, actions: np.ndarray, grounds: np.ndarray, control_dt: float) -> np.ndarray:
-        """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds (N, r + 1)),
-        in one compiled call."""
+        """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds
+        (N, r + 1)), in one compiled call."""
         per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(grounds.shape[1] - 1, control_dt)
         first, building = self.first_command, self.building
         active = actions[:, :first] @ (building.actuator_matrix[:, :first] * building.force_limits[:first]).T
