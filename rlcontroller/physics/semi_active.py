@@ -13,8 +13,8 @@ velocity). The action a in [-1, 1] of each damper is its command for the whole c
       z' = -gamma |d' - y'| z |z| - beta (d' - y') z^2 + A (d' - y')        (n = 2),
       alpha, c0, c1 = (..._a + ..._b u),   u' = -eta (u - v),   v = V_max (a + 1) / 2.
 
-  The prototype's parameters (the paper's Table 1, converted to SI: N, m, s, V) are
-  `SPENCER_1997`; a damper of another capacity multiplies every force parameter (c0, c1, k0, k1,
+  The prototype's parameters (the paper's Table 1 as widely reproduced, converted to SI: N, m, s,
+  V; not re-read from the paper here) are `SPENCER_1997`; a damper of another capacity multiplies every force parameter (c0, c1, k0, k1,
   alpha) by capacity / (alpha(V_max) z_max), z_max = sqrt(A / (beta + gamma)) being the value z
   saturates at, so that its yield-like force alpha(V_max) z_max is `capacity`. The accumulator's
   preload k1 x0 is left out: it only shifts the building's static equilibrium.
