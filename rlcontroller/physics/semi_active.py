@@ -14,9 +14,10 @@ velocity). The action a in [-1, 1] of each damper is its command for the whole c
       alpha, c0, c1 = (..._a + ..._b u),   u' = -eta (u - v),   v = V_max (a + 1) / 2.
 
   The prototype's parameters (the paper's Table 1 as widely reproduced, converted to SI: N, m, s,
-  V; not re-read from the paper here) are `SPENCER_1997`; a damper of another capacity multiplies every force parameter (c0, c1, k0, k1,
-  alpha) by capacity / (alpha(V_max) z_max), z_max = sqrt(A / (beta + gamma)) being the value z
-  saturates at, so that its yield-like force alpha(V_max) z_max is `capacity`. The accumulator's
+  V; not re-read from the paper here) are `SPENCER_1997`; a damper of another capacity multiplies
+  every force parameter (c0, c1, k0, k1, alpha) by capacity / (alpha(V_max) z_max), z_max =
+  sqrt(A / (beta + gamma)) being the value z saturates at, so that its yield-like force
+  alpha(V_max) z_max is `capacity`. The accumulator's
   preload k1 x0 is left out: it only shifts the building's static equilibrium.
 
 The plant's state is [x; x'; per damper (y, z, u, F)]: the floors' (and mass devices')
