@@ -483,3 +483,11 @@ def test_a_floor_force_record_cannot_be_scaled_to_a_pga(tmp_path):
     arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(path), "--scale-pga", "0.3"]
     line = one_error_line(CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "out")]))
     assert "has no ground acceleration to scale" in line
+
+
+def test_wind_training_loads_on_a_yielding_plant_are_refused(tmp_path):
+    (tmp_path / "bad.yaml").write_text(
+        "excitation: {generator: {kind: wind}}\nplant: {hysteresis: {yield_drift: 0.01}}\n"
+    )
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert "excitation.generator: wind loads with yielding stories or dampers are not modelled" in line

@@ -94,6 +94,7 @@ from rlcontroller.config.excitation import (  # noqa: F401
     NearFaultConfig,
     NoiseImpulsesConfig,
     SourceConfig,
+    WindGeneratorConfig,
     WindSuiteConfig,
     load_wind_suite,
 )

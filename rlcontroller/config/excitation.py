@@ -99,8 +99,27 @@ class MixtureConfig(StrictModel):
     components: list[MixtureComponent] = Field(min_length=1, max_length=50)
 
 
+class WindGeneratorConfig(StrictModel):
+    """Generated along-wind loads on the experiment's floors (`physics.wind`), one record per draw: a
+    mean speed drawn in `speed` (m/s at `reference_height`, m), a duration in `duration` (s), over
+    terrain of roughness length `roughness` (m), with `drag_coefficient` on a facade `width` (m) wide,
+    sampled every `dt` s up to `cutoff` Hz."""
+
+    kind: Literal["wind"] = "wind"
+    dt: TimeStep = 0.02
+    duration: DurationRange = (60.0, 180.0)
+    speed: bounded_range(0.0, 100.0, low_open=True) = (10.0, 30.0)  # m/s
+    reference_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 10.0
+    roughness: Annotated[float, Field(gt=0.0, le=5.0)] = 0.3
+    drag_coefficient: Annotated[float, Field(gt=0.0, le=5.0)] = 1.3
+    width: Annotated[float, Field(gt=0.0, le=1000.0)] = 20.0
+    decay: Annotated[float, Field(gt=0.0, le=100.0)] = 10.0
+    cutoff: Annotated[float, Field(gt=0.0, le=50.0)] = 5.0
+
+
 GeneratorConfig = Annotated[
-    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | MixtureConfig, Field(discriminator="kind")
+    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | MixtureConfig | WindGeneratorConfig,
+    Field(discriminator="kind"),
 ]
 
 

@@ -214,6 +214,11 @@ def _check_cross_references(experiment: Experiment) -> None:
             if floor > count:
                 raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
     _check_time_steps(experiment)
+    if any(source.kind == "wind" for source in experiment.excitation.sources()):
+        yielding = experiment.plant is not None and experiment.plant.hysteresis is not None
+        if yielding or experiment.has_dampers:
+            where = location(*experiment.origin("excitation"), "generator")
+            raise ConfigError(f"{where}: wind loads with yielding stories or dampers are not modelled")
     if experiment.plant is not None:
         check_plant(experiment.plant, experiment, *experiment.origin("plant"))
     if experiment.plant_randomization is not None:

@@ -44,7 +44,8 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step, generate
+from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
+from rlcontroller.physics.loads import generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
@@ -121,7 +122,7 @@ class BuildingEnv(gym.Env):
     def _draw_motion(self) -> GroundMotion:
         if self.motions:
             return self.motions[int(self.np_random.integers(len(self.motions)))]
-        return generate(self.experiment.excitation.generator, self.np_random)
+        return generate(self.experiment.excitation.generator, self.np_random, self.building)
 
     def _prepare_linear(self, samples: np.ndarray, substeps: int) -> None:
         """[x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ transition + forcing[k], u = action * limit."""

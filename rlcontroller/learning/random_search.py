@@ -32,7 +32,8 @@ from stable_baselines3.common.callbacks import ProgressBarCallback
 
 from rlcontroller.control.controllers import LinearFeedback, LQGPrior
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
-from rlcontroller.physics.excitation import GroundMotion, generate_suite
+from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
 
 
@@ -120,7 +121,8 @@ class RandomSearch(BaseAlgorithm):
     def iterate(self) -> int:
         """One update of W; returns the control steps it simulated."""
         rng = self.search_rng
-        motions = generate_suite(self.plant.experiment.excitation.generator, self.n_motions, int(rng.integers(2**31)))
+        generator = self.plant.experiment.excitation.generator
+        motions = generate_suite(generator, self.n_motions, int(rng.integers(2**31)), self.plant.building)
         seeds = [int(s) for s in rng.integers(2**31, size=self.n_motions)]
         deltas = self.delta_std * rng.standard_normal((self.n_delta, *self.weights.shape))
         plus, minus, steps = self.paired_log_costs(deltas, motions, seeds)

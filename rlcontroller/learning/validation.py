@@ -15,7 +15,7 @@ import numpy as np
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import batch_rollout
@@ -27,7 +27,9 @@ class Validator:
     def __init__(self, plant: Plant) -> None:
         self.plant = plant
         excitation = plant.experiment.excitation
-        self.motions = generate_suite(excitation.validation, excitation.validation_motions, excitation.validation_seed)
+        self.motions = generate_suite(
+            excitation.validation, excitation.validation_motions, excitation.validation_seed, plant.building
+        )
         self.prior = LQGPrior.design(plant) if plant.experiment.algorithm.residual_lqg else None
         bare = plant.bare  # without its mass devices
         uncontrolled = batch_rollout(bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rlcontroller.config import WindSuiteConfig
+from rlcontroller.config import WindGeneratorConfig, WindSuiteConfig
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.structure import Building
 
@@ -122,25 +122,41 @@ def wind_forces(
 DEFAULT_STORY_HEIGHT = 3.0  # m, for buildings whose story heights are not given
 
 
-def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]:
-    """The suite's wind load records on `building`'s floors (at the tops of its stories; 3 m stories
-    when it gives none), as motions with floor forces and no ground acceleration, all from one seed."""
+def floor_field(config: WindSuiteConfig | WindGeneratorConfig, building: Building, speed: float) -> WindField:
+    """The wind field of a suite or generator at one mean speed on `building`'s floors (at the tops of
+    its stories; 3 m stories when it gives none)."""
     stories = building.story_heights
     if stories is None:
         stories = np.full(building.n_floors, DEFAULT_STORY_HEIGHT)
+    return WindField(
+        heights=np.cumsum(stories),
+        speed=speed,
+        reference_height=config.reference_height,
+        roughness=config.roughness,
+        decay=config.decay,
+        drag_coefficient=config.drag_coefficient,
+        width=config.width,
+        tributary_heights=np.asarray(stories, dtype=float),
+    )
+
+
+def generated_wind(
+    config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str
+) -> GroundMotion:
+    """One wind load record for training: a mean speed and a duration drawn in the generator's ranges."""
+    speed = float(rng.uniform(*config.speed))
+    duration = float(rng.uniform(*config.duration))
+    forces = wind_forces(floor_field(config, building, speed), duration, config.dt, rng, config.cutoff)
+    return GroundMotion(name, config.dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
+
+
+def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]:
+    """The suite's wind load records on `building`'s floors, as motions with floor forces and no
+    ground acceleration, all from one seed."""
     rng = np.random.default_rng(suite.seed)
     records = []
     for speed in suite.speeds:
-        field = WindField(
-            heights=np.cumsum(stories),
-            speed=speed,
-            reference_height=suite.reference_height,
-            roughness=suite.roughness,
-            decay=suite.decay,
-            drag_coefficient=suite.drag_coefficient,
-            width=suite.width,
-            tributary_heights=np.asarray(stories, dtype=float),
-        )
+        field = floor_field(suite, building, speed)
         for number in range(suite.records_per_speed):
             forces = wind_forces(field, suite.duration, suite.dt, rng, suite.cutoff)
             name = f"wind_{speed:g}ms_{number + 1}"

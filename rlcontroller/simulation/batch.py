@@ -24,7 +24,8 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step, generate
+from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
+from rlcontroller.physics.loads import generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
@@ -102,7 +103,7 @@ class BuildingBatch:
             if self.motions:
                 motion = self.motions[int(rng.integers(len(self.motions)))]
             else:
-                motion = generate(plant.experiment.excitation.generator, rng)
+                motion = generate(plant.experiment.excitation.generator, rng, plant.building)
         samples, substeps = for_control_step(motion, self.control_dt)
         n_steps = (samples.size - 1) // substeps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end

@@ -412,3 +412,20 @@ def test_tensorboard_without_the_package_is_one_line(tmp_path, monkeypatch):
         "error: --tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
     )
     assert not (tmp_path / "run").exists()
+
+
+def test_training_under_generated_wind_validates_on_wind(tmp_path):
+    """A wind generator in the excitation: the env and validation load the floors, not the ground."""
+    from rlcontroller.config import ExcitationConfig, WindGeneratorConfig
+
+    wind = WindGeneratorConfig(duration=(20.0, 30.0), speed=(15.0, 25.0))
+    experiment = smoke(total_steps=400, eval_every=200, checkpoint_every=200)
+    experiment = experiment.model_copy(
+        update={"excitation": ExcitationConfig(generator=wind, validation_motions=2, validation_seed=3)}
+    )
+    summary = train(experiment, run_dir=tmp_path / "run")
+    assert summary.steps >= 400 and np.isfinite(summary.best["eval_J1"])
+    from rlcontroller.learning.validation import Validator
+
+    validator = Validator(Plant(experiment))
+    assert all(motion.floor_forces is not None and not motion.acceleration.any() for motion in validator.motions)
