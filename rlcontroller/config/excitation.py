@@ -99,21 +99,33 @@ class MixtureConfig(StrictModel):
     components: list[MixtureComponent] = Field(min_length=1, max_length=50)
 
 
-class WindGeneratorConfig(StrictModel):
+class WindSiteConfig(StrictModel):
+    """Where wind loads a building: the mean speed's `reference_height` (m), the terrain's roughness
+    length `roughness` (m: about 0.01 open sea, 0.03 open country, 0.3 suburbs, 1 city centres),
+    Davenport's coherence `decay`, and the forces' `drag_coefficient` on a facade `width` (m) wide."""
+
+    reference_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 10.0
+    roughness: Annotated[float, Field(gt=0.0, le=5.0)] = 0.3
+    drag_coefficient: Annotated[float, Field(gt=0.0, le=5.0)] = 1.3
+    width: Annotated[float, Field(gt=0.0, le=1000.0)] = 20.0
+    decay: Annotated[float, Field(gt=0.0, le=100.0)] = 10.0
+
+    @model_validator(mode="after")
+    def _rough_below_reference(self) -> WindSiteConfig:
+        if self.roughness >= self.reference_height:
+            raise ValueError("roughness must be below reference_height (the log law's zero is at the roughness length)")
+        return self
+
+
+class WindGeneratorConfig(WindSiteConfig):
     """Generated along-wind loads on the experiment's floors (`physics.wind`), one record per draw: a
-    mean speed drawn in `speed` (m/s at `reference_height`, m), a duration in `duration` (s), over
-    terrain of roughness length `roughness` (m), with `drag_coefficient` on a facade `width` (m) wide,
+    mean speed drawn in `speed` (m/s at the reference height) and a duration in `duration` (s),
     sampled every `dt` s up to `cutoff` Hz."""
 
     kind: Literal["wind"] = "wind"
     dt: TimeStep = 0.02
     duration: DurationRange = (60.0, 180.0)
     speed: bounded_range(0.0, 100.0, low_open=True) = (10.0, 30.0)  # m/s
-    reference_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 10.0
-    roughness: Annotated[float, Field(gt=0.0, le=5.0)] = 0.3
-    drag_coefficient: Annotated[float, Field(gt=0.0, le=5.0)] = 1.3
-    width: Annotated[float, Field(gt=0.0, le=1000.0)] = 20.0
-    decay: Annotated[float, Field(gt=0.0, le=100.0)] = 10.0
     cutoff: Annotated[float, Field(gt=0.0, le=50.0)] = 5.0
 
 
@@ -148,31 +160,18 @@ class ExcitationConfig(StrictModel):
         return sources
 
 
-class WindSuiteConfig(StrictModel):
+class WindSuiteConfig(WindSiteConfig):
     """A suite of generated along-wind load records (`physics.wind`): `records_per_speed` records of
-    `duration` s at each mean speed (m/s at `reference_height`, m) over terrain of roughness length
-    `roughness` (m: about 0.01 open sea, 0.03 open country, 0.3 suburbs, 1 city centres), forces
-    with `drag_coefficient` on a facade `width` (m) wide, sampled every `dt` s up to `cutoff` Hz, from
-    one `seed`. Used as `--records FILE.yaml`."""
+    `duration` s at each mean speed (m/s at the reference height), sampled every `dt` s up to
+    `cutoff` Hz, from one `seed`. Used as `--records FILE.yaml`."""
 
     kind: Literal["wind"]
     speeds: Annotated[list[Annotated[float, Field(gt=0.0, le=100.0)]], Field(min_length=1, max_length=20)]
     records_per_speed: Annotated[int, Field(ge=1, le=100)] = 3
     duration: Annotated[float, Field(gt=0.0, le=7200.0)] = 600.0
     dt: Annotated[float, Field(ge=0.005, le=1.0)] = 0.1
-    reference_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 10.0
-    roughness: Annotated[float, Field(gt=0.0, le=5.0)] = 0.3
-    drag_coefficient: Annotated[float, Field(gt=0.0, le=5.0)] = 1.3
-    width: Annotated[float, Field(gt=0.0, le=1000.0)] = 20.0
-    decay: Annotated[float, Field(gt=0.0, le=100.0)] = 10.0
     cutoff: Annotated[float, Field(gt=0.0, le=50.0)] = 1.0
     seed: Seed = 2026
-
-    @model_validator(mode="after")
-    def _rough_below_reference(self) -> WindSuiteConfig:
-        if self.roughness >= self.reference_height:
-            raise ValueError("roughness must be below reference_height (the log law's zero is at the roughness length)")
-        return self
 
 
 def load_wind_suite(path: str | Path) -> WindSuiteConfig:

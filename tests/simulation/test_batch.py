@@ -53,14 +53,19 @@ def test_a_batch_of_records_gives_each_record_s_rollout(case):
         LQGController(design_lqg(design, known_ground=True), design),
         LQGController(design_lqg_ground_model(design), design, "LQG + ground model"),
     ]
-    batched = batch_rollout(plant, motions, controllers, seeds=[5, 6, 7])
+    assert_batch_is_env(plant, motions, controllers, ("drift", "absolute_acceleration", "base_shear", "force"))
+
+
+def assert_batch_is_env(plant, motions, controllers, quantities, seeds=(5, 6, 7)):
+    """Every controller on every motion, batched, as the Gymnasium env gives it alone (to 1e-9)."""
+    batched = batch_rollout(plant, motions, controllers, seeds=list(seeds))
     env = BuildingEnv(plant)
     for controller, runs in zip(controllers, batched, strict=True):
-        for motion, seed, (result, reward) in zip(motions, [5, 6, 7], runs, strict=True):
+        for motion, seed, (result, reward) in zip(motions, seeds, runs, strict=True):
             alone, alone_reward = rollout(env, motion, controller, seed=seed)
             assert reward == pytest.approx(alone_reward, rel=1e-9)
             assert result.drift.shape == alone.drift.shape
-            for quantity in ("drift", "absolute_acceleration", "base_shear", "force"):
+            for quantity in quantities:
                 expected = alone.quantity(quantity)
                 np.testing.assert_allclose(
                     result.quantity(quantity), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max()
@@ -96,16 +101,5 @@ def test_a_batch_of_mr_damper_buildings_gives_each_record_s_rollout():
     from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand
 
     plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
-    motions = mixed_motions()
     controllers = [ConstantCommand(0.3, 3, "constant"), ClippedOptimal(plant)]
-    batched = batch_rollout(plant, motions, controllers, seeds=[5, 6, 7])
-    env = BuildingEnv(plant)
-    for controller, runs in zip(controllers, batched, strict=True):
-        for motion, seed, (result, reward) in zip(motions, [5, 6, 7], runs, strict=True):
-            alone, alone_reward = rollout(env, motion, controller, seed=seed)
-            assert reward == pytest.approx(alone_reward, rel=1e-9)
-            for quantity in ("drift", "absolute_acceleration", "force"):
-                expected = alone.quantity(quantity)
-                np.testing.assert_allclose(
-                    result.quantity(quantity), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max()
-                )
+    assert_batch_is_env(plant, mixed_motions(), controllers, ("drift", "absolute_acceleration", "force"))
