@@ -268,3 +268,16 @@ def finite(value: float, where: str, low: float = 0.0, high: float = math.inf, l
         bracket = "(" if low_open else "["
         raise ConfigError(f"{where}: expected a finite number in {bracket}{low:g}, {high:g}], got {value!r}")
     return value
+
+
+def read_model(path: str | Path, model: type[StrictModel], expected: str) -> Any:
+    """A YAML file validated as `model`; anything else (not a mapping: "expected a mapping with
+    `expected`") is a one-line ConfigError naming the file and the key."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping with {expected}, got {type(raw).__name__}")
+    try:
+        return model.model_validate(raw)
+    except ValidationError as error:
+        raise first_error(error, str(path), "", model) from None

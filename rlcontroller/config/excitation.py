@@ -8,13 +8,11 @@ from typing import Annotated, Literal
 
 from pydantic import (
     Field,
-    ValidationError,
     model_validator,
 )
 
 from rlcontroller.config.base import (
     AccelerationRange,
-    ConfigError,
     DurationRange,
     IntRange,
     Range,
@@ -22,8 +20,7 @@ from rlcontroller.config.base import (
     StrictModel,
     TimeStep,
     bounded_range,
-    first_error,
-    read_yaml,
+    read_model,
 )
 
 
@@ -176,10 +173,4 @@ class WindSuiteConfig(WindSiteConfig):
 
 def load_wind_suite(path: str | Path) -> WindSuiteConfig:
     """A wind suite from a YAML file; one-line errors naming the file and the key."""
-    raw = read_yaml(Path(path))
-    if not isinstance(raw, dict):
-        raise ConfigError(f"{path}: expected a mapping with kind: wind, got {type(raw).__name__}")
-    try:
-        return WindSuiteConfig.model_validate(raw)
-    except ValidationError as error:
-        raise first_error(error, str(path), "", WindSuiteConfig) from None
+    return read_model(path, WindSuiteConfig, "kind: wind")

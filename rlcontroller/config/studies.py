@@ -8,10 +8,9 @@ from typing import Annotated
 from pydantic import (
     AfterValidator,
     Field,
-    ValidationError,
 )
 
-from rlcontroller.config.base import ConfigError, Seed, StrictModel, first_error, first_repeat, read_yaml
+from rlcontroller.config.base import Seed, StrictModel, first_repeat, read_model
 from rlcontroller.config.excitation import GeneratorConfig
 from rlcontroller.config.experiment import Experiment, check_plant
 from rlcontroller.config.plant import PlantConfig
@@ -38,14 +37,7 @@ class ScenarioFile(StrictModel):
 
 def load_scenarios(path: str | Path, experiment: Experiment) -> list[Scenario]:
     """The named scenarios of a YAML file, checked against the experiment's building."""
-    path = Path(path)
-    raw = read_yaml(path)
-    if not isinstance(raw, dict):
-        raise ConfigError(f"{path}: expected a mapping with 'scenarios', got {type(raw).__name__}")
-    try:
-        scenarios = ScenarioFile.model_validate(raw).scenarios
-    except ValidationError as error:
-        raise first_error(error, str(path), "", ScenarioFile) from None
+    scenarios = read_model(path, ScenarioFile, "'scenarios'").scenarios
     for index, scenario in enumerate(scenarios):
         if scenario.plant is not None:
             check_plant(scenario.plant, experiment, str(path), f"scenarios[{index}].plant")
@@ -69,11 +61,4 @@ class SafetyCheckConfig(StrictModel):
 
 def load_safety_check(path: str | Path) -> SafetyCheckConfig:
     """The safety check's standard from a YAML file."""
-    path = Path(path)
-    raw = read_yaml(path)
-    if not isinstance(raw, dict):
-        raise ConfigError(f"{path}: expected a mapping with 'generator', got {type(raw).__name__}")
-    try:
-        return SafetyCheckConfig.model_validate(raw)
-    except ValidationError as error:
-        raise first_error(error, str(path), "", SafetyCheckConfig) from None
+    return read_model(path, SafetyCheckConfig, "'generator'")
