@@ -289,7 +289,7 @@ def resume_line(run: Path) -> str:
 
     if not (run / "config.yaml").is_file():
         return f"resuming {run}"
-    total = load_experiment(run / "config.yaml").algorithm.total_steps
+    total = load_experiment(run / "config.yaml", self_contained=True).algorithm.total_steps
     checkpoints = RunFolder(run).checkpoints()
     step = int(checkpoints[-1].name.removeprefix("step_")) if checkpoints else 0
     return f"resuming {run} at step {step:,} of {total:,}" + (
@@ -325,7 +325,7 @@ def run_check(
     from rlcontroller.evaluation.safety import safety_check, write_verdict
     from rlcontroller.physics.plant import Plant
 
-    experiment = load_experiment(folder / "config.yaml")
+    experiment = load_experiment(folder / "config.yaml", self_contained=True)
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
     checking = load_safety_check(standard)
@@ -505,7 +505,7 @@ def evaluate(
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
     warn_unchecked(folder, model)
-    experiment = load_experiment(folder / "config.yaml")
+    experiment = load_experiment(folder / "config.yaml", self_contained=True)
     _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, show_progress(progress))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
@@ -526,7 +526,7 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
     summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=progress)
     typer.echo(summary.line())
     _, _, evaluation = comparison(
-        load_experiment(summary.run_dir / "config.yaml"), summary.run_dir, "best", records, None
+        load_experiment(summary.run_dir / "config.yaml", self_contained=True), summary.run_dir, "best", records, None
     )
     out = summary.run_dir / "evaluation"
     with new_folder(out) as staging:
@@ -554,7 +554,12 @@ def compare_lqg(
     records: RecordsOption = None,
     out: OutOption = None,
     scale_pga: ScaleOption = None,
-    sweep: Annotated[bool, typer.Option(help="Trace LQG's J1-J3 trade-off over force weights.")] = False,
+    sweep: Annotated[
+        bool,
+        typer.Option(
+            help="Trace LQG's J1-J3 trade-off over force weights (dampers: passive levels and clipped-optimal weights)."
+        ),
+    ] = False,
     preview: Annotated[
         bool, typer.Option(help="Full-state LQR knowing the ground 0-1 s ahead: what prediction could buy.")
     ] = False,
@@ -565,28 +570,28 @@ def compare_lqg(
     import numpy as np
 
     from rlcontroller.evaluation.evaluation import (
+        DAMPER_LEVELS,
         LQG_VARIANTS,
         OPTIMAL,
         PREVIEW_SECONDS,
+        damper_sweep,
         lqg_sweep,
         mean_metric,
         preview_study,
     )
-    from rlcontroller.evaluation.report import write_preview, write_report, write_sweep
+    from rlcontroller.evaluation.report import write_damper_sweep, write_preview, write_report, write_sweep
 
     if config is not None and run_dir is not None:
         raise ConfigError("--config: either a run folder or --config, not both")
     if config is None:
         run_dir = model_folder(run_dir)
-        experiment = load_experiment(run_dir / "config.yaml")
+        experiment = load_experiment(run_dir / "config.yaml", self_contained=True)
     else:
         experiment = load_experiment(config)
     if not experiment.command_labels():
         raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
-    if experiment.has_dampers and (sweep or preview):
-        raise ConfigError(
-            "--sweep/--preview: LQG's trade-off and the preview bound need a plant without semi-active dampers"
-        )
+    if experiment.has_dampers and preview:
+        raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     progress = show_progress(progress)
@@ -594,7 +599,14 @@ def compare_lqg(
     label = evaluation.label
     with new_folder(out) as staging:
         write_report(evaluation, staging)
-        if sweep:
+        if sweep and experiment.has_dampers:
+            levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
+            with progress_bar(progress, "dampers' trade-off", len(levels) + multipliers.size) as advance:
+                table = damper_sweep(plant, motions, label, levels, multipliers, on_point=lambda: advance())
+            names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
+            points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
+            write_damper_sweep(table, staging, label, points)
+        elif sweep:
             multipliers = np.logspace(-2, 2, 9)
             with progress_bar(progress, "LQG trade-off", multipliers.size) as advance:
                 table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
@@ -608,7 +620,8 @@ def compare_lqg(
                 study = preview_study(plant, motions, on_horizon=lambda: advance())
             write_preview(study, staging, label, references)
     print_summary(evaluation, out)
-    for name, wanted in (("lqg_sweep.md", sweep), ("preview.md", preview)):
+    sweep_file = "damper_sweep.md" if experiment.has_dampers else "lqg_sweep.md"
+    for name, wanted in ((sweep_file, sweep), ("preview.md", preview)):
         if wanted:
             typer.echo((out / name).read_text())
 
@@ -670,7 +683,7 @@ def robustness(
     from rlcontroller.physics.plant import Plant
 
     folder = model_folder(run_dir)
-    experiment = load_experiment(folder / "config.yaml")
+    experiment = load_experiment(folder / "config.yaml", self_contained=True)
     named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
@@ -846,7 +859,7 @@ def export(
         raise ConfigError(f"--out {out}: expected a file path in an existing folder")
     warn_unchecked(folder, model)
     export_onnx(folder, model, out)
-    dampers = load_experiment(folder / "config.yaml").has_dampers
+    dampers = load_experiment(folder / "config.yaml", self_contained=True).has_dampers
     outputs = "forces (N) and damper commands" if dampers else "forces (N)"
     typer.echo(f"wrote {out}: readings (SI) and state in, {outputs} out; see docs/deployment.md")
 

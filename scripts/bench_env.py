@@ -1,5 +1,6 @@
 """Benchmark: environment step() rate against Gymnasium's Pendulum-v1, whole-record simulation, the
-five-story building with yielding (Bouc-Wen) stories and with three MR dampers, single and batched.
+five-story building with yielding (Bouc-Wen) stories and with three MR dampers, single and batched,
+and the 76-story wind benchmark with its active tuned mass damper.
 
 Usage: python scripts/bench_env.py [--steps N]
 Both environments are built with gymnasium.make (the same wrappers) and driven by a random
@@ -74,6 +75,14 @@ def mr_rate(steps: int) -> float:
     return max(steps_per_second(env, steps) for _ in range(3))
 
 
+def tower_rate(steps: int) -> float:
+    """The 76-story benchmark with its active tuned mass damper (77 degrees of freedom) and the
+    wind-model Kalman estimate (230 states) in the observation, single env."""
+    experiment = load_experiment(CONFIGS / "experiments" / "seventy_six_story_atmd.yaml")
+    env = gym.make(rlcontroller.ENV_ID, config=experiment)
+    return max(steps_per_second(env, steps) for _ in range(3))
+
+
 def batch_rate(experiment: Experiment, members: int = 16) -> float:
     """Control steps per second of `members` buildings stepped together, on as many generated motions."""
     plant = Plant(experiment)
@@ -113,6 +122,7 @@ def main() -> None:
     print(f"yielding stories step() (numba):  {compiled:,.0f} steps/s")
     print(f"yielding stories, interpreted:    {interpreted:,.0f} steps/s ({compiled / interpreted:.0f}x slower)")
     print(f"3 MR dampers step() (numba):      {mr_rate(arguments.steps):,.0f} steps/s")
+    print(f"76-story + ATMD, wind estimate:   {tower_rate(arguments.steps):,.0f} steps/s")
     print(f"yielding stories, batch of 16:    {batch_rate(Experiment(plant=YIELDING)):,.0f} steps/s")
     print(f"3 MR dampers, batch of 16:        {batch_rate(mr_experiment()):,.0f} steps/s")
 

@@ -338,11 +338,12 @@ def test_a_misspelt_key_gets_the_closest_known_one(tmp_path, text, expected):
     assert line.startswith(f"error: {path}") and line.endswith(expected)
 
 
-def test_a_trade_off_sweep_of_a_damper_experiment_is_refused_before_any_work(tmp_path):
+def test_a_preview_study_of_a_damper_experiment_is_refused_before_any_work(tmp_path):
     config = str(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
     out = tmp_path / "out"
-    line = one_error_line(CliRunner().invoke(app, ["compare", "lqg", "--config", config, "--sweep", "--out", str(out)]))
-    assert "--sweep/--preview: LQG's trade-off and the preview bound need a plant without semi-active dampers" in line
+    arguments = ["compare", "lqg", "--config", config, "--preview", "--out", str(out)]
+    line = one_error_line(CliRunner().invoke(app, arguments))
+    assert "--preview: the preview bound needs a plant without semi-active dampers" in line
     assert not out.exists()
 
 
@@ -491,3 +492,50 @@ def test_wind_training_loads_on_a_yielding_plant_are_refused(tmp_path):
     )
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
     assert "excitation.generator: wind loads with yielding stories or dampers are not modelled" in line
+
+
+def test_a_ground_model_estimate_under_wind_is_refused(tmp_path):
+    (tmp_path / "bad.yaml").write_text(
+        "excitation: {generator: {kind: wind}}\nsensors: {state_estimate: true, ground_model: true}\n"
+    )
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert "ground_model: under wind the estimate models the floor forces, not the ground" in line
+
+
+@pytest.mark.parametrize("name", ["../elsewhere.csv", "../../etc/passwd", "/etc/passwd", "sub/../../up.csv"])
+def test_a_manifest_row_outside_the_records_folder_is_refused(tmp_path, name):
+    folder = tmp_path / "records"
+    folder.mkdir()
+    (tmp_path / "elsewhere.csv").write_text("time_s,acceleration [g]\n0,0.1\n0.02,0.2\n0.04,0.0\n")
+    (folder / "manifest.csv").write_text(f"file,event\nfine.csv,x\n{name},y\n")
+    (folder / "fine.csv").write_text("time_s,acceleration [g]\n0,0.1\n0.02,0.2\n0.04,0.0\n")
+    out = tmp_path / "out"
+    line = one_error_line(CliRunner().invoke(app, ["evaluate", "--records", str(folder), "--out", str(out)]))
+    assert f"manifest.csv:3: file {name!r} is outside the records folder" in line and not out.exists()
+
+
+def test_a_manifest_may_name_files_in_sub_folders(tmp_path):
+    from rlcontroller.physics.records import load_records
+
+    folder = tmp_path / "records"
+    (folder / "sub").mkdir(parents=True)
+    (folder / "sub" / "a.csv").write_text("time_s,acceleration [g]\n0,0.1\n0.02,0.2\n0.04,0.0\n")
+    (folder / "manifest.csv").write_text("file\n./sub/../sub/a.csv\n")
+    assert len(load_records(folder)[0]) == 1
+
+
+@pytest.mark.parametrize("part", ["building: ../../configs/buildings/five_story.yaml", "reward: /etc/hostname"])
+def test_a_model_folder_naming_files_outside_itself_is_refused(tmp_path, part):
+    import shutil
+
+    folder = tmp_path / "model"
+    shutil.copytree(REPOSITORY / "models" / "five_story_every_story", folder)
+    key = part.split(":")[0]
+    lines = (folder / "config.yaml").read_text().splitlines()
+    start = next(i for i, text in enumerate(lines) if text.startswith(f"{key}:"))
+    end = next(i for i in range(start + 1, len(lines)) if lines[i] and not lines[i].startswith(" "))
+    (folder / "config.yaml").write_text("\n".join([*lines[:start], part, *lines[end:]]) + "\n")
+    out = tmp_path / "out"
+    line = one_error_line(CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(out)]))
+    assert f"config.yaml: {key}: " in line and "a run or model folder names only its own files" in line
+    assert not out.exists()

@@ -65,3 +65,25 @@ def test_the_linear_clone_fit_recovers_a_linear_teacher_and_ridge_shrinks_it():
     np.testing.assert_allclose(fit_linear(observations, observations @ weights.T, 0.0), weights, atol=1e-10)
     shrunk = fit_linear(observations, observations @ weights.T, 1.0)
     assert np.linalg.norm(shrunk) < 0.7 * np.linalg.norm(weights)
+
+
+def test_the_wind_benchmark_table_groups_records_by_their_mean_speed():
+    import pandas as pd
+
+    per_speed_table = load_script("wind_benchmark").per_speed_table
+
+    class Evaluation:
+        metrics = pd.DataFrame(
+            [
+                {"controller": c, "record": f"wind_{speed:g}ms_{n}", "metric": "rms_acceleration", "index": i}
+                | {"value": v}
+                for c, scale in (("uncontrolled", 1.0), ("LQG + wind model", 0.5))
+                for speed in (15.0, 25.0)
+                for n in (1, 2)
+                for i, v in ((1, scale * speed), (2, scale * speed + n))
+            ]
+        )
+
+    table = per_speed_table(Evaluation(), [15.0, 25.0])
+    assert table.loc[(25.0, "LQG + wind model"), "rms_acceleration"] == 0.5 * 25.0 + 0.75  # floors, then records
+    assert table.loc[(15.0, "uncontrolled"), "rms_acceleration"] == 15.0 + 0.75

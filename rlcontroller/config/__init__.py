@@ -57,6 +57,7 @@ from rlcontroller.config.base import (  # noqa: F401
     first_error,
     first_repeat,
     format_location,
+    inside,
     location,
     read_yaml,
     text_byte,

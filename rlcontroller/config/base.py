@@ -254,6 +254,20 @@ def display_path(path: Path) -> str:
     return str(path)
 
 
+def inside(folder: Path, name: str) -> bool:
+    """Whether `name`, a path relative to `folder` from a file, stays inside it (lexically: not absolute,
+    no '..' that climbs out; the files a folder names are its own)."""
+    relative = Path(name)
+    if relative.is_absolute() or relative.drive:
+        return False
+    depth = 0
+    for part in relative.parts:
+        depth += -1 if part == ".." else 0 if part == "." else 1
+        if depth < 0:
+            return False
+    return True
+
+
 def check_seed(seed: int, where: str = "--seed") -> int:
     """A seed must be a whole number in [0, 2^32 - 1] (what numpy and torch accept)."""
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -22,6 +23,7 @@ from rlcontroller.config.base import (
     display_path,
     first_error,
     format_location,
+    inside,
     location,
     read_yaml,
 )
@@ -116,8 +118,18 @@ def _check_part_type(part: str, value: Any, where: str) -> None:
         raise ConfigError(f"{where}: expected {what}, got {got}")
 
 
-def load_experiment(path: str | Path) -> Experiment:
-    """Load an experiment YAML and the part files it names; raise ConfigError on any problem."""
+OWN_FILES = "a run or model folder names only its own files"
+
+
+def _relative(target: Path, folder: Path) -> str:
+    """`target` as a path relative to `folder` (with '..' where it leaves it), both resolved."""
+    return os.path.relpath(target.resolve(), folder.resolve())
+
+
+def load_experiment(path: str | Path, self_contained: bool = False) -> Experiment:
+    """Load an experiment YAML and the part files it names; raise ConfigError on any problem. With
+    `self_contained` (the config.yaml of a run or model folder) every file it names must lie in its
+    folder: a folder from someone else never makes us read a file elsewhere."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):
@@ -125,6 +137,8 @@ def load_experiment(path: str | Path) -> Experiment:
     origins: dict[str, tuple[str, str]] = {}
     for part in PARTS:
         value = raw.get(part)
+        if self_contained and isinstance(value, str) and not inside(path.parent, value):
+            raise ConfigError(f"{path}: {part}: {value!r} is outside {path.parent}; {OWN_FILES}")
         if isinstance(value, str):
             part_path = (path.parent / value).resolve()
             if not part_path.exists():
@@ -142,6 +156,13 @@ def load_experiment(path: str | Path) -> Experiment:
                 _check_part_type(part, value, f"{path}: {part}")
             folder, where = path.parent, f"{path}: {part}"
         if part == "building" and isinstance(raw.get(part), dict) and "matrices" in raw[part]:
+            matrices = raw[part]["matrices"]
+            if (
+                self_contained
+                and isinstance(matrices, str)
+                and not inside(path.parent, _relative(folder / matrices, path.parent))
+            ):
+                raise ConfigError(f"{where}.matrices: {matrices!r} is outside {path.parent}; {OWN_FILES}")
             raw[part] = read_matrix_part(raw[part], folder, where)
     return build_experiment(raw, origins, str(path))
 
@@ -182,6 +203,9 @@ def _check_cross_references(experiment: Experiment) -> None:
         raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
     if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
         raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
+    if experiment.sensors.ground_model and experiment.excitation.generator.kind == "wind":
+        where = location(*experiment.origin("sensors"), "ground_model")
+        raise ConfigError(f"{where}: under wind the estimate models the floor forces, not the ground; set it false")
     cutoff = experiment.sensors.integration_cutoff
     if cutoff is not None:
         where = location(*experiment.origin("sensors"), "integration_cutoff")

@@ -13,7 +13,8 @@ from typing import Protocol
 
 import numpy as np
 
-from rlcontroller.control.lqg import LQGDesign, design_lqg, design_lqg_ground_model
+from rlcontroller.config import RewardConfig
+from rlcontroller.control.lqg import LQGDesign, design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.physics.plant import Plant
 
 
@@ -93,10 +94,10 @@ class LQGController:
 
 
 class LQGPrior:
-    """The action of LQG + measured ground, or of LQG + ground model with `sensors.ground_model`
-    (action units, unclipped), from an observation that holds the env's own Kalman estimate
-    (`sensors.state_estimate`), for residual policies: -feedback @ scaled estimate - feedforward *
-    scaled ground reading."""
+    """The action of LQG + measured ground, of LQG + ground model with `sensors.ground_model`, or of
+    LQG + wind model in an experiment trained under wind (action units, unclipped), from an
+    observation that holds the env's own Kalman estimate (`sensors.state_estimate`), for residual
+    policies: -feedback @ scaled estimate - feedforward * scaled ground reading."""
 
     def __init__(self, feedback: np.ndarray, feedforward: np.ndarray, layout) -> None:
         self.feedback = np.asarray(feedback, dtype=float)  # (m, estimate size), on the scaled estimate
@@ -112,7 +113,12 @@ class LQGPrior:
         if not sensors.state_estimate:
             raise ValueError("a residual on LQG needs sensors.state_estimate: true")
         model = plant.design
-        design = design_lqg_ground_model(model) if sensors.ground_model else design_lqg(model, known_ground=True)
+        if model.wind is not None:
+            design = design_lqg_wind_model(model)
+        elif sensors.ground_model:
+            design = design_lqg_ground_model(model)
+        else:
+            design = design_lqg(model, known_ground=True)
         layout = plant.layout
         return cls(design.feedback * layout.estimate_scale, design.feedforward * layout.ground_scale, layout)
 
@@ -144,12 +150,12 @@ class ClippedOptimal:
     each damper were an ideal actuator of its capacity (`Plant.active_equivalent`), whose Kalman
     filter takes the measured damper forces as the applied ones; each damper is switched fully on
     (+1) when (f_desired - f_measured) f_measured > 0, else off (-1). Needs every damper's force
-    among the sensors (`quantity: force`)."""
+    among the sensors (`quantity: force`). `reward`: another cost for the LQG (trade-off sweeps)."""
 
-    def __init__(self, plant: Plant, name: str = "clipped-optimal") -> None:
+    def __init__(self, plant: Plant, name: str = "clipped-optimal", reward: RewardConfig | None = None) -> None:
         self.name = name
         equivalent = plant.active_equivalent
-        self.design = design_lqg_ground_model(equivalent)
+        self.design = design_lqg_ground_model(equivalent, reward=reward)
         self.capacity = equivalent.force_limits
         self.layout = plant.layout
         self.force_rows = _force_rows(plant)

@@ -5,7 +5,8 @@ Measurements y_k = C z_k + D a_{k-1} + v_k include the feed-through of the actio
 step that ended at t_k (absolute accelerations). The ground acceleration is either process noise,
 or, with `known_ground`, a measured input whose change over a step is the process noise, or
 (`design_kalman_ground_model`) the output of a Kanai-Tajimi filter (the plant's `ground_model`)
-whose two states join the estimate and whose output is measured. Everything is in action units
+whose two states join the estimate and whose output is measured. Under wind
+(`design_kalman_wind_model`) the fluctuating floor forces join the estimate instead. Everything is in action units
 a = u / force_limit at the control step.
 """
 
@@ -18,7 +19,9 @@ import numpy as np
 import scipy.linalg
 from scipy.linalg import solve_discrete_are
 
+from rlcontroller.physics.dynamics import discrete_noise, state_space, wind_model_step
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.wind import WindLoadModel
 
 
 @dataclass(frozen=True)
@@ -130,6 +133,33 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     )
 
 
+def design_kalman_wind_model(plant: Plant, model: WindLoadModel) -> KalmanFilter:
+    """Filter of [z; f] (the fluctuating floor forces of `model`, a first-order process each) from
+    the sensors, which feel f directly where they read absolute accelerations; the process noise is
+    the model's, discretised exactly (`dynamics.discrete_noise`)."""
+    building, sensors = plant.building, plant.sensors
+    step = wind_model_step(building, plant.control_dt, model.time_constant)
+    size, floors = 2 * building.n_dofs, building.n_floors
+    decay = np.zeros((size + floors, size + floors))
+    decay[:size, :size] = state_space(building).a
+    decay[:size, size:] = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
+    decay[size:, size:] = -np.eye(floors) / model.time_constant
+    intensity = np.zeros_like(decay)
+    intensity[size:, size:] = 2.0 * model.covariance / model.time_constant  # stationary covariance: model's
+    process = discrete_noise(decay, intensity, step.phi) + 1e-12 * np.eye(size + floors)
+    sensor_c = np.hstack([sensors.c, sensors.load])
+    measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
+    return KalmanFilter(
+        phi=step.phi,
+        action_gain=step.force_gain * building.force_limits,
+        ground_gain=np.zeros(size + floors),
+        sensor_c=sensor_c,
+        sensor_d=sensors.d * building.force_limits,
+        gain=kalman_gain(step.phi, sensor_c, process, measurement),
+        known_ground=False,
+    )
+
+
 def integration_filter(cutoff: float, control_dt: float, channels: int, n_actuators: int) -> KalmanFilter:
     """Model-free integration of `channels` accelerations (the readings, then the ground reading)
     to velocities and displacements, with no model of the building: per channel the states
@@ -162,8 +192,9 @@ def integration_filter(cutoff: float, control_dt: float, channels: int, n_actuat
 
 def observation_filter(plant: Plant) -> KalmanFilter | None:
     """The filter of the observation's own estimate: with `sensors.state_estimate` the Kalman filter
-    designed on the design model as every controller is (the ground-model filter with
-    `sensors.ground_model`, else the one with the measured ground as a known input); with
+    designed on the design model as every controller is (the wind-model filter in an experiment
+    trained under wind, the ground-model filter with `sensors.ground_model`, else the one with the
+    measured ground as a known input); with
     `sensors.integration_cutoff` the model-free `integration_filter`; else None."""
     sensors = plant.experiment.sensors
     if sensors.integration_cutoff is not None:
@@ -172,4 +203,6 @@ def observation_filter(plant: Plant) -> KalmanFilter | None:
     if not sensors.state_estimate:
         return None
     design = plant.design
+    if design.wind is not None:
+        return design_kalman_wind_model(design, design.wind)
     return design_kalman_ground_model(design) if sensors.ground_model else design_kalman(design, known_ground=True)

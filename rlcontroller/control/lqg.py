@@ -3,7 +3,8 @@
 The Kalman filter (`estimation`) estimates z from the same noisy sensors the agent sees, with the
 feed-through of the held force. Three variants: the ground acceleration unknown (process noise),
 measured and used as a known input, or measured and predicted through a Kanai-Tajimi ground model
-in the state (`design_lqg_ground_model`). Gains act in action units a = u / force_limit.
+in the state (`design_lqg_ground_model`); under wind, the fluctuating floor forces modelled in the
+state (`design_lqg_wind_model`). Gains act in action units a = u / force_limit.
 """
 
 from __future__ import annotations
@@ -13,8 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import RewardConfig
-from rlcontroller.control.estimation import KalmanFilter, design_kalman, design_kalman_ground_model
+from rlcontroller.control.estimation import (
+    KalmanFilter,
+    design_kalman,
+    design_kalman_ground_model,
+    design_kalman_wind_model,
+)
 from rlcontroller.control.lqr import lqr_gain, preview_kernel, quadratic_cost
+from rlcontroller.physics.dynamics import wind_model_step
 from rlcontroller.physics.plant import Plant
 
 
@@ -51,13 +58,31 @@ def design_lqg(
     return LQGDesign(feedback=feedback, feedforward=feedforward, filter=kalman)
 
 
-def design_lqg_ground_model(plant: Plant, ground_std: float = 1.0) -> LQGDesign:
+def design_lqg_ground_model(plant: Plant, ground_std: float = 1.0, reward: RewardConfig | None = None) -> LQGDesign:
     """LQG whose model includes a Kanai-Tajimi filter for the (measured) ground acceleration.
 
     The Kalman filter estimates the building and filter states from the floor sensors plus the
-    ground reading; the LQR on the augmented state (same cost) acts on the predicted ground.
+    ground reading; the LQR on the augmented state (the reward's cost, or `reward`'s) acts on the
+    predicted ground.
     """
     building, step = plant.building, plant.ground_model_step()
-    feedback, _ = lqr_gain(step, quadratic_cost(plant, plant.experiment.reward, step), building.force_limits)
+    cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
+    feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman_ground_model(plant, ground_std)
+    return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman)
+
+
+def design_lqg_wind_model(plant: Plant, reward: RewardConfig | None = None) -> LQGDesign:
+    """LQG whose model includes the fluctuating floor forces of the experiment's design wind
+    (`Plant.wind`): the Kalman filter estimates building and forces from the floor sensors, and the
+    LQR on the augmented state (the reward's cost, or `reward`'s for sweeps; the forces felt at once
+    by the absolute accelerations) acts on them."""
+    model = plant.wind
+    if model is None:
+        raise ValueError("LQG + wind model needs the experiment's excitation generator to be of kind wind")
+    building = plant.building
+    step = wind_model_step(building, plant.control_dt, model.time_constant)
+    cost = quadratic_cost(plant, reward or plant.experiment.reward, step, floor_loads=True)
+    feedback, _ = lqr_gain(step, cost, building.force_limits)
+    kalman = design_kalman_wind_model(plant, model)
     return LQGDesign(feedback=feedback, feedforward=np.zeros(building.n_actuators), filter=kalman)

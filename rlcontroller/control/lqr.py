@@ -20,7 +20,7 @@ from scipy.linalg import solve, solve_discrete_are
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.cost import reward_matrices
-from rlcontroller.physics.dynamics import StepMap
+from rlcontroller.physics.dynamics import StepMap, load_feedthrough
 from rlcontroller.physics.plant import Plant
 
 DELAYED_ACTION_WEIGHT = 1.0e-4  # sqrt of the vanishing direct weight of a delayed command
@@ -35,12 +35,18 @@ class QuadraticCost:
     ground: np.ndarray  # F C_r, applied to the ground term g_k
 
 
-def quadratic_cost(plant: Plant, reward: RewardConfig, step: StepMap) -> QuadraticCost:
-    """The reward's quadratic terms as a cost on the plant's state and action, through `step`."""
+def quadratic_cost(plant: Plant, reward: RewardConfig, step: StepMap, floor_loads: bool = False) -> QuadraticCost:
+    """The reward's quadratic terms as a cost on the plant's state and action, through `step`.
+
+    States beyond the plant's (a disturbance model's) reach the outputs only through the dynamics,
+    unless `floor_loads`: then they are forces on the floors (N), felt at once by absolute accelerations."""
     building = plant.building
-    c, d, factor, _ = reward_matrices(plant, [term for term in reward.terms if term.quadratic])
+    terms = [term for term in reward.terms if term.quadratic]
+    c, d, factor, _ = reward_matrices(plant, terms)
     weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
-    # states beyond the building's (a ground model's) reach the outputs only through the dynamics
+    if floor_loads:
+        loads = np.vstack([load_feedthrough(building, term.quantity) for term in terms])
+        weighted_c = np.hstack([weighted_c, factor[:, None] * loads])
     weighted_c = np.pad(weighted_c, ((0, 0), (0, step.phi.shape[0] - weighted_c.shape[1])))
     action_gain = step.force_gain * building.force_limits
     cost = QuadraticCost(

@@ -5,7 +5,7 @@ A run or model folder holds, for NAME = best or final, beside the experiment's `
     NAME_policy.yaml   format and format_version, the learner and its training steps, the network
                        (each layer's activation, tanh squashing, odd symmetry), the observation's
                        size and normalisation (epsilon, clip), the residual prior (none,
-                       lqg_ground or lqg_ground_model), the actuators' force limits (N) and the
+                       lqg_ground, lqg_ground_model or lqg_wind_model), the actuators' force limits (N) and the
                        control step (s) it was trained with
     NAME_policy.npz    layer{i}_weight (out, in) and layer{i}_bias (float32); observation_mean and
                        observation_var (normalised observations); prior_feedback (m, estimate) and
@@ -35,7 +35,7 @@ from rlcontroller.physics.plant import Plant
 FORMAT = "rlcontroller-policy"
 FORMAT_VERSION = 1
 MODELS = ("best", "final")
-PRIORS = ("none", "lqg_ground", "lqg_ground_model")
+PRIORS = ("none", "lqg_ground", "lqg_ground_model", "lqg_wind_model")
 
 ACTIVATIONS = {
     "ReLU": lambda x: np.maximum(x, 0.0),
@@ -178,6 +178,8 @@ def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[
 
 
 def prior_kind(plant: Plant) -> str:
+    if plant.wind is not None:
+        return "lqg_wind_model"
     return "lqg_ground_model" if plant.experiment.sensors.ground_model else "lqg_ground"
 
 

@@ -276,7 +276,7 @@ def export_onnx(folder: Path, model: str, out: Path) -> Path:
     metadata names its source by folder name and the SHA-256 of its weights, never a local path."""
     import onnx
 
-    plant = Plant(load_experiment(folder / "config.yaml"))
+    plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     controller = read_policy(folder, model, plant)
     _, weights = policy_paths(folder, model)
     digest = hashlib.sha256(weights.read_bytes()).hexdigest()

@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rlcontroller.config import Experiment, display_path
+from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, display_path
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
-from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
@@ -45,7 +45,8 @@ from rlcontroller.simulation.batch import batch_rollout
 
 OPTIMAL = "optimal (clairvoyant)"
 PASSIVE = "passive devices"  # the mass devices with no command: tuned masses as tuned, drivers as tuned masses
-LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model")  # names in every table
+DAMPER_LEVELS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # passive command levels of a damper sweep, of its range
+LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
@@ -177,7 +178,8 @@ def compare(
 def classical_controllers(plant: Plant) -> list[Controller]:
     """The field's answers for the experiment's devices, designed on the design model and run on the
     plant: the three LQGs (accelerations only; + measured ground; + ground model) for actuators and
-    active mass drivers; passive-off, passive-on and clipped-optimal control for semi-active dampers."""
+    active mass drivers, or for an experiment that trains under wind LQG and LQG + wind model;
+    passive-off, passive-on and clipped-optimal control for semi-active dampers."""
     design = plant.design
     if design.semi_active is not None:
         count = design.building.n_actuators
@@ -186,8 +188,15 @@ def classical_controllers(plant: Plant) -> list[Controller]:
             ConstantCommand(1.0, count, "passive-on"),
             ClippedOptimal(design),
         ]
-    designs = [design_lqg(design), design_lqg(design, known_ground=True), design_lqg_ground_model(design)]
-    return [LQGController(lqg, design, name) for lqg, name in zip(designs, LQG_VARIANTS, strict=True)]
+    if isinstance(plant.experiment.excitation.generator, WindGeneratorConfig):
+        designs = {"LQG": design_lqg(design), "LQG + wind model": design_lqg_wind_model(design)}
+    else:
+        designs = {
+            "LQG": design_lqg(design),
+            "LQG + ground": design_lqg(design, known_ground=True),
+            "LQG + ground model": design_lqg_ground_model(design),
+        }
+    return [LQGController(lqg, design, name) for name, lqg in designs.items()]
 
 
 def percent_better(candidate: float, reference: float) -> float:
@@ -216,15 +225,58 @@ def lqg_sweep(
         raise ValueError("the reward has no force term to sweep")
     rows = []
     for multiplier in multipliers:
-        terms = [
-            term.model_copy(update={"weight": term.weight * multiplier}) if term.quantity == "force" else term
-            for term in experiment.reward.terms
-        ]
-        reward = experiment.reward.model_copy(update={"terms": terms})
+        reward = scaled_force_weights(experiment.reward, multiplier)
         controller = LQGController(design_lqg(design, known_ground=known_ground, reward=reward), design)
         result = evaluate(plant, motions, [controller], label, include_optimal=False)
         summary = result.summary().loc["LQG"]
         rows.append({"force_weight_multiplier": float(multiplier), **{m: float(summary[m]) for m in METRICS}})
+        if on_point is not None:
+            on_point()
+    return pd.DataFrame(rows)
+
+
+def scaled_force_weights(reward: RewardConfig, multiplier: float) -> RewardConfig:
+    """The reward with every force term's weight times `multiplier` (a point of a trade-off)."""
+    terms = [
+        term.model_copy(update={"weight": term.weight * multiplier}) if term.quantity == "force" else term
+        for term in reward.terms
+    ]
+    return reward.model_copy(update={"terms": terms})
+
+
+def damper_sweep(
+    plant: Plant,
+    motions: list[GroundMotion],
+    label: str,
+    levels: np.ndarray,
+    multipliers: np.ndarray,
+    on_point: Callable[[], None] | None = None,
+) -> pd.DataFrame:
+    """The classical trade-off of semi-active dampers: every damper held at each command `level`
+    (a fraction of its range: for an MR damper the voltage over its maximum) and clipped-optimal
+    control with the reward's force weights times each multiplier (designed on the design model,
+    run on the plant); mean J1..J4 per point, `on_point()` after each."""
+    if not any(term.quantity == "force" for term in plant.experiment.reward.terms):
+        raise ValueError("the reward has no force term to sweep")
+    count = plant.building.n_actuators
+    controllers: list[tuple[str, float, Controller]] = [
+        ("passive", float(level), ConstantCommand(2.0 * float(level) - 1.0, count, f"passive at {level:g}"))
+        for level in levels
+    ]
+    reward = plant.experiment.reward
+    controllers += [
+        (
+            "clipped-optimal",
+            float(m),
+            ClippedOptimal(plant.design, f"clipped-optimal x{m:g}", scaled_force_weights(reward, m)),
+        )
+        for m in multipliers
+    ]
+    rows = []
+    for family, parameter, controller in controllers:
+        result = evaluate(plant, motions, [controller], label, include_optimal=False)
+        summary = result.summary().loc[controller.name]
+        rows.append({"family": family, "parameter": parameter, **{m: float(summary[m]) for m in METRICS}})
         if on_point is not None:
             on_point()
     return pd.DataFrame(rows)

@@ -35,10 +35,16 @@ COLOURS = {
     "LQG": "tab:blue",
     "LQG + ground": "tab:purple",
     "LQG + ground model": "tab:green",
+    "LQG + wind model": "tab:cyan",
     "RL": "tab:red",
     OPTIMAL: "black",
 }
-LINE_STYLES = {"LQG + ground": (0, (5, 2)), "LQG + ground model": (0, (1, 1)), OPTIMAL: "--"}
+LINE_STYLES = {
+    "LQG + ground": (0, (5, 2)),
+    "LQG + ground model": (0, (1, 1)),
+    "LQG + wind model": (0, (1, 1)),
+    OPTIMAL: "--",
+}
 
 
 def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
@@ -218,6 +224,50 @@ def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tu
     axis.legend(fontsize=8)
     figure.tight_layout()
     written += [out / "lqg_sweep.md", atomic_savefig(figure, out / "lqg_sweep.png")]
+    plt.close(figure)
+    return written
+
+
+def write_damper_sweep(
+    sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tuple[float, float, float]]
+) -> list[Path]:
+    """The semi-active dampers' classical trade-off (`evaluation.damper_sweep`): the passive dampers
+    at each command level and clipped-optimal control at each force-weight multiplier, J1 against J3
+    and J2, with other controllers (name -> (J1, J2, J3)) marked."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = [atomic_write(out / "damper_sweep.csv", sweep.assign(suite=label).to_csv(index=False))]
+    best = sweep.loc[sweep["J1"].idxmin()]
+    lines = [
+        f"# Semi-active dampers' trade-off: {label}",
+        "",
+        "Passive dampers at each command level (a fraction of the range: voltage / maximum for MR dampers)",
+        "and clipped-optimal control at each multiplier of the reward's force weights. A controller beats",
+        "the classical ones only below every point here at its own J2 and J3.",
+        "",
+        markdown_table(sweep.set_index("family")),
+        "",
+        f"- lowest J1 of the classical points: {best['family']} at {best['parameter']:g}, J1 = {best['J1']:.3f}, "
+        f"J2 = {best['J2']:.3f}",
+    ]
+    for name, (j1, j2, j3) in points.items():
+        lines.append(f"- {name}: J1 = {j1:.3f}, J2 = {j2:.3f}, J3 = {j3:.4f}")
+    atomic_write(out / "damper_sweep.md", "\n".join(lines) + "\n")
+    figure, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+    for family, marker in (("passive", "s-"), ("clipped-optimal", "o-")):
+        chosen = sweep[sweep["family"] == family]
+        for axis, x in zip(axes, ("J3", "J2"), strict=True):
+            axis.plot(chosen[x], chosen["J1"], marker, label=family)
+    for name, (j1, j2, j3) in points.items():
+        for axis, x in zip(axes, (j3, j2), strict=True):
+            axis.plot([x], [j1], "*", markersize=13, color=COLOURS.get(name, "tab:red"), label=name)
+    axes[0].set(xlabel="J3 (damper force energy / uncontrolled base shear energy)", ylabel="J1 (peak drift ratio)")
+    axes[1].set(xlabel="J2 (peak acceleration ratio)", ylabel="J1 (peak drift ratio)")
+    for axis in axes:
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=8)
+    figure.suptitle(f"Semi-active dampers' trade-off — {label}", fontsize=9)
+    figure.tight_layout()
+    written += [out / "damper_sweep.md", atomic_savefig(figure, out / "damper_sweep.png")]
     plt.close(figure)
     return written
 

@@ -77,12 +77,17 @@ PGA_BANDS_G = (0.0, 0.02, 0.1, 0.3, np.inf)  # weak motions, where sensor noise 
 
 def j1_by_pga(evaluation: Evaluation) -> pd.DataFrame:
     """Controller x PGA band: mean J1 of the records in the band (mean over stories), and per
-    controller the number of records with J1 > 1 (worse than no control)."""
+    controller the number of records with J1 > 1 (worse than no control). Loads with no ground
+    acceleration (wind) have no band: one column of every record."""
     j1 = evaluation.metrics[evaluation.metrics["metric"] == "J1"].groupby(["controller", "record"], sort=False)["value"]
     per_record = j1.mean().unstack("record")
     pga = pd.Series({record: evaluation.pgas[record] / STANDARD_GRAVITY for record in per_record.columns})
     table = pd.DataFrame(index=pd.Index(evaluation.controllers, name="controller"))
-    for low, high in zip(PGA_BANDS_G[:-1], PGA_BANDS_G[1:], strict=True):
+    bands = zip(PGA_BANDS_G[:-1], PGA_BANDS_G[1:], strict=True)
+    if not pga.any():
+        table[f"every record ({pga.size}, no ground shaking)"] = per_record.mean(axis=1)
+        bands = iter(())
+    for low, high in bands:
         chosen = pga[(pga >= low) & (pga < high)].index
         label = f"PGA ≥ {low:g} g" if np.isinf(high) else f"PGA {low:g}–{high:g} g"
         table[f"{label} ({len(chosen)})"] = per_record[chosen].mean(axis=1) if len(chosen) else np.nan

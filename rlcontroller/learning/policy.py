@@ -77,7 +77,7 @@ def convert(folder: Path) -> list[Path]:
 
     from rlcontroller.learning.env import BuildingEnv
 
-    plant = Plant(load_experiment(folder / "config.yaml"))
+    plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     experiment = plant.experiment
     prior = LQGPrior.design(plant) if experiment.algorithm.residual_lqg else None
     written = []

@@ -126,7 +126,7 @@ class RunFolder:
         return run
 
     def experiment(self) -> Experiment:
-        return load_experiment(self.path / "config.yaml")
+        return load_experiment(self.path / "config.yaml", self_contained=True)
 
     def checkpoints(self) -> list[Path]:
         """Complete checkpoints, oldest first."""

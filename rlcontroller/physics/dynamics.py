@@ -179,6 +179,30 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
+def wind_model_step(building: Building, control_dt: float, time_constant: float) -> StepMap:
+    """Exact control-step map of the state [z; f] of the building and a first-order model of the
+    fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.wind.load_model`), driven
+    by the actuator forces; the model's white noise enters through `wind_noise_covariance`."""
+    system = state_space(building)
+    size, floors = system.a.shape[0], building.n_floors
+    inputs = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
+    augmented = StateSpace(
+        a=np.block([[system.a, inputs], [np.zeros((floors, size)), -np.eye(floors) / time_constant]]),
+        b_force=np.vstack([system.b_force, np.zeros((floors, building.n_actuators))]),
+        b_ground=np.zeros(size + floors),
+    )
+    return compose(exact_substep(augmented, control_dt), 1, control_dt)
+
+
+def discrete_noise(a: np.ndarray, intensity: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """The covariance gained over one step (phi = e^(a dt)) by a stable x' = a x + w, w white of
+    spectral intensity `intensity`: P - phi P phi', P the stationary covariance (a P + P a' +
+    intensity = 0). Exact, and unlike Van Loan's exponential it stays finite for stiff buildings."""
+    stationary = scipy.linalg.solve_continuous_lyapunov(a, -intensity)
+    covariance = stationary - phi @ stationary @ phi.T
+    return 0.5 * (covariance + covariance.T)
+
+
 @dataclass(frozen=True)
 class LoadMap:
     """Floor forces F (N), linear between their samples, over one control step of r sub-steps:

@@ -12,7 +12,8 @@ configured readings, H = `sensors.history`, m actuators and A = `sensors.action_
 | H (p + 1) + E + j m ... + m - 1 | the action applied j steps ago (after the supervisor), in [-1, 1] | 1 |
 
 The estimate: with `state_estimate`, the Kalman estimate of [x (n floors, m); v (n, m/s)], then with
-`ground_model` the ground filter's 2 states (E = 2n or 2n + 2); with `integration_cutoff`, per
+`ground_model` the ground filter's 2 states, or in an experiment trained under wind the wind model's
+fluctuating floor forces (N, scaled by their design std) (E = 2n, 2n + 2 or 2n + floors); with `integration_cutoff`, per
 channel (p + 1): leaky velocity, displacement, velocity (E = 3 (p + 1)); else none (E = 0).
 
 Before the motion starts the history and the actions are zero. `layout.readings` and
@@ -72,9 +73,15 @@ class ObservationLayout:
 
 
 def observation_layout(
-    building: Building, sensors: SensorConfig, n_readings: int, reading_scale: np.ndarray
+    building: Building,
+    sensors: SensorConfig,
+    n_readings: int,
+    reading_scale: np.ndarray,
+    load_scale: np.ndarray | None = None,
 ) -> ObservationLayout:
-    """The layout of the table above for `building`, `sensors` and its n_readings readings."""
+    """The layout of the table above for `building`, `sensors` and its n_readings readings; with
+    `load_scale` (N, one per floor: an experiment trained under wind) the state estimate also holds
+    the fluctuating floor forces of the wind model."""
     n = building.n_dofs
     estimate_scale = np.zeros(0)
     if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
@@ -86,6 +93,8 @@ def observation_layout(
         estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
         if sensors.ground_model:
             estimate_scale = np.append(estimate_scale, GroundModel().state_scale(sensors.ground_scale))
+        elif load_scale is not None:
+            estimate_scale = np.append(estimate_scale, load_scale)
     estimate_start = sensors.history * (n_readings + 1)
     action_start = estimate_start + estimate_scale.size
     return ObservationLayout(

@@ -37,6 +37,7 @@ from rlcontroller.config import (
     PlantRandomization,
     Quantity,
     SensorConfig,
+    WindGeneratorConfig,
     randomized_plant,
 )
 from rlcontroller.physics.dynamics import (
@@ -58,6 +59,7 @@ from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
+from rlcontroller.physics.wind import WindLoadModel, floor_field, load_model
 
 
 @dataclass(frozen=True)
@@ -172,13 +174,27 @@ def centre_of_ranges(randomization: PlantRandomization, base: PlantConfig | None
     return randomized_plant(base, values)
 
 
+def design_wind(experiment: Experiment) -> WindLoadModel | None:
+    """The wind an experiment trains under (an excitation generator of kind wind; else None) at the
+    middle of its speed range, as the load model of LQG + wind model and of the wind-model state
+    estimate: fitted at the first natural frequency of the design building without its mass devices.
+    Never the records it is judged on."""
+    generator = experiment.excitation.generator
+    if not isinstance(generator, WindGeneratorConfig):
+        return None
+    bare = build(experiment.building, experiment.actuators)
+    frequency = float(bare.modes()[0][0] / (2.0 * np.pi))
+    return load_model(floor_field(generator, bare, 0.5 * sum(generator.speed)), frequency)
+
+
 class Plant:
     """An experiment's building with its actuators, sensors and discretisation, built once.
 
     Attributes: `experiment`, `config` (its `plant` part, or None), `building`, `force_limits` (N),
     `control_dt` (s), `n_state` (length of x), `sensors` (`SensorMatrices`), `layout`
     (`ObservationLayout`), `ground_model` (the Kanai-Tajimi model of LQG + ground model and of
-    `sensors.ground_model`), `design` (the design model).
+    `sensors.ground_model`), `wind` (the design wind's load model of LQG + wind model, or None:
+    `design_wind`), `design` (the design model).
     """
 
     def __init__(self, experiment: Experiment) -> None:
@@ -219,7 +235,11 @@ class Plant:
         self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
         self.sensors = sensor_matrices(self, experiment.sensors)
-        self.layout = observation_layout(self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale)
+        self.wind = design_wind(experiment)
+        load_scale = np.sqrt(np.diag(self.wind.covariance)) if self.wind is not None else None
+        self.layout = observation_layout(
+            self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale, load_scale
+        )
         self.ground_model = GroundModel()
         self._maps: dict[tuple[str, int], StepMap] = {}  # (which map, sub-steps) -> map
         self._design = self if self.config is None else None

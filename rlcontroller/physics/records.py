@@ -14,7 +14,7 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
-from rlcontroller.config import KanaiTajimiConfig, display_path
+from rlcontroller.config import KanaiTajimiConfig, display_path, inside
 from rlcontroller.physics.excitation import (
     MOTION_SUFFIXES,
     STANDARD_GRAVITY,
@@ -44,8 +44,11 @@ def read_manifest(path: Path) -> list[dict[str, str]]:
     if "file" not in columns:
         raise MotionError(f"{path}:1: expected a 'file' column naming each record, got columns {columns}")
     for number, row in enumerate(rows, start=2):
-        if not (row.get("file") or "").strip():
+        name = (row.get("file") or "").strip()
+        if not name:
             raise MotionError(f"{path}:{number}: empty 'file'")
+        if not inside(path.parent, name):
+            raise MotionError(f"{path}:{number}: file {name!r} is outside the records folder; expected a file in it")
     return rows
 
 

@@ -149,6 +149,23 @@ def test_semi_active_dampers_are_compared_with_passive_off_on_and_clipped_optima
     assert summary.loc["passive-on", "dissipated_energy_J"] > 0.0
 
 
+def test_the_damper_sweep_ends_at_passive_off_and_on_and_passes_through_clipped_optimal(records):
+    """Its end points are the classical rows of the same evaluation; more voltage, less drift."""
+    from rlcontroller.evaluation.evaluation import compare, damper_sweep
+
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
+    motions = load_records(records)[0][:2]
+    table = damper_sweep(plant, motions, "two records", np.array([0.0, 0.5, 1.0]), np.array([1.0, 100.0]))
+    classical = compare(plant, motions, "two records").summary()
+    passive = table[table["family"] == "passive"]
+    assert passive["J1"].iloc[0] == pytest.approx(classical.loc["passive-off", "J1"], rel=1e-12)
+    assert passive["J1"].iloc[-1] == pytest.approx(classical.loc["passive-on", "J1"], rel=1e-12)
+    assert passive["J1"].is_monotonic_decreasing and passive["J3"].is_monotonic_increasing
+    clipped = table[table["family"] == "clipped-optimal"]
+    assert clipped["J1"].iloc[0] == pytest.approx(classical.loc["clipped-optimal", "J1"], rel=1e-12)
+    assert clipped["J3"].iloc[1] < clipped["J3"].iloc[0]  # heavier force weights, less force
+
+
 def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_same_wind(tmp_path):
     """`--records WIND.yaml`: generated wind loads on the floors; LQG with an accelerometer Kalman
     filter reduces the drift; the records differ, the same suite file gives the same numbers."""

@@ -61,12 +61,12 @@ def test_with_a_tuned_mass_the_loads_stay_on_the_floors():
 
 def wind_record(plant: Plant, seconds: float = 120.0, seed: int = 0):
     from rlcontroller.physics.excitation import GroundMotion
-    from rlcontroller.physics.wind import WindField, wind_forces
+    from rlcontroller.physics.wind import WindField, fluctuating_forces, mean_force
 
     heights = 3.0 * np.arange(1, 6)
     field = WindField(heights=heights, speed=30.0, reference_height=10.0, roughness=0.3, width=20.0)
     dt = 0.01
-    forces = wind_forces(field, seconds, dt, np.random.default_rng(seed))
+    forces = mean_force(field) + fluctuating_forces(field, seconds, dt, np.random.default_rng(seed))
     return GroundMotion(f"wind_{seed}", dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
 
 

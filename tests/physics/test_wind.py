@@ -1,11 +1,12 @@
 """The wind field: over many realisations its auto-spectra are Kaimal's, its coherence Davenport's and
-its variance the spectrum's integral; the mean force is the mean profile's; a seed fixes it."""
+its variance the spectrum's integral; the fluctuating force has zero mean; a seed fixes it. The load
+model of LQG + wind model matches the spectrum and coherence where it is fitted."""
 
 import numpy as np
 import pytest
 import scipy.signal
 
-from rlcontroller.physics.wind import AIR_DENSITY, WindField, turbulence, wind_forces
+from rlcontroller.physics.wind import WindField, fluctuating_forces, load_model, mean_force, turbulence
 
 FIELD = WindField(heights=np.array([40.0, 80.0, 160.0, 300.0]), speed=25.0, reference_height=10.0, roughness=0.3)
 DT, DURATION, REALISATIONS = 0.25, 1800.0, 24
@@ -56,12 +57,31 @@ def test_the_variance_is_the_spectrum_integral_and_the_mean_is_zero():
     assert expected[-1] / FIELD.friction_velocity**2 == pytest.approx(6.0, rel=0.1)  # Kaimal: sigma_u^2 ~ 6 u*^2
 
 
-def test_the_mean_force_is_the_mean_profiles_and_a_seed_fixes_the_record():
-    forces = wind_forces(FIELD, DURATION, DT, np.random.default_rng(5))
-    mean = 0.5 * AIR_DENSITY * FIELD.drag_coefficient * FIELD.areas() * FIELD.mean_speed() ** 2
-    records = [wind_forces(FIELD, DURATION, DT, np.random.default_rng(seed)) for seed in range(12)]
-    np.testing.assert_allclose(np.mean([f.mean(axis=0) for f in records], axis=0), mean, rtol=0.02)
-    np.testing.assert_array_equal(forces, wind_forces(FIELD, DURATION, DT, np.random.default_rng(5)))
-    assert not np.array_equal(forces, wind_forces(FIELD, DURATION, DT, np.random.default_rng(6)))
+def test_the_fluctuating_force_has_zero_mean_and_a_seed_fixes_the_record():
+    forces = fluctuating_forces(FIELD, DURATION, DT, np.random.default_rng(5))
+    records = [fluctuating_forces(FIELD, DURATION, DT, np.random.default_rng(seed)) for seed in range(12)]
+    assert np.all(np.abs(np.mean([f.mean(axis=0) for f in records], axis=0)) < 0.02 * mean_force(FIELD))
+    np.testing.assert_array_equal(forces, fluctuating_forces(FIELD, DURATION, DT, np.random.default_rng(5)))
+    assert not np.array_equal(forces, fluctuating_forces(FIELD, DURATION, DT, np.random.default_rng(6)))
     assert FIELD.mean_speed(np.array([10.0]))[0] == pytest.approx(25.0)  # the reference speed at its height
     np.testing.assert_allclose(FIELD.areas().sum(), 42.0 * 300.0)  # the tributary areas cover the facade
+
+
+def test_the_load_model_matches_kaimal_at_the_first_mode_and_davenport_between_floors():
+    """LQG + wind model's first-order load model: Kaimal's level at the mode (two thirds up), Kaimal's
+    variance, a corner below the mode, and the floors correlated as Davenport's coherence says there."""
+    frequency = 0.16
+    model = load_model(FIELD, frequency)
+    variance = 6.0 * FIELD.friction_velocity**2
+    t = model.time_constant
+    first_order = 4.0 * variance * t / (1.0 + (2.0 * np.pi * frequency * t) ** 2)
+    reference = WindField(
+        heights=np.array([200.0]), speed=FIELD.speed, reference_height=FIELD.reference_height, roughness=FIELD.roughness
+    )
+    assert first_order == pytest.approx(reference.spectrum(np.array([frequency]))[0, 0], rel=1e-9)
+    assert 1.0 / (2.0 * np.pi * t) < frequency
+    per_speed = mean_force(FIELD) * 2.0 / FIELD.mean_speed()  # rho C_D A U
+    np.testing.assert_allclose(np.diag(model.covariance), per_speed**2 * variance)
+    correlation = model.covariance[0, -1] / np.sqrt(model.covariance[0, 0] * model.covariance[-1, -1])
+    separation, mean = 260.0, FIELD.mean_speed()[[0, -1]].mean()
+    assert correlation == pytest.approx(np.exp(-FIELD.decay * frequency * separation / mean), rel=1e-9)
