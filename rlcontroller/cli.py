@@ -308,6 +308,11 @@ def model_folder(run_dir: Path | None) -> Path:
     if not (folder / "config.yaml").is_file():
         hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
         raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
+    from rlcontroller.files import active_holder
+
+    holder = active_holder(folder)
+    if holder is not None:
+        typer.echo(f"note: {folder} is still in use by {holder}; reading its newest complete files", err=True)
     return folder
 
 

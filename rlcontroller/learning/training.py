@@ -15,6 +15,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.files import check_new_folder
+from rlcontroller.files import check_new_folder, folder_lock
 from rlcontroller.learning.algorithms import algorithm_class, build_model, make_vec_env
 from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder, TrainingState, default_run_dir, plot_learning_curve
@@ -170,12 +171,29 @@ def train(
     training the same way (a tuner's pruner). With `tensorboard`, stable-baselines3's logger also
     writes TensorBoard event files to RUN/tensorboard, the validation row included.
     """
-    import torch
-
     if tensorboard and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError(
             "--tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
         )
+    with ExitStack() as held:  # the run folder's lock, from the start (resume) or its creation (new)
+        if resume is not None and (resume / "config.yaml").is_file():
+            held.enter_context(folder_lock(resume, "rlc train"))
+        return _train(experiment, run_dir, resume, device, progress_bar, time_limit_s, on_validation, tensorboard, held)
+
+
+def _train(
+    experiment: Experiment | None,
+    run_dir: Path | None,
+    resume: Path | None,
+    device: str,
+    progress_bar: bool,
+    time_limit_s: float | None,
+    on_validation: Callable[[dict[str, float]], bool] | None,
+    tensorboard: bool,
+    held: ExitStack,
+) -> TrainingSummary:
+    import torch
+
     if resume is not None:
         run = RunFolder(resume)
         if not (resume / "config.yaml").is_file():
@@ -197,6 +215,8 @@ def train(
     try:
         model, state = _start(run, experiment, vec_env, device, resume is not None, tensorboard)
         created = resume is None
+        if created:
+            held.enter_context(folder_lock(run.path, "rlc train"))
         policy_controller(model, None)  # a policy that cannot be saved as data stops before training
         stop = StopRequest()
         signals = (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()

@@ -258,12 +258,30 @@ def sweep(
     echo: Callable[[str], None] = print,
 ) -> tuple[list[RunResult], list[Path]]:
     """Plan, run on the engine (reporting each run as it ends), then aggregate over seeds per group:
-    the results and the aggregate files written in `out` (none when no run was evaluated)."""
-    from rlcontroller.files import atomic_write
-    from rlcontroller.studies.aggregate import aggregate, scores, write_aggregate
+    the results and the aggregate files written in `out` (none when no run was evaluated). `out` is
+    locked for the sweep: a second sweep into it refuses in one line naming this one."""
+    from rlcontroller.files import folder_lock
 
     runs = plan(experiment, seeds, settings, out)
     out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out, "rlc sweep"):
+        return _sweep(experiment, seeds, runs, out, engine, workers, address, records, echo)
+
+
+def _sweep(
+    experiment: Experiment,
+    seeds: list[int],
+    runs: list[SweepRun],
+    out: Path,
+    engine: str,
+    workers: int,
+    address: str | None,
+    records: str | None,
+    echo: Callable[[str], None],
+) -> tuple[list[RunResult], list[Path]]:
+    from rlcontroller.files import atomic_write
+    from rlcontroller.studies.aggregate import aggregate, scores, write_aggregate
+
     combinations = len(runs) // len(seeds)
     echo(f"{len(runs)} run(s): {len(seeds)} seed(s) x {combinations} setting(s), on the {engine} engine")
     results = []

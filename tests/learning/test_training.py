@@ -3,6 +3,7 @@ import json
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -107,8 +108,12 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     while not (run / "checkpoints" / "step_0000000500").is_dir():
         assert process.poll() is None and time.time() < deadline, process.communicate()[0]
         time.sleep(0.1)
-    os.kill(process.pid, signal.SIGKILL)
+    busy = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])  # while it trains
+    assert busy.exit_code != 0
+    assert f"in use by rlc train on {socket.gethostname()} (pid {process.pid}, since" in busy.output.splitlines()[-1]
+    os.kill(process.pid, signal.SIGKILL)  # its lock stays behind, stale: the resume below takes it over
     process.wait()
+    assert (run / ".lock").is_file()
     steps_at_kill = int(RunFolder(run).checkpoints()[-1].name.removeprefix("step_"))
     assert steps_at_kill < 2000
     result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
@@ -120,6 +125,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     wall = [float(r["wall_time_s"]) for r in curve(run)]
     assert wall == sorted(wall)
     assert RunFolder(run).checkpoints()[-1].name == "step_0000002000"
+    assert not (run / ".lock").exists()
 
 
 @pytest.mark.slow

@@ -119,3 +119,30 @@ def alive(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
     except OSError:
         return False
+
+
+def test_a_second_sweep_into_the_same_folder_and_a_train_of_its_run_are_refused(tmp_path):
+    """While a sweep holds its folder (and a run of it trains), a second sweep there, or a train
+    --resume of that run, refuses in one line naming the holder; nothing is started."""
+    import json
+    import socket
+
+    from rlcontroller.files import LOCK
+    from rlcontroller.learning.training import train
+
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        lock = {"host": socket.gethostname(), "pid": holder.pid, "what": "rlc sweep", "started": "now"}
+        (tmp_path / LOCK).write_text(json.dumps(lock))
+        with pytest.raises(ConfigError, match=f"in use by rlc sweep on .* \\(pid {holder.pid}"):
+            sweep(Experiment.model_validate(TINY), [0], [], tmp_path, "local", workers=1, echo=lambda _: None)
+        assert sorted(p.name for p in tmp_path.iterdir()) == [LOCK]  # no run folder, no sweep.csv
+        run = tmp_path / "seed0"
+        run.mkdir()
+        (run / "config.yaml").write_text(Experiment.model_validate(TINY).to_yaml())
+        (run / LOCK).write_text(json.dumps(lock | {"what": "rlc train"}))
+        with pytest.raises(ConfigError, match=f"in use by rlc train on .* \\(pid {holder.pid}"):
+            train(resume=run)
+    finally:
+        holder.kill()
+        holder.wait()
