@@ -249,6 +249,10 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         )
     if not np.allclose(description["force_limits_N"], plant.force_limits, rtol=1e-12, atol=0.0):
         raise ValueError("force_limits_N differ from the folder's config.yaml")
+    if not np.isclose(float(description["control_dt_s"]), plant.control_dt, rtol=1e-9, atol=0.0):
+        raise ValueError(
+            f"control_dt_s {description['control_dt_s']!r}: the folder's config.yaml steps every {plant.control_dt:g} s"
+        )
     layers, width = [], size
     for index, activation in enumerate(network["activations"]):
         if activation is not None and activation not in ACTIVATIONS:
@@ -266,7 +270,10 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         mean, var = weights["observation_mean"], weights["observation_var"]
         if mean.shape != (size,) or var.shape != (size,) or np.any(var < 0):
             raise ValueError("observation_mean and observation_var: expected one value per observation, var >= 0")
-        normalizer = Normalizer(mean, var, float(observation["epsilon"]), float(observation["clip"]))
+        epsilon, clip = float(observation["epsilon"]), float(observation["clip"])
+        if not (np.isfinite(epsilon) and np.isfinite(clip) and epsilon > 0.0 and clip > 0.0):
+            raise ValueError(f"observation epsilon {epsilon!r} and clip {clip!r}: expected finite positive numbers")
+        normalizer = Normalizer(mean, var, epsilon, clip)
     prior = None
     if description["prior"] not in PRIORS:
         raise ValueError(f"prior: expected one of {', '.join(PRIORS)}")
@@ -278,5 +285,7 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         if feedback.shape != (m, estimate.stop - estimate.start) or feedforward.shape != (m,):
             raise ValueError("prior_feedback / prior_feedforward: shapes do not match the observation")
         prior = LQGPrior(feedback, feedforward, plant.layout)
-    steps = int(description["training_steps"])
+    steps = description["training_steps"]
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
+        raise ValueError(f"training_steps {steps!r}: expected a whole number of steps, 0 or more")
     return PolicyController(actor, normalizer, prior, name, steps=steps, algorithm=str(description["algorithm"]))

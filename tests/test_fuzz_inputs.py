@@ -1,0 +1,266 @@
+"""Fuzzed input files for the surfaces added with devices, wind, matrix buildings, scenarios and
+plant randomisation: every leaf value of a valid file replaced by each of a set of bad values. Each
+case must end either in success or in one line naming the file, with exit code 2 — never a
+traceback, a hang or a half-written output folder. The expected messages of the hand-written cases
+are in test_bad_input.py; this checks the property on every combination."""
+
+import copy
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from rlcontroller.cli import app
+
+BAD_VALUES = ("-1", "0", ".inf", "-.inf", ".nan", "1.0e+300", "'text'", "[]", "{}", "null", "[1, [2]]")
+
+BASES = {
+    "mr": {
+        "actuators": [],
+        "devices": [{"type": "mr_damper", "story": 1, "capacity": 1.0e5, "max_voltage": 2.25}],
+        "sensors": {"measurements": [{"quantity": "force", "scale": 1.0e5, "noise_std": 100.0}]},
+    },
+    "variable_damper": {
+        "actuators": [],
+        "devices": [
+            {"type": "variable_damper", "story": 2, "damping_min": 0.0, "damping_max": 1.0e6, "capacity": 1.0e5}
+        ],
+    },
+    "amd": {
+        "devices": [
+            {
+                "type": "active_mass",
+                "floor": 5,
+                "mode": 1,
+                "mass_ratio": 0.02,
+                "force_limit": 1.0e4,
+                "stroke_limit": 1.0,
+            }
+        ],
+        "sensors": {"measurements": [{"quantity": "stroke", "scale": 1.0, "noise_std": 0.001}]},
+    },
+    "tmd": {"devices": [{"type": "tuned_mass", "floor": 3, "mode": 2, "mass_ratio": 0.05, "frequency_ratio": 0.97}]},
+    "wind_generator": {
+        "excitation": {
+            "generator": {
+                "kind": "wind",
+                "dt": 0.02,
+                "duration": [5.0, 8.0],
+                "speed": [10.0, 30.0],
+                "reference_height": 10.0,
+                "roughness": 0.3,
+                "drag_coefficient": 1.3,
+                "width": 20.0,
+                "cutoff": 5.0,
+            },
+            "validation_motions": 2,
+        }
+    },
+    "randomisation": {
+        "plant_randomization": {
+            "stiffness": {"low": 0.8, "high": 1.2},
+            "mass": {"low": 0.9, "high": 1.1, "log": True},
+            "damping": {"low": 0.5, "high": 2.0},
+            "noise_factor": {"low": 1.0, "high": 3.0},
+        }
+    },
+    "plant": {
+        "plant": {
+            "stiffness": 0.9,
+            "mass": 1.1,
+            "damping": 0.8,
+            "damage": [{"story": 2, "stiffness": -0.3}],
+            "actuators": {"time_constant": 0.02, "delay_steps": 1},
+            "sensors": {"noise_factor": 2.0, "dead_floors": [3], "bias": [{"floor": 2, "value": 0.01}]},
+        }
+    },
+}
+
+
+def leaves(tree, path=()):
+    """Every (path, value) of a nested mapping/list whose value is a number, text or boolean."""
+    if isinstance(tree, dict):
+        for key, value in tree.items():
+            yield from leaves(value, (*path, key))
+    elif isinstance(tree, list):
+        for index, value in enumerate(tree):
+            yield from leaves(value, (*path, index))
+    else:
+        yield path, tree
+
+
+def replaced(tree, path, text):
+    tree = copy.deepcopy(tree)
+    node = tree
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = yaml.safe_load(text)
+    return tree
+
+
+CASES = [
+    (f"{name}:{'.'.join(map(str, path))}={bad}", name, path, bad)
+    for name, base in BASES.items()
+    for path, value in leaves(base)
+    if not (isinstance(value, str) and path[-1] in ("type", "kind", "quantity"))
+    for bad in BAD_VALUES
+]
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise Hang
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "path", "bad"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_a_fuzzed_experiment_part_is_accepted_or_refused_in_one_line(tmp_path, name, path, bad):
+    config = tmp_path / "experiment.yaml"
+    config.write_text(yaml.safe_dump(replaced(BASES[name], path, bad)))
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(60)
+    try:
+        result = CliRunner().invoke(app, ["info", str(config)])
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert "Traceback" not in result.output
+    if result.exit_code == 0:
+        return
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {config}"), result.output
+
+
+def test_the_fuzzer_covers_at_least_150_cases_and_most_are_refused():
+    assert len(CASES) >= 150
+
+
+MATRIX_BAD = {
+    "nan": lambda m: np.where(np.eye(len(m), dtype=bool) & (np.arange(len(m))[:, None] == 1), np.nan, m),
+    "inf": lambda m: m + np.diag([np.inf] + [0.0] * (len(m) - 1)),
+    "negative_diagonal": lambda m: m - 2.0 * np.diag(np.diag(m)),
+    "asymmetric": lambda m: m + np.triu(np.ones_like(m), 1) * 1e3,
+    "one_row_short": lambda m: m[:-1],
+    "wrong_size": lambda m: m[:-1, :-1],
+    "zeros": lambda m: np.zeros_like(m),
+    "huge": lambda m: m * 1e300,
+    "one_dimensional": lambda m: np.diag(m),
+    "complex": lambda m: m.astype(complex) * 1j,
+    "text": lambda m: np.array([["a"] * len(m)] * len(m)),
+    "empty": lambda m: np.zeros((0, 0)),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("array", ["M", "K", "C"])
+@pytest.mark.parametrize("change", list(MATRIX_BAD))
+def test_a_fuzzed_matrix_file_is_refused_in_one_line(tmp_path, array, change):
+    n = 5
+    mass = np.diag(np.full(n, 20.0))
+    stiffness = 4e4 * (2 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1))
+    stiffness[-1, -1] = 4e4
+    arrays = {"M": mass, "K": stiffness, "C": 0.01 * stiffness}
+    arrays[array] = MATRIX_BAD[change](arrays[array])
+    np.savez(tmp_path / "building.npz", **arrays)
+    building = {"matrices": "building.npz", "units": {"mass": "t", "force": "kN", "length": "m"}}
+    (tmp_path / "experiment.yaml").write_text(yaml.safe_dump({"building": building}))
+    result = CliRunner().invoke(app, ["info", str(tmp_path / "experiment.yaml")])
+    assert "Traceback" not in result.output and result.exit_code == 2, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.output
+    assert "building" in lines[0], lines[0]
+
+
+WIND_SUITE = {"kind": "wind", "speeds": [20.0], "records_per_speed": 1, "duration": 10.0, "dt": 0.1, "cutoff": 1.0}
+WIND_CASES = [
+    (f"{key}={bad}", key, bad)
+    for key in ("speeds", "records_per_speed", "duration", "dt", "cutoff", "roughness", "width", "seed")
+    for bad in BAD_VALUES
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("key", "bad"), [c[1:] for c in WIND_CASES], ids=[c[0] for c in WIND_CASES])
+def test_a_fuzzed_wind_suite_is_accepted_or_refused_in_one_line(tmp_path, key, bad):
+    suite = dict(WIND_SUITE) | {key: yaml.safe_load(bad)}
+    (tmp_path / "wind.yaml").write_text(yaml.safe_dump(suite))
+    out = tmp_path / "out"
+    smoke = Path(__file__).resolve().parents[1] / "configs" / "experiments" / "smoke.yaml"
+    arguments = ["compare", "lqg", "--config", str(smoke), "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    result = CliRunner().invoke(app, arguments)
+    assert "Traceback" not in result.output
+    if result.exit_code == 0:
+        assert (out / "metrics.csv").is_file()
+        return
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "wind.yaml" in lines[0], result.output
+    assert not out.exists()
+
+
+def _policy_cases():
+    from conftest import NETWORK_POLICY, REPOSITORY
+
+    cases = []
+    for folder in (NETWORK_POLICY, REPOSITORY / "models" / "five_story_every_story"):
+        description = yaml.safe_load((folder / "best_policy.yaml").read_text())
+        for path, _ in leaves(description):
+            cases += [(f"{folder.name}:{'.'.join(map(str, path))}={bad}", folder, path, bad) for bad in BAD_VALUES]
+    return cases
+
+
+POLICY_CASES = _policy_cases()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("folder", "path", "bad"), [c[1:] for c in POLICY_CASES], ids=[c[0] for c in POLICY_CASES])
+def test_a_fuzzed_controller_file_is_read_or_refused_naming_it(tmp_path, folder, path, bad):
+    """A controller file from someone else: any field changed, it is read as data or refused with a
+    `ConfigError` naming the file (a one-line error at the command line) — never another exception."""
+    import shutil
+
+    from rlcontroller.config import ConfigError, load_experiment
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.physics.plant import Plant
+
+    copy_ = tmp_path / "model"
+    shutil.copytree(folder, copy_)
+    description = yaml.safe_load((copy_ / "best_policy.yaml").read_text())
+    (copy_ / "best_policy.yaml").write_text(yaml.safe_dump(replaced(description, path, bad)))
+    plant = Plant(load_experiment(copy_ / "config.yaml", self_contained=True))
+    try:
+        controller = read_policy(copy_, "best", plant)
+    except ConfigError as error:
+        assert str(error).startswith(str(copy_)) and "\n" not in str(error)
+        return
+    action = controller.act(np.zeros(plant.layout.size))
+    assert np.all(np.isfinite(action)) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fraction", [0.0, 0.01, 0.1, 0.25, 0.5, 0.75, 0.9, 0.99])
+@pytest.mark.parametrize("name", ["best_policy.npz", "best_policy.yaml"])
+def test_a_truncated_controller_file_is_refused_naming_it(tmp_path, name, fraction):
+    import shutil
+
+    from conftest import NETWORK_POLICY
+
+    from rlcontroller.config import ConfigError, load_experiment
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.physics.plant import Plant
+
+    copy_ = tmp_path / "model"
+    shutil.copytree(NETWORK_POLICY, copy_)
+    content = (copy_ / name).read_bytes()
+    (copy_ / name).write_bytes(content[: int(fraction * len(content))])
+    plant = Plant(load_experiment(copy_ / "config.yaml", self_contained=True))
+    with pytest.raises(ConfigError) as error:
+        read_policy(copy_, "best", plant)
+    assert str(error.value).startswith(str(copy_)) and "\n" not in str(error.value)
