@@ -38,7 +38,8 @@ EFFORT_MULTIPLIERS = (0.1, 0.3, 1.0, 3.0, 10.0, 30.0)
 CHOSEN = "LQG + wind model"  # the experiment's own weights (multiplier 1)
 COLUMNS = (
     "rms_acceleration",
-    "peak_acceleration_mg",
+    "rms_acceleration_top",
+    "peak_acceleration_top_mg",
     "rms_top_displacement",
     "stroke_rms_m",
     "stroke_m",
