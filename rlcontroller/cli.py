@@ -438,6 +438,7 @@ def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
             raise ConfigError(f"--records {records}: a wind suite is not taken by this command")
         if scale_pga is not None:
             raise ConfigError("--scale-pga: a wind suite has no ground acceleration to scale")
+        check_loads_modelled(plant, records)
         speeds = ", ".join(f"{speed:g}" for speed in suite.speeds)
         label = (
             f"{len(suite.speeds) * suite.records_per_speed} generated wind records of {suite.duration:g} s "
@@ -448,7 +449,19 @@ def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
         typer.echo(
             "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
         )
-    return choose_motions(records, scale_pga)
+    motions, label = choose_motions(records, scale_pga)
+    if plant is not None and any(motion.floor_forces is not None for motion in motions):
+        check_loads_modelled(plant, records)
+    return motions, label
+
+
+def check_loads_modelled(plant, records: Path | None) -> None:
+    """Floor loads (wind, force records) need a linear plant: refused in one line otherwise."""
+    if plant.nonlinear is not None:
+        raise ConfigError(
+            f"--records {records}: floor loads (wind) on a building with yielding stories or semi-active dampers "
+            "are not modelled; use ground-motion records"
+        )
 
 
 def motions_text(count: int) -> str:
@@ -695,6 +708,14 @@ def robustness(
     out = output_folder(out, f"robustness-{folder.resolve().name}")
     check_new_folder(out)
     motions, label = motion_suite(records, scale_pga, plant)
+    if any(motion.floor_forces is not None for motion in motions):
+        linear = [scenario for scenario in named if scenario.plant is None or scenario.plant.hysteresis is None]
+        if len(linear) < len(named):
+            skipped = ", ".join(s.name for s in named if s not in linear)
+            typer.echo(
+                f"note: skipped under floor loads (yielding stories are not modelled with them): {skipped}", err=True
+            )
+        named = linear
     with progress_bar(show_progress(progress), f"{len(named)} scenarios", len(named)) as advance:
         table, seconds = run_robustness(experiment, named, motions, label, policy, lambda name: advance(1, name))
     with new_folder(out) as staging:

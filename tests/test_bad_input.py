@@ -539,3 +539,13 @@ def test_a_model_folder_naming_files_outside_itself_is_refused(tmp_path, part):
     line = one_error_line(CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(out)]))
     assert f"config.yaml: {key}: " in line and "a run or model folder names only its own files" in line
     assert not out.exists()
+
+
+def test_wind_on_a_building_with_dampers_is_refused_in_one_line(tmp_path):
+    (tmp_path / "wind.yaml").write_text("kind: wind\nspeeds: [20]\nduration: 10\n")
+    config = str(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
+    out = tmp_path / "out"
+    arguments = ["compare", "lqg", "--config", config, "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    line = one_error_line(CliRunner().invoke(app, arguments))
+    assert "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled" in line
+    assert not out.exists()

@@ -66,9 +66,12 @@ def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Re
 
 
 def with_settling_tail(motion: GroundMotion) -> GroundMotion:
-    """The motion followed by SETTLING_TAIL_S of zero ground motion (for residual drifts)."""
+    """The motion followed by SETTLING_TAIL_S of zero ground motion and floor loads (for residual drifts)."""
     tail = np.zeros(round(SETTLING_TAIL_S / motion.dt))
-    return replace(motion, acceleration=np.concatenate([motion.acceleration, tail]))
+    forces = motion.floor_forces
+    if forces is not None:
+        forces = np.concatenate([forces, np.zeros((tail.size, forces.shape[1]))])
+    return replace(motion, acceleration=np.concatenate([motion.acceleration, tail]), floor_forces=forces)
 
 
 @dataclass

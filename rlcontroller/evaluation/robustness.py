@@ -22,7 +22,7 @@ import pandas as pd
 
 from rlcontroller.config import Experiment, Scenario
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController
-from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
+from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.physics.excitation import GroundMotion
@@ -31,6 +31,7 @@ from rlcontroller.physics.plant import Plant, centre_of_ranges
 
 NOMINAL_LQG = "LQG (nominal design)"
 NOMINAL_GROUND_MODEL = "LQG + ground model (nominal design)"
+NOMINAL_WIND_MODEL = "LQG + wind model (nominal design)"  # for an experiment trained under wind
 ORACLE_LQG = "LQG (re-designed on the plant)"
 NOMINAL_CLIPPED = "clipped-optimal (nominal design)"
 ORACLE_CLIPPED = "clipped-optimal (re-designed on the plant)"
@@ -50,9 +51,14 @@ def robustness(
     start = time.perf_counter()
     model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
     dampers = model.semi_active is not None
+    disturbance_model = (
+        LQGController(design_lqg_wind_model(model), model, NOMINAL_WIND_MODEL)
+        if model.wind is not None
+        else LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL)
+    )
     designed: list[Controller] = [  # designed once, without knowing the plant
         LQGController(design_lqg(model), model, NOMINAL_LQG),
-        LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
+        disturbance_model,
     ] if not dampers else [
         ConstantCommand(-1.0, model.building.n_actuators, "passive-off"),
         ConstantCommand(1.0, model.building.n_actuators, "passive-on"),

@@ -117,3 +117,24 @@ def test_a_randomised_run_adds_lqg_designed_on_the_centre_of_its_ranges():
     # on the plant at the centre the robust design is the oracle; the nominal design is worse there
     assert means.loc[("soft", CENTRE_LQG), "J1"] == pytest.approx(means.loc[("soft", ORACLE_LQG), "J1"], rel=1e-9)
     assert means.loc[("soft", CENTRE_LQG), "J1"] < means.loc[("soft", NOMINAL_LQG), "J1"]
+
+
+def test_under_wind_the_nominal_designs_are_lqg_and_lqg_with_the_wind_model():
+    """An experiment trained under wind is judged on wind with LQG + wind model among the nominal
+    designs; on the nominal plant it is the one evaluate runs."""
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import load_experiment
+    from rlcontroller.evaluation.robustness import NOMINAL_WIND_MODEL
+    from rlcontroller.physics.loads import generate_suite
+
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml")
+    plant = Plant(experiment)
+    motions = generate_suite(experiment.excitation.generator, 1, 5, plant.building)
+    scenarios = [Scenario(name="nominal"), Scenario(name="softer", plant={"stiffness": 0.85})]
+    result, _ = robustness(experiment, scenarios, motions, "wind")
+    means = summary(result)["J1"]
+    assert {NOMINAL_LQG, NOMINAL_WIND_MODEL} <= set(result["controller"])
+    evaluated = compare(plant, motions, "wind")
+    assert means.loc[("nominal", NOMINAL_WIND_MODEL)] == pytest.approx(mean_metric(evaluated, "LQG + wind model", "J1"))
+    assert means.loc[("softer", NOMINAL_WIND_MODEL)] < means.loc[("softer", NOMINAL_LQG)]
