@@ -2,6 +2,7 @@ import importlib.util
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 
@@ -87,3 +88,28 @@ def test_the_wind_benchmark_table_groups_records_by_their_mean_speed():
     table = per_speed_table(Evaluation(), [15.0, 25.0])
     assert table.loc[(25.0, "LQG + wind model"), "rms_acceleration"] == 0.5 * 25.0 + 0.75  # floors, then records
     assert table.loc[(15.0, "uncontrolled"), "rms_acceleration"] == 15.0 + 0.75
+
+
+@pytest.mark.slow
+def test_a_small_soak_kills_workers_and_ends_as_the_quiet_sweep(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "soak"
+    command = [
+        sys.executable,
+        str(SCRIPTS / "soak.py"),
+        str(out),
+        "--runs",
+        "2",
+        "--steps",
+        "6144",
+        "--checkpoint-every",
+        "256",
+    ]
+    done = subprocess.run([*command, "--kill-every", "4", "6"], capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr
+    report = (out / "soak.md").read_text()
+    assert "every run finished and evaluated: yes" in report, report
+    assert "evaluation metrics equal to the quiet sweep's:" in report and "aggregate equal to" in report, report
+    assert " 0 workers killed" not in report, report

@@ -175,12 +175,38 @@ def execute(
     if engine == "dask":
         yield from _dask(runs, records, workers, address)
         return
+    yield from _local(runs, records, workers)
+
+
+WORKER_LOSSES = 5  # times a run's worker may die (killed, out of memory) before the run is reported failed
+
+
+def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[RunResult]:
+    """Local worker processes. A worker that dies breaks the whole pool: the runs it and its siblings
+    had not finished go to a new pool, where they resume from their last checkpoints (the dead
+    holder's lock is stale and taken over), up to WORKER_LOSSES times each."""
     import multiprocessing
+    from concurrent.futures.process import BrokenProcessPool
 
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(),)) as pool:
-        futures = {pool.submit(_run_local, run, records): run for run in runs}
-        yield from _as_completed(futures, local_completed)
+    pending, losses = list(runs), dict.fromkeys((run.folder for run in runs), 0)
+    while pending:
+        lost = []
+        with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(),)) as pool:
+            futures = {pool.submit(_run_local, run, records): run for run in pending}
+            for future in local_completed(futures):
+                run = futures[future]
+                try:
+                    yield future.result()
+                except BrokenProcessPool:
+                    losses[run.folder] += 1
+                    if losses[run.folder] > WORKER_LOSSES:
+                        yield RunResult(run, "failed", 0.0, f"worker lost {losses[run.folder]} times")
+                    else:
+                        lost.append(run)
+                except Exception as error:
+                    yield RunResult(run, "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300])
+        pending = lost
 
 
 _parent_gone = threading.Event()  # in a local worker: the sweep's process has died

@@ -146,3 +146,61 @@ def test_a_second_sweep_into_the_same_folder_and_a_train_of_its_run_are_refused(
     finally:
         holder.kill()
         holder.wait()
+
+
+@pytest.mark.slow
+def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
+    """SIGKILL to the worker training seed 0: its pool breaks, the unfinished runs go to a new pool
+    and resume from their checkpoints (the dead worker's lock is taken over); every run finishes, none
+    is duplicated."""
+    import json
+
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-1"]
+    process = subprocess.Popen([*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True)
+    lock, deadline = out / "seed0" / ".lock", time.time() + 180
+    while not (lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
+        assert process.poll() is None and time.time() < deadline, process.communicate()[0]
+        time.sleep(0.1)
+    worker = json.loads(lock.read_text())["pid"]
+    subprocess.run(["kill", "-9", str(worker)], check=True)
+    output, _ = process.communicate(timeout=600)
+    assert process.returncode == 0, output
+    assert "2 runs done, 0 failed" in output, output
+    rows = (out / "sweep.csv").read_text().splitlines()[1:]
+    assert len(rows) == 2 and any(",resumed," in row and "seed0" in row for row in rows), rows
+    for seed in (0, 1):
+        run = out / f"seed{seed}"
+        assert (run / "final_model.zip").is_file() and (run / "evaluation" / "metrics.csv").is_file()
+        assert not (run / ".lock").exists() and not list(run.glob(".*incomplete*"))
+        steps = [int(line.split(",")[0]) for line in (run / "learning_curve.csv").read_text().splitlines()[1:]]
+        assert steps == sorted(set(steps)), steps  # no row logged twice
+    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1"]
+
+
+@pytest.mark.slow
+def test_a_dask_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
+    """SIGKILL to the Dask worker training seed 0: the scheduler gives the run to a worker again, where
+    it resumes from its last checkpoint; every run finishes."""
+    import json
+
+    pytest.importorskip("distributed")
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-1"]
+    command += ["--engine", "dask", "--workers", "2", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lock, deadline = out / "seed0" / ".lock", time.time() + 180
+    while not (lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
+        assert process.poll() is None and time.time() < deadline, process.communicate()[0]
+        time.sleep(0.1)
+    subprocess.run(["kill", "-9", str(json.loads(lock.read_text())["pid"])], check=True)
+    output, _ = process.communicate(timeout=600)
+    assert process.returncode == 0 and "2 runs done, 0 failed" in output, output
+    rows = (out / "sweep.csv").read_text().splitlines()[1:]
+    assert any(",resumed," in row and "seed0" in row for row in rows), rows
+    for seed in (0, 1):
+        assert (out / f"seed{seed}" / "final_model.zip").is_file() and not (out / f"seed{seed}" / ".lock").exists()
