@@ -264,3 +264,96 @@ def test_a_truncated_controller_file_is_refused_naming_it(tmp_path, name, fracti
     with pytest.raises(ConfigError) as error:
         read_policy(copy_, "best", plant)
     assert str(error.value).startswith(str(copy_)) and "\n" not in str(error.value)
+
+
+SCENARIOS = {
+    "scenarios": [
+        {"name": "nominal"},
+        {"name": "softer", "plant": {"stiffness": 0.85, "mass": 1.1, "damping": 0.5}},
+        {"name": "damaged", "plant": {"damage": [{"story": 1, "stiffness": -0.4}]}},
+        {"name": "late", "plant": {"actuators": {"time_constant": 0.02, "delay_steps": 1}}},
+        {"name": "sensors", "plant": {"sensors": {"noise_factor": 5.0, "dead_floors": [3]}}},
+    ]
+}
+SCENARIO_CASES = [
+    (f"{'.'.join(map(str, path))}={bad}", path, bad) for path, _ in leaves(SCENARIOS) for bad in BAD_VALUES
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("path", "bad"), [c[1:] for c in SCENARIO_CASES], ids=[c[0] for c in SCENARIO_CASES])
+def test_a_fuzzed_scenario_file_is_read_or_refused_naming_it(tmp_path, path, bad):
+    from rlcontroller.config import ConfigError, Experiment, load_scenarios
+    from rlcontroller.physics.plant import Plant
+
+    file = tmp_path / "scenarios.yaml"
+    file.write_text(yaml.safe_dump(replaced(SCENARIOS, path, bad)))
+    experiment = Experiment()
+    try:
+        scenarios = load_scenarios(file, experiment)
+    except ConfigError as error:
+        assert str(error).startswith(str(file)) and "\n" not in str(error)
+        return
+    for scenario in scenarios:  # accepted: every plant can be built
+        Plant(experiment.model_copy(update={"plant": scenario.plant}))
+
+
+SEARCH = {
+    "algorithm.kwargs.learning_rate": {"low": 1.0e-5, "high": 1.0e-3, "log": True},
+    "algorithm.kwargs.n_steps": {"choices": [128, 256]},
+    "algorithm.kwargs.n_epochs": {"low": 1, "high": 5, "integer": True},
+}
+SEARCH_CASES = [(f"{'.'.join(map(str, p))}={bad}", p, bad) for p, _ in leaves(SEARCH) for bad in BAD_VALUES]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("path", "bad"), [c[1:] for c in SEARCH_CASES], ids=[c[0] for c in SEARCH_CASES])
+def test_a_fuzzed_search_space_is_accepted_or_refused_in_one_line(tmp_path, path, bad):
+    base = {"algorithm": {"name": "PPO", "search": SEARCH}}
+    config = tmp_path / "experiment.yaml"
+    config.write_text(yaml.safe_dump(replaced(base, ("algorithm", "search", *path), bad)))
+    result = CliRunner().invoke(app, ["info", str(config)])
+    assert "Traceback" not in result.output
+    if result.exit_code != 0:
+        lines = result.output.strip().splitlines()
+        assert result.exit_code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {config}"), result.output
+
+
+SET_VALUES = (
+    *("", "=", "x=", "=1", "algorithm.kwargs.gamma=", "algorithm.kwargs.gamma=.nan", "seed=-1", "seed=3"),
+    *("algorithm.kwargs.gamma=[1,", "nothing.here=1", "algorithm.total_steps=0", "building.masses=[1]"),
+    *("algorithm.kwargs.gamma=0.9,,0.99", "simulation.control_dt=1e300", "name=../../x", "algorithm=7"),
+)
+
+
+@pytest.mark.parametrize("text", SET_VALUES)
+def test_a_bad_sweep_setting_is_refused_before_any_run(tmp_path, text):
+    from rlcontroller.config import ConfigError, Experiment
+    from rlcontroller.studies.sweep import parse_setting, plan
+
+    with pytest.raises(ConfigError) as error:
+        plan(Experiment(), [0], [parse_setting(text)], tmp_path / "out")
+    assert "\n" not in str(error.value) and not (tmp_path / "out").exists()
+
+
+AGGREGATE_FILES = {
+    "empty": "",
+    "header_only": "controller,record,metric,index,value\n",
+    "missing_column": "controller,record,metric,value\nRL,a,J1,0.5\n",
+    "text_value": "controller,record,metric,index,value\nRL,a,J1,1,abc\n",
+    "nan_value": "controller,record,metric,index,value\nRL,a,J1,1,nan\n",
+    "binary": "\x00\x01\x02",
+    "ragged": "controller,record,metric,index,value\nRL,a,J1\n",
+}
+
+
+@pytest.mark.parametrize("name", list(AGGREGATE_FILES))
+def test_a_damaged_metrics_file_stops_aggregate_in_one_line(tmp_path, name):
+    (tmp_path / "run" / "evaluation").mkdir(parents=True)
+    (tmp_path / "run" / "evaluation" / "metrics.csv").write_text(AGGREGATE_FILES[name])
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["aggregate", str(tmp_path / "run"), "--out", str(out)])
+    lines = result.output.strip().splitlines()
+    assert result.exit_code == 2 and "Traceback" not in result.output, result.output
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "metrics.csv" in lines[0], result.output
+    assert not out.exists()

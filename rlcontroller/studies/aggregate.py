@@ -51,12 +51,9 @@ def scores(runs: list[Path]) -> pd.DataFrame:
     frames = []
     for run in runs:
         path = metrics_file(run)
-        try:
-            frame = pd.read_csv(path)
-            keys = ["scenario"] if "scenario" in frame.columns else []
-            per_record = frame.groupby([*keys, "controller", "metric", "record"], sort=False)["value"].mean()
-        except (ValueError, KeyError, pd.errors.ParserError) as error:
-            raise ConfigError(f"{path}: not an evaluation metrics file ({type(error).__name__}: {error})") from None
+        frame = read_metrics(path)
+        keys = ["scenario"] if "scenario" in frame.columns else []
+        per_record = frame.groupby([*keys, "controller", "metric", "record"], sort=False)["value"].mean()
         per_record = per_record.rename("score").reset_index().assign(run=str(run))
         if keys:
             pooled = per_record.assign(
@@ -71,6 +68,31 @@ def scores(runs: list[Path]) -> pd.DataFrame:
     if records.nunique() > 1:
         raise ConfigError("the runs were evaluated on different records; aggregate runs of one motion suite")
     return table
+
+
+METRICS_COLUMNS = ("controller", "record", "metric", "index", "value")
+
+
+def read_metrics(path: Path) -> pd.DataFrame:
+    """An evaluation's metrics.csv (or robustness.csv), checked: its columns, at least one row, finite
+    numbers; a damaged file is a one-line `ConfigError` naming it."""
+    try:
+        frame = pd.read_csv(path)
+    except (ValueError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as error:
+        raise ConfigError(f"{path}: not an evaluation metrics file ({type(error).__name__})") from None
+    missing = [column for column in METRICS_COLUMNS if column not in frame.columns]
+    if missing:
+        raise ConfigError(f"{path}: not an evaluation metrics file (no column {', '.join(missing)})")
+    if frame.empty:
+        raise ConfigError(f"{path}: no rows: the evaluation holds no results")
+    values = pd.to_numeric(frame["value"], errors="coerce")
+    bad = ~np.isfinite(values.to_numpy(dtype=float))
+    if bad.any():
+        line = int(np.argmax(bad)) + 2
+        raise ConfigError(f"{path}:{line}: value {frame['value'].iloc[line - 2]!r}, expected a finite number")
+    if frame[["controller", "record", "metric"]].isna().any().any():
+        raise ConfigError(f"{path}: a row without its controller, record or metric")
+    return frame.assign(value=values)
 
 
 def interquartile_mean(values: np.ndarray) -> float:

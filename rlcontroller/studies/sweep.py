@@ -94,6 +94,8 @@ def plan(experiment: Experiment, seeds: list[int], settings: list[tuple[str, lis
     keys = [key for key, _ in settings]
     if len(set(keys)) != len(keys):
         raise ConfigError("--set: a key is set twice; give all its values in one --set KEY=V1,V2")
+    if "seed" in keys:
+        raise ConfigError("--set seed: the seeds of a sweep are given by --seeds")
     runs = []
     for values in itertools.product(*(values for _, values in settings)):
         chosen = dict(zip(keys, values, strict=True))
