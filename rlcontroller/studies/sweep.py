@@ -247,6 +247,11 @@ def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str 
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
         raise ConfigError("--engine dask needs Dask distributed: pip install 'rlcontroller[distributed]'") from None
+    import logging
+
+    for name in [*logging.root.manager.loggerDict, "distributed", "distributed.client"]:
+        if name.startswith("distributed"):  # a lost scheduler is reported below, once, not as log tracebacks
+            logging.getLogger(name).setLevel(logging.CRITICAL)
     cluster = None
     if address is None:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
@@ -259,7 +264,13 @@ def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str 
             client.submit(run_one, run, records, pure=False, key=f"run-{i}-{run.folder.name}"): run
             for i, run in enumerate(runs)
         }
-        yield from _as_completed(futures, as_completed)
+        for result in _as_completed(futures, as_completed):
+            if result.status == "failed" and client.status != "running":  # the scheduler is gone, not a run
+                raise ConfigError(
+                    f"--address {address or 'local cluster'}: lost the Dask scheduler; the runs keep their "
+                    "checkpoints: run the same command again (with a scheduler) to continue"
+                )
+            yield result
     finally:
         client.close()
         if cluster is not None:

@@ -204,3 +204,44 @@ def test_a_dask_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     assert any(",resumed," in row and "seed0" in row for row in rows), rows
     for seed in (0, 1):
         assert (out / f"seed{seed}" / "final_model.zip").is_file() and not (out / f"seed{seed}" / ".lock").exists()
+
+
+@pytest.mark.slow
+def test_a_sweep_whose_dask_scheduler_dies_says_so_in_one_line_and_continues_when_run_again(tmp_path):
+    """A scheduler of its own (`--address`) killed mid-run: one line, exit 2; the same sweep run again
+    (on a local cluster: the worker killed with it left a stale lock) resumes the run."""
+    import socket
+
+    pytest.importorskip("distributed")
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    scheduler = subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    worker_command = [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1"]
+    worker = subprocess.Popen([*worker_command, "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=8192, checkpoint_every=256, eval_every=2048))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0"]
+    command += ["--engine", "dask", "--address", address, "--out", str(out)]
+    try:
+        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.time() + 180
+        while not list((out / "seed0" / "checkpoints").glob("step_*")):
+            assert process.poll() is None and time.time() < deadline, process.communicate()
+            time.sleep(0.1)
+        scheduler.kill()
+        _, error = process.communicate(timeout=300)
+        lines = [line for line in error.strip().splitlines() if not line.startswith("no --records given")]
+        assert process.returncode == 2 and len(lines) == 1 and "lost the Dask scheduler" in lines[0], error
+        assert not (out / ".lock").exists()
+    finally:
+        scheduler.kill()
+        worker.kill()
+        worker.wait()
+    again = subprocess.run(command[: command.index("--address")] + ["--out", str(out)], capture_output=True, text=True)
+    assert again.returncode == 0 and "1 runs done, 0 failed" in again.stdout, again.stderr
+    assert ",resumed," in (out / "sweep.csv").read_text()
