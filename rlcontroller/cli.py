@@ -619,8 +619,8 @@ def compare_lqg(
         write_report(evaluation, staging)
         if sweep and experiment.has_dampers:
             levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
-            with progress_bar(progress, "dampers' trade-off", len(levels) + multipliers.size) as advance:
-                table = damper_sweep(plant, motions, label, levels, multipliers, on_point=lambda: advance())
+            with progress_bar(progress, "dampers' trade-off", len(motions)) as advance:
+                table = damper_sweep(plant, motions, label, levels, multipliers, advance)
             names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
             points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
             write_damper_sweep(table, staging, label, points)

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.linalg
 from scipy.linalg import solve_discrete_are
 
-from rlcontroller.physics.dynamics import discrete_noise, state_space, wind_model_step
+from rlcontroller.physics.dynamics import discrete_noise, wind_model_step, wind_model_system
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.wind import WindLoadModel
 
@@ -138,15 +138,12 @@ def design_kalman_wind_model(plant: Plant, model: WindLoadModel) -> KalmanFilter
     the sensors, which feel f directly where they read absolute accelerations; the process noise is
     the model's, discretised exactly (`dynamics.discrete_noise`)."""
     building, sensors = plant.building, plant.sensors
+    system = wind_model_system(building, model.time_constant)
     step = wind_model_step(building, plant.control_dt, model.time_constant)
     size, floors = 2 * building.n_dofs, building.n_floors
-    decay = np.zeros((size + floors, size + floors))
-    decay[:size, :size] = state_space(building).a
-    decay[:size, size:] = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
-    decay[size:, size:] = -np.eye(floors) / model.time_constant
-    intensity = np.zeros_like(decay)
+    intensity = np.zeros_like(system.a)
     intensity[size:, size:] = 2.0 * model.covariance / model.time_constant  # stationary covariance: model's
-    process = discrete_noise(decay, intensity, step.phi) + 1e-12 * np.eye(size + floors)
+    process = discrete_noise(system.a, intensity, step.phi) + 1e-12 * np.eye(size + floors)
     sensor_c = np.hstack([sensors.c, sensors.load])
     measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
     return KalmanFilter(

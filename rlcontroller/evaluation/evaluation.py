@@ -253,12 +253,13 @@ def damper_sweep(
     label: str,
     levels: np.ndarray,
     multipliers: np.ndarray,
-    on_point: Callable[[], None] | None = None,
+    on_motions: Callable[[int], None] | None = None,
 ) -> pd.DataFrame:
     """The classical trade-off of semi-active dampers: every damper held at each command `level`
     (a fraction of its range: for an MR damper the voltage over its maximum) and clipped-optimal
     control with the reward's force weights times each multiplier (designed on the design model,
-    run on the plant); mean J1..J4 per point, `on_point()` after each."""
+    run on the plant), all in one batched evaluation; mean J1..J4 per point. `on_motions(count)` as
+    in `evaluate`."""
     if not any(term.quantity == "force" for term in plant.experiment.reward.terms):
         raise ValueError("the reward has no force term to sweep")
     count = plant.building.n_actuators
@@ -275,13 +276,13 @@ def damper_sweep(
         )
         for m in multipliers
     ]
-    rows = []
-    for family, parameter, controller in controllers:
-        result = evaluate(plant, motions, [controller], label, include_optimal=False)
-        summary = result.summary().loc[controller.name]
-        rows.append({"family": family, "parameter": parameter, **{m: float(summary[m]) for m in METRICS}})
-        if on_point is not None:
-            on_point()
+    chosen = [controller for _, _, controller in controllers]
+    evaluation = evaluate(plant, motions, chosen, label, include_optimal=False, on_motions=on_motions)
+    summary = evaluation.summary()
+    rows = [
+        {"family": family, "parameter": parameter, **{m: float(summary.loc[controller.name, m]) for m in METRICS}}
+        for family, parameter, controller in controllers
+    ]
     return pd.DataFrame(rows)
 
 

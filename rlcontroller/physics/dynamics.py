@@ -179,19 +179,23 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
-def wind_model_step(building: Building, control_dt: float, time_constant: float) -> StepMap:
-    """Exact control-step map of the state [z; f] of the building and a first-order model of the
+def wind_model_system(building: Building, time_constant: float) -> StateSpace:
+    """The continuous system of the state [z; f]: the building and a first-order model of the
     fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.wind.load_model`), driven
-    by the actuator forces; the model's white noise enters through `wind_noise_covariance`."""
+    by the actuator forces (w enters through `discrete_noise`)."""
     system = state_space(building)
     size, floors = system.a.shape[0], building.n_floors
     inputs = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
-    augmented = StateSpace(
+    return StateSpace(
         a=np.block([[system.a, inputs], [np.zeros((floors, size)), -np.eye(floors) / time_constant]]),
         b_force=np.vstack([system.b_force, np.zeros((floors, building.n_actuators))]),
         b_ground=np.zeros(size + floors),
     )
-    return compose(exact_substep(augmented, control_dt), 1, control_dt)
+
+
+def wind_model_step(building: Building, control_dt: float, time_constant: float) -> StepMap:
+    """Exact control-step map of `wind_model_system`."""
+    return compose(exact_substep(wind_model_system(building, time_constant), control_dt), 1, control_dt)
 
 
 def discrete_noise(a: np.ndarray, intensity: np.ndarray, phi: np.ndarray) -> np.ndarray:

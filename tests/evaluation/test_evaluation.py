@@ -193,3 +193,23 @@ def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_s
     assert comfort["uncontrolled"] == 1.0 and comfort["LQG + ground model"] < 0.9
     top = metrics[metrics["metric"] == "rms_top_displacement"]
     assert top["index"].unique().tolist() == [1] and (top["value"] > 0).all()
+
+
+def test_rlc_compare_lqg_sweep_of_a_damper_experiment_writes_its_trade_off(records, tmp_path):
+    import shutil
+
+    from typer.testing import CliRunner
+
+    from rlcontroller.cli import app
+
+    two = tmp_path / "records"
+    two.mkdir()
+    for path in sorted(records.glob("*.AT2"))[:2]:
+        shutil.copy(path, two / path.name)
+    config = str(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
+    out = tmp_path / "out"
+    arguments = ["compare", "lqg", "--config", config, "--records", str(two), "--sweep", "--out", str(out)]
+    result = CliRunner().invoke(app, arguments)
+    assert result.exit_code == 0, result.output
+    assert {"damper_sweep.csv", "damper_sweep.md", "damper_sweep.png"} <= {p.name for p in out.iterdir()}
+    assert "| passive | 1.000 |" in result.output and "- passive-on: J1 = " in result.output
