@@ -186,9 +186,12 @@ WORKER_LOSSES = 5  # times a run's worker may die (killed, out of memory) before
 def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[RunResult]:
     """Local worker processes. A worker that dies breaks the whole pool: the runs it and its siblings
     had not finished go to a new pool, where they resume from their last checkpoints (the dead
-    holder's lock is stale and taken over), up to WORKER_LOSSES times each."""
+    holder's lock is stale and taken over). A run whose own worker died (its lock left behind) more
+    than WORKER_LOSSES times is reported failed."""
     import multiprocessing
     from concurrent.futures.process import BrokenProcessPool
+
+    from rlcontroller.files import LOCK
 
     context = multiprocessing.get_context("spawn")
     pending, losses = list(runs), dict.fromkeys((run.folder for run in runs), 0)
@@ -200,8 +203,8 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
                 run = futures[future]
                 try:
                     yield future.result()
-                except BrokenProcessPool:
-                    losses[run.folder] += 1
+                except BrokenProcessPool:  # a run still queued, or stopped by its sibling's death, is not to blame
+                    losses[run.folder] += int((run.folder / LOCK).is_file())
                     if losses[run.folder] > WORKER_LOSSES:
                         yield RunResult(run, "failed", 0.0, f"worker lost {losses[run.folder]} times")
                     else:
