@@ -45,7 +45,7 @@ class Uncontrolled:
 
 def residual_action(action: np.ndarray, prior_action: np.ndarray) -> np.ndarray:
     """A residual policy's rule: its action (clipped) plus the prior's, clipped to [-1, 1]."""
-    return np.clip(np.clip(action, -1.0, 1.0) + prior_action, -1.0, 1.0)
+    return (np.asarray(action).clip(-1.0, 1.0) + prior_action).clip(-1.0, 1.0)
 
 
 class LinearFeedback:
@@ -63,7 +63,7 @@ class LinearFeedback:
     def act(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation, dtype=float)
         action = observation @ self.weights.T
-        return np.clip(action, -1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
+        return action.clip(-1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
 
 
 class LQGController:
@@ -90,7 +90,7 @@ class LQGController:
         self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
         self._previous_ground = ground
         action = -(self.estimate @ design.feedback.T) - ground[..., None] * design.feedforward
-        return np.clip(action, -1.0, 1.0)
+        return action.clip(-1.0, 1.0)
 
 
 class LQGPrior:

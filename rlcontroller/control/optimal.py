@@ -51,7 +51,7 @@ def optimal_responses(
         states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
         actions = np.zeros((n_steps, len(members), building.n_actuators))
         for k in range(n_steps):
-            actions[k] = np.clip(-(states[k] @ feedback.T) - feedforward[:, k], -1.0, 1.0)
+            actions[k] = (-(states[k] @ feedback.T) - feedforward[:, k]).clip(-1.0, 1.0)
             states[k + 1] = states[k] @ step.phi.T + actions[k] @ action_gain.T + ground_terms[:, k]
         for row, (i, t) in enumerate(zip(members, terms, strict=True)):
             k = t.shape[0]

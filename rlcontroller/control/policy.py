@@ -86,7 +86,7 @@ class Normalizer:
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         spread = np.sqrt(self.var + self.epsilon)
-        return np.clip((observation - self.mean) / spread, -self.clip, self.clip)
+        return ((observation - self.mean) / spread).clip(-self.clip, self.clip)
 
 
 class PolicyController:
@@ -124,7 +124,7 @@ class PolicyController:
             observation = self.normalizer(observation)
         action = self.actor(observation)
         if self.prior is None:
-            return np.clip(action, -1.0, 1.0)
+            return np.asarray(action).clip(-1.0, 1.0)
         return residual_action(action, self.prior(raw))
 
 

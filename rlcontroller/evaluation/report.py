@@ -116,6 +116,7 @@ def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Pa
     bare = evaluation.responses["uncontrolled", record]
     start, end = strong_part(bare.ground, bare.time)
     figure, (drift_axis, shear_axis) = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
+    shown = slice(max(0, np.searchsorted(bare.time, start) - 1), np.searchsorted(bare.time, end) + 1)
     for controller in evaluation.controllers:
         result = evaluation.responses[controller, record]
         style = {
@@ -123,8 +124,9 @@ def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Pa
             "linestyle": LINE_STYLES.get(controller, "-"),
             "linewidth": 1.6 if controller == "RL" else 1.0,
         }
-        drift_axis.plot(result.time, 100 * result.drift[:, story - 1], label=controller, **style)
-        shear_axis.plot(result.time, result.base_shear / 1e3, label=controller, **style)
+        time = result.time[shown]
+        drift_axis.plot(time, 100 * result.drift[shown, story - 1], label=controller, **style)
+        shear_axis.plot(time, result.base_shear[shown] / 1e3, label=controller, **style)
     description = evaluation.descriptions.get(record, "")
     source = "SYNTHETIC motion" if "SYNTHETIC" in evaluation.label else "as recorded"
     if "scaled to PGA" in evaluation.label:

@@ -10,15 +10,14 @@ so |z| -> 1 once the story yields. With the drift matrix D (d = D x) the floors 
 
 on the state s = [x; v; z] (m, m/s, -). The force u is held over the control step and the ground
 acceleration is linear between its samples, as in the linear plant; classical RK4 with `substeps`
-steps per ground-sample interval, compiled with numba (`scripts/bench_env.py` measures it against
-the same code run by the interpreter). a = 1 is the linear shear building.
+steps per ground-sample interval, compiled with numba in `integrators.py` (`scripts/bench_env.py`
+measures it against the same code run by the interpreter). a = 1 is the linear shear building.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from rlcontroller.config import HysteresisConfig
@@ -61,6 +60,8 @@ class BoucWen:
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state after one control step: the action (forces / force limits) held, `ground` the
         r + 1 ground samples (m/s^2) spanning the step."""
+        from rlcontroller.physics.integrators import bouc_wen_step  # numba: imported when first needed
+
         return bouc_wen_step(
             state,
             self.floor_gain @ action,
@@ -76,55 +77,3 @@ class BoucWen:
             self.beta,
             self.gamma,
         )
-
-
-@numba.njit(cache=True)
-def z_rate(z: float, drift_rate: float, yield_drift: float, exponent: float, beta: float, gamma: float) -> float:
-    """dz/dt of one Bouc-Wen story."""
-    sign = 1.0 if drift_rate * z > 0.0 else (-1.0 if drift_rate * z < 0.0 else 0.0)
-    return drift_rate / yield_drift * (1.0 - abs(z) ** exponent * (beta * sign + gamma))
-
-
-@numba.njit(cache=True)
-def _derivative(
-    state, floor_force, ground, mass_inverse, damping, linear, hysteretic, yield_drift, exponent, beta, gamma
-):
-    n = mass_inverse.size
-    rate = np.empty(3 * n)
-    story_force = np.empty(n)
-    for i in range(n):
-        below_x = state[i - 1] if i > 0 else 0.0
-        below_v = state[n + i - 1] if i > 0 else 0.0
-        drift, drift_rate = state[i] - below_x, state[n + i] - below_v
-        story_force[i] = linear[i] * drift + hysteretic[i] * state[2 * n + i]
-        rate[2 * n + i] = z_rate(state[2 * n + i], drift_rate, yield_drift[i], exponent, beta, gamma)
-    for i in range(n):
-        restoring = story_force[i] - (story_force[i + 1] if i + 1 < n else 0.0)  # D' F
-        damping_force = 0.0
-        for j in range(n):
-            damping_force += damping[i, j] * state[n + j]
-        rate[i] = state[n + i]
-        rate[n + i] = mass_inverse[i] * (floor_force[i] - damping_force - restoring) - ground
-    return rate
-
-
-@numba.njit(cache=True)
-def bouc_wen_step(
-    state, floor_force, ground, control_dt, substeps, mass_inverse, damping, linear, hysteretic, yield_drift, exponent,
-    beta, gamma,
-):  # fmt: skip
-    """RK4 over one control step: `substeps` steps per interval between the ground samples."""
-    intervals = ground.size - 1
-    h = control_dt / (intervals * substeps)
-    s = state.copy()
-    args = (mass_inverse, damping, linear, hysteretic, yield_drift, exponent, beta, gamma)
-    for interval in range(intervals):
-        start, slope = ground[interval], (ground[interval + 1] - ground[interval]) / (h * substeps)
-        for j in range(substeps):
-            a0 = start + slope * h * j
-            k1 = _derivative(s, floor_force, a0, *args)
-            k2 = _derivative(s + 0.5 * h * k1, floor_force, a0 + 0.5 * h * slope, *args)
-            k3 = _derivative(s + 0.5 * h * k2, floor_force, a0 + 0.5 * h * slope, *args)
-            k4 = _derivative(s + h * k3, floor_force, a0 + h * slope, *args)
-            s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return s

@@ -182,7 +182,7 @@ class BuildingBatch:
         view: copy to keep), the rewards (N,) and which members' motions have just ended (N,) bool."""
         size, states = self._state_size, self.states
         clipped = states[:, size:]
-        np.clip(actions, -1.0, 1.0, out=clipped)
+        np.asarray(actions).clip(-1.0, 1.0, out=clipped)
         if self.supervisor is not None:
             clipped[:] = self.supervisor(self.observations, clipped)
         forcing = self._forcing[self._members, np.minimum(self.k, self._forcing.shape[1] - 1)]

@@ -6,7 +6,8 @@ import pytest
 import scipy.integrate
 
 from rlcontroller.config import Experiment, HysteresisConfig
-from rlcontroller.physics.hysteresis import BoucWen, z_rate
+from rlcontroller.physics.hysteresis import BoucWen
+from rlcontroller.physics.integrators import z_rate
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.physics.structure import build
