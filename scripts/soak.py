@@ -2,9 +2,11 @@
 
 Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-every 8192] [--workers 2]
                               [--engine local|dask] [--kill-every 60 180] [--seed 0]
+                              [--learner ppo|random_search]
 
-1. A quiet sweep of `--runs` seeds of a small PPO run (configs/experiments/tiny.yaml with `--steps`
-   training steps and a checkpoint every `--checkpoint-every`) into OUT/quiet.
+1. A quiet sweep of `--runs` seeds of a small run (configs/experiments/tiny.yaml with `--steps`
+   training steps and a checkpoint every `--checkpoint-every`; its PPO, or with `--learner
+   random_search` the model-free random search, whose resume is exact) into OUT/quiet.
 2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), the process
    training a random run (the pid in its run folder's lock) gets SIGKILL.
 3. The verdict: every run of the soak finished and evaluated, how many kills and resumes, the wall
@@ -61,10 +63,13 @@ def main() -> None:
     parser.add_argument("--engine", choices=("local", "dask"), default="local")
     parser.add_argument("--kill-every", type=float, nargs=2, default=(60.0, 180.0), metavar=("LOW", "HIGH"))
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--learner", choices=("ppo", "random_search"), default="ppo")
     arguments = parser.parse_args()
     out: Path = arguments.out
     out.mkdir(parents=True)
     config = yaml.safe_load((REPOSITORY / "configs" / "experiments" / "tiny.yaml").read_text())
+    if arguments.learner == "random_search":
+        config["algorithm"] = yaml.safe_load((REPOSITORY / "configs" / "algorithms" / "random_search.yaml").read_text())
     every = arguments.checkpoint_every
     config["algorithm"].update(total_steps=arguments.steps, checkpoint_every=every, eval_every=max(every, 4096))
     (out / "soak.yaml").write_text(yaml.safe_dump(config))
@@ -113,7 +118,7 @@ def main() -> None:
     ]
     same_aggregate = same_file(out / "quiet" / "aggregate.csv", out / "soak" / "aggregate.csv")
     lines = [
-        f"# Soak: {arguments.runs} runs of {arguments.steps:,} PPO steps, "
+        f"# Soak: {arguments.runs} runs of {arguments.steps:,} {config['algorithm']['name']} steps, "
         f"{arguments.workers} {arguments.engine} workers",
         "",
         f"- quiet sweep: {quiet_seconds:.0f} s",

@@ -1,9 +1,10 @@
-"""A full disk during a command that writes: one line naming the path (exit code 1), nothing
-half-written, and the same command succeeds once there is space again. The disk fills at the Nth
-write of the command (every write goes through `rlcontroller.files`): half the bytes reach the
-temporary file, then ENOSPC."""
+"""A full disk during a command that writes (aggregate, export, check, sweep, tune): one line naming
+the path (exit code 1), nothing half-written, and the same command succeeds once there is space again.
+The disk fills at the Nth write of the command (every write goes through `rlcontroller.files`): half the
+bytes reach the temporary file, then ENOSPC (or EROFS / EACCES for a read-only or forbidden folder)."""
 
 import errno
+import os
 import shutil
 
 import pytest
@@ -14,8 +15,9 @@ from rlcontroller import files
 from rlcontroller.cli import app
 
 
-def fill_disk_at(monkeypatch, write_number: int) -> None:
-    """Writes before `write_number` succeed; that one and every later one find the disk full."""
+def fill_disk_at(monkeypatch, write_number: int, error: int = errno.ENOSPC) -> None:
+    """Writes before `write_number` succeed; that one and every later one find the disk full (or,
+    with `error`, read-only or forbidden: the tests run as root, which ignores permissions)."""
     original = files._replace_with
     count = {"writes": 0}
 
@@ -25,7 +27,7 @@ def fill_disk_at(monkeypatch, write_number: int) -> None:
             return original(path, temporary, write)
         temporary.write_bytes(b"half")
         temporary.unlink()
-        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        raise OSError(error, os.strerror(error), str(path))
 
     monkeypatch.setattr(files, "_replace_with", full)
 
@@ -34,10 +36,10 @@ def files_under(folder):
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
 
 
-def one_filesystem_line(result) -> str:
+def one_filesystem_line(result, message: str = "No space left on device") -> str:
     assert result.exit_code == 1 and "Traceback" not in result.output, result.output
     line = result.output.strip().splitlines()[-1]
-    assert line.startswith("error: ") and "No space left on device" in line, result.output
+    assert line.startswith("error: ") and message in line, result.output
     return line
 
 
@@ -58,6 +60,18 @@ def test_aggregate_on_a_full_disk(tmp_path, monkeypatch, write_number):
     monkeypatch.undo()
     assert CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]).exit_code == 0
     assert {p.name for p in out.iterdir()} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
+
+
+@pytest.mark.parametrize("error", [errno.EROFS, errno.EACCES])
+def test_aggregate_into_a_read_only_or_forbidden_folder(tmp_path, monkeypatch, error):
+    runs = aggregate_inputs(tmp_path)
+    out = tmp_path / "aggregate"
+    before = files_under(tmp_path)
+    fill_disk_at(monkeypatch, 1, error)
+    line = one_filesystem_line(CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]), os.strerror(error))
+    assert "aggregate" in line and files_under(tmp_path) == before
+    monkeypatch.undo()
+    assert CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]).exit_code == 0
 
 
 def test_export_on_a_full_disk(tmp_path, monkeypatch):
@@ -109,3 +123,23 @@ def test_a_sweep_whose_disk_fills_at_its_table_resumes_without_retraining(tmp_pa
     again = CliRunner().invoke(app, ["sweep", str(config), "--seeds", "0", "--out", str(out)])
     assert again.exit_code == 0 and "finished before" in again.output, again.output
     assert model.stat().st_mtime_ns == stamp and yaml.safe_load((out / "sweep.csv").read_text().splitlines()[0])
+
+
+@pytest.mark.slow
+def test_tune_on_a_full_disk_fails_the_trial_and_the_same_command_finishes_the_study(tmp_path, monkeypatch):
+    import yaml
+    from studies.test_tuning import TUNED
+
+    config = tmp_path / "tuned.yaml"
+    config.write_text(yaml.safe_dump(TUNED))
+    out = tmp_path / "tune"
+    arguments = ["tune", str(config), "--trials", "1", "--out", str(out)]
+    fill_disk_at(monkeypatch, 1)  # the trial's first write fails, and so does writing trials.csv after it
+    line = one_filesystem_line(CliRunner().invoke(app, arguments))
+    assert "tune" in line and not [p for p in out.rglob("*") if ".tmp" in p.name]  # no half-written file
+    assert not (out / "trials.csv").exists()
+    monkeypatch.undo()
+    again = CliRunner().invoke(app, arguments)
+    assert again.exit_code == 0, again.output
+    states = [row.split(",")[1] for row in (out / "trials.csv").read_text().splitlines()[1:]]
+    assert sorted(states) == ["COMPLETE", "FAIL"]  # the full disk's trial is kept as failed, one more ran
