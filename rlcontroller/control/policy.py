@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import scipy.special
 import yaml
 
 from rlcontroller.config import ConfigError
@@ -37,12 +36,20 @@ FORMAT_VERSION = 1
 MODELS = ("best", "final")
 PRIORS = ("none", "lqg_ground", "lqg_ground_model", "lqg_wind_model")
 
+
+def gelu(x: np.ndarray) -> np.ndarray:
+    """PyTorch's exact GELU, x Phi(x) (scipy imported here: only GELU networks pay for it)."""
+    from scipy.special import erf
+
+    return 0.5 * x * (1.0 + erf(x / np.sqrt(2.0)))
+
+
 ACTIVATIONS = {
     "ReLU": lambda x: np.maximum(x, 0.0),
     "Tanh": np.tanh,
     "ELU": lambda x: np.where(x > 0.0, x, np.expm1(np.minimum(x, 0.0))),
     "LeakyReLU": lambda x: np.where(x > 0.0, x, 0.01 * x),
-    "GELU": lambda x: 0.5 * x * (1.0 + scipy.special.erf(x / np.sqrt(2.0))),
+    "GELU": gelu,
 }
 
 

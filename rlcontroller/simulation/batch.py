@@ -243,9 +243,10 @@ class BuildingBatch:
             new[members, size:] = states @ rows.c.T + clipped[members] @ (rows.d * plant.force_limits).T
         return new
 
-    def commands(self) -> np.ndarray:
-        """The commands (N) of the step that ended now, per member (N, m)."""
-        return self.states[:, self._state_size :] * self.plant.force_limits
+    def held_actions(self) -> np.ndarray:
+        """The clipped actions held over the step that ended now, per member (N, m): a view; times
+        the force limits, the commands (N)."""
+        return self.states[:, self._state_size :]
 
     def plant_states(self) -> np.ndarray:
         """The padded plant states x (N, S)."""
@@ -303,17 +304,20 @@ def _rollout_chunk(
     commands = np.zeros((n_steps + 1, batch.size, batch.m))
     for controller in controllers:
         controller.reset()
-    lanes = [slice(c * count, (c + 1) * count) for c in range(len(controllers))]
-    observations = batch.observations
-    rewards = np.zeros(batch.size)
+    lanes = [(controller, slice(c * count, (c + 1) * count)) for c, controller in enumerate(controllers)]
+    observations, actions = batch.observations, np.zeros((batch.size, batch.m))
+    rewards = np.zeros((n_steps + 1, batch.size))
     for k in range(1, n_steps + 1):
-        actions = np.concatenate([c.act(observations[lane]) for c, lane in zip(controllers, lanes, strict=True)])
-        observations, reward, _ = batch.step(actions)
-        rewards += np.where(k <= batch.steps, reward, 0.0)
+        for controller, lane in lanes:
+            actions[lane] = controller.act(observations[lane])
+        observations, rewards[k], _ = batch.step(actions)
         states[k] = batch.plant_states()
-        commands[k] = batch.commands()
+        commands[k] = batch.held_actions()
+    commands *= plant.force_limits
+    rewards[np.arange(n_steps + 1)[:, None] > batch.steps] = 0.0
+    totals = rewards.cumsum(axis=0)[-1]  # step by step, in order
     responses: list[list[tuple[Response, float]]] = []
-    for lane in lanes:
+    for _, lane in lanes:
         runs = []
         for member in range(lane.start, lane.stop):
             member_plant, steps = batch.plants[member], batch.steps[member]
@@ -324,6 +328,6 @@ def _rollout_chunk(
                 batch.ground_samples[member],
                 batch.floor_forces[member],
             )
-            runs.append((response, float(rewards[member])))
+            runs.append((response, float(totals[member])))
         responses.append(runs)
     return responses

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Reproduce docs/devices.md's, docs/wind.md's and docs/yielding.md's learned-against-classical tables from a
+# fresh clone: three seeds of each learned controller (rlc sweep: mean, std, interquartile mean and
+# bootstrap intervals over seeds), every run evaluated on the seven records, and each device's classical
+# trade-off on the same records:
+#   1. MR dampers on stories 1, 3, 5 (five_story_mr.yaml: model-free random search, 10 M steps), with the
+#      passive voltage levels and clipped-optimal weights swept (rlc compare lqg --sweep);
+#   2. the roof active mass driver (five_story_amd.yaml: residual on LQG + ground model, 10 M steps), with
+#      LQG's force-weight trade-off;
+#   3. the yielding building (five_story_yielding.yaml: residual on LQG + ground model designed on the
+#      elastic building, trained on yielding plants under strong generated shaking), with LQG's trade-off on
+#      the yielding plant, and every seed also on 50 generated strong motions (PGA 0.3-1.2 g, a seed of
+#      their own);
+#   4. the 76-story wind benchmark's active TMD (seventy_six_story_atmd.yaml: residual on LQG + wind model,
+#      12 M steps), evaluated on the wind suite configs/loads/wind_76.yaml.
+# Wall time on 2 CPU cores, two runs at a time: about 15 min (1) + 5 min (2) + 10 min (3) + 35 min (4).
+#   bash scripts/reproduce_devices.sh [OUT_DIR] [extra rlc sweep options]
+# Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+records="${RLC_RECORDS:-../shared/records}"
+out="${1:-results/devices}"
+shift || true
+sweep() { rlc sweep "$1" --seeds 0-2 --workers 2 --out "$2" "${@:3}"; }
+once() {  # run "$@" unless its output folder (the value after --out) already has a summary
+  local target="${*: -1}"
+  [ -f "$target/summary.csv" ] || [ -f "$target/damper_sweep.csv" ] || [ -f "$target/lqg_sweep.csv" ] || "$@" > /dev/null
+}
+
+sweep configs/experiments/five_story_mr.yaml "$out/mr" --records "$records" "$@"
+once rlc compare lqg --config configs/experiments/five_story_mr.yaml --records "$records" --sweep --out "$out/mr/classical"
+
+sweep configs/experiments/five_story_amd.yaml "$out/amd" --records "$records" "$@"
+once rlc compare lqg --config configs/experiments/five_story_amd.yaml --records "$records" --sweep --out "$out/amd/classical"
+
+sweep configs/experiments/five_story_yielding.yaml "$out/yielding" --records "$records" "$@"
+once rlc compare lqg --config configs/experiments/five_story_yielding.yaml --records "$records" --sweep --out "$out/yielding/classical"
+if [ ! -d "$out/yielding/strong_motions" ]; then
+  python scripts/generated_records.py "$out/yielding/strong_motions" --count 50 --config configs/excitations/strong.yaml > /dev/null
+fi
+for run in "$out"/yielding/seed[0-9]*; do
+  once rlc evaluate "$run" --records "$out/yielding/strong_motions" --out "$run/strong_motions"
+done
+rlc aggregate "$out"/yielding/seed[0-9]*/strong_motions --out "$out/yielding/strong_motions_aggregate" > /dev/null
+
+sweep configs/experiments/seventy_six_story_atmd.yaml "$out/wind" --records configs/loads/wind_76.yaml "$@"
+
+echo "runs and aggregates: $out/mr, $out/amd, $out/yielding (strong motions: $out/yielding/strong_motions_aggregate),"
+echo "$out/wind; each device's classical trade-off: $out/*/classical"
