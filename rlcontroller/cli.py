@@ -431,7 +431,7 @@ def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
 
     if records is not None and records.suffix in (".yaml", ".yml"):
         from rlcontroller.config import load_wind_suite
-        from rlcontroller.physics.wind import wind_suite
+        from rlcontroller.physics.wind import suite_label, wind_suite
 
         suite = load_wind_suite(records)
         if plant is None:
@@ -439,12 +439,7 @@ def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
         if scale_pga is not None:
             raise ConfigError("--scale-pga: a wind suite has no ground acceleration to scale")
         check_loads_modelled(plant, records)
-        speeds = ", ".join(f"{speed:g}" for speed in suite.speeds)
-        label = (
-            f"{len(suite.speeds) * suite.records_per_speed} generated wind records of {suite.duration:g} s "
-            f"({speeds} m/s at {suite.reference_height:g} m, seed {suite.seed}), from {records}"
-        )
-        return wind_suite(suite, plant.building), label
+        return wind_suite(suite, plant.building), suite_label(suite, str(records))
     if records is None and not os.environ.get(RECORDS_VARIABLE):
         typer.echo(
             "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)", err=True
@@ -786,7 +781,12 @@ def sweep(
     chosen_seeds, settings = parse_seeds(seeds), [parse_setting(text) for text in set_ or []]
     folder = out or Path("results") / f"sweep-{experiment.name}"
     plan(experiment, chosen_seeds, settings, folder)  # every combination checked before any work
-    motion_suite(records, None)  # so is --records
+    if records is not None and records.suffix in (".yaml", ".yml"):  # so is --records
+        from rlcontroller.physics.plant import Plant
+
+        motion_suite(records, None, Plant(experiment))
+    else:
+        motion_suite(records, None)
     results, written = run_sweep(
         experiment,
         chosen_seeds,

@@ -208,3 +208,12 @@ def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]
             zero = np.zeros(forces.shape[0])
             records.append(GroundMotion(name, suite.dt, zero, synthetic=True, floor_forces=forces))
     return records
+
+
+def suite_label(suite: WindSuiteConfig, source: str) -> str:
+    """How tables name a wind suite read from `source`."""
+    speeds = ", ".join(f"{speed:g}" for speed in suite.speeds)
+    return (
+        f"{len(suite.speeds) * suite.records_per_speed} generated wind records of {suite.duration:g} s "
+        f"({speeds} m/s at {suite.reference_height:g} m, seed {suite.seed}), from {source}"
+    )

@@ -2,7 +2,7 @@
 
 `rlc sweep CONFIG --seeds 0-9 --set key=v1,v2 ...` plans the cartesian product of the seeds and the
 settings' values; each combination is a normal run folder, OUT/GROUP/seedS (OUT/seedS without
-settings), trained (or resumed, or skipped when finished) and evaluated on the records into
+settings), trained (or resumed, or skipped when finished) and evaluated on the records (or a wind suite) into
 RUN/evaluation/. Runs go to an engine: `local` (processes on this machine) or `dask` (a Dask
 distributed cluster: a local one of `workers` processes, or an existing one at `address`). A run that
 fails is reported and the others go on; running the same command again redoes only what is missing.
@@ -25,7 +25,7 @@ from typing import Any
 
 import yaml
 
-from rlcontroller.config import ConfigError, Experiment, build_experiment, check_seed, with_overrides
+from rlcontroller.config import ConfigError, Experiment, build_experiment, check_seed, load_wind_suite, with_overrides
 
 
 @dataclass(frozen=True)
@@ -158,13 +158,18 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
     from rlcontroller.files import new_folder
     from rlcontroller.physics.plant import Plant
     from rlcontroller.physics.records import choose_motions
+    from rlcontroller.physics.wind import suite_label, wind_suite
 
     out = run.folder / "evaluation"
     if (out / "metrics.csv").is_file():
         return
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
-    motions, label = choose_motions(Path(records) if records else None)
     plant = Plant(experiment)
+    if records is not None and Path(records).suffix in (".yaml", ".yml"):  # a wind suite, on this building
+        suite = load_wind_suite(Path(records))
+        motions, label = wind_suite(suite, plant.building), suite_label(suite, records)
+    else:
+        motions, label = choose_motions(Path(records) if records else None)
     evaluation = compare(plant, motions, label, read_policy(run.folder, "best", plant))
     with new_folder(out) as staging:
         write_report(evaluation, staging)

@@ -76,6 +76,28 @@ def test_rlc_sweep_on_local_processes(tmp_path):
     assert refused.returncode == 2 and "--address: only with --engine dask" in refused.stderr
 
 
+def test_a_sweep_evaluates_its_runs_on_a_wind_suite_as_rlc_evaluate_does(tmp_path):
+    config = tmp_path / "tiny.yaml"
+    config.write_text(yaml.safe_dump(TINY))
+    suite = yaml.safe_load((REPOSITORY / "configs" / "loads" / "wind.yaml").read_text())
+    wind = tmp_path / "wind.yaml"
+    wind.write_text(yaml.safe_dump(suite | {"speeds": [30.0], "records_per_speed": 1, "duration": 30.0}))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(config), "--seeds", "0", "--out", str(out)]
+    done = subprocess.run([*command, "--records", str(wind)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    summary = (out / "seed0" / "evaluation" / "summary.md").read_text()
+    evaluated = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "evaluate", str(out / "seed0"), "--records", str(wind)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert "1 generated wind records of 30 s" in summary and "rms_acceleration_top" in summary
+    rl_row = next(line for line in summary.splitlines() if line.startswith("| RL |"))
+    assert rl_row in evaluated.stdout  # the same numbers as rlc evaluate on the same suite
+
+
 @pytest.mark.slow
 def test_a_killed_sweep_leaves_no_worker_training_and_its_run_resumable(tmp_path):
     """SIGKILL to `rlc sweep`: its worker checkpoints and exits instead of training on as an orphan."""
