@@ -146,6 +146,8 @@ def _train(run: SweepRun) -> str:
     else:
         summary = train(experiment, run_dir=run.folder)
         status = "trained"
+    if summary.interrupted:
+        _signalled.set()
     if summary.interrupted or summary.time_limit_reached:
         raise RuntimeError(f"{run.folder}: training stopped before the end")
     return status
@@ -221,6 +223,7 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
 
 _parent_gone = threading.Event()  # in a local worker: the sweep's process has died
 _running = threading.Event()  # in a local worker: a run is in progress
+_signalled = threading.Event()  # in a local worker: a run stopped at a signal (Ctrl-C, or the pool's SIGTERM)
 
 
 def stop_with_parent(parent: int) -> None:
@@ -240,13 +243,15 @@ def stop_with_parent(parent: int) -> None:
 
 
 def _run_local(run: SweepRun, records: str | None) -> RunResult:
-    """`run_one` in a local worker, which exits after it if the sweep has died meanwhile."""
+    """`run_one` in a local worker, which exits after it if the sweep has died meanwhile or the run
+    was stopped by a signal: a pool whose sibling worker died sends its other workers SIGTERM, and
+    a worker that went on to the runs still queued would leave the sweep one worker short."""
     _running.set()
     try:
         return run_one(run, records)
     finally:
         _running.clear()
-        if _parent_gone.is_set():
+        if _parent_gone.is_set() or _signalled.is_set():
             os._exit(1)
 
 

@@ -174,32 +174,42 @@ def test_a_second_sweep_into_the_same_folder_and_a_train_of_its_run_are_refused(
 def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     """SIGKILL to the worker training seed 0: its pool breaks, the unfinished runs go to a new pool
     and resume from their checkpoints (the dead worker's lock is taken over); every run finishes, none
-    is duplicated."""
+    is duplicated. The sibling worker, stopped by the broken pool, does not go on to the queued run
+    (which would leave the sweep one worker short until it finished)."""
     import json
 
     config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024))
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
-    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-1"]
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-2"]
     process = subprocess.Popen([*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True)
     lock, deadline = out / "seed0" / ".lock", time.time() + 180
     while not (lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
         assert process.poll() is None and time.time() < deadline, process.communicate()[0]
         time.sleep(0.1)
     worker = json.loads(lock.read_text())["pid"]
+    sibling = json.loads((out / "seed1" / ".lock").read_text())["pid"]
     subprocess.run(["kill", "-9", str(worker)], check=True)
+    holders_of_seed2 = set()
+    while process.poll() is None:
+        try:
+            holders_of_seed2.add(json.loads((out / "seed2" / ".lock").read_text())["pid"])
+        except (OSError, ValueError):
+            pass
+        time.sleep(0.02)
     output, _ = process.communicate(timeout=600)
     assert process.returncode == 0, output
-    assert "2 runs done, 0 failed" in output, output
+    assert "3 runs done, 0 failed" in output, output
+    assert holders_of_seed2 and sibling not in holders_of_seed2, (sibling, holders_of_seed2)
     rows = (out / "sweep.csv").read_text().splitlines()[1:]
-    assert len(rows) == 2 and any(",resumed," in row and "seed0" in row for row in rows), rows
-    for seed in (0, 1):
+    assert len(rows) == 3 and any(",resumed," in row and "seed0" in row for row in rows), rows
+    for seed in (0, 1, 2):
         run = out / f"seed{seed}"
         assert (run / "final_model.zip").is_file() and (run / "evaluation" / "metrics.csv").is_file()
         assert not (run / ".lock").exists() and not list(run.glob(".*incomplete*"))
         steps = [int(line.split(",")[0]) for line in (run / "learning_curve.csv").read_text().splitlines()[1:]]
         assert steps == sorted(set(steps)), steps  # no row logged twice
-    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1"]
+    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
 
 
 @pytest.mark.slow
