@@ -115,6 +115,12 @@ def active_holder(folder: Path) -> str | None:
     return None if holder is None or _stale(path, holder) else _describe(holder)
 
 
+def lock_pid(folder: Path) -> int | None:
+    """The process id `folder`'s lock names (its holder, alive or not), or None without a readable lock."""
+    holder = _lock_holder(folder / LOCK)
+    return None if holder is None else int(holder["pid"])
+
+
 @contextmanager
 def folder_lock(folder: Path, what: str) -> Iterator[None]:
     """Hold `folder`'s lock (`folder`/.lock) for the block: one writer at a time. A lock held by a live

@@ -193,15 +193,17 @@ WORKER_LOSSES = 5  # times a run's worker may die (killed, out of memory) before
 def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[RunResult]:
     """Local worker processes. A worker that dies breaks the whole pool: the runs it and its siblings
     had not finished go to a new pool, where they resume from their last checkpoints (the dead
-    holder's lock is stale and taken over). A run whose own worker died (its lock left behind) more
-    than WORKER_LOSSES times is reported failed."""
+    holder's lock is stale and taken over). A run whose own worker died (its lock left behind, each
+    dead holder counted once: the lock stays while the run waits in the queue) more than
+    WORKER_LOSSES times is reported failed."""
     import multiprocessing
     from concurrent.futures.process import BrokenProcessPool
 
-    from rlcontroller.files import LOCK
+    from rlcontroller.files import lock_pid
 
     context = multiprocessing.get_context("spawn")
-    pending, losses = list(runs), dict.fromkeys((run.folder for run in runs), 0)
+    pending = list(runs)
+    dead_holders: dict[Path, set[int]] = {run.folder: set() for run in runs}
     while pending:
         lost = []
         with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(),)) as pool:
@@ -211,9 +213,11 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
                 try:
                     yield future.result()
                 except BrokenProcessPool:  # a run still queued, or stopped by its sibling's death, is not to blame
-                    losses[run.folder] += int((run.folder / LOCK).is_file())
-                    if losses[run.folder] > WORKER_LOSSES:
-                        yield RunResult(run, "failed", 0.0, f"worker lost {losses[run.folder]} times")
+                    holder = lock_pid(run.folder)
+                    if holder is not None:
+                        dead_holders[run.folder].add(holder)
+                    if len(dead_holders[run.folder]) > WORKER_LOSSES:
+                        yield RunResult(run, "failed", 0.0, f"worker lost {len(dead_holders[run.folder])} times")
                     else:
                         lost.append(run)
                 except Exception as error:

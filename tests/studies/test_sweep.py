@@ -2,6 +2,7 @@
 processes, a failed run reported while the others go on, a re-run that redoes nothing done, and a
 killed sweep whose worker checkpoints and stops."""
 
+import contextlib
 import subprocess
 import sys
 import time
@@ -192,10 +193,8 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     subprocess.run(["kill", "-9", str(worker)], check=True)
     holders_of_seed2 = set()
     while process.poll() is None:
-        try:
+        with contextlib.suppress(OSError, ValueError):
             holders_of_seed2.add(json.loads((out / "seed2" / ".lock").read_text())["pid"])
-        except (OSError, ValueError):
-            pass
         time.sleep(0.02)
     output, _ = process.communicate(timeout=600)
     assert process.returncode == 0, output
@@ -210,6 +209,48 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
         steps = [int(line.split(",")[0]) for line in (run / "learning_curve.csv").read_text().splitlines()[1:]]
         assert steps == sorted(set(steps)), steps  # no row logged twice
     assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
+
+
+def test_a_run_waiting_behind_its_dead_worker_s_lock_counts_that_death_once(tmp_path, monkeypatch):
+    """A run whose worker died keeps the dead holder's lock while it waits in the queue; pools that
+    break meanwhile (other workers dying) must not count that one death again (the soak found runs
+    reported "worker lost 6 times" after one death of their own)."""
+    import json
+    import socket
+    from concurrent.futures import Future
+    from concurrent.futures.process import BrokenProcessPool
+
+    from rlcontroller.studies import sweep as sweeping
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    run = sweeping.SweepRun(tmp_path / "seed0", 0, {}, "tiny", "")
+    run.folder.mkdir()
+    lock = {"host": socket.gethostname(), "pid": dead.pid, "what": "rlc train", "started": "2026-01-01T00:00:00"}
+    (run.folder / ".lock").write_text(json.dumps(lock))
+    pools = []
+
+    class BreakingPool:  # the first 8 pools break before the run starts; the 9th runs it
+        def __init__(self, *args, **kwargs):
+            pools.append(self)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exception):
+            return False
+
+        def submit(self, function, run, records):
+            future = Future()
+            if len(pools) <= 8:
+                future.set_exception(BrokenProcessPool("a worker died"))
+            else:
+                future.set_result(sweeping.RunResult(run, "resumed", 1.0))
+            return future
+
+    monkeypatch.setattr(sweeping, "ProcessPoolExecutor", BreakingPool)
+    results = list(sweeping._local([run], None, 2))
+    assert [result.status for result in results] == ["resumed"] and len(pools) == 9
 
 
 @pytest.mark.slow
