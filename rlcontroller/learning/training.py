@@ -222,10 +222,9 @@ def _train(
         signals = (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()
         previous_handlers = {s: signal.signal(s, stop) for s in signals}  # none in a worker thread (Dask)
         callback = _callback(run, experiment, Validator(plant), stop, state, time_limit_s, on_validation)
-        remaining = experiment.algorithm.total_steps - model.num_timesteps
-        try:
-            if remaining > 0:
-                model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
+        remaining = max(experiment.algorithm.total_steps - model.num_timesteps, 0)
+        try:  # also with nothing left (stopped after its last step, before the final save): sets the callback up
+            model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
         finally:
             for number, handler in previous_handlers.items():
                 signal.signal(number, handler)

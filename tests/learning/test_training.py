@@ -305,6 +305,21 @@ def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finishe
     assert train(resume=run).steps == 900
 
 
+def test_a_run_stopped_after_its_last_step_before_the_final_save_resumes_to_the_end(finished_run, tmp_path):
+    """A stop (a sweep's pool sending SIGTERM, say) between the last checkpoint and the final save leaves a
+    checkpoint at the last step and no final model; resuming has no step left to train and must still
+    save the final model (it failed on a callback that training had never set up)."""
+    run = tmp_path / "run"
+    shutil.copytree(finished_run, run)
+    for name in ("final_model.zip", "final_policy.yaml", "final_policy.npz"):
+        (run / name).unlink()
+    assert RunFolder(run).checkpoints()[-1].name == "step_0000000600"
+    result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
+    assert result.exit_code == 0, result.output
+    assert (run / "final_model.zip").is_file() and (run / "final_policy.yaml").is_file()
+    assert [int(row["steps"]) for row in curve(run)] == [300, 600]  # nothing trained or validated twice
+
+
 @pytest.mark.slow
 def test_a_damaged_saved_model_stops_evaluate_with_one_line(finished_run, tmp_path):
     run = tmp_path / "run"
