@@ -184,12 +184,12 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-2"]
     process = subprocess.Popen([*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True)
-    lock, deadline = out / "seed0" / ".lock", time.time() + 180
-    while not (lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
+    lock, sibling_lock, deadline = out / "seed0" / ".lock", out / "seed1" / ".lock", time.time() + 180
+    while not (lock.is_file() and sibling_lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
         assert process.poll() is None and time.time() < deadline, process.communicate()[0]
         time.sleep(0.1)
     worker = json.loads(lock.read_text())["pid"]
-    sibling = json.loads((out / "seed1" / ".lock").read_text())["pid"]
+    sibling = json.loads(sibling_lock.read_text())["pid"]
     subprocess.run(["kill", "-9", str(worker)], check=True)
     holders_of_seed2 = set()
     while process.poll() is None:
