@@ -25,7 +25,15 @@ from rlcontroller.assets import (
     SAFETY_STANDARD,
     STANDARD_SCENARIOS,
 )
-from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS, ConfigError, Experiment, load_experiment, with_overrides
+from rlcontroller.config import (
+    MAX_SEED,
+    MAX_TOTAL_STEPS,
+    ConfigError,
+    Experiment,
+    load_experiment,
+    names_wind_suite,
+    with_overrides,
+)
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.physics.excitation import MotionError
 
@@ -429,7 +437,7 @@ def motion_suite(records: Path | None, scale_pga: float | None, plant=None):
     `records` may be a wind suite (a YAML file with kind: wind), generated on `plant`'s floors."""
     from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 
-    if records is not None and records.suffix in (".yaml", ".yml"):
+    if names_wind_suite(records):
         from rlcontroller.config import load_wind_suite
         from rlcontroller.physics.wind import suite_label, wind_suite
 
@@ -781,7 +789,7 @@ def sweep(
     chosen_seeds, settings = parse_seeds(seeds), [parse_setting(text) for text in set_ or []]
     folder = out or Path("results") / f"sweep-{experiment.name}"
     plan(experiment, chosen_seeds, settings, folder)  # every combination checked before any work
-    if records is not None and records.suffix in (".yaml", ".yml"):  # so is --records
+    if names_wind_suite(records):  # so is --records
         from rlcontroller.physics.plant import Plant
 
         motion_suite(records, None, Plant(experiment))

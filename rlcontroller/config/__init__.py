@@ -98,6 +98,7 @@ from rlcontroller.config.excitation import (  # noqa: F401
     WindGeneratorConfig,
     WindSuiteConfig,
     load_wind_suite,
+    names_wind_suite,
 )
 from rlcontroller.config.experiment import (  # noqa: F401
     OPTIONAL_PARTS,

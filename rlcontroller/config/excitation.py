@@ -171,6 +171,11 @@ class WindSuiteConfig(WindSiteConfig):
     seed: Seed = 2026
 
 
+def names_wind_suite(records: str | Path | None) -> bool:
+    """Whether a `--records` value names a wind suite (a YAML file, kind: wind) rather than ground motions."""
+    return records is not None and Path(records).suffix in (".yaml", ".yml")
+
+
 def load_wind_suite(path: str | Path) -> WindSuiteConfig:
     """A wind suite from a YAML file; one-line errors naming the file and the key."""
     return read_model(path, WindSuiteConfig, "kind: wind")

@@ -25,7 +25,15 @@ from typing import Any
 
 import yaml
 
-from rlcontroller.config import ConfigError, Experiment, build_experiment, check_seed, load_wind_suite, with_overrides
+from rlcontroller.config import (
+    ConfigError,
+    Experiment,
+    build_experiment,
+    check_seed,
+    load_wind_suite,
+    names_wind_suite,
+    with_overrides,
+)
 
 
 @dataclass(frozen=True)
@@ -167,7 +175,7 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
         return
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
     plant = Plant(experiment)
-    if records is not None and Path(records).suffix in (".yaml", ".yml"):  # a wind suite, on this building
+    if names_wind_suite(records):  # a wind suite, on this building
         suite = load_wind_suite(Path(records))
         motions, label = wind_suite(suite, plant.building), suite_label(suite, records)
     else:
