@@ -7,8 +7,9 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
 1. A quiet sweep of `--runs` seeds of a small run (configs/experiments/tiny.yaml with `--steps`
    training steps and a checkpoint every `--checkpoint-every`; its PPO, or with `--learner
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
-2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), the process
-   training a random run (the pid in its run folder's lock) gets SIGKILL.
+2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), a kill falls
+   due: the next moment a run is training, the process training a random one (the pid in its run
+   folder's lock) gets SIGKILL.
 3. The verdict: every run of the soak finished and evaluated, how many kills and resumes, the wall
    times, and whether each run's evaluation metrics and the aggregate equal the quiet sweep's.
 Written to OUT/soak.md and printed.
@@ -91,17 +92,16 @@ def main() -> None:
     kills = []
     next_kill = start + chooser.uniform(*arguments.kill_every)
     while soak.poll() is None:
-        time.sleep(0.5)
-        if time.perf_counter() < next_kill:
-            continue
+        time.sleep(0.2)
         pids = training_pids(out / "soak")
-        if pids:
-            victim = chooser.choice(sorted(pids))
-            try:
-                os.kill(victim, signal.SIGKILL)
-                kills.append((round(time.perf_counter() - start, 1), victim))
-            except ProcessLookupError:
-                pass
+        if time.perf_counter() < next_kill or not pids:
+            continue
+        victim = chooser.choice(sorted(pids))
+        try:
+            os.kill(victim, signal.SIGKILL)
+            kills.append((round(time.perf_counter() - start, 1), victim))
+        except ProcessLookupError:
+            pass
         next_kill = time.perf_counter() + chooser.uniform(*arguments.kill_every)
     output = soak.communicate()[0]
     soak_seconds = time.perf_counter() - start

@@ -103,7 +103,7 @@ def test_a_small_soak_kills_workers_and_ends_as_the_quiet_sweep(tmp_path):
         "--runs",
         "2",
         "--steps",
-        "6144",
+        "12288",  # training lasts past the first kill, due at 4-6 s, even on a fast machine
         "--checkpoint-every",
         "256",
     ]
