@@ -20,6 +20,7 @@ import scipy.linalg
 from scipy.linalg import solve_discrete_are
 
 from rlcontroller.physics.dynamics import discrete_noise, wind_model_step, wind_model_system
+from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.wind import WindLoadModel
 
@@ -53,6 +54,19 @@ class KalmanFilter:
             self.gain.T,
             correction @ self.ground_gain,
         )
+
+    def on_observations(self, layout: ObservationLayout) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """`update` read straight from observations laid out by `layout`: new = estimate @ A +
+        observation @ O (+ the previous observation's ground reading * g), the scales of the readings
+        and of the ground folded in; O is zero but at the newest readings, ground reading and action."""
+        free, action, measured, ground_gain = self._update_matrices
+        observed = np.zeros((layout.size, self.size))
+        n_readings = layout.readings.stop - layout.readings.start
+        observed[layout.readings] = measured[:n_readings] * layout.reading_scale[:, None]
+        if self.measures_ground:
+            observed[layout.ground] = measured[n_readings] * layout.ground_scale
+        observed[layout.action] = action
+        return free, observed, ground_gain * layout.ground_scale if self.known_ground else None
 
     def update(
         self,

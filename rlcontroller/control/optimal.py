@@ -50,9 +50,10 @@ def optimal_responses(
         feedforward = preview_feedforward(cost, step, building.force_limits, ground_terms, length)
         states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
         actions = np.zeros((n_steps, len(members), building.n_actuators))
-        for k in range(n_steps):
-            actions[k] = (-(states[k] @ feedback.T) - feedforward[:, k]).clip(-1.0, 1.0)
-            states[k + 1] = states[k] @ step.phi.T + actions[k] @ action_gain.T + ground_terms[:, k]
+        by_step = [np.ascontiguousarray(a.transpose(1, 0, 2)) for a in (feedforward, ground_terms)]  # step first
+        for k, (step_feedforward, step_ground) in enumerate(zip(*by_step, strict=True)):
+            np.clip(states[k] @ -feedback.T - step_feedforward, -1.0, 1.0, out=actions[k])
+            states[k + 1] = states[k] @ step.phi.T + actions[k] @ action_gain.T + step_ground
         for row, (i, t) in enumerate(zip(members, terms, strict=True)):
             k = t.shape[0]
             held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])

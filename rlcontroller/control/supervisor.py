@@ -42,20 +42,19 @@ class Supervisor:
 
     def gain(self, observations: np.ndarray) -> np.ndarray:
         """The trigger's gain per building, (size,), after taking in the newest ground readings."""
-        ground = np.abs(observations[:, self.ground] * self.ground_scale)
-        np.maximum(self.peak_ground, ground, out=self.peak_ground)
+        np.maximum(self.peak_ground, np.abs(observations[:, self.ground] * self.ground_scale), out=self.peak_ground)
         start, full = self.trigger
         if full == start:
             return (self.peak_ground >= full).astype(float)
-        return np.clip((self.peak_ground - start) / (full - start), 0.0, 1.0)
+        return np.minimum(np.maximum((self.peak_ground - start) / (full - start), 0.0), 1.0)
 
     def __call__(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
-        actions = np.asarray(actions, dtype=float)
+        actions = np.array(actions, dtype=float)
         if self.velocity is not None:
             stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled: the sign is what counts
-            actions = np.where(actions * stroke_velocity > 0.0, 0.0, actions)
+            actions[actions * stroke_velocity > 0.0] = 0.0
         if self.trigger is not None:
-            actions = actions * self.gain(observations)[:, None]
+            actions *= self.gain(observations)[:, None]
         return actions
 
 

@@ -57,8 +57,9 @@ class BuildingBatch:
         self.kalman = observation_filter(plant)
         self.supervisor = supervisor(plant, size)
         if self.kalman is not None:
+            self._filter_matrices = self.kalman.on_observations(layout)
             self.estimates = np.zeros((size, self.kalman.size))
-            self.previous_ground = np.zeros(size)
+            self.previous_ground = np.zeros(size)  # the last ground reading, as the observation holds it
         self.plants = [plant] * size
         self.steps = np.zeros(size, dtype=int)
         self.k = np.zeros(size, dtype=int)
@@ -164,18 +165,15 @@ class BuildingBatch:
         return padded
 
     def _update_estimates(self, readings: np.ndarray, held: np.ndarray, members) -> None:
-        layout = self.layout
-        ground = readings[:, -1] * layout.ground_scale
-        estimates = self.kalman.update(
-            self.estimates[members],
-            readings[:, :-1] * layout.reading_scale,
-            held,
-            ground,
-            self.previous_ground[members],
-        )
+        """The filter's update from `readings` (the newest block, as the observation holds it)."""
+        free, observed, previous_ground_gain = self._filter_matrices
+        block = self.layout.block
+        estimates = self.estimates[members] @ free + readings @ observed[:block] + held @ observed[self.layout.action]
+        if previous_ground_gain is not None:
+            estimates += self.previous_ground[members, None] * previous_ground_gain
         self.estimates[members] = estimates
-        self.previous_ground[members] = ground
-        self.observations[members, layout.estimate] = layout.scaled_estimate(estimates)
+        self.previous_ground[members] = readings[:, -1]
+        self.observations[members, self.layout.estimate] = self.layout.scaled_estimate(estimates)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply `actions` (N, m), clipped to [-1, 1]; returns the new observations (N, obs) float32 (a

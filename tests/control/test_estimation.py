@@ -3,6 +3,7 @@ that converges to the true state. The model-free integration of the readings: it
 functions, and velocity and displacement recovered from an acceleration."""
 
 import numpy as np
+import pytest
 import scipy.linalg
 
 from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
@@ -68,6 +69,30 @@ def test_a_batch_of_estimates_updates_as_each_one_alone():
     for i in range(4):
         alone = kalman.update(estimates[i], readings[i], actions[i], ground[i], previous[i])
         np.testing.assert_allclose(batch[i], alone, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("design", ["known ground", "ground model"])
+def test_the_update_on_raw_observations_is_the_update_on_si_readings(design):
+    plant = Plant(Experiment())
+    kalman = design_kalman(plant, known_ground=True) if design == "known ground" else design_kalman_ground_model(plant)
+    layout = plant.layout
+    free, observed, previous_ground_gain = kalman.on_observations(layout)
+    rng = np.random.default_rng(2)
+    observations = rng.standard_normal((4, layout.size)).astype(np.float32)
+    estimates, previous = rng.standard_normal((4, kalman.size)), rng.standard_normal(4)
+    ground = observations[:, layout.ground].astype(float) * layout.ground_scale
+    expected = kalman.update(
+        estimates,
+        observations[:, layout.readings] * layout.reading_scale,
+        observations[:, layout.action].astype(float),
+        ground,
+        previous * layout.ground_scale,
+    )
+    folded = estimates @ free + observations @ observed
+    if previous_ground_gain is not None:
+        folded += previous[:, None] * previous_ground_gain
+    assert (previous_ground_gain is not None) == kalman.known_ground
+    np.testing.assert_allclose(folded, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
 
 
 def run_filter(filter_, accelerations: np.ndarray) -> np.ndarray:
