@@ -408,14 +408,13 @@ def check_algorithm(experiment: Experiment) -> None:
 
 
 def _check_random_search(experiment: Experiment) -> None:
-    """RandomSearch learns a linear odd actor (a residual with `residual_lqg`) on the batched env's plant."""
+    """RandomSearch learns a linear actor (odd, or affine with `odd: false`; a residual with
+    `residual_lqg`) on the batched env's plant."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
-    if algorithm.policy.actor_arch != [] or not algorithm.policy.odd:
-        raise ConfigError(
-            f"{location(file, prefix, 'policy')}: RandomSearch trains a linear odd actor; "
-            "expected actor_arch: [] and odd: true"
-        )
+    if algorithm.policy.actor_arch != []:
+        where = location(file, prefix, "policy.actor_arch")
+        raise ConfigError(f"{where}: RandomSearch trains a linear actor; expected []")
     refused = {
         "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
         "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),

@@ -55,8 +55,8 @@ class SearchRange(StrictModel):
 
 class AlgorithmConfig(StrictModel):
     """The learner (a stable-baselines3 one, or `RandomSearch`: random search with common random
-    numbers on a linear odd policy, `rlcontroller.learning.random_search`), its keyword arguments
-    and the training schedule.
+    numbers on a linear policy, odd or with `policy.odd: false` affine,
+    `rlcontroller.learning.random_search`), its keyword arguments and the training schedule.
 
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
     gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run as one batch

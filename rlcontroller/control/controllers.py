@@ -49,11 +49,19 @@ def residual_action(action: np.ndarray, prior_action: np.ndarray) -> np.ndarray:
 
 
 class LinearFeedback:
-    """a = clip(W o): a fixed linear map of the observation, odd (no bias); W is (m, observation size).
-    With a `prior` (an `LQGPrior`), W o is a residual on the prior's action (`residual_action`)."""
+    """a = clip(W o + b): a fixed linear map of the observation, odd without a `bias` b; W is
+    (m, observation size). With a `prior` (an `LQGPrior`), W o + b is a residual on the prior's
+    action (`residual_action`)."""
 
-    def __init__(self, weights: np.ndarray, name: str = "linear feedback", prior: LQGPrior | None = None) -> None:
+    def __init__(
+        self,
+        weights: np.ndarray,
+        name: str = "linear feedback",
+        prior: LQGPrior | None = None,
+        bias: np.ndarray | None = None,
+    ) -> None:
         self.weights = np.asarray(weights, dtype=float)
+        self.bias = None if bias is None else np.asarray(bias, dtype=float)
         self.name = name
         self.prior = prior
 
@@ -63,6 +71,8 @@ class LinearFeedback:
     def act(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation, dtype=float)
         action = observation @ self.weights.T
+        if self.bias is not None:
+            action += self.bias
         return action.clip(-1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
 
 
@@ -72,7 +82,10 @@ class LQGController:
     def __init__(self, design: LQGDesign, plant: Plant, name: str = "LQG") -> None:
         self.design = design
         self.name = name
-        self.layout = plant.layout
+        self._ground = plant.layout.ground
+        self._free, self._observed, self._previous_ground_gain = design.filter.on_observations(plant.layout)
+        self._feedback = -design.feedback.T
+        self._feedforward = -design.feedforward * plant.layout.ground_scale  # on the scaled ground reading
         self.reset()
 
     def reset(self) -> None:
@@ -80,17 +93,15 @@ class LQGController:
         self._previous_ground = np.zeros(())
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        layout, design = self.layout, self.design
         observation = np.asarray(observation)
-        readings = observation[..., layout.readings] * layout.reading_scale
-        ground = observation[..., layout.ground].astype(float) * layout.ground_scale
-        held = observation[..., layout.action].astype(float)  # the clipped action just applied
+        ground = observation[..., self._ground, None].astype(float)  # a copy: a batch's observations change in place
         if self.estimate is None:
-            self.estimate = np.zeros(observation.shape[:-1] + (design.filter.size,))
-        self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
-        self._previous_ground = ground
-        action = -(self.estimate @ design.feedback.T) - ground[..., None] * design.feedforward
-        return action.clip(-1.0, 1.0)
+            self.estimate = np.zeros(observation.shape[:-1] + (self._free.shape[0],))
+        estimate = self.estimate @ self._free + observation @ self._observed
+        if self._previous_ground_gain is not None:
+            estimate += self._previous_ground * self._previous_ground_gain
+        self.estimate, self._previous_ground = estimate, ground
+        return (estimate @ self._feedback + ground * self._feedforward).clip(-1.0, 1.0)
 
 
 class LQGPrior:

@@ -1,10 +1,13 @@
-"""Random search with common random numbers: a learner of a linear odd policy a = clip(W o).
+"""Random search with common random numbers: a learner of a linear odd policy a = clip(W o), or with
+`policy.odd: false` of an affine one a = clip(W o + b).
 
-Augmented random search (Mania et al., 2018) on W (actuators x observation), started at W = 0 (no
-control; the learner needs no model of the building). Each iteration draws `n_motions` training
-motions (the experiment's generator) with their noise seeds and `n_delta` random directions d_k,
-runs W + delta_std d_k and W - delta_std d_k on the *same* motions, noise and (with
-`plant_randomization`) plants drawn from those seeds, and steps along
+Augmented random search (Mania et al., 2018) on W (actuators x observation; with b, [W | b]), started
+at W = 0, b = 0 (no control, or for dampers half their range; the learner needs no model of the
+building). An affine policy is for devices whose command is not a force: a damper's best command at
+rest is not zero, and "full voltage, less when ..." is b = 1 plus a linear switch.
+Each iteration draws `n_motions` training motions (the experiment's generator) with their noise
+seeds and `n_delta` random directions d_k, runs W + delta_std d_k and W - delta_std d_k on the
+*same* motions, noise and (with `plant_randomization`) plants drawn from those seeds, and steps along
 sum_k (f(W + delta_std d_k) - f(W - delta_std d_k)) d_k, scaled by `learning_rate` / (n_delta
 delta_std std(f)), where f is the mean over the motions of log(-return): each motion counts by its
 relative change, since a strong motion's return is 10^4 times a weak one's and would drown every
@@ -12,7 +15,8 @@ difference on unpaired motions. That pairing is why this learner exists: sb3-con
 each candidate on the environment's next episodes, so + and - never see the same motion.
 
 The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) with a linear actor
-(`actor_arch: []`; its action layer is W, bias 0; no critic is trained), so saving, loading,
+(`actor_arch: []`; its action layer is W, bias 0; no critic is trained), or for an affine policy
+stable-baselines3's own `ActorCriticPolicy` (its action layer is W, b), so saving, loading,
 evaluation, validation and ONNX export are those of any run. `num_timesteps` counts the control
 steps simulated. The learner runs on the plant of its training env (a `BatchedVecEnv`), whose
 generator and randomisation it uses; every field needed to resume exactly (W, the search's random
@@ -29,6 +33,7 @@ import numpy as np
 import torch
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import ProgressBarCallback
+from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import LinearFeedback, LQGPrior
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
@@ -48,7 +53,7 @@ class RandomSearch(BaseAlgorithm):
     learning_rate : step size of W's update, as in the module docstring's formula.
     """
 
-    policy_aliases = {"MlpPolicy": OddActorCriticPolicy}
+    policy_aliases = {"MlpPolicy": ActorCriticPolicy}  # affine; the odd policy is passed as its class
 
     def __init__(
         self,
@@ -92,8 +97,10 @@ class RandomSearch(BaseAlgorithm):
         self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
         residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg
         self.prior = LQGPrior.design(self.plant) if residual else None
+        self.affine = not isinstance(self.policy, OddActorCriticPolicy)
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
-            self.weights = np.zeros(self.policy.action_net.weight.shape)
+            rows, columns = self.policy.action_net.weight.shape
+            self.weights = np.zeros((rows, columns + self.affine))  # [W | b] when affine
             self.search_rng = np.random.default_rng(self.seed)
         self._set_actor()
 
@@ -102,8 +109,13 @@ class RandomSearch(BaseAlgorithm):
 
     def _set_actor(self) -> None:
         with torch.no_grad():
-            self.policy.action_net.weight.copy_(torch.as_tensor(self.weights, dtype=torch.float32))
-            self.policy.action_net.bias.zero_()
+            weights, bias = self._split(self.weights)
+            self.policy.action_net.weight.copy_(torch.as_tensor(weights, dtype=torch.float32))
+            self.policy.action_net.bias.copy_(torch.as_tensor(0.0 if bias is None else bias, dtype=torch.float32))
+
+    def _split(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """W and b (None for an odd policy) of a candidate's parameters."""
+        return (parameters[:, :-1], parameters[:, -1]) if self.affine else (parameters, None)
 
     def paired_log_costs(
         self, deltas: np.ndarray, motions: list[GroundMotion], seeds: list[int]
@@ -111,7 +123,7 @@ class RandomSearch(BaseAlgorithm):
         """f(W + d_k) and f(W - d_k) for every direction d_k, all on the same motions, noise seeds
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
-        controllers = [LinearFeedback(w, prior=self.prior) for w in candidates]
+        controllers = [LinearFeedback(w, prior=self.prior, bias=b) for w, b in map(self._split, candidates)]
         runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
         f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
         episodes = [{"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane]

@@ -8,6 +8,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
+from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.control.policy import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.random_search import RandomSearch
@@ -86,6 +87,29 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     assert controller.actor.odd and np.all(controller.act(np.zeros(weights.shape[1], np.float32)) == 0.0)
 
 
+def test_an_affine_search_on_dampers_learns_a_bias_and_its_model_acts_as_clip_w_o_plus_b(tmp_path):
+    dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
+    policy = {"actor_arch": [], "odd": False}
+    model = new_model(tiny(dampers, policy=policy))
+    motions, seeds = synthetic_suite(count=2), [4, 5]
+    full = np.zeros((1, *model.weights.shape))
+    full[0, :, -1] = 1.0  # b = 1: every damper at full voltage, W = 0
+    passive_on = batch_rollout(model.plant, motions, [ConstantCommand(1.0, 3, "on")], seeds)[0]
+    assert model.paired_log_costs(full, motions, seeds)[0][0] == pytest.approx(
+        np.mean([np.log(-total) for _, total in passive_on]), rel=1e-12
+    )
+
+    train(tiny(dampers, policy=policy, total_steps=8000), run_dir=tmp_path / "run")
+    parameters = RandomSearch.load(tmp_path / "run" / "final_model.zip", device="cpu").weights
+    weights, bias = parameters[:, :-1], parameters[:, -1]
+    assert np.all(bias != 0.0)
+    controller = saved_policy(tmp_path / "run", "final")
+    observations = np.random.default_rng(5).standard_normal((6, weights.shape[1])).astype(np.float32)
+    expected = np.clip(observations @ weights.T + bias, -1.0, 1.0)
+    np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-5)
+    assert not controller.actor.odd
+
+
 @pytest.mark.slow
 def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_path):
     from rlcontroller.control.controllers import LinearFeedback, LQGController
@@ -137,8 +161,7 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("algorithm", "expected"),
     [
-        ("{policy: {actor_arch: [16], odd: true}}", "algorithm.policy: RandomSearch trains a linear odd actor"),
-        ("{policy: {actor_arch: []}}", "algorithm.policy: RandomSearch trains a linear odd actor"),
+        ("{policy: {actor_arch: [16], odd: true}}", "algorithm.policy.actor_arch: RandomSearch trains a linear actor"),
         ("{normalize_rewards: true}", "algorithm.normalize_rewards: not for RandomSearch"),
         ("{vec_env: dummy}", "algorithm.vec_env: not for RandomSearch"),
         ("{kwargs: {delta_std: 0}}", "algorithm.kwargs.delta_std: expected a number in"),
