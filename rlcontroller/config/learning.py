@@ -131,7 +131,7 @@ LEARNER_KWARGS = {
     | {"stats_window_size"},
     "TD3": _OFF_POLICY | {"policy_delay", "target_policy_noise", "target_noise_clip", "stats_window_size"},
     "DDPG": _OFF_POLICY,
-    "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std"},
+    "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std", "initial_bias"},
 }
 RESERVED_KWARGS = {
     "policy",
@@ -156,4 +156,5 @@ NUMERIC_KWARGS = {
     "n_delta": (1, 10_000, True),
     "n_motions": (1, 10_000, True),
     "delta_std": (1e-12, 1e6, False),
+    "initial_bias": (-1.0, 1.0, False),
 }

@@ -2,8 +2,8 @@
 `policy.odd: false` of an affine one a = clip(W o + b).
 
 Augmented random search (Mania et al., 2018) on W (actuators x observation; with b, [W | b]), started
-at W = 0, b = 0 (no control, or for dampers half their range; the learner needs no model of the
-building). An affine policy is for devices whose command is not a force: a damper's best command at
+at W = 0 and b = `initial_bias` (W = 0 is no control, or a constant command; the learner needs no
+model of the building). An affine policy is for devices whose command is not a force: a damper's best command at
 rest is not zero, and "full voltage, less when ..." is b = 1 plus a linear switch.
 Each iteration draws `n_motions` training motions (the experiment's generator) with their noise
 seeds and `n_delta` random directions d_k, runs W + delta_std d_k and W - delta_std d_k on the
@@ -51,6 +51,8 @@ class RandomSearch(BaseAlgorithm):
     n_motions : training motions per iteration, shared by every candidate.
     delta_std : size of the perturbations of W (action per unit observation).
     learning_rate : step size of W's update, as in the module docstring's formula.
+    initial_bias : b at the start, every action's (an affine policy only): 1 starts dampers at full
+        voltage (passive-on).
     """
 
     policy_aliases = {"MlpPolicy": ActorCriticPolicy}  # affine; the odd policy is passed as its class
@@ -63,6 +65,7 @@ class RandomSearch(BaseAlgorithm):
         n_motions: int = 8,
         delta_std: float = 0.02,
         learning_rate: float = 0.01,
+        initial_bias: float = 0.0,
         policy_kwargs: dict[str, Any] | None = None,
         tensorboard_log: str | None = None,
         seed: int | None = None,
@@ -84,6 +87,7 @@ class RandomSearch(BaseAlgorithm):
         self.n_delta = n_delta
         self.n_motions = n_motions
         self.delta_std = delta_std
+        self.initial_bias = initial_bias
         if _init_setup_model:
             self._setup_model()
 
@@ -100,7 +104,10 @@ class RandomSearch(BaseAlgorithm):
         self.affine = not isinstance(self.policy, OddActorCriticPolicy)
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
             rows, columns = self.policy.action_net.weight.shape
+            if self.initial_bias != 0.0 and not self.affine:
+                raise ValueError(f"initial_bias {self.initial_bias} needs an affine policy (policy.odd: false)")
             self.weights = np.zeros((rows, columns + self.affine))  # [W | b] when affine
+            self.weights[:, columns:] = self.initial_bias
             self.search_rng = np.random.default_rng(self.seed)
         self._set_actor()
 

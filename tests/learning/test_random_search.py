@@ -90,12 +90,10 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
 def test_an_affine_search_on_dampers_learns_a_bias_and_its_model_acts_as_clip_w_o_plus_b(tmp_path):
     dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
     policy = {"actor_arch": [], "odd": False}
-    model = new_model(tiny(dampers, policy=policy))
+    model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": 1.0}))  # starts at full voltage
     motions, seeds = synthetic_suite(count=2), [4, 5]
-    full = np.zeros((1, *model.weights.shape))
-    full[0, :, -1] = 1.0  # b = 1: every damper at full voltage, W = 0
     passive_on = batch_rollout(model.plant, motions, [ConstantCommand(1.0, 3, "on")], seeds)[0]
-    assert model.paired_log_costs(full, motions, seeds)[0][0] == pytest.approx(
+    assert model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)[0][0] == pytest.approx(
         np.mean([np.log(-total) for _, total in passive_on]), rel=1e-12
     )
 
@@ -166,6 +164,8 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
         ("{vec_env: dummy}", "algorithm.vec_env: not for RandomSearch"),
         ("{kwargs: {delta_std: 0}}", "algorithm.kwargs.delta_std: expected a number in"),
         ("{kwargs: {n_delta: 2.5}}", "algorithm.kwargs.n_delta: expected an integer in"),
+        ("{kwargs: {initial_bias: 2}}", "algorithm.kwargs.initial_bias: expected a number in [-1.0, 1.0]"),
+        ("{kwargs: {initial_bias: 0.5}}", "initial_bias 0.5 needs an affine policy (policy.odd: false)"),
         ("{kwargs: {batch_size: 64}}", "algorithm.kwargs.batch_size: not a keyword argument of RandomSearch"),
     ],
 )
