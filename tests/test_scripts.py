@@ -113,3 +113,19 @@ def test_a_small_soak_kills_workers_and_ends_as_the_quiet_sweep(tmp_path):
     assert "every run finished and evaluated: yes" in report, report
     assert "evaluation metrics equal to the quiet sweep's:" in report and "aggregate equal to" in report, report
     assert " 0 workers killed" not in report, report
+
+
+def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp_path):
+    import yaml
+
+    standard = yaml.safe_load((SCRIPTS.parent / "configs" / "checks" / "standard.yaml").read_text())
+    standard |= {"motions": 8, "rest_runs": 1, "rest_duration": 2.0}
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(standard))
+    config = SCRIPTS.parent / "configs" / "experiments" / "five_story_mr.yaml"
+    verdicts = {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
+    assert list(verdicts) == ["passive-off", "passive-on", "clipped-optimal"]
+    assert all(v.criteria["at rest"]["passed"] for v in verdicts.values())  # a damper cannot move a still building
+    suite = {name: v.criteria["check suite"] for name, v in verdicts.items()}
+    assert suite["passive-on"]["motions"] == 8
+    assert suite["passive-on"]["mean_J1"] < suite["passive-off"]["mean_J1"] < 1.0
