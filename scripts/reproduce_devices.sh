@@ -3,8 +3,10 @@
 # fresh clone: three seeds of each learned controller (rlc sweep: mean, std, interquartile mean and
 # bootstrap intervals over seeds), every run evaluated on the seven records, and each device's classical
 # trade-off on the same records:
-#   1. MR dampers on stories 1, 3, 5 (five_story_mr.yaml: model-free random search, 10 M steps), with the
-#      passive voltage levels and clipped-optimal weights swept (rlc compare lqg --sweep);
+#   1. MR dampers on stories 1, 3, 5 (five_story_mr.yaml: model-free random search, 10 M steps; the same
+#      with an affine policy started at full voltage, five_story_mr_affine.yaml, and on a reward without
+#      the force term, five_story_mr_affine_peak.yaml), with the passive voltage levels and clipped-optimal
+#      weights swept (rlc compare lqg --sweep), and every classical answer's safety check;
 #   2. the roof active mass driver (five_story_amd.yaml: residual on LQG + ground model, 10 M steps), with
 #      LQG's force-weight trade-off;
 #   3. the yielding building (five_story_yielding.yaml: residual on LQG + ground model designed on the
@@ -13,7 +15,7 @@
 #      their own);
 #   4. the 76-story wind benchmark's active TMD (seventy_six_story_atmd.yaml: residual on LQG + wind model,
 #      12 M steps), evaluated on the wind suite configs/loads/wind_76.yaml.
-# Wall time on 2 CPU cores, two runs at a time: about 15 min (1) + 5 min (2) + 10 min (3) + 35 min (4).
+# Wall time on 2 CPU cores, two runs at a time: about 35 min (1) + 5 min (2) + 10 min (3) + 35 min (4).
 #   bash scripts/reproduce_devices.sh [OUT_DIR] [extra rlc sweep options]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
 set -euo pipefail
@@ -29,6 +31,8 @@ once() {  # run "$@" unless its output folder (the value after --out) already ha
 
 sweep configs/experiments/five_story_mr.yaml "$out/mr" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_mr.yaml --records "$records" --sweep --out "$out/mr/classical"
+sweep configs/experiments/five_story_mr_affine.yaml "$out/mr_affine" --records "$records" "$@"
+sweep configs/experiments/five_story_mr_affine_peak.yaml "$out/mr_affine_peak" --records "$records" "$@"
 
 sweep configs/experiments/five_story_amd.yaml "$out/amd" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_amd.yaml --records "$records" --sweep --out "$out/amd/classical"
@@ -42,8 +46,13 @@ for run in "$out"/yielding/seed[0-9]*; do
   once rlc evaluate "$run" --records "$out/yielding/strong_motions" --out "$run/strong_motions"
 done
 rlc aggregate "$out"/yielding/seed[0-9]*/strong_motions --out "$out/yielding/strong_motions_aggregate" > /dev/null
+for device in mr amd yielding; do
+  check="$out/$device/classical_check.txt"
+  [ -f "$check" ] || { python scripts/check_classical.py "configs/experiments/five_story_$device.yaml" > "$check.tmp" &&
+    mv "$check.tmp" "$check"; }
+done
 
 sweep configs/experiments/seventy_six_story_atmd.yaml "$out/wind" --records configs/loads/wind_76.yaml "$@"
 
 echo "runs and aggregates: $out/mr, $out/amd, $out/yielding (strong motions: $out/yielding/strong_motions_aggregate),"
-echo "$out/wind; each device's classical trade-off: $out/*/classical"
+echo "$out/wind; each device's classical trade-off: $out/*/classical, its safety check: $out/*/classical_check.txt"

@@ -9,7 +9,10 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
 2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), a kill falls
    due: the next moment a run is training, the process training a random one (the pid in its run
-   folder's lock) gets SIGKILL.
+   folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times: a kill breaks the pool,
+   which stops the sibling workers too, and one stopped before its run takes the signal counts as a
+   loss of that run as well; on a slow machine the soak would otherwise test the sweep's limit, not
+   resuming.
 3. The verdict: every run of the soak finished and evaluated, how many kills and resumes, the wall
    times, and whether each run's evaluation metrics and the aggregate equal the quiet sweep's.
 Written to OUT/soak.md and printed.
@@ -25,9 +28,12 @@ import signal
 import subprocess
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import yaml
+
+from rlcontroller.studies.sweep import WORKER_LOSSES
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 
@@ -39,12 +45,12 @@ def sweep_command(config: Path, runs: int, workers: int, engine: str, out: Path)
     ]
 
 
-def training_pids(out: Path) -> list[int]:
-    """The processes holding a run folder's lock under `out` (the ones training now)."""
-    pids = []
+def training_pids(out: Path) -> dict[str, int]:
+    """The process holding each run folder's lock under `out` (the ones training now), by run."""
+    pids = {}
     for lock in out.glob("seed*/.lock"):
         try:
-            pids.append(int(json.loads(lock.read_text())["pid"]))
+            pids[lock.parent.name] = int(json.loads(lock.read_text())["pid"])
         except (OSError, ValueError, KeyError):
             continue
     return pids
@@ -91,15 +97,17 @@ def main() -> None:
     soak = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     kills = []
     next_kill = start + chooser.uniform(*arguments.kill_every)
+    killed_runs: Counter[str] = Counter()
     while soak.poll() is None:
         time.sleep(0.2)
-        pids = training_pids(out / "soak")
+        pids = {run: pid for run, pid in training_pids(out / "soak").items() if killed_runs[run] < WORKER_LOSSES // 2}
         if time.perf_counter() < next_kill or not pids:
             continue
-        victim = chooser.choice(sorted(pids))
+        run = chooser.choice(sorted(pids))
         try:
-            os.kill(victim, signal.SIGKILL)
-            kills.append((round(time.perf_counter() - start, 1), victim))
+            os.kill(pids[run], signal.SIGKILL)
+            kills.append((round(time.perf_counter() - start, 1), pids[run]))
+            killed_runs[run] += 1
         except ProcessLookupError:
             pass
         next_kill = time.perf_counter() + chooser.uniform(*arguments.kill_every)
