@@ -31,7 +31,10 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(name):
         ({"name": "SAC", "kwargs": {"gamma": 1.5}}, "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
         ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
-        ({"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}}, "algorithm.policy.actor_arch: RandomSearch"),
+        (
+            {"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}},
+            "algorithm.policy.actor_arch: RandomSearch",
+        ),
     ],
 )
 def test_what_a_learner_refuses_is_refused_at_loading(algorithm, message):
