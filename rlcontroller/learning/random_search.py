@@ -1,10 +1,10 @@
 """Random search with common random numbers: a learner of a linear odd policy a = clip(W o), or with
 `policy.odd: false` of an affine one a = clip(W o + b).
 
-Augmented random search (Mania et al., 2018) on W (actuators x observation; with b, [W | b]), started
-at W = 0 and b = `initial_bias` (W = 0 is no control, or a constant command; the learner needs no
-model of the building). An affine policy is for devices whose command is not a force: a damper's best command at
-rest is not zero, and "full voltage, less when ..." is b = 1 plus a linear switch.
+Augmented random search (Mania et al., 2018) on W (actuators x observation; with b, [W | b]),
+started at W = 0 and b = `initial_bias` (no control, or a constant command; the learner needs no
+model of the building). An affine policy is for devices whose command is not a force: a damper's
+best command at rest is not zero, and "full voltage, less when ..." is b = 1 plus a linear switch.
 Each iteration draws `n_motions` training motions (the experiment's generator) with their noise
 seeds and `n_delta` random directions d_k, runs W + delta_std d_k and W - delta_std d_k on the
 *same* motions, noise and (with `plant_randomization`) plants drawn from those seeds, and steps along
