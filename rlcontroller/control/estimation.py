@@ -89,6 +89,24 @@ class KalmanFilter:
         return new
 
 
+def update_on_block(
+    folded: tuple[np.ndarray, np.ndarray, np.ndarray | None],
+    layout: ObservationLayout,
+    estimate: np.ndarray,
+    readings: np.ndarray,
+    held_action: np.ndarray,
+    previous_ground: np.ndarray | float,
+) -> np.ndarray:
+    """`KalmanFilter.update` on the newest block of readings as the observation holds them (scaled,
+    the ground reading last), with `folded` = `filter.on_observations(layout)`; `previous_ground` is
+    the block before's ground reading, scaled. Leading axes: one row per building."""
+    free, observed, previous_ground_gain = folded
+    new = estimate @ free + readings @ observed[: layout.block] + held_action @ observed[layout.action]
+    if previous_ground_gain is not None:
+        new += np.asarray(previous_ground)[..., None] * previous_ground_gain
+    return new
+
+
 def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
     """Steady-state measurement-update gain L for x+ = phi x + w (cov process), y = c x + v (cov measurement)."""
     prior = solve_discrete_are(phi.T, c.T, process, measurement)

@@ -41,7 +41,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
-from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
@@ -78,6 +78,8 @@ class BuildingEnv(gym.Env):
         self._use_plant(plant)
         self.layout = layout = plant.layout
         self.kalman = observation_filter(plant)  # the agent's own estimate, designed like LQG's
+        if self.kalman is not None:
+            self._filter_matrices = self.kalman.on_observations(self.layout)
         self.supervisor = supervisor(plant, 1)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
@@ -192,13 +194,11 @@ class BuildingEnv(gym.Env):
 
     def _update_estimate(self, readings: np.ndarray, held_action: np.ndarray) -> None:
         """The Kalman estimate at the new scaled readings (ground last), into the observation."""
-        layout = self.layout
-        ground = readings[-1] * layout.ground_scale
-        self._estimate = self.kalman.update(
-            self._estimate, readings[:-1] * layout.reading_scale, held_action, ground, self._previous_ground
+        self._estimate = update_on_block(
+            self._filter_matrices, self.layout, self._estimate, readings, held_action, self._previous_ground
         )
-        self._previous_ground = ground
-        self._observation[layout.estimate] = layout.scaled_estimate(self._estimate)
+        self._previous_ground = readings[-1]
+        self._observation[self.layout.estimate] = self.layout.scaled_estimate(self._estimate)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         k = self._k

@@ -21,7 +21,7 @@ from gymnasium.utils import seeding
 from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.control.controllers import Controller
-from rlcontroller.control.estimation import observation_filter
+from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
@@ -166,11 +166,9 @@ class BuildingBatch:
 
     def _update_estimates(self, readings: np.ndarray, held: np.ndarray, members) -> None:
         """The filter's update from `readings` (the newest block, as the observation holds it)."""
-        free, observed, previous_ground_gain = self._filter_matrices
-        block = self.layout.block
-        estimates = self.estimates[members] @ free + readings @ observed[:block] + held @ observed[self.layout.action]
-        if previous_ground_gain is not None:
-            estimates += self.previous_ground[members, None] * previous_ground_gain
+        estimates = update_on_block(
+            self._filter_matrices, self.layout, self.estimates[members], readings, held, self.previous_ground[members]
+        )
         self.estimates[members] = estimates
         self.previous_ground[members] = readings[:, -1]
         self.observations[members, self.layout.estimate] = self.layout.scaled_estimate(estimates)
