@@ -24,7 +24,8 @@ from rlcontroller.physics.plant import Plant
 
 class Supervisor:
     """The supervisor of `size` buildings of one plant: `reset(members)` at each start, then
-    `__call__(observations, actions)` -> the actions the actuators receive, (size, m) in [-1, 1]."""
+    `__call__(observations, actions)` turns the actions (size, m) in [-1, 1], in place, into those
+    the actuators receive."""
 
     def __init__(self, config: SupervisorConfig, plant: Plant, size: int) -> None:
         layout, n = plant.layout, plant.building.n_dofs
@@ -48,14 +49,12 @@ class Supervisor:
             return (self.peak_ground >= full).astype(float)
         return np.minimum(np.maximum((self.peak_ground - start) / (full - start), 0.0), 1.0)
 
-    def __call__(self, observations: np.ndarray, actions: np.ndarray) -> np.ndarray:
-        actions = np.array(actions, dtype=float)
+    def __call__(self, observations: np.ndarray, actions: np.ndarray) -> None:
         if self.velocity is not None:
             stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled: the sign is what counts
             actions[actions * stroke_velocity > 0.0] = 0.0
         if self.trigger is not None:
             actions *= self.gain(observations)[:, None]
-        return actions
 
 
 def supervisor(plant: Plant, size: int) -> Supervisor | None:

@@ -146,12 +146,11 @@ def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Pa
 
 def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
     """J1-J4 per story (J3 per actuator), the mean over records, one line per controller."""
-    frame = evaluation.metrics
+    mean = evaluation.metrics.groupby(["metric", "controller", "index"], sort=True)["value"].mean()
     figure, axes = plt.subplots(1, 4, figsize=(16, 4.2))
     for axis, metric in zip(axes, METRICS, strict=True):
-        chosen = frame[frame["metric"] == metric]
         for controller in evaluation.controllers:
-            means = chosen[chosen["controller"] == controller].groupby("index", sort=True)["value"].mean()
+            means = mean.loc[metric, controller]
             axis.plot(
                 means.index,
                 means.values,

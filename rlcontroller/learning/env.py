@@ -210,7 +210,7 @@ class BuildingEnv(gym.Env):
         np.minimum(clipped, 1.0, out=clipped)
         np.maximum(clipped, -1.0, out=clipped)
         if self.supervisor is not None:
-            clipped[:] = self.supervisor(self._observation[None], clipped[None])[0]
+            self.supervisor(self._observation[None], clipped[None])
         new = self._advance(k, clipped)
         state_action[:n_state] = new[:n_state]
         outputs = new[n_state:]

@@ -180,7 +180,7 @@ class BuildingBatch:
         clipped = states[:, size:]
         np.asarray(actions).clip(-1.0, 1.0, out=clipped)
         if self.supervisor is not None:
-            clipped[:] = self.supervisor(self.observations, clipped)
+            self.supervisor(self.observations, clipped)
         forcing = self._forcing[self._members, np.minimum(self.k, self._forcing.shape[1] - 1)]
         new = self._advance(clipped) + forcing
         states[:, :size] = new[:, :size]
