@@ -77,31 +77,41 @@ class LinearFeedback:
 
 
 class LQGController:
-    """Kalman filter + LQR on the observation (the same readings the agent gets)."""
+    """Kalman filter + LQR on the observation (the same readings the agent gets), run as one linear
+    system with the observation's scales folded in: its state z = [estimate, ground reading] follows
+    z_k = z_(k-1) F + o_k H (the filter's update, the previous ground reading included), and the
+    action is clip(z_k K) = clip(-feedback @ estimate - feedforward * ground)."""
 
     def __init__(self, design: LQGDesign, plant: Plant, name: str = "LQG") -> None:
         self.design = design
         self.name = name
-        self._ground = plant.layout.ground
-        self._free, self._observed, self._previous_ground_gain = design.filter.on_observations(plant.layout)
-        self._feedback = -design.feedback.T
-        self._feedforward = -design.feedforward * plant.layout.ground_scale  # on the scaled ground reading
+        layout = plant.layout
+        free, observed, previous_ground_gain = design.filter.on_observations(layout)
+        n = free.shape[0]
+        self._transition = np.zeros((n + 1, n + 1))  # F
+        self._transition[:n, :n] = free
+        if previous_ground_gain is not None:
+            self._transition[n, :n] = previous_ground_gain
+        self._input = np.zeros((layout.size, n + 1))  # H
+        self._input[:, :n] = observed
+        self._input[layout.ground, n] = 1.0
+        self._output = np.vstack([-design.feedback.T, -design.feedforward * layout.ground_scale])  # K
         self.reset()
 
     def reset(self) -> None:
-        self.estimate: np.ndarray | None = None  # the filter's estimate, one row per building
-        self._previous_ground = np.zeros(())
+        self._state: np.ndarray | None = None  # z, one row per building
+
+    @property
+    def estimate(self) -> np.ndarray | None:
+        """The filter's estimate, one row per building (None before the first action)."""
+        return None if self._state is None else self._state[..., :-1]
 
     def act(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation)
-        ground = observation[..., self._ground, None].astype(float)  # a copy: a batch's observations change in place
-        if self.estimate is None:
-            self.estimate = np.zeros(observation.shape[:-1] + (self._free.shape[0],))
-        estimate = self.estimate @ self._free + observation @ self._observed
-        if self._previous_ground_gain is not None:
-            estimate += self._previous_ground * self._previous_ground_gain
-        self.estimate, self._previous_ground = estimate, ground
-        return (estimate @ self._feedback + ground * self._feedforward).clip(-1.0, 1.0)
+        if self._state is None:
+            self._state = np.zeros(observation.shape[:-1] + (self._transition.shape[0],))
+        self._state = self._state @ self._transition + observation @ self._input
+        return (self._state @ self._output).clip(-1.0, 1.0)
 
 
 class LQGPrior:
@@ -113,8 +123,9 @@ class LQGPrior:
     def __init__(self, feedback: np.ndarray, feedforward: np.ndarray, layout) -> None:
         self.feedback = np.asarray(feedback, dtype=float)  # (m, estimate size), on the scaled estimate
         self.feedforward = np.asarray(feedforward, dtype=float)  # (m,), on the scaled ground reading
-        self._estimate = layout.estimate
-        self._ground = layout.ground
+        self._gain = np.zeros((layout.size, self.feedback.shape[0]))  # both, as one map of the observation
+        self._gain[layout.estimate] = -self.feedback.T
+        self._gain[layout.ground] = -self.feedforward
 
     @classmethod
     def design(cls, plant: Plant) -> LQGPrior:
@@ -134,11 +145,7 @@ class LQGPrior:
         return cls(design.feedback * layout.estimate_scale, design.feedforward * layout.ground_scale, layout)
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
-        observation = np.asarray(observation, dtype=float)
-        return (
-            -(observation[..., self._estimate] @ self.feedback.T)
-            - observation[..., self._ground, None] * self.feedforward
-        )
+        return np.asarray(observation, dtype=float) @ self._gain
 
 
 class ConstantCommand:
