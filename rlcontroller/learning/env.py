@@ -221,7 +221,7 @@ class BuildingEnv(gym.Env):
         if self.kalman is not None:
             self._update_estimate(outputs[rows.readings], clipped)
 
-        terms = rows.reward_terms(outputs, clipped, self._previous_action)
+        terms = rows.reward_terms(outputs[rows.reward], clipped, self._previous_action)
         self._previous_action[:] = clipped
         info: dict[str, Any] = dict(zip(rows.reward_names, terms.tolist(), strict=True))
         info["drift"] = outputs[rows.drift]

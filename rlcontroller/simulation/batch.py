@@ -176,6 +176,20 @@ class BuildingBatch:
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply `actions` (N, m), clipped to [-1, 1]; returns the new observations (N, obs) float32 (a
         view: copy to keep), the rewards (N,) and which members' motions have just ended (N,) bool."""
+        outputs = self.advance(actions)
+        held = self.held_actions()
+        rewards = self.rewards(outputs[:, self.rows.reward], held, self.previous_action)
+        self.previous_action[:] = held
+        return self.observations, rewards, self.k == self.steps
+
+    def rewards(self, reward_rows: np.ndarray, held: np.ndarray, previous_held: np.ndarray) -> np.ndarray:
+        """The rewards (..., N) of steps whose outputs' reward rows are `reward_rows` (..., N, rows),
+        with the actions `held` over them and `previous_held` over the steps before (..., N, m)."""
+        return -(self.rows.reward_terms(reward_rows, held, previous_held) * self.term_factors).sum(axis=-1)
+
+    def advance(self, actions: np.ndarray) -> np.ndarray:
+        """`step` without its rewards, for a caller that takes them for many steps at once (`rewards`):
+        returns the new outputs (N, outputs), a view."""
         size, states = self._state_size, self.states
         clipped = states[:, size:]
         np.asarray(actions).clip(-1.0, 1.0, out=clipped)
@@ -191,9 +205,7 @@ class BuildingBatch:
         self.layout.advance(observations, readings, clipped)
         if self.kalman is not None:
             self._update_estimates(readings, clipped, slice(None))
-        terms = self.rows.reward_terms(outputs, clipped, self.previous_action)
-        self.previous_action[:] = clipped
-        return observations, -(terms * self.term_factors).sum(axis=1), self.k == self.steps
+        return outputs
 
     def _advance(self, clipped: np.ndarray) -> np.ndarray:
         """[x_{k+1} | outputs_{k+1}] without the forcing, for every member."""
@@ -302,13 +314,16 @@ def _rollout_chunk(
         controller.reset()
     lanes = [(controller, slice(c * count, (c + 1) * count)) for c, controller in enumerate(controllers)]
     observations, actions = batch.observations, np.zeros((batch.size, batch.m))
-    rewards = np.zeros((n_steps + 1, batch.size))
+    reward_rows = batch.rows.reward
+    outputs = np.zeros((n_steps + 1, batch.size, reward_rows.stop - reward_rows.start))  # their reward rows
     for k in range(1, n_steps + 1):
         for controller, lane in lanes:
             actions[lane] = controller.act(observations[lane])
-        observations, rewards[k], _ = batch.step(actions)
+        outputs[k] = batch.advance(actions)[:, reward_rows]
         states[k] = batch.plant_states()
         commands[k] = batch.held_actions()
+    rewards = np.zeros((n_steps + 1, batch.size))
+    rewards[1:] = batch.rewards(outputs[1:], commands[1:], commands[:-1])
     commands *= plant.force_limits
     rewards[np.arange(n_steps + 1)[:, None] > batch.steps] = 0.0
     totals = rewards.cumsum(axis=0)[-1]  # step by step, in order

@@ -49,9 +49,10 @@ class StepOutputs:
             ]
         )
 
-    def reward_terms(self, outputs: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
-        """Each reward term's value (positive: the reward is minus their sum), shape (..., terms)."""
-        weighted = outputs[..., self.reward]
+    def reward_terms(self, reward_rows: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
+        """Each reward term's value (positive: the reward is minus their sum), shape (..., terms), from
+        the outputs' reward rows `outputs[..., reward]` and the action held over the step and before."""
+        weighted = reward_rows
         if self.change_factor is not None:
             repeats = self.change_factor.size // action.shape[-1]
             change = np.tile(action - previous_action, repeats) * self.change_factor

@@ -28,6 +28,16 @@ PLANTS = {
         }
     },
     "yielding": {"plant": {"hysteresis": {"yield_drift": 0.012}}},
+    "a 4th-power, a force-change term, per motion": {
+        "reward": {
+            "terms": [
+                {"quantity": "drift", "weight": 1.0, "scale": 0.05},
+                {"quantity": "drift", "weight": 1.0, "scale": 0.03, "power": 4},
+                {"quantity": "force_change", "weight": 0.2, "scale": 5.0e4},
+            ],
+            "per_motion": True,
+        }
+    },
 }
 
 
