@@ -9,10 +9,8 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
 2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), a kill falls
    due: the next moment a run is training, the process training a random one (the pid in its run
-   folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times: a kill breaks the pool,
-   which stops the sibling workers too, and one stopped before its run takes the signal counts as a
-   loss of that run as well; on a slow machine the soak would otherwise test the sweep's limit, not
-   resuming.
+   folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times, so that the soak tests
+   resuming, not the sweep's limit of losses per run.
 3. The verdict: every run of the soak finished and evaluated, how many kills and resumes, the wall
    times, and whether each run's evaluation metrics and the aggregate equal the quiet sweep's.
 Written to OUT/soak.md and printed.

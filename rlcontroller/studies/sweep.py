@@ -241,7 +241,15 @@ _signalled = threading.Event()  # in a local worker: a run stopped at a signal (
 def stop_with_parent(parent: int) -> None:
     """Worker initializer: once the sweep's process is gone (killed, say by a job's time limit), stop
     the run in progress as Ctrl-C would (it checkpoints and resumes later) and exit, instead of
-    training on as an orphan beside a sweep started again."""
+    training on as an orphan beside a sweep started again. A SIGTERM outside training (whose own
+    handler checkpoints), as a broken pool sends its other workers, exits through the run's `finally`
+    blocks: its lock is released, and its run is not charged with a worker loss that was not its own."""
+
+    def exit_cleanly(number: int, frame: object) -> None:
+        _signalled.set()
+        raise SystemExit(1)
+
+    signal.signal(signal.SIGTERM, exit_cleanly)
 
     def watch() -> None:
         while os.getppid() == parent:

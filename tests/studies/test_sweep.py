@@ -211,6 +211,28 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
 
 
+def test_a_worker_stopped_by_sigterm_before_training_leaves_no_lock(tmp_path):
+    """A broken pool SIGTERMs its other workers; one still setting its run up (before training's own
+    handler) must release its run's lock on the way out, or the sweep charges that run with the death
+    (the soak under load saw every run "worker lost 6 times")."""
+    code = (
+        "import os, sys, time\n"
+        "from pathlib import Path\n"
+        "from rlcontroller.files import folder_lock\n"
+        "from rlcontroller.studies.sweep import stop_with_parent\n"
+        "stop_with_parent(os.getppid())\n"
+        "with folder_lock(Path(sys.argv[1]), 'rlc train'):\n"
+        "    print('locked', flush=True)\n"
+        "    time.sleep(60)\n"
+    )
+    worker = subprocess.Popen([sys.executable, "-c", code, str(tmp_path)], stdout=subprocess.PIPE, text=True)
+    assert worker.stdout.readline().strip() == "locked"
+    assert (tmp_path / ".lock").is_file()
+    worker.terminate()
+    assert worker.wait(timeout=30) == 1  # exited, not killed by the signal
+    assert not (tmp_path / ".lock").exists()
+
+
 def test_a_run_waiting_behind_its_dead_worker_s_lock_counts_that_death_once(tmp_path, monkeypatch):
     """A run whose worker died keeps the dead holder's lock while it waits in the queue; pools that
     break meanwhile (other workers dying) must not count that one death again (the soak found runs
