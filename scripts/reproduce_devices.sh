@@ -8,14 +8,17 @@
 #      the force term, five_story_mr_affine_peak.yaml), with the passive voltage levels and clipped-optimal
 #      weights swept (rlc compare lqg --sweep), and every classical answer's safety check;
 #   2. the roof active mass driver (five_story_amd.yaml: residual on LQG + ground model, 10 M steps), with
-#      LQG's force-weight trade-off;
+#      LQG's force-weight trade-off, and the learner x observation ablation on it: PPO on the same residual
+#      (five_story_amd_ppo.yaml), random search without the prior on the same estimate
+#      (five_story_amd_estimate.yaml) and on the model-free integrated readings (five_story_amd_model_free.yaml),
+#      PPO on the model-free readings (five_story_amd_ppo_model_free.yaml);
 #   3. the yielding building (five_story_yielding.yaml: residual on LQG + ground model designed on the
 #      elastic building, trained on yielding plants under strong generated shaking), with LQG's trade-off on
 #      the yielding plant, and every seed also on 50 generated strong motions (PGA 0.3-1.2 g, a seed of
 #      their own);
 #   4. the 76-story wind benchmark's active TMD (seventy_six_story_atmd.yaml: residual on LQG + wind model,
 #      12 M steps), evaluated on the wind suite configs/loads/wind_76.yaml.
-# Wall time on 2 CPU cores, two runs at a time: about 35 min (1) + 5 min (2) + 10 min (3) + 35 min (4).
+# Wall time on 2 CPU cores, two runs at a time: about 35 min (1) + 40 min (2) + 10 min (3) + 35 min (4).
 #   bash scripts/reproduce_devices.sh [OUT_DIR] [extra rlc sweep options]
 # Records from $RLC_RECORDS, else ../shared/records. Started again, it redoes only what is missing.
 set -euo pipefail
@@ -36,6 +39,9 @@ sweep configs/experiments/five_story_mr_affine_peak.yaml "$out/mr_affine_peak" -
 
 sweep configs/experiments/five_story_amd.yaml "$out/amd" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_amd.yaml --records "$records" --sweep --out "$out/amd/classical"
+for ablation in ppo estimate model_free ppo_model_free; do
+  sweep "configs/experiments/five_story_amd_$ablation.yaml" "$out/amd_$ablation" --records "$records" "$@"
+done
 
 sweep configs/experiments/five_story_yielding.yaml "$out/yielding" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_yielding.yaml --records "$records" --sweep --out "$out/yielding/classical"
