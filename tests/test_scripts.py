@@ -129,3 +129,22 @@ def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp
     suite = {name: v.criteria["check suite"] for name, v in verdicts.items()}
     assert suite["passive-on"]["motions"] == 8
     assert suite["passive-on"]["mean_J1"] < suite["passive-off"]["mean_J1"] < 1.0
+
+
+def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_s_lqg():
+    from rlcontroller.config import load_experiment
+    from rlcontroller.control.lqg import design_lqg_ground_model
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import synthetic_suite
+
+    sweep = load_script("lqg_acceleration_sweep")
+    experiment = load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story.yaml")
+    plant = Plant(experiment)
+    unweighted = sweep.with_acceleration_term(experiment, 0.0, 5.0)
+    assert [t.quantity for t in unweighted.terms] == ["drift", "base_shear", "force"]  # the agent-only terms dropped
+    ours = design_lqg_ground_model(plant.design, reward=unweighted).feedback
+    np.testing.assert_allclose(ours, design_lqg_ground_model(plant.design).feedback, rtol=1e-9)
+    motions = synthetic_suite(count=3)
+    rewards = [sweep.with_acceleration_term(experiment, weight, 5.0) for weight in (0.0, 0.3, 3.0)]
+    j2 = [sweep.mean_metrics(plant, reward, motions)["J2"] for reward in rewards]
+    assert j2[0] > j2[1] > j2[2]
