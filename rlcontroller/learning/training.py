@@ -63,6 +63,8 @@ def _callback(
             self.started = self.session_start = time.perf_counter()
             self.keep_going = True
             self.previous_steps = self.model.num_timesteps
+            if self.model.num_timesteps == 0:  # the starting policy is a candidate too: a residual's is its prior
+                self.validate()
 
         def wall_time(self) -> float:
             return state.wall_time_s + time.perf_counter() - self.session_start

@@ -58,7 +58,7 @@ def test_a_run_folder_has_every_file(tmp_path):
     assert [c.name for c in checkpoints] == ["step_0000000300", "step_0000000600"]
     assert {p.name for p in checkpoints[-1].iterdir()} == {"model.zip", "replay_buffer.pkl", "state.json"}
     rows = curve(run)
-    assert [int(r["steps"]) for r in rows] == [300, 600]
+    assert [int(r["steps"]) for r in rows] == [0, 300, 600]  # the starting policy is validated too
     assert all(
         np.isfinite(float(r[k])) for r in rows for k in ("eval_reward", "eval_J1", "eval_J2", "eval_peak_drift_m")
     )
@@ -121,7 +121,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     assert result.output.startswith(f"resuming {run} at step {steps_at_kill:,} of 2,000\n")
     assert "trained: 2000 steps" in result.output
     steps = [int(r["steps"]) for r in curve(run)]
-    assert steps == list(range(250, 2001, 250))  # continuous: no gap, no duplicate
+    assert steps == [0, *range(250, 2001, 250)]  # continuous: no gap, no duplicate
     wall = [float(r["wall_time_s"]) for r in curve(run)]
     assert wall == sorted(wall)
     assert RunFolder(run).checkpoints()[-1].name == "step_0000002000"
@@ -317,7 +317,7 @@ def test_a_run_stopped_after_its_last_step_before_the_final_save_resumes_to_the_
     result = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])
     assert result.exit_code == 0, result.output
     assert (run / "final_model.zip").is_file() and (run / "final_policy.yaml").is_file()
-    assert [int(row["steps"]) for row in curve(run)] == [300, 600]  # nothing trained or validated twice
+    assert [int(row["steps"]) for row in curve(run)] == [0, 300, 600]  # nothing trained or validated twice
 
 
 @pytest.mark.slow
@@ -340,7 +340,7 @@ def test_training_on_randomised_plants_validates_on_fixed_draws(tmp_path):
     experiment = load_experiment_from(experiment, tmp_path)
     train(experiment, run_dir=tmp_path / "run")
     rows = curve(tmp_path / "run")
-    assert len(rows) == 2 and rows[0]["lqg_J1"] == rows[1]["lqg_J1"]  # the same plants at every validation
+    assert len(rows) == 3 and len({row["lqg_J1"] for row in rows}) == 1  # the same plants at every validation
     nominal = curve_of(smoke(total_steps=300, checkpoint_every=300, eval_every=300), tmp_path / "nominal")
     assert rows[0]["lqg_J1"] != nominal[0]["lqg_J1"]  # and not the nominal plant
     assert load_experiment(tmp_path / "run" / "config.yaml").plant_randomization is not None
@@ -359,9 +359,10 @@ def curve_of(experiment, run_dir: Path) -> list[dict[str, str]]:
 
 
 class ScriptedValidator:
-    """Validation results in a set order: the reward keeps rising, J1 is best at the second one."""
+    """Validation results in a set order: the reward keeps rising, J1 is best at the third one (the
+    first is the starting policy's, at step 0)."""
 
-    J1 = [0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
+    J1 = [0.97, 0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
 
     def __init__(self, plant) -> None:
         self.calls, self.plant, self.prior = 0, plant, None
@@ -392,6 +393,32 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
     saved = PPO.load(tmp_path / "run" / "checkpoints" / f"step_{best_steps:010d}" / "model.zip", device="cpu")
     for ours, theirs in zip(best.policy.parameters(), saved.policy.parameters(), strict=True):
         assert ours.detach().equal(theirs.detach())
+
+
+class WorseningValidator(ScriptedValidator):
+    """The starting policy validates best: every later validation is worse."""
+
+    J1 = [0.4, 0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
+
+
+def test_a_run_that_only_gets_worse_keeps_its_starting_policy_as_best(tmp_path, monkeypatch):
+    """The policy training starts from (for a residual: its prior) is validated at step 0 and is the
+    best model while nothing validates better, instead of the least bad of the later ones."""
+    from stable_baselines3 import PPO
+
+    from rlcontroller.learning import training
+
+    monkeypatch.setattr(training, "Validator", WorseningValidator)
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "tiny.yaml")
+    settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": "J1"}
+    experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
+    summary = train(experiment, run_dir=tmp_path / "run", device="cpu")
+    assert summary.best_steps == 0 and summary.best["eval_J1"] == 0.4
+    best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
+    final = PPO.load(tmp_path / "run" / "final_model.zip", device="cpu")
+    assert best.num_timesteps == 0 and final.num_timesteps == 1024
+    pairs = zip(best.policy.parameters(), final.policy.parameters(), strict=True)
+    assert any(not ours.detach().equal(theirs.detach()) for ours, theirs in pairs)
 
 
 def tensorboard_scalars(run: Path) -> dict[str, list[tuple[int, float]]]:
