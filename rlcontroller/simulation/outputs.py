@@ -49,10 +49,10 @@ class StepOutputs:
             ]
         )
 
-    def reward_terms(self, reward_rows: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
+    def reward_terms(self, weighted: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
         """Each reward term's value (positive: the reward is minus their sum), shape (..., terms), from
-        the outputs' reward rows `outputs[..., reward]` and the action held over the step and before."""
-        weighted = reward_rows
+        the outputs' weighted reward rows `outputs[..., reward]` and the action held over the step and
+        over the step before."""
         if self.change_factor is not None:
             repeats = self.change_factor.size // action.shape[-1]
             change = np.tile(action - previous_action, repeats) * self.change_factor
