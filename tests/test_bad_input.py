@@ -265,6 +265,10 @@ def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
         ("plant_randomization: {stiffness: {low: 0.01, high: 1.0}}\n", "0.01 gives no valid plant"),
         ("plant_randomization: {mass: {low: 0, high: 1, log: true}}\n", "a log-uniform range needs low > 0"),
         ("plant_randomization: {delay_steps: [0, 99]}\n", "plant_randomization.delay_steps: 99 gives no valid plant"),
+        (
+            "plant_randomization: {device_frequency: {low: 0.9, high: 1.1}}\n",
+            "plant_randomization.device_frequency: the experiment has no tuned or active mass to detune",
+        ),
     ],
 )
 def test_bad_plant_and_randomisation_parts(tmp_path, text, expected):

@@ -148,3 +148,21 @@ def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_
     rewards = [sweep.with_acceleration_term(experiment, weight, 5.0) for weight in (0.0, 0.3, 3.0)]
     j2 = [sweep.mean_metrics(plant, reward, motions)["J2"] for reward in rewards]
     assert j2[0] > j2[1] > j2[2]
+
+
+def test_the_mass_driver_grid_trades_stroke_for_drift_and_detuning_hurts_the_nominal_design():
+    from rlcontroller.config import load_experiment
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import synthetic_suite
+
+    study = load_script("mass_driver_lqg_grid")
+    experiment = load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml")
+    assert study.scaled_weights(experiment.reward, 1.0, 1.0) == experiment.reward  # all its terms are quadratic
+    tuned = Plant(experiment).building.devices[0].stiffness
+    assert study.detuned(experiment, 0.9).building.devices[0].stiffness == pytest.approx(0.81 * tuned, rel=1e-12)
+    controllers = study.grid(experiment, [1.0], [1.0, 30.0])
+    passive, nominal, heavy = study.table(experiment, controllers, synthetic_suite(count=3), [0.85, 1.0])
+    assert heavy["peak stroke (m)"] < nominal["peak stroke (m)"] < 2.5 * passive["peak stroke (m)"]
+    assert nominal["J1 x1"] < heavy["J1 x1"] < passive["J1 x1"] < 1.0
+    assert nominal["J1 x0.85"] > heavy["J1 x0.85"]  # the nominal design's fragility on a softer driver
+    assert nominal["worst J1"] == nominal["J1 x0.85"] and heavy["mean J1"] < nominal["mean J1"]

@@ -303,6 +303,8 @@ def _check_randomization(experiment: Experiment) -> None:
         bounds = getattr(randomization, key)
         if bounds is None:
             continue
+        if key == "device_frequency" and all(device.type in SEMI_ACTIVE for device in experiment.devices):
+            raise ConfigError(f"{location(file, prefix, key)}: the experiment has no tuned or active mass to detune")
         ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
         for end in ends:
             try:

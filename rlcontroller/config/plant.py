@@ -127,6 +127,7 @@ class PlantRandomization(StrictModel):
     time_constant: RandomRange | None = None  # s
     delay_steps: IntRange | None = None
     noise_factor: RandomRange | None = None
+    device_frequency: RandomRange | None = None  # every mass device's frequency factor (detuning)
 
 
 RANDOMIZED_FIELDS = {
@@ -136,6 +137,7 @@ RANDOMIZED_FIELDS = {
     "time_constant": "actuators.time_constant",
     "delay_steps": "actuators.delay_steps",
     "noise_factor": "sensors.noise_factor",
+    "device_frequency": "devices.frequency",
 }
 
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import (
+    RANDOMIZED_FIELDS,
     SEMI_ACTIVE,
     ActuatorConfig,
     BuildingConfig,
@@ -143,9 +144,10 @@ def scaled_damper(damper, factor: float):
 
 def draw_plant(randomization: PlantRandomization, base: PlantConfig | None, rng: np.random.Generator) -> PlantConfig:
     """One random plant part: the ranged fields drawn (uniform, log-uniform or whole numbers) with `rng`,
-    in a fixed order, the rest from `base`."""
+    in the fixed order of RANDOMIZED_FIELDS (a field added there goes last: earlier draws stay), the rest
+    from `base`."""
     values: dict[str, float] = {}
-    for key in ("stiffness", "mass", "damping", "time_constant", "delay_steps", "noise_factor"):
+    for key in RANDOMIZED_FIELDS:
         bounds = getattr(randomization, key)
         if bounds is None:
             continue
@@ -163,7 +165,7 @@ def centre_of_ranges(randomization: PlantRandomization, base: PlantConfig | None
     ranges), with the actuator dynamics of `base` (the nominal ones): what a careful engineer designs
     on without knowing which plant it will be."""
     values: dict[str, float] = {}
-    for key in ("stiffness", "mass", "damping", "noise_factor"):
+    for key in ("stiffness", "mass", "damping", "noise_factor", "device_frequency"):
         bounds = getattr(randomization, key)
         if bounds is None:
             continue

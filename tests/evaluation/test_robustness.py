@@ -1,6 +1,8 @@
 """Robustness: the oracle equals the nominal design on the nominal plant, beats it off-design, and
 survives a delay that makes the nominal LQG amplify the response."""
 
+from pathlib import Path
+
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
@@ -138,3 +140,20 @@ def test_under_wind_the_nominal_designs_are_lqg_and_lqg_with_the_wind_model():
     evaluated = compare(plant, motions, "wind")
     assert means.loc[("nominal", NOMINAL_WIND_MODEL)] == pytest.approx(mean_metric(evaluated, "LQG + wind model", "J1"))
     assert means.loc[("softer", NOMINAL_WIND_MODEL)] < means.loc[("softer", NOMINAL_LQG)]
+
+
+@pytest.mark.parametrize(
+    ("scenarios", "experiment"),
+    [
+        ("standard.yaml", "five_story.yaml"),
+        ("devices.yaml", "five_story_amd.yaml"),
+        ("dampers.yaml", "five_story_mr.yaml"),
+        ("driver_detuning.yaml", "five_story_amd.yaml"),
+    ],
+)
+def test_the_committed_scenario_files_load_for_their_experiments(scenarios, experiment):
+    from rlcontroller.config import load_experiment
+
+    configs = Path(__file__).resolve().parents[2] / "configs"
+    loaded = load_scenarios(configs / "scenarios" / scenarios, load_experiment(configs / "experiments" / experiment))
+    assert "nominal" in [scenario.name for scenario in loaded]

@@ -294,3 +294,29 @@ def test_a_reward_per_motion_does_not_depend_on_the_motion_intensity():
         assert np.abs(rollout(env, strong, lqg)[0].force).max() < 0.99 * plant.force_limits.min()  # linear
     np.testing.assert_allclose(returns[True][1], returns[True][0], rtol=1e-3)  # float32 readings into LQG
     assert returns[False][1] / returns[False][0] > 400  # 20^2 for the quadratic terms, 20^4 for the other
+
+
+def test_a_randomised_device_frequency_detunes_the_driver_per_episode():
+    """The spring of an active mass driver, as drawn per episode, is the tuned one times the
+    drawn frequency factor squared; the design model keeps the tuned spring."""
+    from rlcontroller.config import build_experiment
+    from rlcontroller.physics.plant import Plant
+
+    driver = {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e4, "stroke_limit": 1.0}
+    experiment = build_experiment(
+        {
+            "actuators": [],
+            "devices": [driver],
+            "plant_randomization": {"device_frequency": {"low": 0.85, "high": 1.15}},
+        }
+    )
+    tuned = Plant(experiment).design.building.devices[0].stiffness
+    env = BuildingEnv(experiment, randomize=True)
+    motion = synthetic_suite(count=1)[0]
+    factors = []
+    for seed in range(40):
+        env.reset(seed=seed, options={"motion": motion})
+        factor = env.plant.config.devices.frequency
+        assert env.plant.building.devices[0].stiffness == pytest.approx(tuned * factor**2, rel=1e-12)
+        factors.append(factor)
+    assert 0.85 <= min(factors) < 0.9 and 1.1 < max(factors) <= 1.15
