@@ -259,9 +259,10 @@ def write_damper_sweep(
         chosen = sweep[sweep["family"] == family]
         for axis, x in zip(axes, ("J3", "J2"), strict=True):
             axis.plot(chosen[x], chosen["J1"], marker, label=family)
-    for name, (j1, j2, j3) in points.items():
+    for number, (name, (j1, j2, j3)) in enumerate(points.items()):  # each its own marker and colour
+        marker, size = ("*", 13) if name == "RL" else ("Dv^PX"[number % 5], 8)
         for axis, x in zip(axes, (j3, j2), strict=True):
-            axis.plot([x], [j1], "*", markersize=13, color=COLOURS.get(name, "tab:red"), label=name)
+            axis.plot([x], [j1], marker, markersize=size, color=COLOURS.get(name, f"C{number + 2}"), label=name)
     axes[0].set(xlabel="J3 (damper force energy / uncontrolled base shear energy)", ylabel="J1 (peak drift ratio)")
     axes[1].set(xlabel="J2 (peak acceleration ratio)", ylabel="J1 (peak drift ratio)")
     for axis in axes:
