@@ -4,8 +4,9 @@ Usage: python scripts/check_classical.py CONFIG [--standard configs/checks/stand
 
 Runs the safety check's suite and at-rest criteria (`rlc check`'s own code, `evaluation.safety`) on
 every classical controller of the experiment (`classical_controllers`: the LQGs for actuators and
-active mass drivers, passive-off, passive-on and clipped-optimal for semi-active dampers), on the
-experiment's plant, and prints each verdict in one line per criterion. A learned controller that fails
+active mass drivers, passive-off, passive-on and clipped-optimal for semi-active dampers; with active
+mass drivers also the drivers without a command, the tuned masses they are), on the experiment's
+plant, and prints each verdict in one line per criterion. A learned controller that fails
 where every classical one fails too is held to a bound the device cannot meet; docs/devices.md says
 which.
 """
@@ -19,6 +20,7 @@ from pathlib import Path
 from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.config.studies import load_safety_check
+from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.evaluation.evaluation import classical_controllers
 from rlcontroller.evaluation.safety import Verdict, safety_check
 from rlcontroller.physics.plant import Plant
@@ -28,7 +30,10 @@ def classical_verdicts(config: Path, standard: Path = SAFETY_STANDARD) -> list[V
     """The safety-check verdict of each classical controller of the experiment in `config`."""
     plant = Plant(load_experiment(config))
     check = load_safety_check(standard)
-    return [safety_check(plant, controller, check, scenarios=[]) for controller in classical_controllers(plant)]
+    controllers = classical_controllers(plant)
+    if plant.building.devices and not plant.building.dampers:  # active mass drivers: the passive masses too
+        controllers.append(ConstantCommand(0.0, plant.building.n_actuators, "drivers off (tuned masses)"))
+    return [safety_check(plant, controller, check, scenarios=[]) for controller in controllers]
 
 
 def main() -> None:

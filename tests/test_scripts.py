@@ -131,6 +131,21 @@ def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp
     assert suite["passive-on"]["mean_J1"] < suite["passive-off"]["mean_J1"] < 1.0
 
 
+def test_an_active_mass_driver_is_also_checked_switched_off(tmp_path):
+    import yaml
+
+    standard = yaml.safe_load((SCRIPTS.parent / "configs" / "checks" / "standard.yaml").read_text())
+    standard |= {"motions": 6, "rest_runs": 1, "rest_duration": 2.0}
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(standard))
+    config = SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml"
+    verdicts = {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
+    assert list(verdicts) == ["LQG", "LQG + ground", "LQG + ground model", "drivers off (tuned masses)"]
+    off = verdicts["drivers off (tuned masses)"].criteria
+    assert off["at rest"]["peak_drift_over_bound"] == 0.0  # no command: noise moves nothing
+    assert off["check suite"]["mean_J1"] > verdicts["LQG + ground model"].criteria["check suite"]["mean_J1"]
+
+
 def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_s_lqg():
     from rlcontroller.config import load_experiment
     from rlcontroller.control.lqg import design_lqg_ground_model
