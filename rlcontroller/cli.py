@@ -348,12 +348,16 @@ def run_check(
     )
     named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
     with progress_bar(progress, "safety check", 3) as advance:
-        verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
+        try:
+            verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
+        except ConfigError as error:  # the standard asks for what this building has not
+            raise ConfigError(f"{display_path(standard)}: {error}") from None
     target = folder
     if folder.resolve().is_relative_to(MODELS.resolve()):
         target = output_folder(None, f"check-{folder.name}")
         target.mkdir(parents=True)
-    path = write_verdict(verdict, target, model)
+    other = "" if standard.resolve() == SAFETY_STANDARD.resolve() else standard.stem  # keeps the standard's verdict
+    path = write_verdict(verdict, target, model, other)
     for line in verdict.lines():
         typer.echo(line)
     typer.echo(f"verdict in {path}")

@@ -92,7 +92,8 @@ def test_check_on_a_full_disk_keeps_the_old_verdict(tmp_path, monkeypatch):
 
     folder = tmp_path / "model"
     shutil.copytree(NETWORK_POLICY, folder)
-    (folder / "best_check.yaml").write_text("passed: true\n")  # an old verdict, to be replaced
+    old = folder / "best_check-quick.yaml"  # the verdict under the standard quick.yaml
+    old.write_text("passed: true\n")  # an old verdict, to be replaced
     quick = tmp_path / "quick.yaml"
     standard = yaml.safe_load((REPOSITORY / "configs" / "checks" / "standard.yaml").read_text())
     quick.write_text(yaml.safe_dump(standard | {"motions": 2, "rest_runs": 1, "rest_duration": 2.0}))
@@ -100,11 +101,11 @@ def test_check_on_a_full_disk_keeps_the_old_verdict(tmp_path, monkeypatch):
     fill_disk_at(monkeypatch, 1)
     arguments = ["check", str(folder), "--standard", str(quick)]
     line = one_filesystem_line(CliRunner().invoke(app, arguments))
-    assert "best_check.yaml" in line and files_under(tmp_path) == before
-    assert (folder / "best_check.yaml").read_text() == "passed: true\n"
+    assert "best_check-quick.yaml" in line and files_under(tmp_path) == before
+    assert old.read_text() == "passed: true\n"
     monkeypatch.undo()
     assert CliRunner().invoke(app, arguments).exit_code in (0, 1)  # the verdict is written either way
-    assert (folder / "best_check.yaml").read_text() != "passed: true\n"
+    assert old.read_text() != "passed: true\n"
 
 
 @pytest.mark.slow

@@ -4,9 +4,10 @@ Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite an
 
 1. **check suite** — on every one of its generated motions (own seed, never used in training or
    selection): the building's peak inter-story drift (max over stories and time) is no larger than
-   the uncontrolled building's and the mean over stories of J1 is at most 1; on a motion whose
-   uncontrolled peak drift ratio is below the insignificance bound, the controlled peak drift ratio
-   stays below the bound instead. The mean J1 over the significant motions is at most 1 as well.
+   the uncontrolled building's and the mean over stories of J1 is at most 1 (with the standard's
+   `reference: passive devices`: than the building's with its tuned and active masses uncommanded);
+   on a motion whose uncontrolled peak drift ratio is below the insignificance bound, the controlled
+   peak drift ratio stays below the bound instead. The mean J1 over the significant motions is at most 1 as well.
 2. **at rest** — sensor noise only, no ground motion: the peak drift ratio stays below the bound.
 3. **closed-loop stability** — for a policy (a function of the observation), the closed loop
    linearised at rest on the design model, without the experiment's supervisor (whose trigger
@@ -26,10 +27,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from rlcontroller.config import SafetyCheckConfig, Scenario
+from rlcontroller.config import ConfigError, SafetyCheckConfig, Scenario
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.evaluation.evaluation import evaluate
+from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
 from rlcontroller.physics.plant import Plant
@@ -76,6 +77,8 @@ def safety_check(
 ) -> Verdict:
     """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`;
     `on_criterion(name)` is called as each criterion is judged (a progress bar)."""
+    if standard.reference == PASSIVE and (not plant.building.devices or plant.building.dampers):
+        raise ConfigError("reference: passive devices: the building has no tuned or active mass (or has dampers)")
     bounds = drift_bounds(plant, standard)
     judges = {
         "check suite": lambda: suite_criterion(plant, controller, standard, bounds),
@@ -97,7 +100,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
     evaluation = evaluate(plant, motions, [controller], "safety check suite", include_optimal=False)
     failures, j1_means, worst = [], [], None
     for motion in motions:
-        bare = evaluation.responses["uncontrolled", motion.name].drift
+        bare = evaluation.responses[standard.reference, motion.name].drift
         controlled = evaluation.responses[controller.name, motion.name].drift
         bare_peak, peak = np.max(np.abs(bare), axis=0), np.max(np.abs(controlled), axis=0)
         if np.max(bare_peak / bounds) < 1.0:  # insignificant: stay below the bound
@@ -108,7 +111,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
             j1_means.append(j1)
             score = float(np.max(peak) / np.max(bare_peak))
             ok = score <= 1.0 + ROUNDING and j1 <= 1.0 + ROUNDING
-            score, kind = max(score, j1), "peak drift ratio to uncontrolled (or mean J1, the larger)"
+            score, kind = max(score, j1), f"peak drift ratio to {standard.reference} (or mean J1, the larger)"
         row = {"motion": motion.name, "pga_g": round(motion.pga / STANDARD_GRAVITY, 5), "value": round(score, 4)}
         if not ok:
             failures.append(row)
@@ -116,14 +119,16 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
             worst = row | {"measure": kind}
     mean_j1 = float(np.mean(j1_means)) if j1_means else float("nan")
     passed = not failures and (not j1_means or mean_j1 <= 1.0 + ROUNDING)
+    reference = "no control" if standard.reference == "uncontrolled" else "the passive devices"
     summary = (
-        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than no control "
+        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {reference} "
         f"({len(motions) - len(j1_means)} insignificant); mean J1 {mean_j1:.3f}; worst {worst['motion']} "
         f"(PGA {worst['pga_g']:g} g): {worst['value']:.3f}"
     )
     return {
         "passed": passed,
         "summary": summary,
+        "reference": standard.reference,
         "motions": len(motions),
         "insignificant_motions": len(motions) - len(j1_means),
         "mean_J1": round(mean_j1, 4),
@@ -205,12 +210,13 @@ def spectral_radius(plant: Plant, controller: PolicyController) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(closed_loop_matrix(plant, controller)))))
 
 
-def verdict_path(folder: Path, model: str) -> Path:
-    return folder / f"{model}_check.yaml"
+def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
+    """MODEL_check.yaml: the verdict under the project's standard; MODEL_check-NAME.yaml under another."""
+    return folder / f"{model}_check{'-' + standard if standard else ''}.yaml"
 
 
-def write_verdict(verdict: Verdict, folder: Path, model: str) -> Path:
-    return atomic_write(verdict_path(folder, model), verdict.to_yaml())
+def write_verdict(verdict: Verdict, folder: Path, model: str, standard: str = "") -> Path:
+    return atomic_write(verdict_path(folder, model, standard), verdict.to_yaml())
 
 
 def read_verdict(folder: Path, model: str) -> bool | None:

@@ -117,7 +117,72 @@ def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     result = CliRunner().invoke(app, ["check", "--standard", str(quick)])
     assert result.exit_code == 0, result.output
-    (written,) = (tmp_path / "results").glob("check-five_story_every_story-*/best_check.yaml")
+    (written,) = (tmp_path / "results").glob("check-five_story_every_story-*/best_check-quick_standard.yaml")
     assert f"verdict in {written.relative_to(tmp_path)}" in result.output
     assert yaml.safe_load(written.read_text())["passed"] is True
     assert (DEFAULT_MODEL / "best_check.yaml").read_bytes() == shipped
+
+
+def test_against_the_passive_devices_a_switched_off_driver_scores_exactly_one():
+    """With `reference: passive devices`, a driver that never pushes is the reference itself: every
+    significant motion scores 1 and it passes; judged against the bare building its tuned mass is
+    worse on some motions. Only the reference key differs between the two committed standards."""
+    import yaml
+
+    from rlcontroller.config import load_experiment
+    from rlcontroller.control.controllers import ConstantCommand
+
+    committed = {
+        name: yaml.safe_load((STANDARD.parent / f"{name}.yaml").read_text()) for name in ("standard", "passive_devices")
+    }
+    assert (
+        committed["passive_devices"].pop("reference") == "passive devices"
+        and committed["passive_devices"] == committed["standard"]
+    )
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_amd.yaml"))
+    off = ConstantCommand(0.0, 1, "driver off")
+    against_passive = safety_check(plant, off, small_standard(motions=40, reference="passive devices"), [])
+    suite = against_passive.criteria["check suite"]
+    assert against_passive.passed and suite["reference"] == "passive devices"
+    assert suite["worst"]["value"] == pytest.approx(1.0, abs=1e-9) or suite["insignificant_motions"] == 40
+    against_bare = safety_check(plant, off, small_standard(motions=40), []).criteria["check suite"]
+    assert against_bare["failure_count"] > 0 and against_bare["reference"] == "uncontrolled"
+
+
+def test_a_passive_devices_reference_needs_a_tuned_or_active_mass(tmp_path):
+    from rlcontroller.config import ConfigError
+
+    with pytest.raises(ConfigError, match="reference: passive devices: the building has no tuned or active mass"):
+        safety_check(Plant(Experiment()), Uncontrolled(3), small_standard(reference="passive devices"), [])
+
+
+def test_a_verdict_under_another_standard_does_not_replace_the_standard_s(tmp_path):
+    import shutil
+
+    import yaml
+
+    folder = tmp_path / "model"
+    shutil.copytree(NETWORK_POLICY, folder)
+    standard_verdict = (folder / "best_check.yaml").read_bytes()
+    quick = tmp_path / "quick.yaml"
+    quick.write_text(
+        yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "rest_runs": 1, "rest_duration": 2.0})
+    )
+    result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(quick)])
+    assert result.exit_code in (0, 1) and (folder / "best_check-quick.yaml").is_file(), result.output
+    assert (folder / "best_check.yaml").read_bytes() == standard_verdict
+
+
+def test_rlc_check_names_the_standard_that_asks_for_a_mass_the_building_lacks(tmp_path):
+    import shutil
+
+    import yaml
+
+    folder = tmp_path / "model"
+    shutil.copytree(NETWORK_POLICY, folder)
+    wrong = tmp_path / "passive.yaml"
+    wrong.write_text(
+        yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "passive devices"})
+    )
+    result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(wrong)])
+    assert result.exit_code == 2 and f"error: {wrong}: reference: passive devices: the building has no" in result.output
