@@ -25,26 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import ConfigError, Experiment, PlantConfig, RewardConfig, load_experiment
+from rlcontroller.config import ConfigError, Experiment, PlantConfig, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
+from rlcontroller.evaluation.evaluation import PASSIVE, evaluate, scaled_weights
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import choose_motions
 
 REPOSITORY = Path(__file__).resolve().parents[1]
-
-
-def scaled_weights(reward: RewardConfig, force: float, stroke: float) -> RewardConfig:
-    """The reward's quadratic terms with the force weights times `force`, the stroke weights times `stroke`."""
-    factors = {"force": force, "stroke": stroke}
-    terms = [
-        term.model_copy(update={"weight": term.weight * factors.get(term.quantity, 1.0)})
-        for term in reward.terms
-        if term.quadratic
-    ]
-    return reward.model_copy(update={"terms": terms})
 
 
 def grid(experiment: Experiment, force: list[float], stroke: list[float]) -> list[LQGController]:
@@ -54,7 +43,7 @@ def grid(experiment: Experiment, force: list[float], stroke: list[float]) -> lis
     design = Plant(experiment).design
     return [
         LQGController(
-            design_lqg_ground_model(design, reward=scaled_weights(experiment.reward, f, s)),
+            design_lqg_ground_model(design, reward=scaled_weights(experiment.reward, {"force": f, "stroke": s})),
             design,
             f"LQG + ground model, force x{f:g}, stroke x{s:g}",
         )

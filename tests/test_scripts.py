@@ -115,15 +115,19 @@ def test_a_small_soak_kills_workers_and_ends_as_the_quiet_sweep(tmp_path):
     assert " 0 workers killed" not in report, report
 
 
-def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp_path):
+def classical_verdicts(experiment: str, motions: int, tmp_path: Path) -> dict:
+    """check_classical.py's verdicts on `motions` check motions and one short run at rest."""
     import yaml
 
     standard = yaml.safe_load((SCRIPTS.parent / "configs" / "checks" / "standard.yaml").read_text())
-    standard |= {"motions": 8, "rest_runs": 1, "rest_duration": 2.0}
     path = tmp_path / "small.yaml"
-    path.write_text(yaml.safe_dump(standard))
-    config = SCRIPTS.parent / "configs" / "experiments" / "five_story_mr.yaml"
-    verdicts = {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
+    path.write_text(yaml.safe_dump(standard | {"motions": motions, "rest_runs": 1, "rest_duration": 2.0}))
+    config = SCRIPTS.parent / "configs" / "experiments" / experiment
+    return {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
+
+
+def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp_path):
+    verdicts = classical_verdicts("five_story_mr.yaml", 8, tmp_path)
     assert list(verdicts) == ["passive-off", "passive-on", "clipped-optimal"]
     assert all(v.criteria["at rest"]["passed"] for v in verdicts.values())  # a damper cannot move a still building
     suite = {name: v.criteria["check suite"] for name, v in verdicts.items()}
@@ -132,14 +136,7 @@ def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp
 
 
 def test_an_active_mass_driver_is_also_checked_switched_off(tmp_path):
-    import yaml
-
-    standard = yaml.safe_load((SCRIPTS.parent / "configs" / "checks" / "standard.yaml").read_text())
-    standard |= {"motions": 6, "rest_runs": 1, "rest_duration": 2.0}
-    path = tmp_path / "small.yaml"
-    path.write_text(yaml.safe_dump(standard))
-    config = SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml"
-    verdicts = {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
+    verdicts = classical_verdicts("five_story_amd.yaml", 6, tmp_path)
     assert list(verdicts) == ["LQG", "LQG + ground", "LQG + ground model", "drivers off (tuned masses)"]
     off = verdicts["drivers off (tuned masses)"].criteria
     assert off["at rest"]["peak_drift_over_bound"] == 0.0  # no command: noise moves nothing
@@ -172,7 +169,7 @@ def test_the_mass_driver_grid_trades_stroke_for_drift_and_detuning_hurts_the_nom
 
     study = load_script("mass_driver_lqg_grid")
     experiment = load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml")
-    assert study.scaled_weights(experiment.reward, 1.0, 1.0) == experiment.reward  # all its terms are quadratic
+    assert study.scaled_weights(experiment.reward, {"force": 1.0, "stroke": 1.0}) == experiment.reward
     tuned = Plant(experiment).building.devices[0].stiffness
     assert study.detuned(experiment, 0.9).building.devices[0].stiffness == pytest.approx(0.81 * tuned, rel=1e-12)
     controllers = study.grid(experiment, [1.0], [1.0, 30.0])

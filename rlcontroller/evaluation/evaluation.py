@@ -228,7 +228,7 @@ def lqg_sweep(
         raise ValueError("the reward has no force term to sweep")
     rows = []
     for multiplier in multipliers:
-        reward = scaled_force_weights(experiment.reward, multiplier)
+        reward = scaled_weights(experiment.reward, {"force": multiplier})
         controller = LQGController(design_lqg(design, known_ground=known_ground, reward=reward), design)
         result = evaluate(plant, motions, [controller], label, include_optimal=False)
         summary = result.summary().loc["LQG"]
@@ -238,11 +238,11 @@ def lqg_sweep(
     return pd.DataFrame(rows)
 
 
-def scaled_force_weights(reward: RewardConfig, multiplier: float) -> RewardConfig:
-    """The reward with every force term's weight times `multiplier` (a point of a trade-off)."""
+def scaled_weights(reward: RewardConfig, multipliers: dict[str, float]) -> RewardConfig:
+    """The reward with each term's weight times its quantity's multiplier (`{"force": 0.1}`; other
+    quantities unchanged): a point of a trade-off."""
     terms = [
-        term.model_copy(update={"weight": term.weight * multiplier}) if term.quantity == "force" else term
-        for term in reward.terms
+        term.model_copy(update={"weight": term.weight * multipliers.get(term.quantity, 1.0)}) for term in reward.terms
     ]
     return reward.model_copy(update={"terms": terms})
 
@@ -272,7 +272,7 @@ def damper_sweep(
         (
             "clipped-optimal",
             float(m),
-            ClippedOptimal(plant.design, f"clipped-optimal x{m:g}", scaled_force_weights(reward, m)),
+            ClippedOptimal(plant.design, f"clipped-optimal x{m:g}", scaled_weights(reward, {"force": m})),
         )
         for m in multipliers
     ]
