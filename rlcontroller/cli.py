@@ -799,17 +799,21 @@ def sweep(
         motion_suite(records, None, Plant(experiment))
     else:
         motion_suite(records, None)
-    results, written = run_sweep(
-        experiment,
-        chosen_seeds,
-        settings,
-        folder,
-        engine.value,
-        workers,
-        address,
-        str(records.resolve()) if records else None,
-        echo=typer.echo,
-    )
+    try:
+        results, written = run_sweep(
+            experiment,
+            chosen_seeds,
+            settings,
+            folder,
+            engine.value,
+            workers,
+            address,
+            str(records.resolve()) if records else None,
+            echo=typer.echo,
+        )
+    except KeyboardInterrupt:
+        typer.echo("sweep stopped: the runs in progress saved a checkpoint; run the same command again to continue")
+        raise typer.Exit(130) from None
     failed = [result for result in results if result.status == "failed"]
     if written:
         typer.echo((folder / "aggregate.md").read_text())

@@ -210,40 +210,49 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
     from rlcontroller.files import lock_pid
 
     context = multiprocessing.get_context("spawn")
+    stop = context.Event()  # set at Ctrl-C: each worker stops its run as Ctrl-C would and exits
     pending = list(runs)
     dead_holders: dict[Path, set[int]] = {run.folder: set() for run in runs}
     while pending:
         lost = []
-        with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(),)) as pool:
+        with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(), stop)) as pool:
             futures = {pool.submit(_run_local, run, records): run for run in pending}
-            for future in local_completed(futures):
-                run = futures[future]
-                try:
-                    yield future.result()
-                except BrokenProcessPool:  # a run still queued, or stopped by its sibling's death, is not to blame
-                    holder = lock_pid(run.folder)
-                    if holder is not None:
-                        dead_holders[run.folder].add(holder)
-                    if len(dead_holders[run.folder]) > WORKER_LOSSES:
-                        yield RunResult(run, "failed", 0.0, f"worker lost {len(dead_holders[run.folder])} times")
-                    else:
-                        lost.append(run)
-                except Exception as error:
-                    yield RunResult(run, "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300])
+            try:
+                for future in local_completed(futures):
+                    run = futures[future]
+                    try:
+                        yield future.result()
+                    except BrokenProcessPool:  # a run still queued, or stopped by its sibling's death, is not to blame
+                        holder = lock_pid(run.folder)
+                        if holder is not None:
+                            dead_holders[run.folder].add(holder)
+                        if len(dead_holders[run.folder]) > WORKER_LOSSES:
+                            yield RunResult(run, "failed", 0.0, f"worker lost {len(dead_holders[run.folder])} times")
+                        else:
+                            lost.append(run)
+                    except Exception as error:
+                        yield RunResult(run, "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300])
+            except KeyboardInterrupt:  # the pool's exit then waits for the workers' checkpoints, starts nothing
+                stop.set()
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
         pending = lost
 
 
-_parent_gone = threading.Event()  # in a local worker: the sweep's process has died
+_sweep_gone = threading.Event()  # in a local worker: the sweep's process has died or asked it to stop
 _running = threading.Event()  # in a local worker: a run is in progress
 _signalled = threading.Event()  # in a local worker: a run stopped at a signal (Ctrl-C, or the pool's SIGTERM)
 
 
-def stop_with_parent(parent: int) -> None:
-    """Worker initializer: once the sweep's process is gone (killed, say by a job's time limit), stop
-    the run in progress as Ctrl-C would (it checkpoints and resumes later) and exit, instead of
-    training on as an orphan beside a sweep started again. A SIGTERM outside training (whose own
-    handler checkpoints), as a broken pool sends its other workers, exits through the run's `finally`
-    blocks: its lock is released, and its run is not charged with a worker loss that was not its own."""
+def stop_with_parent(parent: int, stop) -> None:
+    """Worker initializer: once the sweep's process is gone (killed, say by a job's time limit) or has
+    set `stop` (at its Ctrl-C or SIGINT), stop the run in progress as Ctrl-C would (it checkpoints and
+    resumes later) and exit, instead of training on as an orphan beside a sweep started again. The
+    worker leaves the terminal's process group, so that one Ctrl-C reaches it once, through the sweep
+    (a second one would abort without a checkpoint). A SIGTERM outside training (whose own handler
+    checkpoints), as a broken pool sends its other workers, exits through the run's `finally` blocks:
+    its lock is released, and its run is not charged with a worker loss that was not its own."""
+    os.setpgrp()
 
     def exit_cleanly(number: int, frame: object) -> None:
         _signalled.set()
@@ -252,9 +261,9 @@ def stop_with_parent(parent: int) -> None:
     signal.signal(signal.SIGTERM, exit_cleanly)
 
     def watch() -> None:
-        while os.getppid() == parent:
+        while os.getppid() == parent and not stop.is_set():
             time.sleep(0.5)
-        _parent_gone.set()
+        _sweep_gone.set()
         if not _running.is_set():
             os._exit(1)
         os.kill(os.getpid(), signal.SIGTERM)  # `_run_local` exits once the run has stopped
@@ -271,7 +280,7 @@ def _run_local(run: SweepRun, records: str | None) -> RunResult:
         return run_one(run, records)
     finally:
         _running.clear()
-        if _parent_gone.is_set() or _signalled.is_set():
+        if _sweep_gone.is_set() or _signalled.is_set():
             os._exit(1)
 
 

@@ -3,6 +3,8 @@ processes, a failed run reported while the others go on, a re-run that redoes no
 killed sweep whose worker checkpoints and stops."""
 
 import contextlib
+import os
+import signal
 import subprocess
 import sys
 import time
@@ -216,11 +218,11 @@ def test_a_worker_stopped_by_sigterm_before_training_leaves_no_lock(tmp_path):
     handler) must release its run's lock on the way out, or the sweep charges that run with the death
     (the soak under load saw every run "worker lost 6 times")."""
     code = (
-        "import os, sys, time\n"
+        "import os, sys, threading, time\n"
         "from pathlib import Path\n"
         "from rlcontroller.files import folder_lock\n"
         "from rlcontroller.studies.sweep import stop_with_parent\n"
-        "stop_with_parent(os.getppid())\n"
+        "stop_with_parent(os.getppid(), threading.Event())\n"
         "with folder_lock(Path(sys.argv[1]), 'rlc train'):\n"
         "    print('locked', flush=True)\n"
         "    time.sleep(60)\n"
@@ -340,3 +342,28 @@ def test_a_sweep_whose_dask_scheduler_dies_says_so_in_one_line_and_continues_whe
     again = subprocess.run(command[: command.index("--address")] + ["--out", str(out)], capture_output=True, text=True)
     assert again.returncode == 0 and "1 runs done, 0 failed" in again.stdout, again.stderr
     assert ",resumed," in (out / "sweep.csv").read_text()
+
+
+@pytest.mark.slow
+def test_sigint_to_the_sweep_alone_stops_its_worker_with_a_checkpoint_and_starts_nothing_more(tmp_path):
+    """`kill -INT` on `rlc sweep` (a job scheduler's stop, not a terminal's Ctrl-C, which reaches every
+    process of the group): the worker stops its run as Ctrl-C would, the queued run never starts, and
+    the sweep exits instead of training the whole queue first."""
+    from rlcontroller.files import lock_pid
+
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0,1"]
+    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while not list((out / "seed0" / "checkpoints").glob("step_*")):
+        assert sweep_process.poll() is None and time.time() < deadline
+        time.sleep(0.2)
+    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    os.kill(sweep_process.pid, signal.SIGINT)
+    assert sweep_process.wait(timeout=90) == 130
+    assert not any(alive(pid) for pid in workers)
+    newest = sorted((out / "seed0" / "checkpoints").glob("step_*"))[-1]
+    assert (newest / "state.json").is_file() and lock_pid(out / "seed0") is None
+    assert not (out / "seed1" / "checkpoints").exists() and not (out / "seed0" / "final_model.zip").exists()
