@@ -104,16 +104,7 @@ def test_a_sweep_evaluates_its_runs_on_a_wind_suite_as_rlc_evaluate_does(tmp_pat
 @pytest.mark.slow
 def test_a_killed_sweep_leaves_no_worker_training_and_its_run_resumable(tmp_path):
     """SIGKILL to `rlc sweep`: its worker checkpoints and exits instead of training on as an orphan."""
-    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))
-    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
-    out = tmp_path / "sweep"
-    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0"]
-    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
-    deadline = time.time() + 120
-    while not list((out / "seed0" / "checkpoints").glob("step_*")):
-        assert sweep_process.poll() is None and time.time() < deadline
-        time.sleep(0.2)
-    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    sweep_process, out, workers = long_sweep_training(tmp_path, "0")
     assert len(workers) == 1
     sweep_process.kill()
     sweep_process.wait()
@@ -123,6 +114,22 @@ def test_a_killed_sweep_leaves_no_worker_training_and_its_run_resumable(tmp_path
         time.sleep(0.2)
     newest = sorted((out / "seed0" / "checkpoints").glob("step_*"))[-1]
     assert (newest / "state.json").is_file() and not (out / "seed0" / "final_model.zip").exists()
+
+
+def long_sweep_training(tmp_path: Path, seeds: str) -> tuple[subprocess.Popen, Path, list[int]]:
+    """`rlc sweep` of a long run per seed on one local worker, once seed 0 has its first checkpoint:
+    the sweep's process, its folder and its worker processes."""
+    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))
+    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", seeds]
+    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while not list((out / "seed0" / "checkpoints").glob("step_*")):
+        assert sweep_process.poll() is None and time.time() < deadline
+        time.sleep(0.2)
+    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    return sweep_process, out, workers
 
 
 def children(pid: int) -> list[int]:
@@ -351,16 +358,7 @@ def test_sigint_to_the_sweep_alone_stops_its_worker_with_a_checkpoint_and_starts
     the sweep exits instead of training the whole queue first."""
     from rlcontroller.files import lock_pid
 
-    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=10_000_000, checkpoint_every=256))
-    (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
-    out = tmp_path / "sweep"
-    command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0,1"]
-    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
-    deadline = time.time() + 120
-    while not list((out / "seed0" / "checkpoints").glob("step_*")):
-        assert sweep_process.poll() is None and time.time() < deadline
-        time.sleep(0.2)
-    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    sweep_process, out, workers = long_sweep_training(tmp_path, "0,1")
     os.kill(sweep_process.pid, signal.SIGINT)
     assert sweep_process.wait(timeout=90) == 130
     assert not any(alive(pid) for pid in workers)
