@@ -123,7 +123,11 @@ def long_sweep_training(tmp_path: Path, seeds: str) -> tuple[subprocess.Popen, P
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", seeds]
-    sweep_process = subprocess.Popen([*command, "--workers", "1", "--out", str(out)], stdout=subprocess.DEVNULL)
+    sweep_process = subprocess.Popen(
+        [*command, "--workers", "1", "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as at a terminal: tests run in the
+    )  # background (CI) ignore SIGINT, and a child that inherits that ignores it too, as the shell intends
     deadline = time.time() + 120
     while not list((out / "seed0" / "checkpoints").glob("step_*")):
         assert sweep_process.poll() is None and time.time() < deadline
@@ -360,7 +364,10 @@ def test_sigint_to_the_sweep_alone_stops_its_worker_with_a_checkpoint_and_starts
 
     sweep_process, out, workers = long_sweep_training(tmp_path, "0,1")
     os.kill(sweep_process.pid, signal.SIGINT)
-    assert sweep_process.wait(timeout=90) == 130
+    try:
+        assert sweep_process.wait(timeout=90) == 130
+    finally:  # a sweep that did not stop must not train on after the test (its workers follow it)
+        sweep_process.kill()
     assert not any(alive(pid) for pid in workers)
     newest = sorted((out / "seed0" / "checkpoints").glob("step_*"))[-1]
     assert (newest / "state.json").is_file() and lock_pid(out / "seed0") is None
