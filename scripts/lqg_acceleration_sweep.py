@@ -20,7 +20,7 @@ from pathlib import Path
 from rlcontroller.config import ConfigError, Experiment, RewardConfig, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.evaluation.evaluation import evaluate
+from rlcontroller.evaluation.evaluation import evaluate, mean_metric
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import choose_motions
@@ -39,9 +39,8 @@ def with_acceleration_term(experiment: Experiment, weight: float, scale: float) 
 def mean_metrics(plant: Plant, reward: RewardConfig, motions: list[GroundMotion]) -> dict[str, float]:
     """Mean J1, J2, J3 over the motions of LQG + ground model designed on `reward`."""
     controller = LQGController(design_lqg_ground_model(plant.design, reward=reward), plant.design, "LQG")
-    metrics = evaluate(plant, motions, [controller], "", include_optimal=False).metrics
-    mine = metrics[metrics["controller"] == "LQG"]
-    return {metric: float(mine[mine["metric"] == metric]["value"].mean()) for metric in ("J1", "J2", "J3")}
+    evaluation = evaluate(plant, motions, [controller], "", include_optimal=False)
+    return {metric: mean_metric(evaluation, "LQG", metric) for metric in ("J1", "J2", "J3")}
 
 
 def main() -> None:

@@ -28,7 +28,8 @@ import numpy as np
 from rlcontroller.config import ConfigError, Experiment, PlantConfig, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.evaluation.evaluation import PASSIVE, evaluate, scaled_weights
+from rlcontroller.evaluation.evaluation import PASSIVE, evaluate, mean_metric, scaled_weights
+from rlcontroller.files import atomic_savefig
 from rlcontroller.physics.excitation import GroundMotion
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import choose_motions
@@ -69,13 +70,12 @@ def table(
         name: {"controller": name, "J2": 0.0, "peak stroke (m)": 0.0} for name in names
     }
     for frequency in frequencies:
-        metrics = evaluate(detuned(experiment, frequency), motions, controllers, "", include_optimal=False).metrics
+        evaluation = evaluate(detuned(experiment, frequency), motions, controllers, "", include_optimal=False)
         for name, row in rows.items():
-            mine = metrics[metrics["controller"] == name]
-            row[f"J1 x{frequency:g}"] = float(mine[mine["metric"] == "J1"]["value"].mean())
+            row[f"J1 x{frequency:g}"] = mean_metric(evaluation, name, "J1")
             if frequency == 1.0:
-                row["J2"] = float(mine[mine["metric"] == "J2"]["value"].mean())
-                row["peak stroke (m)"] = float(mine[mine["metric"] == "stroke_m"]["value"].mean())
+                row["J2"] = mean_metric(evaluation, name, "J2")
+                row["peak stroke (m)"] = mean_metric(evaluation, name, "stroke_m")
     for row in rows.values():
         values = [row[f"J1 x{frequency:g}"] for frequency in frequencies]
         row["mean J1"], row["worst J1"] = float(np.mean(values)), float(np.max(values))
@@ -130,7 +130,7 @@ def plot(rows: list[dict[str, float | str]], runs: list[Path], out: Path) -> Non
     axis.grid(alpha=0.3)
     axis.legend(fontsize=7)
     figure.tight_layout()
-    figure.savefig(out, dpi=120)
+    atomic_savefig(figure, out)
     plt.close(figure)
 
 
