@@ -14,6 +14,7 @@ from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any
 
+import click
 import typer
 
 from rlcontroller.assets import (
@@ -44,7 +45,10 @@ app = typer.Typer(
     help="Reinforcement-learning active control of buildings under earthquakes. New here? Start with 'rlc demo'.",
 )
 
-USER_ERRORS = (ConfigError, MotionError)
+USER_ERRORS = (ConfigError, MotionError)  # a design that cannot be made on a model is a ConfigError too
+INTERNAL_ERROR = 3  # exit code of a failure that is not the user's (user mistakes: 2, file system: 1)
+DEBUG_VARIABLE = "RLC_DEBUG"  # set to 1: tracebacks on screen, as with --debug
+debugging = False  # set for each invocation by the --debug option or the variable
 
 
 def _version(value: bool) -> None:
@@ -58,8 +62,13 @@ def _commands(
     version: Annotated[
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
+    debug: Annotated[
+        bool, typer.Option("--debug", help=f"Show an internal error's traceback on screen (or set {DEBUG_VARIABLE}=1).")
+    ] = False,
 ) -> None:
     """Reinforcement-learning active control of buildings under earthquakes."""
+    global debugging
+    debugging = debug or os.environ.get(DEBUG_VARIABLE, "") not in ("", "0")
 
 
 def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
@@ -80,8 +89,31 @@ def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
             where = f"{error.filename}: " if error.filename else ""
             typer.echo(f"error: {where}{error.strerror or error}", err=True)
             raise typer.Exit(1) from None
+        except (typer.Exit, typer.Abort, click.ClickException):
+            raise
+        except Exception as error:
+            if debugging:
+                raise
+            typer.echo(f"internal error: {internal_error(error)}", err=True)
+            raise typer.Exit(INTERNAL_ERROR) from None
 
     return wrapper
+
+
+def internal_error(error: Exception) -> str:
+    """What went wrong in one line, the traceback kept in a new file (named in the line)."""
+    import tempfile
+    import traceback
+
+    handle, path = tempfile.mkstemp(prefix="rlc-traceback-", suffix=".txt")
+    with os.fdopen(handle, "w", encoding="utf-8") as file:
+        file.write(f"rlc {' '.join(sys.argv[1:])}\n")
+        file.write("".join(traceback.format_exception(error)))
+    what = (str(error).splitlines() or [""])[0][:200]
+    return (
+        f"{type(error).__name__}{': ' + what if what else ''} (full traceback in {path}; "
+        f"--debug shows it here; please report it)"
+    )
 
 
 def _positive_finite(high: float) -> Callable[[float | None], float | None]:
@@ -335,7 +367,7 @@ def run_check(
     there, or for a shipped model (whose files stay as shipped) in a new folder under results/."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
-    from rlcontroller.evaluation.safety import safety_check, write_verdict
+    from rlcontroller.evaluation.safety import judged_digests, safety_check, write_verdict
     from rlcontroller.physics.plant import Plant
 
     experiment = load_experiment(folder / "config.yaml", self_contained=True)
@@ -352,6 +384,7 @@ def run_check(
             verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
         except ConfigError as error:  # the standard asks for what this building has not
             raise ConfigError(f"{display_path(standard)}: {error}") from None
+    verdict.judged = judged_digests(folder, model, checking)
     target = folder
     if folder.resolve().is_relative_to(MODELS.resolve()):
         target = output_folder(None, f"check-{folder.name}")
@@ -375,14 +408,26 @@ def standard_scenarios(experiment: Experiment) -> Path:
 SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices, dampers.yaml with dampers"
 
 
-def warn_unchecked(folder: Path, model: str) -> None:
-    """One line on stderr when the policy failed the safety check or was never checked."""
-    from rlcontroller.evaluation.safety import read_verdict, verdict_path
+def verdict_state(folder: Path, model: str):
+    """The verdict on a folder's policy under the project's standard, if it judged these files."""
+    from rlcontroller.config import load_safety_check
+    from rlcontroller.evaluation.safety import read_verdict
 
-    passed = read_verdict(folder, model)
-    if passed is None:
-        typer.echo(f"note: {folder}'s {model} policy was never safety-checked; run 'rlc check {folder}'", err=True)
-    elif not passed:
+    return read_verdict(folder, model, load_safety_check(SAFETY_STANDARD))
+
+
+def warn_unchecked(folder: Path, model: str) -> None:
+    """One line on stderr when the policy failed the safety check or was never checked (as it is now)."""
+    from rlcontroller.evaluation.safety import verdict_path
+
+    state = verdict_state(folder, model)
+    if state.passed is None:
+        typer.echo(
+            f"note: {folder}'s {model} policy counts as never safety-checked ({state.reason}); "
+            f"run 'rlc check {folder}'",
+            err=True,
+        )
+    elif not state.passed:
         typer.echo(
             f"warning: {folder}'s {model} policy FAILED the safety check (it can be worse than no control): "
             f"{verdict_path(folder, model)}",
@@ -529,8 +574,8 @@ def evaluate(
     folder = model_folder(run_dir)
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
-    warn_unchecked(folder, model)
     experiment = load_experiment(folder / "config.yaml", self_contained=True)
+    warn_unchecked(folder, model)
     _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, show_progress(progress))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
@@ -858,16 +903,15 @@ def models() -> None:
     """The shipped controllers: learner, training steps, safety verdict; the default is marked."""
     import yaml
 
-    from rlcontroller.evaluation.safety import read_verdict
-
     typer.echo("models/ (card.md in each says what it is, what it observes and its numbers)")
     for folder in sorted(path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file()):
         policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
-        verdict = {True: "safety check passed", False: "safety check FAILED", None: "never checked"}
+        state = verdict_state(folder, "best")
+        verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
         mark = " (default)" if folder == DEFAULT_MODEL else ""
         typer.echo(
             f"{folder.name}{mark}: {policy['algorithm']}, {policy['training_steps']:,} steps, "
-            f"{verdict[read_verdict(folder, 'best')]}"
+            f"{verdict or f'never checked ({state.reason})'}"
         )
 
 
@@ -921,12 +965,37 @@ def check(
         Path | None, typer.Option(help="Plants for the stability report.", show_default=SCENARIOS_DEFAULT)
     ] = None,
     progress: ProgressOption = None,
+    show: Annotated[
+        bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
+    ] = False,
 ) -> None:
     """The safety check a controller passes before it is shipped: never worse than no control on a
     broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
     the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
     folder = model_folder(run_dir)
+    if show:
+        show_verdict(folder, model)
+        return
     if not run_check(folder, model, standard, scenarios, show_progress(progress)).passed:
+        raise typer.Exit(1)
+
+
+def show_verdict(folder: Path, model: str) -> None:
+    """`rlc check --show`: the verdict's lines when it judged the folder's files as they are; exit 1 otherwise
+    or when it failed."""
+    import yaml
+
+    from rlcontroller.evaluation.safety import Verdict, verdict_path
+
+    state = verdict_state(folder, model)
+    if state.passed is None:
+        typer.echo(f"{folder}'s {model} policy counts as never safety-checked: {state.reason}")
+        raise typer.Exit(1)
+    path = verdict_path(folder, model)
+    for line in Verdict(**yaml.safe_load(path.read_text(encoding="utf-8"))).lines():
+        typer.echo(line)
+    typer.echo(f"verdict in {path}, judging these files (sha256 of policy, experiment and standard match)")
+    if not state.passed:
         raise typer.Exit(1)
 
 

@@ -9,7 +9,7 @@ Usage: python scripts/bench_train.py [--minutes 15] [--skip-quality] [--vec-env-
 2. Environment steps per second inside model.learn(): the paper's SAC (MLP 3x128, batch 256,
    one gradient step per env step) and PPO with 8 envs, torch threads 1 and 2.
 3. Time-to-quality, side by side in this one run: configs/experiments/paper_sac.yaml (the plain recipe) and
-   configs/experiments/five_story.yaml (the new default) are each trained for at most --minutes of wall time;
+   configs/five_story.yaml (the new default) are each trained for at most --minutes of wall time;
    quality is reached when the validation J1 (generated motions, never the records) falls below
    that of LQG with the same cost on the same motions.
 """
@@ -128,7 +128,7 @@ def main() -> None:
     parser.add_argument("--vec-env-only", action="store_true", help="only the vector env comparison")
     arguments = parser.parse_args()
     paper = load_experiment(CONFIGS / "experiments" / "paper_sac.yaml")
-    default = load_experiment(CONFIGS / "experiments" / "five_story.yaml")
+    default = load_experiment(CONFIGS / "five_story.yaml")
     print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
     vec_env_comparison(default)
     if arguments.vec_env_only:

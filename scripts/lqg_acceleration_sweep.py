@@ -8,7 +8,7 @@ acceleration). This adds a quadratic term on the absolute floor accelerations (w
 m/s^2) to the experiment's quadratic reward terms, designs LQG + ground model on that cost for each
 weight, and prints its mean J1, J2 and J3 on each suite of records (folders of records, as `rlc
 evaluate --records` takes; e.g. the seven records and `scripts/generated_records.py`'s 200 motions).
-docs/benchmark.md's table is this script's output for configs/experiments/five_story.yaml.
+docs/benchmark.md's table is this script's output for configs/five_story.yaml.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def mean_metrics(plant: Plant, reward: RewardConfig, motions: list[GroundMotion]
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("config", type=Path, nargs="?", default=REPOSITORY / "configs/experiments/five_story.yaml")
+    parser.add_argument("config", type=Path, nargs="?", default=REPOSITORY / "configs/five_story.yaml")
     parser.add_argument("--records", type=Path, nargs="+", default=[REPOSITORY.parent / "shared" / "records"])
     parser.add_argument("--weights", type=float, nargs="+", default=[0.0, 0.01, 0.03, 0.1, 0.3, 1.0])
     parser.add_argument("--scale", type=float, default=5.0, help="m/s^2")

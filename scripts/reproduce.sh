@@ -2,7 +2,7 @@
 # Reproduce the README's Results from a fresh clone, three seeds of each learned controller, every run
 # evaluated on the seven records (rlc sweep: two runs at a time; mean, std, interquartile mean and
 # bootstrap intervals over seeds):
-#   1. configs/experiments/five_story.yaml (the benchmark) and five_story_odd.yaml (odd actor), then LQG's
+#   1. configs/five_story.yaml (the benchmark) and five_story_odd.yaml (odd actor), then LQG's
 #      trade-off and the value of preview;
 #   2. configs/experiments/five_story_robust.yaml (trained on randomised plants), each seed also through
 #      `rlc robustness` (standard scenarios), aggregated per scenario and over all scenarios;
@@ -34,7 +34,7 @@ robustness_of() {  # rlc robustness for every seed of a folder, then the aggrega
   rlc aggregate "$1"/seed[0-9]*/robustness --out "$1/robustness_aggregate" > /dev/null
 }
 
-sweep configs/experiments/five_story.yaml "$out" "$@"
+sweep configs/five_story.yaml "$out" "$@"
 sweep configs/experiments/five_story_odd.yaml "$out/odd" "$@"
 if [ ! -f "$out/compare_lqg/summary.csv" ]; then
   rlc compare lqg "$out/seed0" --records "$records" --sweep --preview --out "$out/compare_lqg" > /dev/null

@@ -13,6 +13,15 @@ from rlcontroller.config import BuildingConfig, Experiment
 from rlcontroller.physics.structure import Building, build
 
 REPOSITORY = Path(__file__).resolve().parents[1]
+# Two computations of the same physics that sum in different orders -- a batch against one record, the
+# Gymnasium env against the reference integrator, records in another order -- agree only to rounding, and
+# over thousands of closed-loop steps it grows: where LQG saturates its 100 kN actuators for long stretches
+# the loop amplifies a 1e-9 N difference to 0.19 N (1.9e-6 of the peak force) within 300 steps, while the
+# record's reward agrees to 3.7e-9 (measured on this project's 2-core VM; another BLAS build gave the
+# same). SAME_PHYSICS = 1e-5 leaves a margin of 5 over that and still catches a modelling difference (a
+# wrong step, noise draw, delay or force limit changes peaks by 1e-3 or more). Bit-for-bit (==) is kept where
+# the same code path runs; single-step identities keep their own tighter tolerance.
+SAME_PHYSICS = 1e-5
 # A PPO residual network policy with its config and failing verdict: the retired `five_story` model (worse
 # than no control on 73 of the safety check's 320 motions), kept only as a fixture of the policy file format.
 NETWORK_POLICY = REPOSITORY / "tests" / "data" / "retired_five_story"

@@ -301,7 +301,7 @@ STUDY_CASES = {
     "tune_bad_storage": (
         [
             "tune",
-            str(REPOSITORY / "configs" / "experiments" / "five_story.yaml"),
+            str(REPOSITORY / "configs" / "five_story.yaml"),
             "--trials",
             "2",
             "--storage",
@@ -422,6 +422,10 @@ WIND_CASES = {
     ),
     "unknown_key": ("kind: wind\nspeeds: [20]\nspeed_ms: 3\n", "speed_ms: unknown key"),
     "not_wind": ("kind: snow\nspeeds: [20]\n", "kind: Input should be 'wind'"),
+    "cutoff_above_nyquist": (
+        "kind: wind\nspeeds: [20]\ndt: 0.05\ncutoff: 50\n",
+        "cutoff 50 Hz lies above the Nyquist frequency 10 Hz of dt 0.05 s",
+    ),
 }
 
 

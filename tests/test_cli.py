@@ -2,12 +2,13 @@
 
 import importlib.metadata
 import re
+import shutil
 import subprocess
 import sys
 
 import pandas as pd
 import pytest
-from conftest import REPOSITORY, run_at_a_terminal
+from conftest import REPOSITORY, records_folder, run_at_a_terminal
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
@@ -120,7 +121,7 @@ def test_top_level_help_cuts_nothing_and_says_where_to_start():
 
 
 def test_an_experiment_yaml_given_as_a_run_folder_says_what_to_do(tmp_path):
-    config = REPOSITORY / "configs" / "experiments" / "five_story.yaml"
+    config = REPOSITORY / "configs" / "five_story.yaml"
     result = CliRunner().invoke(app, ["evaluate", str(config), "--out", str(tmp_path / "out")])
     assert result.exit_code == 2 and "an experiment YAML, expected a run or model folder" in result.output
     assert f"rlc compare lqg --config {config}" in result.output
@@ -155,3 +156,62 @@ def test_compare_lqg_shows_its_evaluation_and_sweep_progress_at_a_terminal(tmp_p
         and "LQG trade-off" in output
         and "9/9" in output
     ), output
+
+
+@pytest.mark.slow
+def test_the_specifications_commands_run_as_written(tmp_path, monkeypatch):
+    """The four commands the project's specification names, verbatim, from a folder holding configs/ and
+    records/ as the checkout does (records/ as committed: the manifest, not the PEER files)."""
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    (tmp_path / "configs").symlink_to(REPOSITORY / "configs")
+    shutil.copytree(REPOSITORY / "records", tmp_path / "records")
+
+    def rlc(command: str) -> subprocess.CompletedProcess:
+        arguments = [sys.executable, "-m", "rlcontroller", *command.split()]
+        return subprocess.run(arguments, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+
+    info = rlc("info configs/five_story.yaml")
+    assert info.returncode == 0 and "1.444" in info.stdout and "name: five_story" in info.stdout
+    train = rlc("train configs/five_story.yaml --total-steps 2000")  # the specification's, shortened
+    assert train.returncode == 0 and "trained: 2048 steps" in train.stdout, train.stderr
+    (run,) = (tmp_path / "runs").iterdir()
+    assert (run / "config.yaml").is_file() and (run / "best_policy.npz").is_file()
+    missing = rlc("evaluate --records records/")
+    assert missing.returncode == 2 and missing.stdout == ""
+    assert missing.stderr.startswith("error: records: 7 of 7 records of manifest.csv missing: RSN753_LOMAP_CLS000.AT2")
+    assert len(missing.stderr.splitlines()) == 1
+    compared = rlc("compare lqg")
+    assert compared.returncode == 0 and "| LQG + ground model |" in compared.stdout and "SYNTHETIC" in compared.stdout
+    shared = records_folder()
+    if not (shared / "manifest.csv").is_file():
+        pytest.skip(f"no PEER records at {shared}: the table on the seven records is not run")
+    for record in shared.glob("*.AT2"):
+        shutil.copy(record, tmp_path / "records")
+    evaluated = rlc("evaluate --records records/")
+    assert evaluated.returncode == 0 and "| uncontrolled | 1.000 | 1.000 |" in evaluated.stdout
+    assert "evaluated 7 motions" in evaluated.stdout
+
+
+def test_an_internal_error_is_one_line_naming_its_traceback_file(monkeypatch, tmp_path):
+    """A failure that is not the user's: one line, exit 3, the traceback in the file it names; --debug (or
+    RLC_DEBUG=1) lets it through with its traceback."""
+    import rlcontroller.config as config
+
+    monkeypatch.delenv("RLC_DEBUG", raising=False)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+
+    def planted(*args, **kwargs):
+        raise RuntimeError("planted failure\nsecond line")
+
+    monkeypatch.setattr("rlcontroller.cli.load_experiment", planted)
+    assert config.load_experiment is not planted
+    result = CliRunner().invoke(app, ["info", "configs/five_story.yaml"])
+    (line,) = result.output.splitlines()
+    assert result.exit_code == 3
+    assert line.startswith("internal error: RuntimeError: planted failure (full traceback in ")
+    (file,) = tmp_path.glob("rlc-traceback-*.txt")
+    assert str(file) in line and "Traceback" in file.read_text() and "second line" in file.read_text()
+    debugged = CliRunner().invoke(app, ["--debug", "info", "configs/five_story.yaml"])
+    assert isinstance(debugged.exception, RuntimeError) and "internal error" not in debugged.output
+    monkeypatch.setenv("RLC_DEBUG", "1")
+    assert isinstance(CliRunner().invoke(app, ["info", "configs/five_story.yaml"]).exception, RuntimeError)

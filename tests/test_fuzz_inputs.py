@@ -357,3 +357,67 @@ def test_a_damaged_metrics_file_stops_aggregate_in_one_line(tmp_path, name):
     assert result.exit_code == 2 and "Traceback" not in result.output, result.output
     assert len(lines) == 1 and lines[0].startswith("error: ") and "metrics.csv" in lines[0], result.output
     assert not out.exists()
+
+
+def _npy(shape: str, descr: str = "<f8", body: bytes = b"") -> bytes:
+    """A version-1 .npy member whose header declares `shape` of `descr`, followed by `body`."""
+    header = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}"
+    header += " " * (117 - len(header)) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + body
+
+
+def _members(folder):
+    import zipfile
+
+    with zipfile.ZipFile(folder / "best_policy.npz") as archive:
+        return {name: archive.read(name) for name in archive.namelist()}
+
+
+POLICY_DAMAGE = {
+    # a 200-byte file whose header declares 745 GiB: refused from the header, nothing allocated
+    "a header declaring 10^11 values": ("npz", {"layer0_weight.npy": _npy("(100000000000,)")}, "header declares"),
+    "an array of another shape": (
+        "npz",
+        {"layer0_weight.npy": _npy("(5, 56)", "<f4", bytes(5 * 56 * 4))},
+        r"layer0_weight is \(5, 56\) of float32, the policy declares \(5, 57\)",
+    ),
+    "integer weights": ("npz", {"layer0_bias.npy": _npy("(5,)", "<i8", bytes(40))}, "floating-point"),
+    "an object array": ("npz", {"layer0_bias.npy": _npy("(5,)", "|O", bytes(40))}, "expected numbers"),
+    "an unknown array": ("npz", {"extra.npy": _npy("(3,)", "<f8", bytes(24))}, "unknown array extra"),
+    "a member that is no array": ("npz", {"notes.txt": b"hello"}, "notes.txt: not an array"),
+    "an unknown key": ("yaml", "bogus_key: 1\n", "unknown key bogus_key"),
+    "an unknown network key": ("yaml", None, "unknown key network.width"),
+    "an anchor and an alias": ("yaml", "extra: &big [1, 2]\nmore: *big\n", "anchors and aliases are not accepted"),
+}
+
+
+@pytest.mark.parametrize("case", list(POLICY_DAMAGE))
+def test_a_controller_file_is_checked_before_its_data_is_read(tmp_path, case):
+    """The policy YAML is read with no anchors, aliases or unknown keys; each array's shape and dtype come from
+    its .npy header and must be what the YAML declares before any data is read."""
+    import shutil
+    import zipfile
+
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import ConfigError, load_experiment
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.physics.plant import Plant
+
+    folder = tmp_path / "model"
+    shutil.copytree(REPOSITORY / "models" / "five_story_every_story", folder)
+    kind, change, message = POLICY_DAMAGE[case]
+    if kind == "npz":
+        members = _members(folder) | change
+        with zipfile.ZipFile(folder / "best_policy.npz", "w") as archive:
+            for name, data in members.items():
+                archive.writestr(name, data)
+    elif change is None:
+        text = (folder / "best_policy.yaml").read_text()
+        (folder / "best_policy.yaml").write_text(text.replace("network:\n", "network:\n  width: 64\n"))
+    else:
+        (folder / "best_policy.yaml").write_text((folder / "best_policy.yaml").read_text() + change)
+    plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
+    with pytest.raises(ConfigError, match=message) as error:
+        read_policy(folder, "best", plant)
+    assert str(error.value).startswith(str(folder)) and "\n" not in str(error.value)

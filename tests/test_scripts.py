@@ -150,7 +150,7 @@ def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_
     from rlcontroller.physics.records import synthetic_suite
 
     sweep = load_script("lqg_acceleration_sweep")
-    experiment = load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story.yaml")
+    experiment = load_experiment(SCRIPTS.parent / "configs" / "five_story.yaml")
     plant = Plant(experiment)
     unweighted = sweep.with_acceleration_term(experiment, 0.0, 5.0)
     assert [t.quantity for t in unweighted.terms] == ["drift", "base_shear", "force"]  # the agent-only terms dropped

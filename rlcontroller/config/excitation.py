@@ -113,6 +113,17 @@ class WindSiteConfig(StrictModel):
             raise ValueError("roughness must be below reference_height (the log law's zero is at the roughness length)")
         return self
 
+    @model_validator(mode="after")
+    def _cutoff_below_nyquist(self) -> WindSiteConfig:
+        """Loads sampled every dt hold nothing above 1 / (2 dt): a higher cutoff would be silently aliased."""
+        dt, cutoff = getattr(self, "dt", None), getattr(self, "cutoff", None)
+        if dt is not None and cutoff is not None and cutoff > 0.5 / dt:
+            raise ValueError(
+                f"cutoff {cutoff:g} Hz lies above the Nyquist frequency {0.5 / dt:g} Hz of dt {dt:g} s; "
+                f"expected a cutoff of at most {0.5 / dt:g} Hz (or a dt of at most {0.5 / cutoff:g} s)"
+            )
+        return self
+
 
 class WindGeneratorConfig(WindSiteConfig):
     """Generated along-wind loads on the experiment's floors (`physics.wind`), one record per draw: a

@@ -17,8 +17,8 @@ from functools import cached_property
 
 import numpy as np
 import scipy.linalg
-from scipy.linalg import solve_discrete_are
 
+from rlcontroller.control.riccati import kalman_gain
 from rlcontroller.physics.dynamics import discrete_noise, wind_model_step, wind_model_system
 from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
@@ -105,12 +105,6 @@ def update_on_block(
     if previous_ground_gain is not None:
         new += np.asarray(previous_ground)[..., None] * previous_ground_gain
     return new
-
-
-def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
-    """Steady-state measurement-update gain L for x+ = phi x + w (cov process), y = c x + v (cov measurement)."""
-    prior = solve_discrete_are(phi.T, c.T, process, measurement)
-    return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
 
 
 def design_kalman(plant: Plant, known_ground: bool = False, ground_std: float = 1.0) -> KalmanFilter:

@@ -7,7 +7,7 @@ z_{k+1} = Phi z_k + Gamma u_k + g_k (g_k: the ground's contribution) that is
     cost_k = |H_z z_k + H_u u_k + F C_r g_k|^2,   H_z = F C_r Phi,  H_u = F (C_r Gamma + D_r),
 
 so Q = H_z' H_z, R = H_u' H_u, N = H_z' H_u: the discrete-time LQR of exactly the reward
-(python-control's Riccati solvers, method='scipy'). Everything is in action units
+(`riccati.lqr`: scipy's solver, its residual checked). Everything is in action units
 a = u / force_limit, which keeps the Riccati equations well scaled.
 """
 
@@ -16,10 +16,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve, solve_discrete_are
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.cost import reward_matrices
+from rlcontroller.control.riccati import lqr
 from rlcontroller.physics.dynamics import StepMap, load_feedthrough
 from rlcontroller.physics.plant import Plant
 
@@ -73,10 +73,7 @@ def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tu
     n = cost.state.T @ cost.action
     if np.linalg.matrix_rank(r) < r.shape[0]:
         raise ValueError("the reward does not penalise every actuator force (R is singular); add a force term")
-    b = step.force_gain * force_limits
-    riccati = solve_discrete_are(step.phi, b, q, r, s=n)
-    gain = solve(b.T @ riccati @ b + r, b.T @ riccati @ step.phi + n.T)
-    return gain, riccati
+    return lqr(step.phi, step.force_gain * force_limits, q, r, n)
 
 
 def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, length: int) -> np.ndarray:

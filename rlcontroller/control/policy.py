@@ -30,6 +30,7 @@ from rlcontroller.config import ConfigError
 from rlcontroller.control.controllers import LQGPrior, residual_action
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
+from rlcontroller.untrusted import npz_headers, read_npz, safe_yaml
 
 FORMAT = "rlcontroller-policy"
 FORMAT_VERSION = 1
@@ -204,9 +205,11 @@ def read_policy(folder: Path, model: str, plant: Plant, name: str = "RL") -> Pol
         )
         raise ConfigError(f"{folder}: no {meta_path.name}{hint}")
     description = _read_yaml(meta_path)
-    weights = _read_npz(weights_path)
     try:
+        weights = _read_npz(weights_path, description, plant)
         controller = _controller(description, weights, plant, name)
+    except ConfigError:  # names the weights file
+        raise
     except KeyError as error:
         raise ConfigError(f"{meta_path}: not a valid policy (missing {error.args[0]!r})") from None
     except TypeError as error:
@@ -217,33 +220,102 @@ def read_policy(folder: Path, model: str, plant: Plant, name: str = "RL") -> Pol
     return controller
 
 
+KEYS = {
+    "": {
+        "format",
+        "format_version",
+        "algorithm",
+        "training_steps",
+        "network",
+        "observation",
+        "prior",
+        "actions",
+        "force_limits_N",
+        "control_dt_s",
+    },
+    "network": {"activations", "squash", "odd"},
+    "observation": {"size", "normalize", "epsilon", "clip"},
+}
+
+
 def _read_yaml(path: Path) -> dict:
     try:
-        description = yaml.safe_load(path.read_text(encoding="utf-8"))
+        description = safe_yaml(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise ConfigError(f"{path}: not readable YAML ({type(error).__name__})") from None
+        detail = str(error) if "aliases" in str(error) else type(error).__name__
+        raise ConfigError(f"{path}: not readable YAML ({detail})") from None
     if not isinstance(description, dict) or description.get("format") != FORMAT:
         raise ConfigError(f"{path}: not an rlcontroller policy (expected 'format: {FORMAT}')")
     if description.get("format_version") != FORMAT_VERSION:
         raise ConfigError(
             f"{path}: format_version {description.get('format_version')!r}; this rlc reads version {FORMAT_VERSION}"
         )
+    for section, known in KEYS.items():
+        mapping = description.get(section) if section else description
+        unknown = sorted(map(str, set(mapping) - known)) if isinstance(mapping, dict) else []
+        if unknown:
+            where = f"{section}." if section else ""
+            raise ConfigError(f"{path}: unknown key {where}{unknown[0]} (expected {', '.join(sorted(known))})")
     return description
 
 
-def _read_npz(path: Path) -> dict[str, np.ndarray]:
+def _read_npz(path: Path, description: dict, plant: Plant) -> dict[str, np.ndarray]:
+    """The weights, once every array's shape and dtype, read from its header, is what `description`
+    declares for `plant` (ValueError naming the array otherwise; nothing unknown, nothing larger)."""
     if not path.is_file():
         raise ConfigError(f"{path}: missing (the policy's weights)")
     try:
-        with np.load(path, allow_pickle=False) as arrays:
-            weights = {key: arrays[key] for key in arrays.files}
+        headers = npz_headers(path)
+    except (OSError, EOFError, zipfile.BadZipFile) as error:
+        detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
+        raise ConfigError(f"{path}: not readable weights ({detail})") from None
+    except ValueError as error:
+        raise ConfigError(f"{path}: {error}") from None
+    expected = _declared_arrays(headers, description, plant)
+    unknown = sorted(set(headers) - set(expected))
+    if unknown:
+        raise ConfigError(f"{path}: unknown array {unknown[0]} (the policy declares {', '.join(expected)})")
+    for key, shape in expected.items():
+        if key not in headers:
+            raise ConfigError(f"{path}: no array {key} (the policy declares it)")
+        if headers[key][0] != shape or headers[key][1].kind != "f":
+            found = f"{headers[key][0]} of {headers[key][1]}"
+            raise ConfigError(f"{path}: {key} is {found}, the policy declares {shape} of floating-point numbers")
+    try:
+        weights = read_npz(path)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
         detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
         raise ConfigError(f"{path}: not readable weights ({detail})") from None
     for key, array in weights.items():
-        if array.dtype.kind != "f" or not np.all(np.isfinite(array)):
+        if not np.all(np.isfinite(array)):
             raise ConfigError(f"{path}: {key}: expected finite floating-point numbers")
     return weights
+
+
+def _declared_arrays(
+    headers: dict[str, tuple[tuple[int, ...], np.dtype]], description: dict, plant: Plant
+) -> dict[str, tuple[int, ...]]:
+    """The arrays `description` declares and their shapes for `plant`: the layers chained from the
+    observation to the actions (hidden widths as the weights' headers give them), the normalisation, the
+    prior."""
+    activations = description["network"]["activations"]
+    if not isinstance(activations, list) or not activations:
+        raise ValueError("network.activations: expected a list, one activation per layer")
+    size, m = plant.layout.size, plant.building.n_actuators
+    expected, width = {}, size
+    for index in range(len(activations)):
+        shape = headers.get(f"layer{index}_weight", ((0,), None))[0]
+        outputs = shape[0] if shape else 0  # a hidden width is the weights'; a wrong rank fails the comparison
+        expected |= {f"layer{index}_weight": (outputs, width), f"layer{index}_bias": (outputs,)}
+        width = outputs
+    if width != m:
+        raise ValueError(f"the network gives {width} actions, expected {m}")
+    if description["observation"]["normalize"]:
+        expected |= {"observation_mean": (size,), "observation_var": (size,)}
+    if description["prior"] != "none":
+        estimate = plant.layout.estimate
+        expected |= {"prior_feedback": (m, estimate.stop - estimate.start), "prior_feedforward": (m,)}
+    return expected
 
 
 def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant, name: str) -> PolicyController:
@@ -260,23 +332,18 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         raise ValueError(
             f"control_dt_s {description['control_dt_s']!r}: the folder's config.yaml steps every {plant.control_dt:g} s"
         )
-    layers, width = [], size
+    layers = []
     for index, activation in enumerate(network["activations"]):
         if activation is not None and activation not in ACTIVATIONS:
             raise ValueError(f"network.activations: unknown {activation!r}")
-        weight, bias = weights[f"layer{index}_weight"], weights[f"layer{index}_bias"]
-        if weight.ndim != 2 or weight.shape[1] != width or bias.shape != (weight.shape[0],):
-            raise ValueError(f"layer{index}: shapes {weight.shape} and {bias.shape} do not chain from {width} inputs")
+        weight, bias = weights[f"layer{index}_weight"], weights[f"layer{index}_bias"]  # shapes checked
         layers.append(Layer(weight.astype(np.float32), bias.astype(np.float32), activation))
-        width = weight.shape[0]
-    if not layers or width != m:
-        raise ValueError(f"the network gives {width} actions, expected {m}")
     actor = Actor(tuple(layers), bool(network["squash"]), bool(network["odd"]))
     normalizer = None
     if observation["normalize"]:
         mean, var = weights["observation_mean"], weights["observation_var"]
-        if mean.shape != (size,) or var.shape != (size,) or np.any(var < 0):
-            raise ValueError("observation_mean and observation_var: expected one value per observation, var >= 0")
+        if np.any(var < 0):
+            raise ValueError("observation_var: expected values >= 0")
         epsilon, clip = float(observation["epsilon"]), float(observation["clip"])
         if not (np.isfinite(epsilon) and np.isfinite(clip) and epsilon > 0.0 and clip > 0.0):
             raise ValueError(f"observation epsilon {epsilon!r} and clip {clip!r}: expected finite positive numbers")
@@ -288,9 +355,6 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         if not plant.experiment.sensors.state_estimate or description["prior"] != prior_kind(plant):
             raise ValueError(f"prior {description['prior']!r} does not match the folder's config.yaml sensors")
         feedback, feedforward = weights["prior_feedback"], weights["prior_feedforward"]
-        estimate = plant.layout.estimate
-        if feedback.shape != (m, estimate.stop - estimate.start) or feedforward.shape != (m,):
-            raise ValueError("prior_feedback / prior_feedforward: shapes do not match the observation")
         prior = LQGPrior(feedback, feedforward, plant.layout)
     steps = description["training_steps"]
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:

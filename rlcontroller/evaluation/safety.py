@@ -15,11 +15,15 @@ Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite an
    plant of the standard scenarios is reported (not a pass criterion: the verdict says where it is
    not stable).
 
-The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the policy it judges.
+The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the policy it judges, with the
+sha256 of what it judged (the policy's files, the experiment, the standard): a verdict whose digests no
+longer match the folder is read as no verdict (`read_verdict`).
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,11 +50,11 @@ class Verdict:
     controller: str
     passed: bool
     criteria: dict[str, dict] = field(default_factory=dict)
+    judged: dict[str, str] = field(default_factory=dict)  # sha256 of what it judged (`judged_digests`)
 
     def to_yaml(self) -> str:
-        return yaml.safe_dump(
-            {"controller": self.controller, "passed": self.passed, "criteria": self.criteria}, sort_keys=False
-        )
+        fields = {"controller": self.controller, "passed": self.passed, "criteria": self.criteria}
+        return yaml.safe_dump(fields | ({"judged": self.judged} if self.judged else {}), sort_keys=False)
 
     def lines(self) -> list[str]:
         head = f"safety check of {self.controller}: {'PASSED' if self.passed else 'FAILED'}"
@@ -215,19 +219,51 @@ def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
     return folder / f"{model}_check{'-' + standard if standard else ''}.yaml"
 
 
+def judged_digests(folder: Path, model: str, standard: SafetyCheckConfig) -> dict[str, str]:
+    """sha256 of what a verdict judges: the policy's files, the experiment it runs in (the run's
+    config.yaml) and the standard (its resolved settings, so a comment does not count)."""
+    names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
+    digests = {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
+    settings = json.dumps(standard.model_dump(mode="json"), sort_keys=True).encode()
+    digests["standard"] = hashlib.sha256(settings).hexdigest()
+    return digests
+
+
 def write_verdict(verdict: Verdict, folder: Path, model: str, standard: str = "") -> Path:
     return atomic_write(verdict_path(folder, model, standard), verdict.to_yaml())
 
 
-def read_verdict(folder: Path, model: str) -> bool | None:
-    """True or False from the verdict on a folder's `model` policy, None when there is none (never
-    checked) or it is unreadable."""
+@dataclass(frozen=True)
+class VerdictState:
+    """What a folder's verdict says of its policy as it is now: `passed` True or False, or None with
+    `reason` when there is none that judged these files."""
+
+    passed: bool | None
+    reason: str = ""
+
+
+def read_verdict(folder: Path, model: str, standard: SafetyCheckConfig) -> VerdictState:
+    """The verdict on a folder's `model` policy under `standard`, if it judged the files the folder holds
+    now: a verdict without digests, or whose digests differ (weights, policy, experiment or standard
+    changed since), or that is unreadable counts as never checked, with the reason."""
     path = verdict_path(folder, model)
     if not path.is_file():
-        return None
+        return VerdictState(None, "never safety-checked")
     try:
         verdict = yaml.safe_load(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError, OSError):
-        return None
+        return VerdictState(None, f"its verdict {path.name} is unreadable")
     passed = verdict.get("passed") if isinstance(verdict, dict) else None
-    return passed if isinstance(passed, bool) else None
+    judged = verdict.get("judged") if isinstance(verdict, dict) else None
+    if not isinstance(passed, bool):
+        return VerdictState(None, f"its verdict {path.name} says neither passed nor failed")
+    if not isinstance(judged, dict):
+        return VerdictState(None, f"its verdict {path.name} does not say which files it judged")
+    try:
+        now = judged_digests(folder, model, standard)
+    except OSError:
+        return VerdictState(None, "a file its verdict judged is missing")
+    changed = [name for name, digest in now.items() if judged.get(name) != digest]
+    if changed:
+        return VerdictState(None, f"{', '.join(changed)} changed since its verdict {path.name}")
+    return VerdictState(passed)

@@ -19,13 +19,15 @@ def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
     from rlcontroller.control.lqg import design_lqg
     from rlcontroller.physics.plant import Plant
 
-    benchmark, paper = load_experiment(CONFIGS / "experiments" / "five_story.yaml"), Experiment()
+    benchmark, paper = load_experiment(CONFIGS / "five_story.yaml"), Experiment()
     assert benchmark.building == paper.building and benchmark.actuators == paper.actuators
     assert benchmark.sensors.measurements == paper.sensors.measurements
     np.testing.assert_allclose(design_lqg(Plant(benchmark)).feedback, design_lqg(Plant(paper)).feedback, rtol=1e-6)
 
 
-@pytest.mark.parametrize("path", sorted(p for p in (CONFIGS / "experiments").glob("*.yaml")), ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path", [CONFIGS / "five_story.yaml", *sorted((CONFIGS / "experiments").glob("*.yaml"))], ids=lambda p: p.name
+)
 def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(path: Path):
     experiment = load_experiment(path)
     assert experiment.name == path.stem
@@ -104,7 +106,7 @@ def test_errors_in_a_part_file_name_that_file(tmp_path):
 
 def test_part_files_resolve_relative_to_the_experiment(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    experiment = load_experiment(CONFIGS / "experiments" / "five_story.yaml")
+    experiment = load_experiment(CONFIGS / "five_story.yaml")
     assert experiment.building.masses[0] == 25.0e3
 
 
@@ -126,7 +128,7 @@ def test_rlc_info_exits_2_with_one_line_and_no_traceback(tmp_path, text):
 
 
 def test_rlc_info_prints_periods_damping_and_actuators():
-    result = CliRunner().invoke(app, ["info", str(CONFIGS / "experiments" / "five_story.yaml")])
+    result = CliRunner().invoke(app, ["info", str(CONFIGS / "five_story.yaml")])
     assert result.exit_code == 0, result.output
     assert "1.444" in result.output and "0.242" in result.output
     assert "0.0100" in result.output and "0.0500" in result.output

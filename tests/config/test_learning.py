@@ -46,7 +46,7 @@ def test_what_a_learner_refuses_is_refused_at_loading(algorithm, message):
 def test_loading_and_checking_an_experiment_imports_no_torch():
     code = (
         "import sys\nfrom rlcontroller.config import load_experiment\n"
-        f"load_experiment({str(REPOSITORY / 'configs' / 'experiments' / 'five_story.yaml')!r})\n"
+        f"load_experiment({str(REPOSITORY / 'configs' / 'five_story.yaml')!r})\n"
         "print(sorted(m for m in ('torch', 'stable_baselines3') if m in sys.modules))"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -7,12 +7,15 @@ import pytest
 from conftest import NETWORK_POLICY, REPOSITORY
 from typer.testing import CliRunner
 
+from rlcontroller.assets import DEFAULT_MODEL
 from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_safety_check
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.policy import Actor, Layer, PolicyController
 from rlcontroller.evaluation.safety import (
+    VerdictState,
     closed_loop_matrix,
+    judged_digests,
     read_verdict,
     safety_check,
     spectral_radius,
@@ -67,11 +70,78 @@ def test_positive_velocity_feedback_is_found_unstable_and_fails_the_check():
 
 def test_the_verdict_is_written_and_read_back(tmp_path):
     plant = Plant(Experiment())
-    verdict = safety_check(plant, Uncontrolled(3), small_standard(motions=2), [])
+    standard = small_standard(motions=2)
+    verdict = safety_check(plant, Uncontrolled(3), standard, [])
+    for name in ("best_policy.yaml", "best_policy.npz", "config.yaml"):
+        (tmp_path / name).write_text(name)
+    verdict.judged = judged_digests(tmp_path, "best", standard)
     write_verdict(verdict, tmp_path, "best")
-    assert read_verdict(tmp_path, "best") is True and read_verdict(tmp_path, "final") is None
+    assert read_verdict(tmp_path, "best", standard).passed is True
+    assert read_verdict(tmp_path, "final", standard) == VerdictState(None, "never safety-checked")
     (tmp_path / "best_check.yaml").write_text("passed: [")
-    assert read_verdict(tmp_path, "best") is None
+    assert read_verdict(tmp_path, "best", standard) == VerdictState(None, "its verdict best_check.yaml is unreadable")
+
+
+@pytest.mark.parametrize("changed", ["best_policy.npz", "best_policy.yaml", "config.yaml", "standard"])
+def test_a_verdict_counts_only_for_the_files_it_judged(tmp_path, changed):
+    """The shipped default's verdict judges its files; weights, policy or experiment changed by one byte, or
+    another standard, and the same verdict counts as none (README: one line says so)."""
+    import shutil
+
+    folder = tmp_path / "model"
+    shutil.copytree(DEFAULT_MODEL, folder)
+    standard = load_safety_check(STANDARD)
+    assert read_verdict(folder, "best", standard).passed is True
+    if changed == "standard":
+        standard = standard.model_copy(update={"motions": standard.motions - 1})
+    else:
+        data = bytearray((folder / changed).read_bytes())
+        data[-3] ^= 1
+        (folder / changed).write_bytes(bytes(data))
+    state = read_verdict(folder, "best", standard)
+    assert state.passed is None and state.reason == f"{changed} changed since its verdict best_check.yaml"
+
+
+def test_a_verdict_without_digests_counts_as_none(tmp_path):
+    import shutil
+
+    import yaml
+
+    folder = tmp_path / "model"
+    shutil.copytree(DEFAULT_MODEL, folder)
+    verdict = yaml.safe_load((folder / "best_check.yaml").read_text())
+    del verdict["judged"]
+    (folder / "best_check.yaml").write_text(yaml.safe_dump(verdict))
+    state = read_verdict(folder, "best", load_safety_check(STANDARD))
+    assert state.passed is None and "does not say which files it judged" in state.reason
+
+
+@pytest.mark.slow
+def test_tampered_weights_are_reported_as_unchecked_by_every_command(tmp_path):
+    """The issue's case: the default's weights times -20 under its passing verdict. evaluate and export say in
+    one line that it counts as never checked, models and check --show too; nothing says it passed."""
+    import shutil
+
+    folder = tmp_path / "model"
+    shutil.copytree(DEFAULT_MODEL, folder)
+    with np.load(folder / "best_policy.npz") as arrays:
+        weights = {name: -20.0 * arrays[name] for name in arrays.files}
+    np.savez(folder / "best_policy.npz", **weights)
+    line = f"note: {folder}'s best policy counts as never safety-checked (best_policy.npz changed since its verdict"
+    for command in (
+        ["evaluate", str(folder), "--out", str(tmp_path / "e")],
+        ["export", str(folder), "--out", str(tmp_path / "c.onnx")],
+    ):
+        result = CliRunner().invoke(app, command)
+        assert result.exit_code == 0 and line in result.output, result.output
+    shown = CliRunner().invoke(app, ["check", str(folder), "--show"])
+    assert shown.exit_code == 1 and "counts as never safety-checked: best_policy.npz changed" in shown.output
+    assert "PASSED" not in shown.output
+
+
+def test_check_show_prints_a_current_verdict():
+    result = CliRunner().invoke(app, ["check", "--show"])
+    assert result.exit_code == 0 and "safety check of RL: PASSED" in result.output and "match" in result.output
 
 
 @pytest.mark.slow
@@ -83,7 +153,7 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
     (folder / "best_check.yaml").unlink()
     result = CliRunner().invoke(app, ["check", str(folder)])
     assert result.exit_code == 1 and "FAILED" in result.output, result.output
-    assert read_verdict(folder, "best") is False
+    assert read_verdict(folder, "best", load_safety_check(STANDARD)).passed is False
     warned = CliRunner().invoke(app, ["export", str(folder), "--out", str(tmp_path / "c.onnx")])
     assert warned.exit_code == 0 and "FAILED the safety check" in warned.output
 

@@ -228,11 +228,14 @@ def test_every_shipped_model_loads_and_acts_from_a_fresh_clone(name):
     [
         (lambda f: edit(f / "best_policy.yaml", "format_version: 1", "format_version: 7"), "format_version 7"),
         (lambda f: edit(f / "best_policy.yaml", "size: 43", "size: 44"), "observation size 44"),
-        (lambda f: edit(f / "best_policy.yaml", "network:", "network: 5\nx:"), "a value of the wrong kind"),
+        (lambda f: edit(f / "best_policy.yaml", "network:", "network: 5\nx:"), "unknown key x"),
         (lambda f: (f / "best_policy.yaml").write_text("[1, 2"), "not readable YAML"),
-        (lambda f: arrays(f, layer0_weight=lambda a: a[:, :5]), "do not chain from 43 inputs"),
+        (
+            lambda f: arrays(f, layer0_weight=lambda a: a[:, :5]),
+            "layer0_weight is (128, 5) of float32, the policy declares (128, 43)",
+        ),
         (lambda f: arrays(f, layer1_bias=lambda a: a * np.nan), "expected finite floating-point numbers"),
-        (lambda f: arrays(f, prior_feedback=None), "missing 'prior_feedback'"),
+        (lambda f: arrays(f, prior_feedback=None), "no array prior_feedback (the policy declares it)"),
         (lambda f: (f / "best_policy.npz").unlink(), "missing (the policy's weights)"),
     ],
 )

@@ -3,7 +3,7 @@ from collections import deque
 import numpy as np
 import pytest
 import yaml
-from conftest import REPOSITORY
+from conftest import REPOSITORY, SAME_PHYSICS
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
@@ -121,7 +121,7 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
     at_zero = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)[0][0]
     lqg = LQGController(design_lqg_ground_model(model.plant.design), model.plant)
     lqg_runs = batch_rollout(model.plant, motions, [lqg], seeds)[0]
-    assert at_zero == pytest.approx(np.mean([np.log(-total) for _, total in lqg_runs]), rel=1e-9)
+    assert at_zero == pytest.approx(np.mean([np.log(-total) for _, total in lqg_runs]), rel=SAME_PHYSICS)
 
     train(
         experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import SAME_PHYSICS
 
 from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
 from rlcontroller.learning.env import BuildingEnv
@@ -123,7 +124,7 @@ def test_a_delay_shifts_the_delivered_force_and_the_response_exactly(lag):
         env = BuildingEnv(plant)
         env.reset(seed=0, options={"motion": motion})
         runs.append([env.step(a)[4]["drift"] for a in sequence])
-    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(runs[0], runs[1], rtol=SAME_PHYSICS, atol=1e-12)
 
 
 def test_sensor_faults_dead_floor_bias_and_noise():

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from conftest import NETWORK_POLICY
+from conftest import NETWORK_POLICY, SAME_PHYSICS
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
@@ -67,18 +67,18 @@ def test_a_batch_of_records_gives_each_record_s_rollout(case):
 
 
 def assert_batch_is_env(plant, motions, controllers, quantities, seeds=(5, 6, 7)):
-    """Every controller on every motion, batched, as the Gymnasium env gives it alone (to 1e-9)."""
+    """Every controller on every motion, batched, as the Gymnasium env gives it alone (to SAME_PHYSICS)."""
     batched = batch_rollout(plant, motions, controllers, seeds=list(seeds))
     env = BuildingEnv(plant)
     for controller, runs in zip(controllers, batched, strict=True):
         for motion, seed, (result, reward) in zip(motions, seeds, runs, strict=True):
             alone, alone_reward = rollout(env, motion, controller, seed=seed)
-            assert reward == pytest.approx(alone_reward, rel=1e-9)
+            assert reward == pytest.approx(alone_reward, rel=SAME_PHYSICS)
             assert result.drift.shape == alone.drift.shape
             for quantity in quantities:
                 expected = alone.quantity(quantity)
                 np.testing.assert_allclose(
-                    result.quantity(quantity), expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max()
+                    result.quantity(quantity), expected, rtol=SAME_PHYSICS, atol=SAME_PHYSICS * np.abs(expected).max()
                 )
 
 
@@ -89,7 +89,9 @@ def test_small_batches_give_the_same_responses_as_one(monkeypatch):
     whole = batch_rollout(plant, motions, [controller])[0]
     monkeypatch.setattr(batch_module, "ROWS_PER_BATCH", 1)  # one motion per batch
     for (one, _), (many, _) in zip(batch_rollout(plant, motions, [controller])[0], whole, strict=True):
-        np.testing.assert_allclose(one.drift, many.drift, rtol=1e-9, atol=1e-12 * np.abs(many.drift).max())
+        np.testing.assert_allclose(
+            one.drift, many.drift, rtol=SAME_PHYSICS, atol=SAME_PHYSICS * np.abs(many.drift).max()
+        )
 
 
 def test_the_policy_acts_on_the_batch_as_on_each_record():
