@@ -51,9 +51,10 @@ def optimal_responses(
         states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
         actions = np.zeros((n_steps, len(members), building.n_actuators))
         by_step = [np.ascontiguousarray(a.transpose(1, 0, 2)) for a in (feedforward, ground_terms)]  # step first
+        gain, transition, input_gain = -feedback.T, step.phi.T, action_gain.T  # formed once, not every step
         for k, (step_feedforward, step_ground) in enumerate(zip(*by_step, strict=True)):
-            np.clip(states[k] @ -feedback.T - step_feedforward, -1.0, 1.0, out=actions[k])
-            states[k + 1] = states[k] @ step.phi.T + actions[k] @ action_gain.T + step_ground
+            (states[k] @ gain - step_feedforward).clip(-1.0, 1.0, out=actions[k])
+            states[k + 1] = states[k] @ transition + actions[k] @ input_gain + step_ground
         for row, (i, t) in enumerate(zip(members, terms, strict=True)):
             k = t.shape[0]
             held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])

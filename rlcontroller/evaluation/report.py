@@ -9,15 +9,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from rlcontroller.evaluation.evaluation import OPTIMAL, Evaluation  # noqa: E402
-from rlcontroller.evaluation.tables import (  # noqa: E402
+from rlcontroller.evaluation.evaluation import OPTIMAL, Evaluation
+from rlcontroller.evaluation.tables import (
     FAIRNESS,
     LEGEND,
     METRIC_NAMES,
@@ -27,8 +23,8 @@ from rlcontroller.evaluation.tables import (  # noqa: E402
     per_record_frame,
     summary_table,
 )
-from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
-from rlcontroller.physics.metrics import METRICS  # noqa: E402
+from rlcontroller.files import atomic_savefig, atomic_write
+from rlcontroller.physics.metrics import METRICS
 
 COLOURS = {
     "uncontrolled": "0.6",
@@ -109,51 +105,75 @@ def strong_part(ground: np.ndarray, time: np.ndarray, low: float = 0.05, high: f
     return float(max(time[0], start)), float(min(time[-1], end))
 
 
-def plot_time_histories(evaluation: Evaluation, out: Path, story: int = 4) -> Path:
-    """Drift of one story and base shear on one record, zoomed on the strong part of the response."""
+def time_history_data(evaluation: Evaluation, story: int = 4) -> dict:
+    """What `draw_time_histories` draws: drift of one story and base shear on one record, every
+    controller, over the strong part of the response (plain arrays and text)."""
     record = time_history_record(evaluation)
     story = min(story, len(evaluation.experiment.building.masses))
     bare = evaluation.responses["uncontrolled", record]
     start, end = strong_part(bare.ground, bare.time)
-    figure, (drift_axis, shear_axis) = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
     shown = slice(max(0, np.searchsorted(bare.time, start) - 1), np.searchsorted(bare.time, end) + 1)
+    lines = []
     for controller in evaluation.controllers:
         result = evaluation.responses[controller, record]
-        style = {
-            "color": COLOURS.get(controller),
-            "linestyle": LINE_STYLES.get(controller, "-"),
-            "linewidth": 1.6 if controller == "RL" else 1.0,
-        }
-        time = result.time[shown]
-        drift_axis.plot(time, 100 * result.drift[shown, story - 1], label=controller, **style)
-        shear_axis.plot(time, result.base_shear[shown] / 1e3, label=controller, **style)
+        lines.append(
+            (controller, result.time[shown], 100 * result.drift[shown, story - 1], result.base_shear[shown] / 1e3)
+        )
     description = evaluation.descriptions.get(record, "")
     source = "SYNTHETIC motion" if "SYNTHETIC" in evaluation.label else "as recorded"
     if "scaled to PGA" in evaluation.label:
         source = evaluation.label[evaluation.label.index("scaled to PGA") :]
     title = f"{record}" + (f" ({description})" if description else "") + f", {source}; strong part shown"
-    drift_axis.set(ylabel=f"story-{story} drift (cm)", title=title, xlim=(start, end))
+    return {"title": title, "story": story, "span": (start, end), "lines": lines}
+
+
+def draw_time_histories(data: dict, path: Path) -> Path:
+    """`time_history_data` as a two-panel PNG at `path`: drift (cm) above, base shear (kN) below."""
+    plt = pyplot()
+    figure, (drift_axis, shear_axis) = plt.subplots(2, 1, figsize=(11, 6.5), sharex=True)
+    for controller, time, drift, shear in data["lines"]:
+        style = {
+            "color": COLOURS.get(controller),
+            "linestyle": LINE_STYLES.get(controller, "-"),
+            "linewidth": 1.6 if controller == "RL" else 1.0,
+        }
+        drift_axis.plot(time, drift, label=controller, **style)
+        shear_axis.plot(time, shear, label=controller, **style)
+    drift_axis.set(ylabel=f"story-{data['story']} drift (cm)", title=data["title"], xlim=data["span"])
     shear_axis.set(xlabel="time (s)", ylabel="base shear (kN)")
     drift_axis.legend(loc="upper right", ncol=3, fontsize=9)
     for axis in (drift_axis, shear_axis):
         axis.grid(alpha=0.3)
     # tight_layout's margins for these sizes, fixed: it measures every label again (0.06 s a figure)
     figure.subplots_adjust(left=0.08, right=0.985, bottom=0.09, top=0.94, hspace=0.08)
-    path = atomic_savefig(figure, out / "time_histories.png")
+    atomic_savefig(figure, path)
     plt.close(figure)
     return path
 
 
-def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
-    """J1-J4 per story (J3 per actuator), the mean over records, one line per controller."""
+def per_story_data(evaluation: Evaluation) -> dict:
+    """What `draw_metrics_per_story` draws: J1-J4 per story (J3 per commanded device), the mean over
+    records, per controller."""
     mean = evaluation.metrics.groupby(["metric", "controller", "index"], sort=True)["value"].mean()
+    lines = {
+        metric: [
+            (controller, mean.loc[metric, controller].index.to_numpy(), mean.loc[metric, controller].to_numpy())
+            for controller in evaluation.controllers
+        ]
+        for metric in METRICS
+    }
+    return {"label": evaluation.label, "lines": lines, "command_labels": evaluation.experiment.command_labels()}
+
+
+def draw_metrics_per_story(data: dict, path: Path) -> Path:
+    """`per_story_data` as four panels, one line per controller, as a PNG at `path`."""
+    plt = pyplot()
     figure, axes = plt.subplots(1, 4, figsize=(16, 4.2))
     for axis, metric in zip(axes, METRICS, strict=True):
-        for controller in evaluation.controllers:
-            means = mean.loc[metric, controller]
+        for controller, index, values in data["lines"][metric]:
             axis.plot(
-                means.index,
-                means.values,
+                index,
+                values,
                 marker="o",
                 markersize=3,
                 color=COLOURS.get(controller, "tab:orange"),
@@ -161,34 +181,108 @@ def plot_metrics_per_story(evaluation: Evaluation, out: Path) -> Path:
                 linewidth=1.8 if controller == "RL" else 1.0,
                 label=controller,
             )
-            axis.set_xticks(means.index)
+            axis.set_xticks(index)
         if metric == "J3":
-            labels = evaluation.experiment.command_labels()
-            axis.set_xticklabels([labels[i - 1] for i in axis.get_xticks()])
+            axis.set_xticklabels([data["command_labels"][i - 1] for i in axis.get_xticks()])
         axis.set(
             xlabel="story of the commanded device" if metric == "J3" else "story",
             title=METRIC_NAMES[metric] + (" (E_u / E_Vb,UC)" if metric == "J3" else " (C / UC)"),
         )
         axis.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    figure.suptitle(f"J1–J4 per story, mean over records — {evaluation.label}", fontsize=11)
+    figure.suptitle(f"J1–J4 per story, mean over records — {data['label']}", fontsize=11)
     figure.subplots_adjust(left=0.04, right=0.99, bottom=0.14, top=0.84, wspace=0.2)  # tight_layout's, fixed (above)
-    path = atomic_savefig(figure, out / "metrics_per_story.png")
+    atomic_savefig(figure, path)
     plt.close(figure)
     return path
 
 
-def write_report(evaluation: Evaluation, out: Path) -> list[Path]:
-    """Tables and plots of one evaluation into `out`."""
+DRAWINGS = {draw.__name__: draw for draw in (draw_time_histories, draw_metrics_per_story)}
+
+
+def write_report(evaluation: Evaluation, out: Path, drawing: Drawing | None = None) -> list[Path]:
+    """Tables and plots of one evaluation into `out`; the plots by `drawing`'s process while the tables
+    are written, when one is given."""
     out.mkdir(parents=True, exist_ok=True)
-    return write_tables(evaluation, out) + [
-        plot_time_histories(evaluation, out),
-        plot_metrics_per_story(evaluation, out),
+    jobs = [
+        (draw_time_histories, time_history_data(evaluation), out / "time_histories.png"),
+        (draw_metrics_per_story, per_story_data(evaluation), out / "metrics_per_story.png"),
     ]
+    if drawing is None:
+        return write_tables(evaluation, out) + [draw(data, path) for draw, data, path in jobs]
+    drawing.submit(jobs)
+    return write_tables(evaluation, out) + drawing.results()
+
+
+class Drawing:
+    """A process, forked at once, that imports matplotlib while its parent simulates and then draws the
+    evaluation's plots from their data (`write_report`): with two cores the import (0.4 s) and the drawing
+    (0.5 s) leave `rlc evaluate`'s path (docs/speed.md). Our own data between our own processes (pickled
+    through a pipe); nothing read from a file. Use as a context manager: leaving it ends the process."""
+
+    def __init__(self) -> None:
+        import multiprocessing
+        import sys
+
+        sys.stdout.flush()  # the child must not write its copy of unflushed output again
+        sys.stderr.flush()
+        context = multiprocessing.get_context("fork")
+        self._connection, child_end = context.Pipe()
+        self._process = context.Process(target=_draw_jobs, args=(child_end,), daemon=True)
+        self._process.start()
+        child_end.close()
+
+    def submit(self, jobs: list[tuple]) -> None:
+        self._connection.send([(draw.__name__, data, path) for draw, data, path in jobs])
+
+    def results(self) -> list[Path]:
+        try:
+            status, value = self._connection.recv()
+        except EOFError:
+            raise RuntimeError(f"the drawing process ended early (exit code {self._process.exitcode})") from None
+        if status == "error":
+            raise RuntimeError(f"drawing the plots failed:\n{value}")
+        return value
+
+    def __enter__(self) -> Drawing:
+        return self
+
+    def __exit__(self, *exception) -> None:
+        self._connection.close()
+        self._process.join(timeout=5.0)
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join()
+
+
+def _draw_jobs(connection) -> None:
+    import traceback
+
+    pyplot()  # the import, while the parent simulates
+    while True:
+        try:
+            jobs = connection.recv()
+        except EOFError:
+            return
+        try:
+            connection.send(("ok", [DRAWINGS[name](data, path) for name, data, path in jobs]))
+        except Exception:
+            connection.send(("error", traceback.format_exc()))
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend, imported on first use: only what draws pays its 0.4 s."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tuple[float, float]]) -> list[Path]:
     """LQG's J1-J3 trade-off (one row per force-weight multiplier) with other controllers marked."""
+    plt = pyplot()
     out.mkdir(parents=True, exist_ok=True)
     written = [atomic_write(out / "lqg_sweep.csv", sweep.assign(suite=label).to_csv(index=False))]
     lines = [
@@ -236,6 +330,7 @@ def write_damper_sweep(
     """The semi-active dampers' classical trade-off (`evaluation.damper_sweep`): the passive dampers
     at each command level and clipped-optimal control at each force-weight multiplier, J1 against J3
     and J2, with other controllers (name -> (J1, J2, J3)) marked."""
+    plt = pyplot()
     out.mkdir(parents=True, exist_ok=True)
     written = [atomic_write(out / "damper_sweep.csv", sweep.assign(suite=label).to_csv(index=False))]
     best = sweep.loc[sweep["J1"].idxmin()]
@@ -293,6 +388,7 @@ def write_preview(
     preview: pd.DataFrame, out: Path, label: str, references: dict[str, tuple[float, float]]
 ) -> list[Path]:
     """J1/J2 of full-state LQR against how far ahead it knows the ground, other controllers as lines."""
+    plt = pyplot()
     out.mkdir(parents=True, exist_ok=True)
     written = [atomic_write(out / "preview.csv", preview.assign(suite=label).to_csv(index=False))]
     lines = [
@@ -334,6 +430,7 @@ def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str
     """robustness.csv (long form), robustness.md (scenario x controller means, the worst record's
     J1, the mean over scenarios) and robustness.png (J1 against the stiffness factor; J1 and J2 per
     scenario)."""
+    plt = pyplot()
     from rlcontroller.evaluation.robustness import mean_over_scenarios, stiffness_curve, summary, worst_record_j1
 
     out.mkdir(parents=True, exist_ok=True)
