@@ -114,6 +114,32 @@ class LQGController:
         return (self._state @ self._output).clip(-1.0, 1.0)
 
 
+class LQGBank:
+    """Several `LQGController`s, each on its own `rows` consecutive buildings of a batch, stepped as one
+    batched linear system (their states zero-padded to the largest): two batched products a step instead
+    of two per controller, in the batch's hot loop. The same actions as each controller alone."""
+
+    def __init__(self, controllers: list[LQGController], rows: int) -> None:
+        size = max(controller._transition.shape[0] for controller in controllers)
+        count, observations = len(controllers), controllers[0]._input.shape[0]
+        self.rows = rows
+        self._transition = np.zeros((count, size, size))
+        self._input = np.zeros((count, observations, size))
+        self._output = np.zeros((count, size, controllers[0]._output.shape[1]))
+        for i, controller in enumerate(controllers):
+            n = controller._transition.shape[0]
+            self._transition[i, :n, :n] = controller._transition
+            self._input[i, :, :n] = controller._input
+            self._output[i, :n] = controller._output
+        self._state = np.zeros((count, rows, size))
+
+    def act(self, observations: np.ndarray) -> np.ndarray:
+        """Actions (count * rows, m) for observations (count * rows, size), controller by controller."""
+        count = self._transition.shape[0]
+        self._state = self._state @ self._transition + observations.reshape(count, self.rows, -1) @ self._input
+        return (self._state @ self._output).reshape(count * self.rows, -1).clip(-1.0, 1.0)
+
+
 class LQGPrior:
     """The action of LQG + measured ground, of LQG + ground model with `sensors.ground_model`, or of
     LQG + wind model in an experiment trained under wind (action units, unclipped), from an

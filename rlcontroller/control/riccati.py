@@ -5,12 +5,13 @@ A building's higher modes may be so heavily damped that they die within one cont
 benchmark's damping matrix gives modes above about 15 Hz critical damping or more: at 0.1 s their
 transition eigenvalues are 1e-17 to 1e-9). Such a mode is quasi-static at the control rate: no controller
 acting once a step can move it, and its eigenvalue, zero to machine precision, makes the Riccati solver's
-generalised Schur reordering fail. So the design keeps the invariant subspace of the modes whose
-transition eigenvalue is at least `QUASI_STATIC` in modulus (ordered real Schur form, decoupled by a
-Sylvester equation: an exact modal truncation), solves there, and lifts the gains back to the full
-state: an LQR gain acts on the kept modes' coordinates, a Kalman gain corrects only them. The closed
-loop is block-triangular, the dropped modes keep their open-loop decay. Where no mode is that fast (the
-five-story building at 0.02 s: smallest modulus 0.97) nothing changes.
+generalised Schur reordering fail. When the full equation fails, the design keeps the invariant subspace
+of the modes whose transition eigenvalue is at least `QUASI_STATIC` in modulus (ordered real Schur form,
+decoupled by a Sylvester equation: an exact modal truncation), solves there, and lifts the gains back to
+the full state: an LQR gain acts on the kept modes' coordinates, a Kalman gain corrects only them. The
+closed loop is block-triangular, the dropped modes keep their open-loop decay. Only then: a zero
+eigenvalue is not always such a mode (an actuator delay's buffer has them, and the design must see the
+delay), and where the full equation solves, nothing changes.
 
 Every solution is checked: a relative residual of its equation above `RESIDUAL_TOLERANCE` is a
 `DesignError`, never a silent gain.
@@ -80,25 +81,47 @@ def solve_dare(
 
 
 def lqr(phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(K, P) of the discrete LQR x+ = phi x + b u, cost x'Qx + 2x'Nu + u'Ru; a = -K x. On the kept modes
-    of `phi` (`modal_truncation`) when some are quasi-static, K and P lifted back to the full state."""
-    truncation = modal_truncation(phi)
-    if truncation is not None:
-        basis, projector = truncation.basis, truncation.projector
-        gain, riccati = lqr(projector @ phi @ basis, projector @ b, basis.T @ q @ basis, r, basis.T @ n)
-        return gain @ projector, projector.T @ riccati @ projector
-    riccati = solve_dare(phi, b, q, r, s=n, what="LQR")
-    gain = scipy.linalg.solve(b.T @ riccati @ b + r, b.T @ riccati @ phi + n.T)
-    return gain, riccati
+    """(K, P) of the discrete LQR x+ = phi x + b u, cost x'Qx + 2x'Nu + u'Ru; a = -K x. Solved on the
+    full model; where that fails (quasi-static modes, above), on the kept modes and lifted back."""
+    try:
+        riccati = solve_dare(phi, b, q, r, s=n, what="LQR")
+    except DesignError:
+        truncation = modal_truncation(phi)
+        if truncation is None:
+            raise
+        return lqr_on_kept_modes(phi, b, q, r, n, truncation)
+    return scipy.linalg.solve(b.T @ riccati @ b + r, b.T @ riccati @ phi + n.T), riccati
+
+
+def lqr_on_kept_modes(
+    phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, n: np.ndarray, truncation: ModalTruncation
+) -> tuple[np.ndarray, np.ndarray]:
+    """`lqr` designed on `truncation`'s modes, K and P lifted back to the full state."""
+    basis, projector = truncation.basis, truncation.projector
+    reduced_phi, reduced_b = projector @ phi @ basis, projector @ b
+    riccati = solve_dare(reduced_phi, reduced_b, basis.T @ q @ basis, r, s=basis.T @ n, what="LQR")
+    gain = scipy.linalg.solve(reduced_b.T @ riccati @ reduced_b + r, reduced_b.T @ riccati @ reduced_phi + n.T @ basis)
+    return gain @ projector, projector.T @ riccati @ projector
 
 
 def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray) -> np.ndarray:
     """Steady-state measurement-update gain L for x+ = phi x + w (cov process), y = c x + v (cov
-    measurement); on the kept modes of `phi` when some are quasi-static (they are not corrected)."""
-    truncation = modal_truncation(phi)
-    if truncation is not None:
-        basis, projector = truncation.basis, truncation.projector
-        reduced = kalman_gain(projector @ phi @ basis, c @ basis, projector @ process @ projector.T, measurement)
-        return basis @ reduced
-    prior = solve_dare(phi.T, c.T, process, measurement, what="Kalman filter")
+    measurement); where the full equation fails (quasi-static modes, above), on the kept modes."""
+    try:
+        prior = solve_dare(phi.T, c.T, process, measurement, what="Kalman filter")
+    except DesignError:
+        truncation = modal_truncation(phi)
+        if truncation is None:
+            raise
+        return kalman_gain_on_kept_modes(phi, c, process, measurement, truncation)
     return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
+
+
+def kalman_gain_on_kept_modes(
+    phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray, truncation: ModalTruncation
+) -> np.ndarray:
+    """`kalman_gain` designed on `truncation`'s modes, which alone the lifted gain corrects."""
+    basis, projector = truncation.basis, truncation.projector
+    reduced_phi, reduced_c = projector @ phi @ basis, c @ basis
+    prior = solve_dare(reduced_phi.T, reduced_c.T, projector @ process @ projector.T, measurement, what="Kalman filter")
+    return basis @ prior @ reduced_c.T @ np.linalg.inv(reduced_c @ prior @ reduced_c.T + measurement)

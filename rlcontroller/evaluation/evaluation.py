@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from rlcontroller.background import in_background
 from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, display_path
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
@@ -128,8 +129,10 @@ def evaluate(
     devices = plant.building.devices
     passive = uncontrolled_responses(plant, simulated) if devices else []
     seeds = [content_seed(motion) for motion in motions]
+    # the optimum on the other core while the controllers run here (`background`): the same numbers
+    optimum = in_background(lambda: optimal_responses(plant, simulated)) if include_optimal else None
     controlled = batch_rollout(plant, simulated, controllers, seeds=seeds, on_motions=on_motions)
-    optimal = optimal_responses(plant, simulated) if include_optimal else []
+    optimal = optimum.result() if optimum is not None else []
     rows: list[dict] = []
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):

@@ -7,6 +7,7 @@ the records. Plots show drift in cm and forces in kN for readability; the CSVs a
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 import numpy as np
@@ -248,6 +249,8 @@ class Drawing:
         return self
 
     def __exit__(self, *exception) -> None:
+        with contextlib.suppress(OSError):  # no more jobs (the child holds a copy of this end: no EOF for it)
+            self._connection.send(None)
         self._connection.close()
         self._process.join(timeout=5.0)
         if self._process.is_alive():
@@ -263,6 +266,8 @@ def _draw_jobs(connection) -> None:
         try:
             jobs = connection.recv()
         except EOFError:
+            return
+        if jobs is None:
             return
         try:
             connection.send(("ok", [DRAWINGS[name](data, path) for name, data, path in jobs]))

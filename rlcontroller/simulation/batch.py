@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium.utils import seeding
 from numpy.lib.stride_tricks import sliding_window_view
 
-from rlcontroller.control.controllers import Controller
+from rlcontroller.control.controllers import Controller, LQGBank, LQGController
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
@@ -75,6 +75,7 @@ class BuildingBatch:
         self._stacked: np.ndarray | None = None  # the transitions of all members, padded to S
         self._transitions: list[np.ndarray | None] = [None] * size  # each member's own T (unpadded)
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
+        self._ground_cache: dict[int, tuple] = {}  # id(motion) -> (motion, step map, its ground forcing)
         self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
         self._members = np.arange(size)
 
@@ -100,6 +101,7 @@ class BuildingBatch:
         if self.randomization is not None:
             drawn = draw_plant(self.randomization, plant.experiment.plant, rng)
             plant = Plant(plant.experiment.model_copy(update={"plant": drawn}))
+        reused = motion is not None or bool(self.motions)  # a motion other members may start with too
         if motion is None:
             if self.motions:
                 motion = self.motions[int(rng.integers(len(self.motions)))]
@@ -114,9 +116,11 @@ class BuildingBatch:
         rows = self.rows if plant is self.plant else step_outputs(plant)
         if plant.nonlinear is None:
             step = plant.step_map(substeps)
-            ground_terms = step.ground_terms(samples)
+            ground_terms, ground_outputs = self._ground_forcing(
+                motion, samples, step, rows, reused and plant is self.plant
+            )
             forcing[:n_steps, : plant.n_state] = ground_terms
-            forcing[:n_steps, size:] = ground_terms @ rows.c.T
+            forcing[:n_steps, size:] = ground_outputs
             if plant is not self.plant:
                 self._transitions[member] = rows.transition(step, plant.force_limits)
             else:
@@ -151,6 +155,18 @@ class BuildingBatch:
             self.estimates[member] = 0.0
             self.previous_ground[member] = 0.0
             self._update_estimates(readings[0][None], self.previous_action[member][None], [member])
+
+    def _ground_forcing(self, motion: GroundMotion, samples: np.ndarray, step, rows, keep: bool) -> tuple:
+        """The ground's terms in the state and in the outputs at every step of `motion`; kept for the
+        members that start with the same motion object on the base plant (every controller's lane does)."""
+        cached = self._ground_cache.get(id(motion))
+        if cached is not None and cached[0] is motion and cached[1] is step:
+            return cached[2:]
+        ground_terms = step.ground_terms(samples)
+        terms = (ground_terms, ground_terms @ rows.c.T)
+        if keep:
+            self._ground_cache[id(motion)] = (motion, step, *terms)  # holds `motion`: its id stays its own
+        return terms
 
     def _padded(self, inner: np.ndarray) -> np.ndarray:
         """A member's T zero-padded to the batch's state size."""
@@ -314,10 +330,11 @@ def _rollout_chunk(
         controller.reset()
     lanes = [(controller, slice(c * count, (c + 1) * count)) for c, controller in enumerate(controllers)]
     observations, actions = batch.observations, np.zeros((batch.size, batch.m))
+    acting = fused_lanes(lanes, count)
     reward_rows = batch.rows.reward
     outputs = np.zeros((n_steps + 1, batch.size, reward_rows.stop - reward_rows.start))  # their reward rows
     for k in range(1, n_steps + 1):
-        for controller, lane in lanes:
+        for controller, lane in acting:
             actions[lane] = controller.act(observations[lane])
         outputs[k] = batch.advance(actions)[:, reward_rows]
         states[k] = batch.plant_states()
@@ -342,3 +359,21 @@ def _rollout_chunk(
             runs.append((response, float(totals[member])))
         responses.append(runs)
     return responses
+
+
+def fused_lanes(lanes: list[tuple[Controller, slice]], rows: int) -> list[tuple[Controller | LQGBank, slice]]:
+    """The lanes with each run of consecutive LQG controllers acting as one `LQGBank`."""
+    fused: list[tuple[Controller | LQGBank, slice]] = []
+    run: list[tuple[LQGController, slice]] = []
+    for controller, lane in [*lanes, (None, None)]:
+        if isinstance(controller, LQGController):
+            run.append((controller, lane))
+            continue
+        if len(run) > 1:
+            fused.append((LQGBank([c for c, _ in run], rows), slice(run[0][1].start, run[-1][1].stop)))
+        else:
+            fused += run
+        run = []
+        if controller is not None:
+            fused.append((controller, lane))
+    return fused

@@ -255,3 +255,24 @@ def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
     ]
     assert table.loc["uncontrolled", "records with J1 > 1"] == 0 and table.loc["pushes", "records with J1 > 1"] >= 2
     assert np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0
+
+
+def test_the_drawing_process_draws_the_same_plots_and_reports_its_failures(tmp_path):
+    """`rlc evaluate`'s plots drawn by the forked drawing process are byte for byte the ones drawn here;
+    a job that fails there is an error here, with its traceback, never a missing plot."""
+    from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.records import synthetic_suite
+
+    plant = Plant(Experiment())
+    evaluation = compare(plant, synthetic_suite(count=2), "SYNTHETIC test")
+    report.write_report(evaluation, tmp_path / "here")
+    with report.Drawing() as drawing:
+        written = report.write_report(evaluation, tmp_path / "there", drawing)
+        for name in ("time_histories.png", "metrics_per_story.png"):
+            assert (tmp_path / "there" / name) in written
+            assert (tmp_path / "there" / name).read_bytes() == (tmp_path / "here" / name).read_bytes()
+        drawing.submit([(report.draw_time_histories, {"lines": "not lines"}, tmp_path / "bad.png")])
+        with pytest.raises(RuntimeError, match="drawing the plots failed:\nTraceback"):
+            drawing.results()
+    assert not (tmp_path / "bad.png").exists()
