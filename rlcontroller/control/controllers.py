@@ -88,14 +88,14 @@ class LQGController:
         layout = plant.layout
         free, observed, previous_ground_gain = design.filter.on_observations(layout)
         n = free.shape[0]
-        self._transition = np.zeros((n + 1, n + 1))  # F
-        self._transition[:n, :n] = free
+        self.transition = np.zeros((n + 1, n + 1))  # F (F, H and K are read by `LQGBank`)
+        self.transition[:n, :n] = free
         if previous_ground_gain is not None:
-            self._transition[n, :n] = previous_ground_gain
-        self._input = np.zeros((layout.size, n + 1))  # H
-        self._input[:, :n] = observed
-        self._input[layout.ground, n] = 1.0
-        self._output = np.vstack([-design.feedback.T, -design.feedforward * layout.ground_scale])  # K
+            self.transition[n, :n] = previous_ground_gain
+        self.input = np.zeros((layout.size, n + 1))  # H
+        self.input[:, :n] = observed
+        self.input[layout.ground, n] = 1.0
+        self.output = np.vstack([-design.feedback.T, -design.feedforward * layout.ground_scale])  # K
         self.reset()
 
     def reset(self) -> None:
@@ -109,9 +109,9 @@ class LQGController:
     def act(self, observation: np.ndarray) -> np.ndarray:
         observation = np.asarray(observation)
         if self._state is None:
-            self._state = np.zeros(observation.shape[:-1] + (self._transition.shape[0],))
-        self._state = self._state @ self._transition + observation @ self._input
-        return (self._state @ self._output).clip(-1.0, 1.0)
+            self._state = np.zeros(observation.shape[:-1] + (self.transition.shape[0],))
+        self._state = self._state @ self.transition + observation @ self.input
+        return (self._state @ self.output).clip(-1.0, 1.0)
 
 
 class LQGBank:
@@ -120,24 +120,24 @@ class LQGBank:
     of two per controller, in the batch's hot loop. The same actions as each controller alone."""
 
     def __init__(self, controllers: list[LQGController], rows: int) -> None:
-        size = max(controller._transition.shape[0] for controller in controllers)
-        count, observations = len(controllers), controllers[0]._input.shape[0]
+        size = max(controller.transition.shape[0] for controller in controllers)
+        count, observations = len(controllers), controllers[0].input.shape[0]
         self.rows = rows
-        self._transition = np.zeros((count, size, size))
-        self._input = np.zeros((count, observations, size))
-        self._output = np.zeros((count, size, controllers[0]._output.shape[1]))
+        self.transition = np.zeros((count, size, size))
+        self.input = np.zeros((count, observations, size))
+        self.output = np.zeros((count, size, controllers[0].output.shape[1]))
         for i, controller in enumerate(controllers):
-            n = controller._transition.shape[0]
-            self._transition[i, :n, :n] = controller._transition
-            self._input[i, :, :n] = controller._input
-            self._output[i, :n] = controller._output
+            n = controller.transition.shape[0]
+            self.transition[i, :n, :n] = controller.transition
+            self.input[i, :, :n] = controller.input
+            self.output[i, :n] = controller.output
         self._state = np.zeros((count, rows, size))
 
     def act(self, observations: np.ndarray) -> np.ndarray:
         """Actions (count * rows, m) for observations (count * rows, size), controller by controller."""
-        count = self._transition.shape[0]
-        self._state = self._state @ self._transition + observations.reshape(count, self.rows, -1) @ self._input
-        return (self._state @ self._output).reshape(count * self.rows, -1).clip(-1.0, 1.0)
+        count = self.transition.shape[0]
+        self._state = self._state @ self.transition + observations.reshape(count, self.rows, -1) @ self.input
+        return (self._state @ self.output).reshape(count * self.rows, -1).clip(-1.0, 1.0)
 
 
 class LQGPrior:

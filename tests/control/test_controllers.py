@@ -131,3 +131,23 @@ def test_clipped_optimal_needs_every_damper_force_measured():
     plant = mr_plant(measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0)])
     with pytest.raises(ValueError, match=r"needs the force of every damper measured; not of \[1, 2, 3\]"):
         ClippedOptimal(plant)
+
+
+def test_an_lqg_bank_acts_as_each_lqg_alone():
+    """The batch steps consecutive LQG lanes as one padded linear system: over 50 steps of random
+    observations, each lane's actions are its controller's own (states of sizes 11 and 13)."""
+    from rlcontroller.control.controllers import LQGBank
+
+    plant = Plant(Experiment())
+    alone = [
+        LQGController(design_lqg(plant, known_ground=True), plant),
+        LQGController(design_lqg_ground_model(plant), plant),
+    ]
+    bank = LQGBank(alone, rows=3)
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        observations = rng.standard_normal((6, plant.layout.size)).astype(np.float32)
+        together = bank.act(observations)
+        for lane, controller in enumerate(alone):
+            rows = slice(3 * lane, 3 * lane + 3)
+            np.testing.assert_allclose(together[rows], controller.act(observations[rows]), rtol=1e-12, atol=1e-14)
