@@ -14,8 +14,12 @@ from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any
 
-import click
 import typer
+
+try:  # typer 0.2x carries its own click (typer._click) and no longer installs click
+    from typer import TyperException as CommandLineError
+except ImportError:
+    from click import ClickException as CommandLineError
 
 from rlcontroller.assets import (
     DAMPER_SCENARIOS,
@@ -89,7 +93,7 @@ def user_errors(command: Callable[..., Any]) -> Callable[..., Any]:
             where = f"{error.filename}: " if error.filename else ""
             typer.echo(f"error: {where}{error.strerror or error}", err=True)
             raise typer.Exit(1) from None
-        except (typer.Exit, typer.Abort, click.ClickException):
+        except (typer.Exit, typer.Abort, CommandLineError):
             raise
         except Exception as error:
             if debugging:
