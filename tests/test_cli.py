@@ -204,7 +204,7 @@ def test_an_internal_error_is_one_line_naming_its_traceback_file(monkeypatch, tm
     def planted(*args, **kwargs):
         raise RuntimeError("planted failure\nsecond line")
 
-    monkeypatch.setattr("rlcontroller.cli.load_experiment", planted)
+    monkeypatch.setattr("rlcontroller.api.common.load_experiment", planted)
     assert config.load_experiment is not planted
     result = CliRunner().invoke(app, ["info", "configs/five_story.yaml"])
     (line,) = result.output.splitlines()

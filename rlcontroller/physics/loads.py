@@ -1,15 +1,25 @@
-"""What loads a building in training and validation: a ground motion from a ground-motion generator
-(`physics.excitation`), or wind forces on its floors from a wind generator (`physics.wind`)."""
+"""What loads a building: in training and validation a ground motion from a ground-motion generator
+(`physics.excitation`) or wind forces on its floors from a wind generator (`physics.wind`); in
+evaluation the suite a `--records` value names (`load_suite`), resolved here and nowhere else."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from rlcontroller.config import GeneratorConfig, WindGeneratorConfig
+from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
 from rlcontroller.physics import excitation
 from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 from rlcontroller.physics.structure import Building
-from rlcontroller.physics.wind import generated_wind
+from rlcontroller.physics.wind import generated_wind, suite_label, wind_suite
+
+if TYPE_CHECKING:
+    from rlcontroller.physics.plant import Plant
 
 
 def generate(
@@ -25,3 +35,39 @@ def generate_suite(config: GeneratorConfig, count: int, seed: int, building: Bui
     """`count` load records from one seed (the same seed gives the same suite)."""
     rng = np.random.default_rng(seed)
     return [generate(config, rng, building, f"{config.kind}_{seed}_{i}") for i in range(count)]
+
+
+def load_suite(
+    records: Path | str | None,
+    scale_pga: float | None = None,
+    plant: Plant | None = None,
+    echo: Callable[[str], None] | None = None,
+) -> tuple[list[GroundMotion], str]:
+    """The loads a `--records` value names and their label: a folder or file of ground-motion records
+    (default $RLC_RECORDS, else the labelled synthetic suite, said through `echo`), or a wind suite
+    (a YAML file, kind: wind) generated on `plant`'s floors. Loads the plant cannot take are refused in
+    one line (ConfigError); without a plant a wind suite is refused."""
+    records = Path(records) if records is not None else None
+    if names_wind_suite(records):
+        suite = load_wind_suite(records)
+        if plant is None:
+            raise ConfigError(f"--records {records}: a wind suite is not taken by this command")
+        if scale_pga is not None:
+            raise ConfigError("--scale-pga: a wind suite has no ground acceleration to scale")
+        refuse_floor_forces(plant, records)
+        return wind_suite(suite, plant.building), suite_label(suite, str(records))
+    if records is None and not os.environ.get(RECORDS_VARIABLE) and echo is not None:
+        echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
+    motions, label = choose_motions(records, scale_pga)
+    if plant is not None and any(motion.floor_forces is not None for motion in motions):
+        refuse_floor_forces(plant, records)
+    return motions, label
+
+
+def refuse_floor_forces(plant: Plant, records: Path | None) -> None:
+    """Floor loads (wind, force records) need a linear plant: refused in one line otherwise."""
+    if plant.nonlinear is not None:
+        raise ConfigError(
+            f"--records {records}: floor loads (wind) on a building with yielding stories or semi-active dampers "
+            "are not modelled; use ground-motion records"
+        )

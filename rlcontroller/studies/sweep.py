@@ -30,8 +30,6 @@ from rlcontroller.config import (
     Experiment,
     build_experiment,
     check_seed,
-    load_wind_suite,
-    names_wind_suite,
     with_overrides,
 )
 
@@ -166,20 +164,15 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.files import new_folder
+    from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import choose_motions
-    from rlcontroller.physics.wind import suite_label, wind_suite
 
     out = run.folder / "evaluation"
     if (out / "metrics.csv").is_file():
         return
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
     plant = Plant(experiment)
-    if names_wind_suite(records):  # a wind suite, on this building
-        suite = load_wind_suite(Path(records))
-        motions, label = wind_suite(suite, plant.building), suite_label(suite, records)
-    else:
-        motions, label = choose_motions(Path(records) if records else None)
+    motions, label = load_suite(records, None, plant)
     evaluation = compare(plant, motions, label, read_policy(run.folder, "best", plant))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
@@ -335,15 +328,20 @@ def sweep(
     engine: str = "local",
     workers: int = 2,
     address: str | None = None,
-    records: str | None = None,
+    records: Path | str | None = None,
     echo: Callable[[str], None] = print,
 ) -> tuple[list[RunResult], list[Path]]:
     """Plan, run on the engine (reporting each run as it ends), then aggregate over seeds per group:
-    the results and the aggregate files written in `out` (none when no run was evaluated). `out` is
-    locked for the sweep: a second sweep into it refuses in one line naming this one."""
+    the results and the aggregate files written in `out` (none when no run was evaluated). Every
+    combination and the `records` suite are checked before any work. `out` is locked for the sweep: a
+    second sweep into it refuses in one line naming this one."""
     from rlcontroller.files import folder_lock
+    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.plant import Plant
 
     runs = plan(experiment, seeds, settings, out)
+    load_suite(records, None, Plant(experiment), echo)
+    records = str(Path(records).resolve()) if records else None
     out.mkdir(parents=True, exist_ok=True)
     with folder_lock(out, "rlc sweep"):
         return _sweep(experiment, seeds, runs, out, engine, workers, address, records, echo)

@@ -1,0 +1,37 @@
+"""The public Python API: what each `rlc` command does, as a function (the command line only parses
+its arguments, calls one of these and prints). Each takes paths as the command does and a `Report`
+to hear how the work goes (default `QUIET`); user mistakes raise `rlcontroller.config.ConfigError`
+with a one-line message. docs/architecture.md has an example per command."""
+
+from rlcontroller.api.common import QUIET, Report, load, model_folder
+from rlcontroller.api.describe import describe
+from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
+from rlcontroller.api.safety import check, unchecked_note, verdict_lines, verdict_state
+from rlcontroller.api.shipping import convert, export, shipped_models
+from rlcontroller.api.studies import aggregate, sweep, tune
+from rlcontroller.api.training import demo, train
+
+__all__ = [
+    "QUIET",
+    "aggregate",
+    "sweep",
+    "tune",
+    "Report",
+    "check",
+    "compare_lqg",
+    "compare_passive",
+    "convert",
+    "demo",
+    "describe",
+    "evaluate",
+    "export",
+    "load",
+    "model_folder",
+    "robustness",
+    "shipped_models",
+    "summary_text",
+    "train",
+    "unchecked_note",
+    "verdict_lines",
+    "verdict_state",
+]

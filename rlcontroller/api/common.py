@@ -1,0 +1,91 @@
+"""What every command needs: its experiment, its run or model folder, a new output folder, and the
+`Report` a caller passes in to hear how the work goes (the command line prints it; `QUIET` says nothing)."""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from rlcontroller.assets import DAMPER_SCENARIOS, DEFAULT_MODEL, DEVICE_SCENARIOS, STANDARD_SCENARIOS
+from rlcontroller.config import ConfigError, Experiment, load_experiment
+
+Advance = Callable[..., None]
+"""`advance(amount=1, label="")`: a long step moved on."""
+
+
+class Report:
+    """How a command's work goes, told as it happens: `line` (what the command reports: the command
+    line's stdout), `note` (a remark beside it: stderr) and `progress(description, total)` (a context
+    yielding `advance` while a long step runs). This one says nothing; the command line's prints."""
+
+    def line(self, text: str) -> None:
+        """A line of the command's report."""
+
+    def note(self, text: str) -> None:
+        """A remark: a fallback taken, a file still being written, a policy never checked."""
+
+    @contextmanager
+    def progress(self, description: str, total: int) -> Iterator[Advance]:
+        yield lambda amount=1, label="": None
+
+
+QUIET = Report()
+
+
+def load(config: Path | None) -> Experiment:
+    """The experiment of `config`, or of the default model."""
+    return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config)
+
+
+def folder_experiment(folder: Path) -> Experiment:
+    """The experiment a run or model folder was made with (its config.yaml, self-contained)."""
+    return load_experiment(folder / "config.yaml", self_contained=True)
+
+
+def model_folder(run_dir: Path | None, report: Report = QUIET) -> Path:
+    """The run folder given, or the committed default model; says when another process still writes it."""
+    folder = run_dir or DEFAULT_MODEL
+    if folder.is_file() and folder.suffix in (".yaml", ".yml"):
+        raise ConfigError(
+            f"{folder}: an experiment YAML, expected a run or model folder: train it first "
+            f"('rlc train {folder}'), or compare LQG on it with 'rlc compare lqg --config {folder}'"
+        )
+    if not (folder / "config.yaml").is_file():
+        hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
+        raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
+    from rlcontroller.files import active_holder
+
+    holder = active_holder(folder)
+    if holder is not None:
+        report.note(f"note: {folder} is still in use by {holder}; reading its newest complete files")
+    return folder
+
+
+def stamp() -> str:
+    return dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+
+
+def output_folder(out: Path | None, default_name: str) -> Path:
+    """`out`, or a new folder results/NAME-TIME (never an existing one, never a tracked folder)."""
+    if out is not None:
+        return out
+    base = Path("results") / f"{default_name}-{stamp()}"
+    path, number = base, 1
+    while path.exists():
+        number += 1
+        path = base.with_name(f"{base.name}-{number}")
+    return path
+
+
+def standard_scenarios(experiment: Experiment) -> Path:
+    """The standard robustness scenarios, or with devices their own (no yielding stories; devices as built
+    differing from their design; no actuator dynamics with semi-active dampers)."""
+    if experiment.has_dampers:
+        return DAMPER_SCENARIOS
+    return DEVICE_SCENARIOS if experiment.devices else STANDARD_SCENARIOS
+
+
+def motions_text(count: int) -> str:
+    return f"{count} motion{'s' if count != 1 else ''}"

@@ -1,0 +1,89 @@
+"""What an experiment is: the text of `rlc info`."""
+
+from __future__ import annotations
+
+from rlcontroller.config import Experiment
+
+
+def describe(experiment: Experiment) -> str:
+    """The resolved config, natural periods and modal damping ratios (of the design model, and of the
+    simulated plant when there is a plant part), the actuator layout and the devices."""
+    from rlcontroller.physics.plant import Plant
+
+    plant = Plant(experiment)
+    lines = ["# resolved configuration", resolved_text(experiment)]
+    floors_only = " (floors only, without the devices)" if experiment.devices else ""
+    buildings = [(f"design model{floors_only}", plant.design.bare.building)]
+    if experiment.plant is not None:
+        buildings.append((f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building))
+    for title, building in buildings:
+        lines.append(f"# modes of the {title}")
+        lines.append(f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}")
+        ratios = building.modal_damping_ratios()
+        for mode, (period, ratio) in enumerate(zip(building.periods(), ratios, strict=True), 1):
+            lines.append(f"{mode:>4}  {period:>10.3f}  {1 / period:>14.3f}  {ratio:>13.4f}")
+    lines.append("\n# actuators")
+    for index, actuator in enumerate(experiment.actuators):
+        floors = f"floor {actuator.story}"
+        if actuator.mount == "inter_story":
+            floors = f"+u on floor {actuator.story}, -u on " + (
+                f"floor {actuator.story - 1}" if actuator.story > 1 else "the ground"
+            )
+        lines.append(
+            f"{index + 1}: story {actuator.story}, {actuator.mount}, limit {actuator.force_limit / 1e3:g} kN ({floors})"
+        )
+    if experiment.devices:
+        lines.append("\n# devices (mass devices tuned on the design model)")
+        lines += [f"{index}: {line}" for index, line in enumerate(device_lines(experiment, plant.design.building), 1)]
+    return "\n".join(lines)
+
+
+def resolved_text(experiment: Experiment) -> str:
+    """The resolved experiment as YAML, a building's matrices shown by their size and source."""
+    import yaml
+
+    raw = experiment.model_dump(mode="json")
+    building = raw["building"]
+    for key in ("mass_matrix", "stiffness_matrix", "damping_matrix"):
+        if building.get(key) is not None:
+            size = len(building[key])
+            building[key] = f"({size} x {size}, SI, from {building.get('source') or 'the config'})"
+    return yaml.safe_dump(raw, sort_keys=False)
+
+
+def device_lines(experiment: Experiment, building) -> list[str]:
+    """One line per device of `experiment` as built in `building` (the design model), in config order."""
+    import numpy as np
+
+    total = float(np.sum(building.floor_masses))
+    labels = experiment.command_labels()
+    masses = iter(building.devices)
+    lines = []
+    for config in experiment.devices:
+        if config.type == "mr_damper":
+            command = labels.index(f"MR {config.story}") + 1
+            lines.append(
+                f"mr_damper on story {config.story}, capacity {config.capacity / 1e3:g} kN, "
+                f"0-{config.max_voltage:g} V, eta {config.eta:g} 1/s (command {command})"
+            )
+            continue
+        if config.type == "variable_damper":
+            command = labels.index(f"VD {config.story}") + 1
+            lines.append(
+                f"variable_damper on story {config.story}, c {config.damping_min:g}-{config.damping_max:g} N*s/m, "
+                f"capacity {config.capacity / 1e3:g} kN (command {command})"
+            )
+            continue
+        device = next(masses)
+        frequency = np.sqrt(device.stiffness / device.mass) / (2 * np.pi)
+        text = (
+            f"{device.kind} on floor {device.floor}, {device.mass / 1e3:.4g} t ({device.mass_ratio:g} of mode "
+            f"{config.mode}'s modal mass, {device.mass / total:.3%} of the building's), {frequency:.4g} Hz "
+            f"(ratio {device.frequency_ratio:.4f}), damping ratio {device.damping_ratio:.4f}"
+        )
+        if device.stroke_limit is not None:
+            text += f", stroke limit {device.stroke_limit:g} m"
+        if device.active:
+            text += f", force limit {device.force_limit / 1e3:g} kN (command {labels.index(f'AMD {device.floor}') + 1})"
+        lines.append(text)
+    return lines

@@ -1,0 +1,255 @@
+"""Every controller judged on a suite of loads: `rlc evaluate`, `rlc compare lqg`, `rlc compare passive`
+and `rlc robustness` as functions. Each builds the plant once, resolves the suite (`physics.loads`),
+simulates, writes its tables and plots into a new folder and returns what it computed."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from rlcontroller.api.common import (
+    QUIET,
+    Report,
+    folder_experiment,
+    load,
+    model_folder,
+    motions_text,
+    output_folder,
+    standard_scenarios,
+)
+from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.files import check_new_folder, new_folder
+
+
+def comparison(
+    experiment: Experiment,
+    run_dir: Path | None,
+    model: str,
+    records: Path | None,
+    scale_pga: float | None,
+    report: Report = QUIET,
+):
+    """The plant, the loads and the evaluation of every controller (the run's policy if given)."""
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.plant import Plant
+
+    plant = Plant(experiment)
+    policy = read_policy(run_dir, model, plant) if run_dir is not None else None
+    motions, label = load_suite(records, scale_pga, plant, report.note)
+    with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
+        return plant, motions, compare(plant, motions, label, policy, on_motions=advance)
+
+
+def evaluate(
+    run_dir: Path | None = None,
+    records: Path | None = None,
+    out: Path | None = None,
+    scale_pga: float | None = None,
+    model: str = "best",
+    report: Report = QUIET,
+):
+    """A run's (default: the default model's) policy against LQG and no control on the records: returns
+    the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to."""
+    from rlcontroller.api.safety import unchecked_note
+    from rlcontroller.evaluation.report import write_report
+
+    folder = model_folder(run_dir, report)
+    out = output_folder(out, f"evaluate-{folder.resolve().name}")
+    check_new_folder(out)
+    experiment = folder_experiment(folder)
+    note = unchecked_note(folder, model)
+    if note is not None:
+        report.note(note)
+    with drawing() as plots:  # matplotlib's import and the plots on the other core
+        _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report)
+        with new_folder(out) as staging:
+            write_report(evaluation, staging, plots)
+    return evaluation, out
+
+
+@contextmanager
+def drawing() -> Iterator:
+    """A drawing process for `write_report` where there is a second core to run it on (and fork), else None."""
+    if (os.cpu_count() or 1) < 2 or not hasattr(os, "fork"):
+        yield None
+        return
+    from rlcontroller.evaluation.report import Drawing
+
+    with Drawing() as plots:
+        yield plots
+
+
+@dataclass
+class LQGComparison:
+    """What `compare_lqg` computed: the evaluation, the folder, and the text of the studies asked for."""
+
+    evaluation: object
+    out: Path
+    sweep: str | None = None
+    preview: str | None = None
+
+
+def compare_lqg(
+    run_dir: Path | None = None,
+    config: Path | None = None,
+    records: Path | None = None,
+    out: Path | None = None,
+    scale_pga: float | None = None,
+    sweep: bool = False,
+    preview: bool = False,
+    model: str = "best",
+    report: Report = QUIET,
+) -> LQGComparison:
+    """LQG with the reward's cost (and its variants) against no control and, given a run, its policy;
+    with `sweep` LQG's trade-off over force weights (dampers: passive levels and clipped-optimal weights),
+    with `preview` full-state LQR knowing the ground ahead."""
+    import numpy as np
+
+    from rlcontroller.evaluation.evaluation import (
+        DAMPER_LEVELS,
+        LQG_VARIANTS,
+        OPTIMAL,
+        PREVIEW_SECONDS,
+        damper_sweep,
+        lqg_sweep,
+        mean_metric,
+        preview_study,
+    )
+    from rlcontroller.evaluation.report import write_damper_sweep, write_preview, write_report, write_sweep
+
+    if config is not None and run_dir is not None:
+        raise ConfigError("--config: either a run folder or --config, not both")
+    if config is None:
+        run_dir = model_folder(run_dir, report)
+        experiment = folder_experiment(run_dir)
+    else:
+        experiment = load(config)
+    if not experiment.command_labels():
+        raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
+    if experiment.has_dampers and preview:
+        raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
+    out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
+    check_new_folder(out)
+    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report)
+    label = evaluation.label
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
+        if sweep and experiment.has_dampers:
+            levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
+            with report.progress("dampers' trade-off", len(motions)) as advance:
+                table = damper_sweep(plant, motions, label, levels, multipliers, advance)
+            names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
+            points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
+            write_damper_sweep(table, staging, label, points)
+        elif sweep:
+            multipliers = np.logspace(-2, 2, 9)
+            with report.progress("LQG trade-off", multipliers.size) as advance:
+                table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
+            names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
+            points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
+            write_sweep(table, staging, label, points)
+        if preview:
+            names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
+            references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
+            with report.progress("preview horizons", len(PREVIEW_SECONDS)) as advance:
+                study = preview_study(plant, motions, on_horizon=lambda: advance())
+            write_preview(study, staging, label, references)
+    sweep_file = "damper_sweep.md" if experiment.has_dampers else "lqg_sweep.md"
+    return LQGComparison(
+        evaluation,
+        out,
+        (out / sweep_file).read_text() if sweep else None,
+        (out / "preview.md").read_text() if preview else None,
+    )
+
+
+def compare_passive(
+    config: Path,
+    records: Path | None = None,
+    out: Path | None = None,
+    scale_pga: float | None = None,
+    report: Report = QUIET,
+):
+    """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
+    active mass drivers as the tuned masses they are without a command; returns the evaluation and its
+    folder."""
+    from rlcontroller.evaluation.evaluation import evaluate as evaluate_controllers
+    from rlcontroller.evaluation.report import write_report
+    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.plant import Plant
+
+    experiment = load(config)
+    if not experiment.devices:
+        raise ConfigError(f"{config}: devices: none, so nothing passive to compare")
+    out = output_folder(out, f"compare_passive-{experiment.name}")
+    check_new_folder(out)
+    plant = Plant(experiment)
+    motions, label = load_suite(records, scale_pga, plant, report.note)
+    with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
+        evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
+    with new_folder(out) as staging:
+        write_report(evaluation, staging)
+    return evaluation, out
+
+
+def robustness(
+    run_dir: Path | None = None,
+    records: Path | None = None,
+    scenarios: Path | None = None,
+    out: Path | None = None,
+    scale_pga: float | None = None,
+    model: str = "best",
+    report: Report = QUIET,
+):
+    """Every controller on every scenario's plant and every record: returns the mean-J1 table (scenario x
+    controller), the suite's label, the scenarios run, the seconds taken and the folder written."""
+    from rlcontroller.config import load_scenarios
+    from rlcontroller.control.policy import read_policy
+    from rlcontroller.evaluation.report import write_robustness
+    from rlcontroller.evaluation.robustness import robustness as run_robustness
+    from rlcontroller.evaluation.robustness import summary
+    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.plant import Plant
+
+    folder = model_folder(run_dir, report)
+    experiment = folder_experiment(folder)
+    named = load_scenarios(scenarios or standard_scenarios(experiment), experiment)
+    plant = Plant(experiment)
+    policy = read_policy(folder, model, plant)
+    out = output_folder(out, f"robustness-{folder.resolve().name}")
+    check_new_folder(out)
+    motions, label = load_suite(records, scale_pga, plant, report.note)
+    if any(motion.floor_forces is not None for motion in motions):
+        linear = [scenario for scenario in named if scenario.plant is None or scenario.plant.hysteresis is None]
+        if len(linear) < len(named):
+            skipped = ", ".join(s.name for s in named if s not in linear)
+            report.note(f"note: skipped under floor loads (yielding stories are not modelled with them): {skipped}")
+        named = linear
+    with report.progress(f"{len(named)} scenarios", len(named)) as advance:
+        table, seconds = run_robustness(experiment, named, motions, label, policy, lambda name: advance(1, name))
+    with new_folder(out) as staging:
+        write_robustness(table, named, staging, label, seconds)
+    mean_j1 = summary(table)["J1"].unstack("controller").rename_axis("scenario (mean J1)")
+    return mean_j1, label, named, seconds, out
+
+
+def summary_text(evaluation, out: Path) -> str:
+    """The tables a command prints after an evaluation: J1-J4 per controller, the improvement over LQG,
+    J1 by PGA band, and where the files are."""
+    from rlcontroller.evaluation.tables import LEGEND, improvement_table, j1_by_pga, markdown_table, summary_table
+
+    lines = [f"# {evaluation.label}"]
+    lines += [f"{name}: {source}" for name, source in evaluation.sources.items()]
+    lines += [markdown_table(summary_table(evaluation)), LEGEND]
+    improvement = improvement_table(evaluation)
+    if improvement is not None:
+        lines.append(markdown_table(improvement, digits=1))
+    lines.append(markdown_table(j1_by_pga(evaluation)))
+    count = len(evaluation.records)
+    lines.append(f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}")
+    return "\n".join(lines)

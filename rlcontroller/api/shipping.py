@@ -1,0 +1,67 @@
+"""Controllers as they leave the project: the shipped ones (`rlc models`), one as an ONNX file
+(`rlc export`), and an old run's stable-baselines3 zips turned into policy data (`rlc convert`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rlcontroller.api.common import QUIET, Report, folder_experiment, model_folder
+from rlcontroller.api.safety import unchecked_note, verdict_state
+from rlcontroller.assets import DEFAULT_MODEL, MODELS
+from rlcontroller.config import ConfigError
+
+
+def shipped_models() -> list[str]:
+    """One line per shipped controller under models/: learner, training steps, safety verdict; the
+    default is marked."""
+    import yaml
+
+    lines = []
+    for folder in sorted(path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file()):
+        policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
+        state = verdict_state(folder, "best")
+        verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
+        mark = " (default)" if folder == DEFAULT_MODEL else ""
+        lines.append(
+            f"{folder.name}{mark}: {policy['algorithm']}, {policy['training_steps']:,} steps, "
+            f"{verdict or f'never checked ({state.reason})'}"
+        )
+    return lines
+
+
+def export(run_dir: Path | None = None, out: Path | None = None, model: str = "best", report: Report = QUIET) -> Path:
+    """A folder's policy (default: the default model's) as one ONNX file: sensor readings (SI) and its own
+    state in, forces (N) out; `out` defaults to results/FOLDER_MODEL_controller.onnx and is never
+    overwritten. Returns the file written."""
+    from rlcontroller.deployment.export import export_onnx
+
+    folder = model_folder(run_dir, report)
+    if out is None:
+        Path("results").mkdir(exist_ok=True)
+        out = Path("results") / f"{folder.resolve().name}_{model}_controller.onnx"
+    if out.exists():
+        raise ConfigError(f"--out {out}: exists; an export is never overwritten (choose another --out)")
+    if not out.parent.is_dir():
+        raise ConfigError(f"--out {out}: expected a file path in an existing folder")
+    note = unchecked_note(folder, model)
+    if note is not None:
+        report.note(note)
+    export_onnx(folder, model, out)
+    outputs = "forces (N) and damper commands" if folder_experiment(folder).has_dampers else "forces (N)"
+    report.line(f"wrote {out}: readings (SI) and state in, {outputs} out; see docs/deployment.md")
+    return out
+
+
+def convert(run_dir: Path, trust_pickle: bool = False) -> list[Path]:
+    """Write a run's stable-baselines3 models as policy data (best/final_policy.yaml + .npz), the files
+    that evaluate, check and export read without unpickling; `trust_pickle` must be given, since opening
+    a zip runs whatever code its author put in it. Returns the YAML files written."""
+    from rlcontroller.learning.policy import convert as convert_models
+
+    if not trust_pickle:
+        raise ConfigError(
+            f"{run_dir}: converting opens pickles, which can run their author's code; "
+            "add --trust-pickle only if you trust whoever made this folder"
+        )
+    model_folder(run_dir)
+    return convert_models(run_dir)

@@ -1,0 +1,85 @@
+"""Commands that make one controller: `rlc info`, `train`, `demo`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rlcontroller import api
+from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, positive_finite, user_errors
+from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS
+
+
+@app.command(short_help="An experiment resolved: building, periods, actuators.")
+@user_errors
+def info(
+    config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
+) -> None:
+    """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
+    the simulated plant when there is a plant part), actuator layout and devices."""
+    typer.echo(api.describe(api.load(config)))
+
+
+@app.command(short_help="Train a controller on generated motions.")
+@user_errors
+def train(
+    config: Annotated[
+        Path | None, typer.Argument(help="Experiment YAML (see configs/README.md; not with --resume).")
+    ] = None,
+    total_steps: Annotated[
+        int | None, typer.Option(min=1, max=MAX_TOTAL_STEPS, help="Override algorithm.total_steps.")
+    ] = None,
+    seed: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help="Override the experiment's seed.")] = None,
+    run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
+    resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
+    device: Annotated[str, typer.Option(help="cpu, cuda or auto.")] = "auto",
+    time_limit: Annotated[
+        float | None,
+        typer.Option(
+            callback=positive_finite(1.0e6), help="Stop after this many minutes of this invocation (resumable)."
+        ),
+    ] = None,
+    progress: ProgressOption = None,
+    tensorboard: Annotated[
+        bool,
+        typer.Option(
+            "--tensorboard",
+            help="Also log to RUN/tensorboard (stable-baselines3's logger and the validation J1/J2 with the LQG "
+            "references); follow with 'tensorboard --logdir runs'. Needs rlcontroller[tensorboard].",
+        ),
+    ] = False,
+) -> None:
+    """Train a controller (SAC, PPO, TD3, DDPG, A2C or random search) on generated ground motions;
+    checkpoints resume."""
+    report = Printed(progress)
+    trained = api.train(
+        config, resume, total_steps, seed, run_dir, device, time_limit, report.bars, tensorboard, report
+    )
+    summary = trained.summary
+    if summary.interrupted or summary.time_limit_reached:
+        typer.echo(f"resume with: rlc train --resume {summary.run_dir}")
+    if summary.interrupted:
+        raise typer.Exit(130)
+    if trained.verdict is not None:
+        print_verdict(trained.verdict, trained.verdict_file)
+
+
+def print_verdict(verdict, path: Path) -> None:
+    for line in verdict.lines():
+        typer.echo(line)
+    typer.echo(f"verdict in {path}")
+
+
+@app.command(short_help="Start here: train, evaluate and check a small controller.")
+@user_errors
+def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
+    """The main job end to end: learn a controller from nothing, with no model of the building
+    (configs/experiments/demo.yaml, about 30 s), evaluate it against LQG and the uncontrolled building, and
+    run the safety check on it."""
+    report = Printed(progress)
+    trained = api.demo(records, report.bars, report)
+    print_verdict(trained.verdict, trained.verdict_file)
+    if not trained.verdict.passed:
+        typer.echo("this run's controller failed the safety check: docs/safety_check.md says what that means")

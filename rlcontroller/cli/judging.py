@@ -1,0 +1,155 @@
+"""Commands that judge controllers: `rlc evaluate`, `compare lqg`, `compare passive`, `robustness`, `check`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rlcontroller import api
+from rlcontroller.assets import SAFETY_STANDARD
+from rlcontroller.cli.app import (
+    SCENARIOS_DEFAULT,
+    ModelOption,
+    OutOption,
+    Printed,
+    ProgressOption,
+    RecordsOption,
+    ScaleOption,
+    app,
+    user_errors,
+)
+from rlcontroller.cli.experiments import print_verdict
+
+RunOption = Annotated[Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")]
+
+
+@app.command(short_help="A controller against LQG and no control on records.")
+@user_errors
+def evaluate(
+    run_dir: RunOption = None,
+    records: RecordsOption = None,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+    model: ModelOption = "best",
+    progress: ProgressOption = None,
+) -> None:
+    """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
+    evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress))
+    typer.echo(api.summary_text(evaluation, out))
+
+
+compare_app = typer.Typer(
+    no_args_is_help=True,
+    short_help="The classical answers: LQG, passive devices.",
+    help="The classical answers: LQG with the same cost (rlc compare lqg), passive devices (rlc compare passive).",
+)
+app.add_typer(compare_app, name="compare")
+
+
+@compare_app.command("lqg", short_help="LQG with the same cost: its J tables and trade-off curve.")
+@user_errors
+def compare_lqg(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run or model folder whose policy joins (default: the default model).")
+    ] = None,
+    config: Annotated[Path | None, typer.Option(help="Experiment YAML instead of a run: LQG only.")] = None,
+    records: RecordsOption = None,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+    sweep: Annotated[
+        bool,
+        typer.Option(
+            help="Trace LQG's J1-J3 trade-off over force weights (dampers: passive levels and clipped-optimal weights)."
+        ),
+    ] = False,
+    preview: Annotated[
+        bool, typer.Option(help="Full-state LQR knowing the ground 0-1 s ahead: what prediction could buy.")
+    ] = False,
+    model: ModelOption = "best",
+    progress: ProgressOption = None,
+) -> None:
+    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
+    compared = api.compare_lqg(run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress))
+    typer.echo(api.summary_text(compared.evaluation, compared.out))
+    for text in (compared.sweep, compared.preview):
+        if text is not None:
+            typer.echo(text)
+
+
+@compare_app.command("passive", short_help="The building with its mass devices passive, and without them.")
+@user_errors
+def compare_passive(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML with a devices part.")],
+    records: RecordsOption = None,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+    progress: ProgressOption = None,
+) -> None:
+    """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
+    active mass drivers as the tuned masses they are without a command; strokes and damper energy."""
+    evaluation, out = api.compare_passive(config, records, out, scale_pga, Printed(progress))
+    typer.echo(api.summary_text(evaluation, out))
+
+
+@app.command(short_help="Every controller on plants that differ from the design.")
+@user_errors
+def robustness(
+    run_dir: RunOption = None,
+    records: RecordsOption = None,
+    scenarios: Annotated[
+        Path | None,
+        typer.Option(
+            help="Scenario YAML: named plants that differ from the design model.", show_default=SCENARIOS_DEFAULT
+        ),
+    ] = None,
+    out: OutOption = None,
+    scale_pga: ScaleOption = None,
+    model: ModelOption = "best",
+    progress: ProgressOption = None,
+) -> None:
+    """Every controller on every scenario's plant and every record: how each copes with model error."""
+    from rlcontroller.evaluation.tables import markdown_table
+
+    mean_j1, label, named, seconds, out = api.robustness(
+        run_dir, records, scenarios, out, scale_pga, model, Printed(progress)
+    )
+    typer.echo(f"# {label}")
+    typer.echo(markdown_table(mean_j1))
+    typer.echo(f"{len(named)} scenarios evaluated in {seconds:.0f} s; tables and plot in {out}")
+
+
+@app.command(short_help="The safety check: never worse than no control.")
+@user_errors
+def check(
+    run_dir: Annotated[
+        Path | None, typer.Argument(help="Run or model folder (default: the default model, see rlc models).")
+    ] = None,
+    model: ModelOption = "best",
+    standard: Annotated[
+        Path,
+        typer.Option(help="The check's standard: suite, seed, bounds.", show_default="configs/checks/standard.yaml"),
+    ] = SAFETY_STANDARD,
+    scenarios: Annotated[
+        Path | None, typer.Option(help="Plants for the stability report.", show_default=SCENARIOS_DEFAULT)
+    ] = None,
+    progress: ProgressOption = None,
+    show: Annotated[
+        bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
+    ] = False,
+) -> None:
+    """The safety check a controller passes before it is shipped: never worse than no control on a
+    broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
+    the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
+    report = Printed(progress)
+    folder = api.model_folder(run_dir, report)
+    if show:
+        lines, passed = api.verdict_lines(folder, model)
+        typer.echo("\n".join(lines))
+    else:
+        verdict, path = api.check(folder, model, standard, scenarios, report)
+        print_verdict(verdict, path)
+        passed = verdict.passed
+    if not passed:
+        raise typer.Exit(1)

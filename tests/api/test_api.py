@@ -1,0 +1,106 @@
+"""The public Python API: each command's function gives what the command prints, tells its notes through
+the `Report` it is handed, and raises the command's one-line error on a user mistake."""
+
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+from conftest import REPOSITORY
+from typer.testing import CliRunner
+
+from rlcontroller import api
+from rlcontroller.cli import app
+from rlcontroller.config import ConfigError
+
+SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
+
+
+class Recorded(api.Report):
+    """A report that keeps what it is told."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.notes: list[str] = []
+        self.steps: dict[str, int] = {}
+
+    def line(self, text: str) -> None:
+        self.lines.append(text)
+
+    def note(self, text: str) -> None:
+        self.notes.append(text)
+
+    @contextmanager
+    def progress(self, description, total):
+        self.steps[description] = 0
+
+        def advance(amount=1, label=""):
+            self.steps[description] += amount
+
+        yield advance
+
+
+def test_describe_is_what_rlc_info_prints():
+    config = REPOSITORY / "configs" / "five_story.yaml"
+    printed = CliRunner().invoke(app, ["info", str(config)])
+    assert printed.exit_code == 0
+    assert printed.output == api.describe(api.load(config)) + "\n"
+    assert "1.444" in printed.output  # the paper's first period
+
+
+def test_compare_lqg_reports_its_notes_and_progress_and_prints_nothing(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    report = Recorded()
+    compared = api.compare_lqg(config=SMOKE, out=tmp_path / "out", report=report)
+    assert capsys.readouterr() == ("", "")  # the library prints nothing itself
+    assert report.notes == [
+        "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)"
+    ]
+    assert report.steps == {"evaluating 7 motions": 7}
+    assert compared.out == tmp_path / "out" and (compared.out / "metrics.csv").is_file()
+    assert compared.sweep is None and compared.preview is None
+    text = api.summary_text(compared.evaluation, compared.out)
+    assert text.startswith("# SYNTHETIC") and "| LQG |" in text and text.endswith(f"tables and plots in {compared.out}")
+
+
+def test_a_user_mistake_is_the_commands_one_line_error(tmp_path):
+    with pytest.raises(ConfigError, match="either a run folder or --config, not both"):
+        api.compare_lqg(run_dir=tmp_path, config=SMOKE)
+    with pytest.raises(ConfigError, match="not a run folder: no config.yaml"):
+        api.evaluate(tmp_path)
+    with pytest.raises(ConfigError, match="a wind suite is not taken by this command"):
+        from rlcontroller.physics.loads import load_suite
+
+        load_suite(REPOSITORY / "configs" / "loads" / "wind.yaml")
+
+
+def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
+    import shutil
+
+    from rlcontroller.assets import DEFAULT_MODEL
+
+    assert api.unchecked_note(DEFAULT_MODEL, "best") is None  # the shipped default passed
+    copy = tmp_path / "model"
+    shutil.copytree(DEFAULT_MODEL, copy)
+    (copy / "best_check.yaml").unlink()
+    report = Recorded()
+    out = api.export(copy, tmp_path / "controller.onnx", report=report)
+    assert out.is_file()
+    assert report.notes == [
+        f"note: {copy}'s best policy counts as never safety-checked (never safety-checked); run 'rlc check {copy}'"
+    ]
+    assert report.lines == [f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"]
+
+
+def test_shipped_models_mark_the_default():
+    lines = api.shipped_models()
+    assert any(line.startswith("five_story_every_story (default): ") for line in lines)
+    assert all("never checked" not in line for line in lines)
+
+
+def test_the_api_is_what_the_commands_call():
+    """Each command module only parses and prints: no physics, RL or evaluation imported at its top."""
+    for module in ("experiments", "judging", "studies", "shipping"):
+        text = (REPOSITORY / "rlcontroller" / "cli" / f"{module}.py").read_text()
+        assert "rlcontroller.physics" not in text and "rlcontroller.learning" not in text, module
+        assert "rlcontroller.evaluation.evaluation" not in text and "Plant(" not in text, module
+    assert Path(api.__file__).parent.name == "api"
