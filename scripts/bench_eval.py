@@ -28,7 +28,7 @@ from rlcontroller.control.policy import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 
@@ -37,7 +37,7 @@ MODEL = REPOSITORY / "models" / "five_story"
 SCENARIOS = REPOSITORY / "configs" / "scenarios" / "standard.yaml"
 
 
-def record_by_record(plant: Plant, motions: list[GroundMotion]) -> float:
+def record_by_record(plant: Plant, motions: list[Load]) -> float:
     """Seconds for the six controllers run one record at a time (the loop batching replaced)."""
     design = plant.design
     controllers = [
@@ -56,7 +56,7 @@ def record_by_record(plant: Plant, motions: list[GroundMotion]) -> float:
     return time.perf_counter() - start
 
 
-def synthetic_records(count: int) -> list[GroundMotion]:
+def synthetic_records(count: int) -> list[Load]:
     """`count` Kanai-Tajimi records of 10-100 s and PGA 0.003-1.2 g, resampled to three sampling steps."""
     config = KanaiTajimiConfig(dt=0.005, duration=(10.0, 100.0), pga=(0.003 * STANDARD_GRAVITY, 1.2 * STANDARD_GRAVITY))
     motions = generate_suite(config, count, seed=207)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.physics.excitation import for_control_step
+from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.records import load_records
 
 HISTORY = 20
@@ -39,7 +39,8 @@ def main(folder: Path) -> None:
     print("|---|" + "---|" * len(HORIZONS))
     scores = []
     for motion in load_records(folder)[0]:
-        samples, substeps = for_control_step(motion, control_dt)
+        grid = on_control_grid(motion, control_dt)
+        samples, substeps = grid.ground, grid.substeps
         scores.append([prediction_r2(samples[::substeps], horizon) for horizon in HORIZONS])
         print(f"| {motion.name} | " + " | ".join(f"{s:.2f}" for s in scores[-1]) + " |")
     print("| mean | " + " | ".join(f"{s:.2f}" for s in np.mean(scores, axis=0)) + " |")

@@ -21,7 +21,7 @@ from rlcontroller.config import ConfigError, Experiment, RewardConfig, load_expe
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import evaluate, mean_metric
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import choose_motions
 
@@ -36,7 +36,7 @@ def with_acceleration_term(experiment: Experiment, weight: float, scale: float) 
     return RewardConfig.model_validate({"terms": terms})
 
 
-def mean_metrics(plant: Plant, reward: RewardConfig, motions: list[GroundMotion]) -> dict[str, float]:
+def mean_metrics(plant: Plant, reward: RewardConfig, motions: list[Load]) -> dict[str, float]:
     """Mean J1, J2, J3 over the motions of LQG + ground model designed on `reward`."""
     controller = LQGController(design_lqg_ground_model(plant.design, reward=reward), plant.design, "LQG")
     evaluation = evaluate(plant, motions, [controller], "", include_optimal=False)

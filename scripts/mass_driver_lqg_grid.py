@@ -30,7 +30,7 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate, mean_metric, scaled_weights
 from rlcontroller.files import atomic_savefig
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import choose_motions
 
@@ -61,7 +61,7 @@ def detuned(experiment: Experiment, frequency: float) -> Plant:
 def table(
     experiment: Experiment,
     controllers: list[LQGController],
-    motions: list[GroundMotion],
+    motions: list[Load],
     frequencies: list[float],
 ) -> list[dict[str, float | str]]:
     """One row per weight pair (and the passive driver): nominal J1, J2, peak stroke; J1 per frequency."""

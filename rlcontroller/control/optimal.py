@@ -11,12 +11,12 @@ import numpy as np
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, quadratic_cost
 from rlcontroller.physics.dynamics import Response, response
-from rlcontroller.physics.excitation import GroundMotion, for_control_step
+from rlcontroller.physics.excitation import Load, on_control_grid
 from rlcontroller.physics.plant import Plant
 
 
 def optimal_response(
-    plant: Plant, motion: GroundMotion, reward: RewardConfig | None = None, preview: int | None = None
+    plant: Plant, motion: Load, reward: RewardConfig | None = None, preview: int | None = None
 ) -> Response:
     """Full-state LQR plus the optimal feed-forward on the next `preview` control steps of the
     ground motion (None: the whole record), forces clipped to the limits.
@@ -29,19 +29,19 @@ def optimal_response(
 
 
 def optimal_responses(
-    plant: Plant, motions: list[GroundMotion], reward: RewardConfig | None = None, preview: int | None = None
+    plant: Plant, motions: list[Load], reward: RewardConfig | None = None, preview: int | None = None
 ) -> list[Response]:
     """`optimal_response` of every motion, simulated together (motions of one sampling, padded)."""
     building = plant.building
-    sampled = [for_control_step(motion, plant.control_dt) for motion in motions]
+    grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
     results: list[Response | None] = [None] * len(motions)
-    for substeps in sorted({substeps for _, substeps in sampled}):
-        members = [i for i, (_, r) in enumerate(sampled) if r == substeps]
+    for substeps in sorted({grid.substeps for grid in grids}):
+        members = [i for i, grid in enumerate(grids) if grid.substeps == substeps]
         step = plant.step_map(substeps)
         cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
         feedback, _ = lqr_gain(step, cost, building.force_limits)
         action_gain = step.force_gain * building.force_limits
-        terms = [step.ground_terms(sampled[i][0]) for i in members]
+        terms = [step.ground_terms(grids[i].ground) for i in members]
         n_steps = max(t.shape[0] for t in terms)
         ground_terms = np.zeros((len(members), n_steps, step.phi.shape[0]))
         for row, t in enumerate(terms):
@@ -59,5 +59,5 @@ def optimal_responses(
             k = t.shape[0]
             held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])
             time = np.arange(k + 1) * step.control_dt
-            results[i] = response(building, states[: k + 1, row], held, time, sampled[i][0][::substeps][: k + 1])
+            results[i] = response(building, states[: k + 1, row], held, time, grids[i].ground_at_steps)
     return results

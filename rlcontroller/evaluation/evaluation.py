@@ -24,11 +24,10 @@ from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import (
-    GroundMotion,
+    Load,
     MotionError,
     content_seed,
-    floor_forces_for_control_step,
-    for_control_step,
+    on_control_grid,
 )
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
@@ -51,22 +50,22 @@ LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
 
-def uncontrolled_responses(plant: Plant, motions: list[GroundMotion]) -> list[Response]:
+def uncontrolled_responses(plant: Plant, motions: list[Load]) -> list[Response]:
     """`plant` with no command (`plant.bare` is the building without its devices): whole-record
     simulations with the step map, or a batch through the non-linear step for yielding stories."""
-    if plant.nonlinear is not None:
+    if plant.integrator is not None:
         return [
             response for response, _ in batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
         ]
     responses = []
     for motion in motions:
-        samples, substeps = for_control_step(motion, plant.control_dt)
-        loads = floor_forces_for_control_step(motion, plant.control_dt)
-        responses.append(simulate(plant.building, plant.structure_step_map(substeps), samples, floor_forces=loads))
+        grid = on_control_grid(motion, plant.control_dt)
+        step = plant.structure_step_map(grid.substeps)
+        responses.append(simulate(plant.building, step, grid.ground, floor_forces=grid.floor_forces))
     return responses
 
 
-def with_settling_tail(motion: GroundMotion) -> GroundMotion:
+def with_settling_tail(motion: Load) -> Load:
     """The motion followed by SETTLING_TAIL_S of zero ground motion and floor loads (for residual drifts)."""
     tail = np.zeros(round(SETTLING_TAIL_S / motion.dt))
     forces = motion.floor_forces
@@ -108,7 +107,7 @@ class Evaluation:
 
 def evaluate(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     controllers: list[Controller],
     label: str,
     include_optimal: bool = True,
@@ -122,7 +121,7 @@ def evaluate(
             floors = motion.floor_forces.shape[1]
             raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {plant.building.n_floors}")
     yielding = plant.yielding
-    include_optimal = include_optimal and plant.nonlinear is None and not plant.has_actuator_dynamics
+    include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
     simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant.bare, simulated)
@@ -164,7 +163,7 @@ def evaluate(
 
 def compare(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     label: str,
     policy: PolicyController | None = None,
     on_motions: Callable[[int], None] | None = None,
@@ -218,7 +217,7 @@ def mean_metric(evaluation: Evaluation, controller: str, metric: str) -> float:
 
 def lqg_sweep(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     label: str,
     multipliers: np.ndarray,
     known_ground: bool = False,
@@ -252,7 +251,7 @@ def scaled_weights(reward: RewardConfig, multipliers: dict[str, float]) -> Rewar
 
 def damper_sweep(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     label: str,
     levels: np.ndarray,
     multipliers: np.ndarray,
@@ -291,7 +290,7 @@ def damper_sweep(
 
 def preview_study(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     seconds: tuple[float | None, ...] = PREVIEW_SECONDS,
     on_horizon: Callable[[], None] | None = None,
 ) -> pd.DataFrame:

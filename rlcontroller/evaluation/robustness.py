@@ -25,7 +25,7 @@ from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Co
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
 from rlcontroller.physics.plant import Plant, centre_of_ranges
 
@@ -41,7 +41,7 @@ CENTRE_LQG = "LQG (centre of the ranges)"
 def robustness(
     experiment: Experiment,
     scenarios: list[Scenario],
-    motions: list[GroundMotion],
+    motions: list[Load],
     label: str,
     policy: PolicyController | None = None,
     on_scenario: Callable[[str], None] | None = None,

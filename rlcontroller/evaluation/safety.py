@@ -36,7 +36,7 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, GroundMotion, generate_suite
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
 
@@ -144,7 +144,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
 
 def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
     dt = plant.control_dt
-    still = GroundMotion("at rest", dt, np.zeros(round(standard.rest_duration / dt) + 1), synthetic=True)
+    still = Load("at rest", dt, np.zeros(round(standard.rest_duration / dt) + 1), synthetic=True)
     seeds = [standard.seed + 1 + run for run in range(standard.rest_runs)]
     runs = batch_rollout(plant, [still] * standard.rest_runs, [controller], seeds=seeds)[0]
     worst = max(float(np.max(np.max(np.abs(response.drift), axis=0) / bounds)) for response, _ in runs)
@@ -196,7 +196,7 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
     n_x, n_o = plant.n_state, plant.layout.size
     size = n_x + n_o
     batch = BuildingBatch(plant, 2 * size)
-    still = GroundMotion("at rest", plant.control_dt, np.zeros(3), synthetic=True)
+    still = Load("at rest", plant.control_dt, np.zeros(3), synthetic=True)
     for member in range(2 * size):
         batch.start(member, _Silent(), still)
     basis = np.vstack([np.eye(size), -np.eye(size)]) * step

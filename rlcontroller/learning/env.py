@@ -23,7 +23,7 @@ force (N) and time (s).
 
 Termination: never (the building is stable); the episode is truncated when the ground motion
 ends. The motion is drawn from the configured generator, or from `motions` given to the
-constructor, or passed as `reset(options={"motion": GroundMotion})`.
+constructor, or passed as `reset(options={"motion": Load})`.
 
 Plant: the env simulates the experiment's plant (its `plant` part, if any); the state estimate
 is designed on the design model, as every controller is. With `randomize=True` (training and
@@ -44,7 +44,7 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
+from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
@@ -56,7 +56,7 @@ class BuildingEnv(gym.Env):
     def __init__(
         self,
         config: Plant | Experiment | str | Path | None = None,
-        motions: list[GroundMotion] | None = None,
+        motions: list[Load] | None = None,
         render_mode: str | None = None,
         randomize: bool = False,
     ) -> None:
@@ -87,7 +87,7 @@ class BuildingEnv(gym.Env):
         self._held_force = np.zeros(m)
         self._k = 0
         self._n_steps = 0
-        self.motion: GroundMotion | None = None
+        self.motion: Load | None = None
 
     def _use_plant(self, plant: Plant) -> None:
         """Simulate `plant` from the next step on: its output matrices, sensor noise and bias, state."""
@@ -121,28 +121,24 @@ class BuildingEnv(gym.Env):
         """The force (N) delivered at the current time: held over the step that ended now."""
         return self._held_force.copy()
 
-    def _draw_motion(self) -> GroundMotion:
+    def _draw_motion(self) -> Load:
         if self.motions:
             return self.motions[int(self.np_random.integers(len(self.motions)))]
         return generate(self.experiment.excitation.generator, self.np_random, self.building)
 
-    def _prepare_linear(self, samples: np.ndarray, substeps: int) -> None:
-        """[x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ transition + forcing[k], u = action * limit."""
-        step = self.step_map(substeps)
-        ground_terms = step.ground_terms(samples)
-        self._n_steps = ground_terms.shape[0]
-        self._transition = self._outputs.transition(step, self.force_limits)
-        self._forcing = np.hstack([ground_terms, ground_terms @ self._outputs.c.T])
-        self._advance = self._advance_linear
-
-    def _prepare_nonlinear(self, samples: np.ndarray, substeps: int) -> None:
-        """The non-linear step: x_{k+1} from the integrator, then the outputs, linear in x_{k+1} and u."""
-        self._windows = sliding_window_view(samples, substeps + 1)[::substeps]
-        self._n_steps = self._windows.shape[0]
-        self._forcing = np.zeros((self._n_steps, self.plant.n_state + self._outputs.c.shape[0]))
-        self._output_ct = self._outputs.c.T.copy()
-        self._output_dt = (self._outputs.d * self.force_limits).T.copy()
-        self._advance = self._advance_nonlinear
+    def _prepare(self, grid: LoadGrid) -> None:
+        """[x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ transition + forcing[k], u = action * limit; with
+        the plant's own integrator x_{k+1} comes from it and the outputs are linear in x_{k+1} and u."""
+        self._n_steps = grid.n_steps
+        self._forcing = self.plant.forcing(grid, self._outputs.c, self._outputs.load)
+        if self.plant.integrator is None:
+            self._transition = self._outputs.transition(self.step_map(grid.substeps), self.force_limits)
+            self._advance = self._advance_linear
+        else:
+            self._windows = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
+            self._output_ct = self._outputs.c.T.copy()
+            self._output_dt = (self._outputs.d * self.force_limits).T.copy()
+            self._advance = self._advance_nonlinear
 
     def _advance_linear(self, k: int, clipped: np.ndarray) -> np.ndarray:
         outputs = self._state_action @ self._transition
@@ -150,7 +146,7 @@ class BuildingEnv(gym.Env):
         return outputs
 
     def _advance_nonlinear(self, k: int, clipped: np.ndarray) -> np.ndarray:
-        state = self.plant.nonlinear.step(
+        state = self.plant.integrator.step(
             self._state_action[: self._n_state], clipped, self._windows[k], self.control_dt
         )
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
@@ -162,20 +158,10 @@ class BuildingEnv(gym.Env):
             self._use_plant(Plant(self.experiment.model_copy(update={"plant": drawn})))
         motion = (options or {}).get("motion") or self._draw_motion()
         self.motion = motion
-        samples, substeps = for_control_step(motion, self.control_dt)
-        if self.plant.nonlinear is None:
-            self._prepare_linear(samples, substeps)
-        else:
-            self._prepare_nonlinear(samples, substeps)
-        self.floor_forces = None
-        loads = floor_forces_for_control_step(motion, self.control_dt)
-        if loads is not None:  # wind: the floors' forcing, and its direct share in the outputs
-            terms = self.plant.load_map(substeps).terms(loads)
-            outputs = terms @ self._outputs.c.T + loads[substeps::substeps][: self._n_steps] @ self._outputs.load.T
-            self._forcing[:, : self._n_state] += terms
-            self._forcing[:, self._n_state :] += outputs
-            self.floor_forces = loads[::substeps][: self._n_steps + 1]
-        self.ground_samples = samples[::substeps][: self._n_steps + 1]
+        grid = on_control_grid(motion, self.control_dt)
+        self._prepare(grid)
+        self.floor_forces = grid.forces_at_steps
+        self.ground_samples = grid.ground_at_steps
         self._term_factors = self._outputs.term_factors(self.ground_samples)
         readings = noisy_readings(self.plant, self.ground_samples, self.np_random)
         self._forcing[:, self._n_state :][:, self._outputs.readings] += readings[1:]
@@ -233,7 +219,7 @@ class BuildingEnv(gym.Env):
         return observation.copy(), -float(terms @ self._term_factors), False, k >= self._n_steps, info
 
 
-def rollout(env: BuildingEnv, motion: GroundMotion, controller: Controller, seed: int = 0) -> tuple[Response, float]:
+def rollout(env: BuildingEnv, motion: Load, controller: Controller, seed: int = 0) -> tuple[Response, float]:
     """Run `controller` on `motion` in `env` (sensor noise seeded by `seed`).
 
     Returns the whole response (from the plant's own outputs) and the episode's total reward.

@@ -37,7 +37,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import LinearFeedback, LQGPrior
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
 
@@ -125,7 +125,7 @@ class RandomSearch(BaseAlgorithm):
         return (parameters[:, :-1], parameters[:, -1]) if self.affine else (parameters, None)
 
     def paired_log_costs(
-        self, deltas: np.ndarray, motions: list[GroundMotion], seeds: list[int]
+        self, deltas: np.ndarray, motions: list[Load], seeds: list[int]
     ) -> tuple[np.ndarray, np.ndarray, int]:
         """f(W + d_k) and f(W - d_k) for every direction d_k, all on the same motions, noise seeds
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""

@@ -1,7 +1,10 @@
-"""Ground motions: PEER NGA .AT2 and CSV records, resampling, scaling, and generators.
+"""Loads: ground motions (PEER NGA .AT2 and CSV records, generators) and records of floor forces, their
+resampling onto a control grid, and scaling.
 
-Every motion is held in SI units (m/s^2) from the moment it is read: records in g are
-converted once, here. Between samples a motion is piecewise linear.
+A `Load` is one of two kinds: a ground acceleration (uniform excitation of the base) or forces on the
+floors (wind, or any measured force record), with a ground acceleration of zero. Every load is held in
+SI units (m/s^2, N) from the moment it is read: records in g are converted once, here. Between samples a
+load is piecewise linear.
 """
 
 from __future__ import annotations
@@ -37,8 +40,12 @@ class MotionError(ValueError):
     """A ground-motion file that cannot be read; `str()` names the file and line."""
 
 
+GROUND_ACCELERATION = "ground_acceleration"
+FLOOR_FORCES = "floor_forces"
+
+
 @dataclass(frozen=True)
-class GroundMotion:
+class Load:
     """A ground acceleration history (m/s^2) sampled every `dt` seconds from t = 0; for a load on the
     floors instead (wind), `floor_forces` (samples, floors) in N, with a ground acceleration of zero."""
 
@@ -62,12 +69,17 @@ class GroundMotion:
     def time(self) -> np.ndarray:
         return np.arange(self.acceleration.size) * self.dt
 
+    @property
+    def kind(self) -> str:
+        """`GROUND_ACCELERATION` or `FLOOR_FORCES`."""
+        return GROUND_ACCELERATION if self.floor_forces is None else FLOOR_FORCES
+
 
 _WEST2_HEADER = re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([0-9.Ee+-]+)", re.IGNORECASE)
 _WEST1_HEADER = re.compile(r"^\s*(\d+)\s+([0-9.Ee+-]+)\s+NPTS", re.IGNORECASE)
 
 
-def checked(motion: GroundMotion, where: str) -> GroundMotion:
+def checked(motion: Load, where: str) -> Load:
     """The motion if it is one a building can be judged on, else a MotionError naming `where`:
     at least two samples, a time step in [1e-4, 1] s, at most an hour, finite, not all zero,
     and a PGA of at most about 10 g (more is a unit mistake)."""
@@ -90,7 +102,7 @@ def checked(motion: GroundMotion, where: str) -> GroundMotion:
     return motion
 
 
-def read_at2(path: str | Path) -> GroundMotion:
+def read_at2(path: str | Path) -> Load:
     """Read a PEER NGA (West1 or West2) .AT2 acceleration file in units of g."""
     path = Path(path)
     try:
@@ -125,10 +137,10 @@ def read_at2(path: str | Path) -> GroundMotion:
     if len(values) != npts:
         what = "truncated?" if len(values) < npts else "extra values?"
         raise MotionError(f"{path}: header says NPTS={npts} but the file holds {len(values)} values ({what})")
-    return checked(GroundMotion(name=path.stem, dt=dt, acceleration=np.asarray(values) * STANDARD_GRAVITY), str(path))
+    return checked(Load(name=path.stem, dt=dt, acceleration=np.asarray(values) * STANDARD_GRAVITY), str(path))
 
 
-def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
+def read_csv(path: str | Path, unit: str | None = None) -> Load:
     """Read a two-column CSV (time in s, acceleration) with a header row.
 
     The unit is `unit` or taken from the second header, e.g. 'acceleration [g]', 'acc_m/s2';
@@ -178,13 +190,13 @@ def read_csv(path: str | Path, unit: str | None = None) -> GroundMotion:
         raise MotionError(f"{path}:{bad}: time must increase strictly")
     values = np.asarray(acceleration) * UNITS_TO_SI[unit]
     dt = float(np.median(steps))
-    motion = checked(GroundMotion(name=path.stem, dt=dt, acceleration=values), str(path))
+    motion = checked(Load(name=path.stem, dt=dt, acceleration=values), str(path))
     if times[-1] - times[0] > MAX_DURATION:
         raise MotionError(f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s")
     if np.allclose(steps, dt, rtol=1e-6, atol=0.0):
         return motion
     uniform = np.arange(0.0, times[-1] - times[0] + 0.5 * dt, dt)
-    return GroundMotion(name=path.stem, dt=dt, acceleration=np.interp(uniform, times - times[0], values))
+    return Load(name=path.stem, dt=dt, acceleration=np.interp(uniform, times - times[0], values))
 
 
 MOTION_SUFFIXES = (".at2", ".csv")
@@ -195,7 +207,7 @@ FORCE_UNIT = re.compile(r"[\s_\[(](n|kn|mn)[\])]?$")  # the unit at the end of a
 MAX_FLOOR_FORCE = 1.0e9  # N per floor: beyond it a value is a unit mistake
 
 
-def read_force_csv(path: Path, rows: list[list[str]]) -> GroundMotion:
+def read_force_csv(path: Path, rows: list[list[str]]) -> Load:
     """A record of measured floor forces: a header `time, floor 1 [kN], floor 2 [kN], ...` (N, kN or
     MN, one column per floor from floor 1, the same unit for all) and evenly spaced times (s)."""
     header = [cell.strip().lower() for cell in rows[0]]
@@ -240,10 +252,10 @@ def read_force_csv(path: Path, rows: list[list[str]]) -> GroundMotion:
     if not np.any(forces):
         raise MotionError(f"{path}: every force is zero: nothing loads the building")
     zero = np.zeros(times.size)
-    return GroundMotion(name=path.stem, dt=dt, acceleration=zero, floor_forces=forces)
+    return Load(name=path.stem, dt=dt, acceleration=zero, floor_forces=forces)
 
 
-def read_motion(path: str | Path) -> GroundMotion:
+def read_motion(path: str | Path) -> Load:
     """Read a .AT2 or .csv ground-motion file by its extension."""
     path = Path(path)
     if path.suffix.lower() == ".at2":
@@ -253,7 +265,7 @@ def read_motion(path: str | Path) -> GroundMotion:
     raise MotionError(f"{path}: unknown ground-motion format {path.suffix!r}, expected .AT2 or .csv")
 
 
-def resample(motion: GroundMotion, dt: float) -> GroundMotion:
+def resample(motion: Load, dt: float) -> Load:
     """Linear interpolation onto a grid of step `dt` (s) (exact for the piecewise-linear motion
     when the new grid contains the old one)."""
     if math.isclose(dt, motion.dt, rel_tol=1e-9):
@@ -266,32 +278,47 @@ def resample(motion: GroundMotion, dt: float) -> GroundMotion:
     return replace(motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration), floor_forces=forces)
 
 
-def scale_to_pga(motion: GroundMotion, pga: float) -> GroundMotion:
+def scale_to_pga(motion: Load, pga: float) -> Load:
     """The motion scaled to a peak ground acceleration `pga` (m/s^2)."""
     if motion.floor_forces is not None:
         raise MotionError(f"{motion.name}: a record of floor forces has no ground acceleration to scale")
     return replace(motion, acceleration=motion.acceleration * (pga / motion.pga))
 
 
-def for_control_step(motion: GroundMotion, control_dt: float) -> tuple[np.ndarray, int]:
-    """Samples at control_dt / r with r = ceil(control_dt / motion.dt): never decimated.
+@dataclass(frozen=True)
+class LoadGrid:
+    """A load on the grid a plant steps on: `substeps` samples per control step, never decimated.
 
-    Returns (samples, r); the motion is resampled only if its step does not divide control_dt.
-    """
-    if motion.duration < control_dt:
-        raise MotionError(
-            f"{motion.name}: lasts {motion.duration:g} s, shorter than one control step ({control_dt:g} s)"
-        )
-    substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
-    return resample(motion, control_dt / substeps).acceleration, substeps
+    `ground` (samples,) m/s^2 and `floor_forces` (samples, floors) N or None, at control_dt / substeps;
+    `n_steps` whole control steps."""
+
+    ground: np.ndarray = field(repr=False)
+    floor_forces: np.ndarray | None = field(repr=False)
+    substeps: int
+
+    @property
+    def n_steps(self) -> int:
+        return (self.ground.size - 1) // self.substeps
+
+    @property
+    def ground_at_steps(self) -> np.ndarray:
+        """The ground acceleration at the control instants 0..n_steps (m/s^2)."""
+        return self.ground[:: self.substeps][: self.n_steps + 1]
+
+    @property
+    def forces_at_steps(self) -> np.ndarray | None:
+        """The floor forces at the control instants 0..n_steps (N), or None."""
+        return None if self.floor_forces is None else self.floor_forces[:: self.substeps][: self.n_steps + 1]
 
 
-def floor_forces_for_control_step(motion: GroundMotion, control_dt: float) -> np.ndarray | None:
-    """The floor forces (N) on the grid of `for_control_step`, or None for a ground motion."""
-    if motion.floor_forces is None:
-        return None
-    substeps = max(1, math.ceil(control_dt / motion.dt - 1e-9))
-    return resample(motion, control_dt / substeps).floor_forces
+def on_control_grid(load: Load, control_dt: float) -> LoadGrid:
+    """The load sampled at control_dt / r with r = ceil(control_dt / load.dt): never decimated; resampled
+    only if its step does not divide control_dt."""
+    if load.duration < control_dt:
+        raise MotionError(f"{load.name}: lasts {load.duration:g} s, shorter than one control step ({control_dt:g} s)")
+    substeps = max(1, math.ceil(control_dt / load.dt - 1e-9))
+    resampled = resample(load, control_dt / substeps)
+    return LoadGrid(resampled.acceleration, resampled.floor_forces, substeps)
 
 
 @dataclass(frozen=True)
@@ -317,7 +344,7 @@ def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
     return float(rng.uniform(bounds[0], bounds[1]))
 
 
-def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: str = "noise_impulses") -> GroundMotion:
+def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: str = "noise_impulses") -> Load:
     """The paper's training motion: Gaussian white noise plus random half-sine impulses."""
     duration = _uniform(rng, config.duration)
     time = np.arange(int(duration / config.dt) + 1) * config.dt
@@ -328,10 +355,10 @@ def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: 
         start = float(rng.uniform(0.0, max(duration - width, 0.0)))
         inside = (time >= start) & (time <= start + width)
         acceleration[inside] += amplitude * np.sin(np.pi * (time[inside] - start) / width)
-    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+    return Load(name, config.dt, acceleration, synthetic=True)
 
 
-def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str = "kanai_tajimi") -> GroundMotion:
+def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str = "kanai_tajimi") -> Load:
     """Kanai-Tajimi filtered white noise, H(s) = (2 z w s + w^2) / (s^2 + 2 z w s + w^2), times a
     rise-plateau-decay envelope, scaled to a random PGA (m/s^2)."""
     import scipy.signal  # here, not at import: it takes 0.6 s, and most commands generate no motion
@@ -353,14 +380,14 @@ def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str 
     peak = np.max(np.abs(acceleration))
     if peak > 0:
         acceleration *= _log_or_uniform(rng, config.pga, config.pga_log) / peak
-    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+    return Load(name, config.dt, acceleration, synthetic=True)
 
 
 def _log_or_uniform(rng: np.random.Generator, bounds: tuple[float, float], log: bool) -> float:
     return float(np.exp(rng.uniform(np.log(bounds[0]), np.log(bounds[1])))) if log else _uniform(rng, bounds)
 
 
-def near_fault(config: NearFaultConfig, rng: np.random.Generator, name: str = "near_fault") -> GroundMotion:
+def near_fault(config: NearFaultConfig, rng: np.random.Generator, name: str = "near_fault") -> Load:
     """A Kanai-Tajimi background plus a Mavroeidis-Papageorgiou (2003) pulse, scaled to a random PGA.
 
     The pulse's velocity is (1 + cos(2 pi f (t - t0) / gamma)) cos(2 pi f (t - t0) + nu) / 2 for
@@ -386,10 +413,10 @@ def near_fault(config: NearFaultConfig, rng: np.random.Generator, name: str = "n
     peak = np.max(np.abs(acceleration))
     if peak > 0:
         acceleration *= _log_or_uniform(rng, config.pga, config.pga_log) / peak
-    return GroundMotion(name, config.dt, acceleration, synthetic=True)
+    return Load(name, config.dt, acceleration, synthetic=True)
 
 
-def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None = None) -> GroundMotion:
+def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None = None) -> Load:
     """One synthetic motion from the configured generator."""
     if isinstance(config, MixtureConfig):
         weights = np.array([component.weight for component in config.components])
@@ -402,7 +429,7 @@ def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None
     return noise_impulses(config, rng, name or "noise_impulses")
 
 
-def content_seed(motion: GroundMotion, seed: int = 0) -> int:
+def content_seed(motion: Load, seed: int = 0) -> int:
     """A seed fixed by the motion's samples and time step and by `seed`, not by its name, file or
     position in a suite: the same record gets the same sensor noise wherever it is evaluated."""
     content = np.float64(motion.dt).tobytes() + np.ascontiguousarray(motion.acceleration, dtype=np.float64).tobytes()
@@ -412,7 +439,7 @@ def content_seed(motion: GroundMotion, seed: int = 0) -> int:
     return int.from_bytes(digest[:8], "little") >> 1
 
 
-def generate_suite(config: GeneratorConfig, count: int, seed: int) -> list[GroundMotion]:
+def generate_suite(config: GeneratorConfig, count: int, seed: int) -> list[Load]:
     """`count` motions from one seed (the same seed gives the same suite)."""
     rng = np.random.default_rng(seed)
     return [generate(config, rng, f"{config.kind}_{seed}_{i}") for i in range(count)]

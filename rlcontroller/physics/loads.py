@@ -13,7 +13,7 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
 from rlcontroller.physics import excitation
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import FLOOR_FORCES, Load
 from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 from rlcontroller.physics.structure import Building
 from rlcontroller.physics.wind import generated_wind, suite_label, wind_suite
@@ -22,16 +22,14 @@ if TYPE_CHECKING:
     from rlcontroller.physics.plant import Plant
 
 
-def generate(
-    config: GeneratorConfig, rng: np.random.Generator, building: Building, name: str | None = None
-) -> GroundMotion:
+def generate(config: GeneratorConfig, rng: np.random.Generator, building: Building, name: str | None = None) -> Load:
     """One load record from the configured generator, on `building` (whose floors wind loads)."""
     if isinstance(config, WindGeneratorConfig):
         return generated_wind(config, building, rng, name or "wind")
     return excitation.generate(config, rng, name)
 
 
-def generate_suite(config: GeneratorConfig, count: int, seed: int, building: Building) -> list[GroundMotion]:
+def generate_suite(config: GeneratorConfig, count: int, seed: int, building: Building) -> list[Load]:
     """`count` load records from one seed (the same seed gives the same suite)."""
     rng = np.random.default_rng(seed)
     return [generate(config, rng, building, f"{config.kind}_{seed}_{i}") for i in range(count)]
@@ -42,7 +40,7 @@ def load_suite(
     scale_pga: float | None = None,
     plant: Plant | None = None,
     echo: Callable[[str], None] | None = None,
-) -> tuple[list[GroundMotion], str]:
+) -> tuple[list[Load], str]:
     """The loads a `--records` value names and their label: a folder or file of ground-motion records
     (default $RLC_RECORDS, else the labelled synthetic suite, said through `echo`), or a wind suite
     (a YAML file, kind: wind) generated on `plant`'s floors. Loads the plant cannot take are refused in
@@ -59,15 +57,13 @@ def load_suite(
     if records is None and not os.environ.get(RECORDS_VARIABLE) and echo is not None:
         echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
     motions, label = choose_motions(records, scale_pga)
-    if plant is not None and any(motion.floor_forces is not None for motion in motions):
+    if plant is not None and any(motion.kind == FLOOR_FORCES for motion in motions):
         refuse_floor_forces(plant, records)
     return motions, label
 
 
 def refuse_floor_forces(plant: Plant, records: Path | None) -> None:
-    """Floor loads (wind, force records) need a linear plant: refused in one line otherwise."""
-    if plant.nonlinear is not None:
-        raise ConfigError(
-            f"--records {records}: floor loads (wind) on a building with yielding stories or semi-active dampers "
-            "are not modelled; use ground-motion records"
-        )
+    """Floor loads (wind, force records) on a plant that cannot take them: refused in one line."""
+    refusal = plant.cannot_take(FLOOR_FORCES)
+    if refusal is not None:
+        raise ConfigError(f"--records {records}: {refusal}; use ground-motion records")

@@ -55,7 +55,7 @@ from rlcontroller.physics.dynamics import (
     state_space,
     step_map,
 )
-from rlcontroller.physics.excitation import GroundModel
+from rlcontroller.physics.excitation import FLOOR_FORCES, GroundModel, LoadGrid
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.semi_active import SemiActiveDampers
@@ -225,7 +225,7 @@ class Plant:
         if hysteresis is not None:  # a shear building's (checked at loading)
             self.yielding = BoucWen.of(self.building, hysteresis, np.asarray(building.stiffnesses, dtype=float))
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
-        self.nonlinear = self.yielding or self.semi_active  # the integrator, when the step is not linear
+        self.integrator = self.yielding or self.semi_active  # its own step, when the step is not linear
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
         dynamics = self.config.actuators if self.config is not None else None
@@ -425,10 +425,36 @@ class Plant:
         ground_gain[:inner] = core.ground_gain
         return StepMap(phi=phi, force_gain=force_gain, ground_gain=ground_gain, control_dt=self.control_dt)
 
+    def cannot_take(self, kind: str) -> str | None:
+        """Why this plant cannot be loaded by a load of `kind` (`excitation.FLOOR_FORCES` or
+        `GROUND_ACCELERATION`), in one line; None when it can."""
+        if kind == FLOOR_FORCES and self.integrator is not None:
+            return "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled"
+        return None
+
+    def forcing(self, grid: LoadGrid, c: np.ndarray, load_rows: np.ndarray) -> np.ndarray:
+        """What the load adds to each control step beyond the plant's own transition: (n_steps, n_state +
+        outputs), its terms in the state x and in outputs y = c x + load_rows F (F the floor forces). A
+        plant with its own integrator takes the ground acceleration in its step: only floor forces are
+        terms here, and it refuses them (`cannot_take`)."""
+        n_steps = grid.n_steps
+        forcing = np.zeros((n_steps, self.n_state + c.shape[0]))
+        if self.integrator is None:
+            forcing[:, : self.n_state] = self.step_map(grid.substeps).ground_terms(grid.ground)
+        if grid.floor_forces is not None:
+            refusal = self.cannot_take(FLOOR_FORCES)
+            if refusal is not None:
+                raise ValueError(refusal)
+            forcing[:, : self.n_state] += self.load_map(grid.substeps).terms(grid.floor_forces)
+            forcing[:, self.n_state :] = grid.floor_forces[grid.substeps :: grid.substeps][:n_steps] @ load_rows.T
+        forcing[:, self.n_state :] += forcing[:, : self.n_state] @ c.T
+        return forcing
+
     def load_map(self, substeps: int = 1) -> LoadMap:
         """Floor forces over a control step on this plant's state x (cached); linear plants only."""
-        if self.nonlinear is not None:
-            raise ValueError("loads on the floors (wind) with yielding stories or dampers are not modelled")
+        refusal = self.cannot_take(FLOOR_FORCES)
+        if refusal is not None:
+            raise ValueError(refusal)
         key = ("load", substeps)
         if key not in self._maps:
             gain = load_map(self.building, self.control_dt, substeps).gain

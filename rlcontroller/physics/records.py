@@ -18,7 +18,7 @@ from rlcontroller.config import KanaiTajimiConfig, display_path, inside
 from rlcontroller.physics.excitation import (
     MOTION_SUFFIXES,
     STANDARD_GRAVITY,
-    GroundMotion,
+    Load,
     MotionError,
     generate_suite,
     read_motion,
@@ -56,7 +56,7 @@ def _description(row: dict[str, str]) -> str:
     return ", ".join(row[c].strip() for c in DESCRIPTION_COLUMNS if (row.get(c) or "").strip())
 
 
-def _folder_motions(folder: Path) -> list[GroundMotion]:
+def _folder_motions(folder: Path) -> list[Load]:
     manifest = folder / MANIFEST
     if manifest.is_file():
         rows = read_manifest(manifest)
@@ -79,7 +79,7 @@ def _folder_motions(folder: Path) -> list[GroundMotion]:
     return [read_motion(path) for path in files]
 
 
-def load_records(path: Path, scale_pga_g: float | None = None) -> tuple[list[GroundMotion], str]:
+def load_records(path: Path, scale_pga_g: float | None = None) -> tuple[list[Load], str]:
     """The records of a folder (or one record file), as recorded or scaled to a PGA (in g),
     and the suite's label."""
     path = Path(path)
@@ -96,14 +96,14 @@ def load_records(path: Path, scale_pga_g: float | None = None) -> tuple[list[Gro
     return motions, label + (f", scaled to PGA {scale_pga_g:g} g" if scale_pga_g is not None else ", as recorded")
 
 
-def synthetic_suite(count: int = 7, seed: int = SYNTHETIC_SEED) -> list[GroundMotion]:
+def synthetic_suite(count: int = 7, seed: int = SYNTHETIC_SEED) -> list[Load]:
     """The embedded default: seeded Kanai-Tajimi motions, strong enough to matter (PGA 2-6 m/s^2)."""
     config = KanaiTajimiConfig(duration=(25.0, 40.0), pga=(2.0, 6.0), strong_duration=(6.0, 15.0))
     motions = generate_suite(config, count, seed)
     return [replace(motion, name=f"synthetic_KT_{i + 1}") for i, motion in enumerate(motions)]
 
 
-def choose_motions(records: Path | None, scale_pga_g: float | None = None) -> tuple[list[GroundMotion], str]:
+def choose_motions(records: Path | None, scale_pga_g: float | None = None) -> tuple[list[Load], str]:
     """The records at `records` (or $RLC_RECORDS); without either, the labelled synthetic suite."""
     source = records or (Path(os.environ[RECORDS_VARIABLE]) if os.environ.get(RECORDS_VARIABLE) else None)
     if source is not None:

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import WindGeneratorConfig, WindSuiteConfig
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.structure import Building
 
 KARMAN = 0.4
@@ -187,15 +187,15 @@ def floor_field(config: WindSuiteConfig | WindGeneratorConfig, building: Buildin
 
 def generated_wind(
     config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str
-) -> GroundMotion:
+) -> Load:
     """One wind load record for training: a mean speed and a duration drawn in the generator's ranges."""
     speed = float(rng.uniform(*config.speed))
     duration = float(rng.uniform(*config.duration))
     forces = fluctuating_forces(floor_field(config, building, speed), duration, config.dt, rng, config.cutoff)
-    return GroundMotion(name, config.dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
+    return Load(name, config.dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
 
 
-def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]:
+def wind_suite(suite: WindSuiteConfig, building: Building) -> list[Load]:
     """The suite's wind load records on `building`'s floors, as motions with floor forces and no
     ground acceleration, all from one seed."""
     rng = np.random.default_rng(suite.seed)
@@ -206,7 +206,7 @@ def wind_suite(suite: WindSuiteConfig, building: Building) -> list[GroundMotion]
             forces = fluctuating_forces(field, suite.duration, suite.dt, rng, suite.cutoff)
             name = f"wind_{speed:g}ms_{number + 1}"
             zero = np.zeros(forces.shape[0])
-            records.append(GroundMotion(name, suite.dt, zero, synthetic=True, floor_forces=forces))
+            records.append(Load(name, suite.dt, zero, synthetic=True, floor_forces=forces))
     return records
 
 

@@ -24,7 +24,7 @@ from rlcontroller.control.controllers import Controller, LQGBank, LQGController
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import GroundMotion, floor_forces_for_control_step, for_control_step
+from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
 from rlcontroller.physics.plant import Plant, draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
@@ -44,9 +44,7 @@ class BuildingBatch:
     plant states x then the clipped actions, `plants`, `steps` (K per member), `k` (steps taken).
     """
 
-    def __init__(
-        self, plant: Plant, size: int, motions: list[GroundMotion] | None = None, randomize: bool = False
-    ) -> None:
+    def __init__(self, plant: Plant, size: int, motions: list[Load] | None = None, randomize: bool = False) -> None:
         experiment = plant.experiment
         self.plant, self.size, self.motions = plant, size, motions
         self.randomization = experiment.plant_randomization if randomize else None
@@ -75,7 +73,7 @@ class BuildingBatch:
         self._stacked: np.ndarray | None = None  # the transitions of all members, padded to S
         self._transitions: list[np.ndarray | None] = [None] * size  # each member's own T (unpadded)
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
-        self._ground_cache: dict[int, tuple] = {}  # id(motion) -> (motion, step map, its ground forcing)
+        self._ground_cache: dict[int, tuple] = {}  # id(load) -> (load, sub-steps, its forcing)
         self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
         self._members = np.arange(size)
 
@@ -94,7 +92,7 @@ class BuildingBatch:
         self._state_size, self.states, self._forcing = state_size, states, forcing
         self._stacked = None
 
-    def start(self, member: int, rng: np.random.Generator, motion: GroundMotion | None = None) -> None:
+    def start(self, member: int, rng: np.random.Generator, motion: Load | None = None) -> None:
         """Start `member` from rest: draw its plant (with randomisation) and motion (unless given), then
         its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
         plant = self.plant
@@ -107,39 +105,31 @@ class BuildingBatch:
                 motion = self.motions[int(rng.integers(len(self.motions)))]
             else:
                 motion = generate(plant.experiment.excitation.generator, rng, plant.building)
-        samples, substeps = for_control_step(motion, self.control_dt)
-        n_steps = (samples.size - 1) // substeps
+        grid = on_control_grid(motion, self.control_dt)
+        n_steps = grid.n_steps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
         size = self._state_size
         forcing = self._forcing[member]
         forcing[:] = 0.0
         rows = self.rows if plant is self.plant else step_outputs(plant)
-        if plant.nonlinear is None:
-            step = plant.step_map(substeps)
-            ground_terms, ground_outputs = self._ground_forcing(
-                motion, samples, step, rows, reused and plant is self.plant
-            )
-            forcing[:n_steps, : plant.n_state] = ground_terms
-            forcing[:n_steps, size:] = ground_outputs
+        load_forcing = self._load_forcing(motion, grid, plant, rows, reused and plant is self.plant)
+        forcing[:n_steps, : plant.n_state] = load_forcing[:, : plant.n_state]
+        forcing[:n_steps, size:] = load_forcing[:, plant.n_state :]
+        if plant.integrator is None:
+            step = plant.step_map(grid.substeps)
             if plant is not self.plant:
                 self._transitions[member] = rows.transition(step, plant.force_limits)
             else:
-                if substeps not in self._cache:
-                    self._cache[substeps] = rows.transition(step, plant.force_limits)
-                self._transitions[member] = self._cache[substeps]
+                if grid.substeps not in self._cache:
+                    self._cache[grid.substeps] = rows.transition(step, plant.force_limits)
+                self._transitions[member] = self._cache[grid.substeps]
             self._windows[member] = None
         else:
             self._transitions[member] = None
-            self._windows[member] = sliding_window_view(samples, substeps + 1)[::substeps]
+            self._windows[member] = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
         self._stacked = None
-        self.floor_forces[member] = None
-        loads = floor_forces_for_control_step(motion, self.control_dt)
-        if loads is not None:  # wind: the floors' forcing, and its direct share in the outputs
-            terms = plant.load_map(substeps).terms(loads)
-            forcing[:n_steps, : plant.n_state] += terms
-            forcing[:n_steps, size:] += terms @ rows.c.T + loads[substeps::substeps][:n_steps] @ rows.load.T
-            self.floor_forces[member] = loads[::substeps][: n_steps + 1]
-        ground = samples[::substeps][: n_steps + 1]
+        self.floor_forces[member] = grid.forces_at_steps
+        ground = grid.ground_at_steps
         readings = noisy_readings(plant, ground, rng)
         forcing[:n_steps, size:][:, self.rows.readings] += readings[1:]
         self.plants[member] = plant
@@ -156,17 +146,16 @@ class BuildingBatch:
             self.previous_ground[member] = 0.0
             self._update_estimates(readings[0][None], self.previous_action[member][None], [member])
 
-    def _ground_forcing(self, motion: GroundMotion, samples: np.ndarray, step, rows, keep: bool) -> tuple:
-        """The ground's terms in the state and in the outputs at every step of `motion`; kept for the
-        members that start with the same motion object on the base plant (every controller's lane does)."""
+    def _load_forcing(self, motion: Load, grid: LoadGrid, plant: Plant, rows, keep: bool) -> np.ndarray:
+        """`plant.forcing` of the load; kept for the members that start with the same load object on the
+        base plant (every controller's lane does)."""
         cached = self._ground_cache.get(id(motion))
-        if cached is not None and cached[0] is motion and cached[1] is step:
-            return cached[2:]
-        ground_terms = step.ground_terms(samples)
-        terms = (ground_terms, ground_terms @ rows.c.T)
+        if cached is not None and cached[0] is motion and cached[1] == grid.substeps:
+            return cached[2]
+        forcing = plant.forcing(grid, rows.c, rows.load)
         if keep:
-            self._ground_cache[id(motion)] = (motion, step, *terms)  # holds `motion`: its id stays its own
-        return terms
+            self._ground_cache[id(motion)] = (motion, grid.substeps, forcing)  # holds `motion`: its id stays its own
+        return forcing
 
     def _padded(self, inner: np.ndarray) -> np.ndarray:
         """A member's T zero-padded to the batch's state size."""
@@ -246,7 +235,7 @@ class BuildingBatch:
             n, windows = plant.n_state, self._windows[member]
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
-            state = plant.nonlinear.step(self.states[member, :n], clipped[member], windows[k], self.control_dt)
+            state = plant.integrator.step(self.states[member, :n], clipped[member], windows[k], self.control_dt)
             rows = self.rows if plant is self.plant else step_outputs(plant)
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T
@@ -282,7 +271,7 @@ ROWS_PER_BATCH = 400_000  # members x control steps simulated at once (bounds th
 
 def batch_rollout(
     plant: Plant,
-    motions: list[GroundMotion],
+    motions: list[Load],
     controllers: list[Controller],
     seeds: list[int] | None = None,
     randomize: bool = False,
@@ -296,8 +285,7 @@ def batch_rollout(
     if not controllers:
         return []
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
-    sampled = [for_control_step(motion, plant.control_dt) for motion in motions]
-    lengths = [(samples.size - 1) // substeps for samples, substeps in sampled]  # control steps
+    lengths = [on_control_grid(motion, plant.control_dt).n_steps for motion in motions]  # control steps
     order = sorted(range(len(motions)), key=lambda i: lengths[i])
     results: list[list] = [[None] * len(motions) for _ in controllers]
     while order:
@@ -316,7 +304,7 @@ def batch_rollout(
 
 
 def _rollout_chunk(
-    plant: Plant, motions: list[GroundMotion], controllers: list[Controller], seeds: list[int], randomize: bool
+    plant: Plant, motions: list[Load], controllers: list[Controller], seeds: list[int], randomize: bool
 ) -> list[list[tuple[Response, float]]]:
     count = len(motions)
     batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)

@@ -9,7 +9,7 @@ import scipy.linalg
 from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model, integration_filter, kalman_gain
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 
 
@@ -37,7 +37,7 @@ def test_the_estimate_converges_to_the_true_state_from_noise_free_readings():
     pulse = np.zeros(1501)
     pulse[10:20] = 2.0
     env = BuildingEnv(plant)
-    observation, _ = env.reset(seed=0, options={"motion": GroundMotion("pulse", 0.02, pulse)})
+    observation, _ = env.reset(seed=0, options={"motion": Load("pulse", 0.02, pulse)})
     layout, errors, previous = plant.layout, [], 0.0
     estimate = np.zeros(kalman.size)
     for _ in range(1500):

@@ -10,7 +10,7 @@ from rlcontroller.control.optimal import optimal_response
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import Response, step_map
-from rlcontroller.physics.excitation import GroundModel, GroundMotion, kanai_tajimi, read_at2, scale_to_pga
+from rlcontroller.physics.excitation import GroundModel, Load, kanai_tajimi, read_at2, scale_to_pga
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import build
@@ -55,7 +55,7 @@ def test_gain_matches_an_independent_riccati_solution():
 def test_the_lqr_cost_is_exactly_the_reward():
     experiment = Experiment()
     env = BuildingEnv(experiment)
-    motion = GroundMotion("m", 0.02, np.random.default_rng(0).normal(0, 2.0, 60))
+    motion = Load("m", 0.02, np.random.default_rng(0).normal(0, 2.0, 60))
     env.reset(seed=0, options={"motion": motion})
     step = env.step_map(1)
     cost = quadratic_cost(env.plant, experiment.reward, step)
@@ -151,7 +151,7 @@ def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
     assert np.abs(lqg.force).max() > 1e4
 
 
-def read_at2_or_synthetic() -> GroundMotion:
+def read_at2_or_synthetic() -> Load:
     from rlcontroller.physics.records import synthetic_suite
 
     return synthetic_suite(count=1)[0]
@@ -166,9 +166,9 @@ def test_residual_needs_the_state_estimate():
         build_experiment({"sensors": {"ground_model": True}})
 
 
-def weak_motion(steps: int, seed: int = 3) -> GroundMotion:
+def weak_motion(steps: int, seed: int = 3) -> Load:
     """Small enough that no force reaches its limit, so the optimal control is the unclipped one."""
-    return GroundMotion("weak", 0.02, 0.05 * np.random.default_rng(seed).standard_normal(steps + 1))
+    return Load("weak", 0.02, 0.05 * np.random.default_rng(seed).standard_normal(steps + 1))
 
 
 def test_clairvoyant_actions_solve_the_finite_least_squares_problem():

@@ -11,7 +11,7 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
@@ -28,7 +28,7 @@ def lqg(plant: Plant) -> LQGController:
     return LQGController(design_lqg_ground_model(plant.design), plant, "LQG + ground model")
 
 
-def run(env: BuildingEnv, controller, motion: GroundMotion, seed: int = 3):
+def run(env: BuildingEnv, controller, motion: Load, seed: int = 3):
     """Each step's observation before it, the controller's action and the action applied."""
     observation, info = env.reset(seed=seed, options={"motion": motion})
     controller.reset()
@@ -43,7 +43,7 @@ def run(env: BuildingEnv, controller, motion: GroundMotion, seed: int = 3):
 
 
 def test_at_rest_the_trigger_keeps_every_force_at_zero():
-    still = GroundMotion("at rest", 0.02, np.zeros(3001), synthetic=True)
+    still = Load("at rest", 0.02, np.zeros(3001), synthetic=True)
     supervised = BuildingEnv(experiment())
     _, wanted, applied = run(supervised, lqg(supervised.plant), still)
     assert np.abs(wanted).max() > 1e-3  # LQG reacts to the sensor noise...

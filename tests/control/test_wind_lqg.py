@@ -13,7 +13,7 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate, mean_metric
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import discrete_noise, simulate
-from rlcontroller.physics.excitation import floor_forces_for_control_step
+from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 
@@ -37,7 +37,7 @@ def test_the_discrete_process_noise_is_van_loans_integral():
 
 def velocity_error(plant: Plant, design, motion) -> float:
     """Relative RMS error of the filter's floor velocities, noise-free accelerometers, no control."""
-    forces = floor_forces_for_control_step(motion, plant.control_dt)
+    forces = on_control_grid(motion, plant.control_dt).floor_forces
     response = simulate(plant.building, plant.structure_step_map(1), np.zeros(forces.shape[0]), floor_forces=forces)
     n = plant.building.n_dofs
     states = np.hstack([response.displacement, response.velocity])

@@ -18,7 +18,7 @@ from rlcontroller.control.policy import read_policy
 from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.policy import algorithm_class, policy_controller
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 
@@ -74,7 +74,7 @@ def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
     assert plant.experiment.supervisor is not None
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
     assert_same_forces(plant, read_policy(folder, "best", plant), path, synthetic_suite(count=2))
-    still = GroundMotion("at rest", plant.control_dt, np.zeros(1001), synthetic=True)
+    still = Load("at rest", plant.control_dt, np.zeros(1001), synthetic=True)
     forces = onnx_rollout(Plant(plant.experiment.model_copy(update={"supervisor": None})), path, still, 0)
     assert np.all(forces == 0.0)
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}

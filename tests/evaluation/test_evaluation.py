@@ -14,7 +14,7 @@ from rlcontroller.evaluation.evaluation import (
     uncontrolled_responses,
 )
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import for_control_step, read_at2
+from rlcontroller.physics.excitation import on_control_grid, read_at2
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import SYNTHETIC_LABEL, load_records, synthetic_suite
 
@@ -98,7 +98,8 @@ def test_a_tuned_mass_dampers_energy_balances(records):
     plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_tmd.yaml"))
     building, floors = plant.building, plant.bare.building
     for motion in load_records(records)[0][:3]:
-        samples, substeps = for_control_step(motion, plant.control_dt)
+        grid = on_control_grid(motion, plant.control_dt)
+        samples, substeps = grid.ground, grid.substeps
         result = simulate(building, plant.step_map(substeps), samples)
         dt = plant.control_dt
         ground_input = np.trapezoid(-result.ground * (result.velocity @ floors.floor_masses), dx=dt)
@@ -124,7 +125,8 @@ def test_with_mass_devices_uncontrolled_is_the_bare_building_and_passive_the_tun
     assert evaluation.controllers == ["uncontrolled", PASSIVE]
     bare = Plant(Experiment())
     for motion in motions:
-        samples, substeps = for_control_step(motion, plant.control_dt)
+        grid = on_control_grid(motion, plant.control_dt)
+        samples, substeps = grid.ground, grid.substeps
         expected = simulate(bare.building, bare.step_map(substeps), samples)
         drift = evaluation.responses["uncontrolled", motion.name].drift
         np.testing.assert_allclose(drift, expected.drift, rtol=0, atol=1e-12 * np.max(np.abs(expected.drift)))

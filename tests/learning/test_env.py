@@ -10,7 +10,7 @@ from rlcontroller import ENV_ID
 from rlcontroller.config import Experiment, MeasurementConfig, RewardTerm, SensorConfig
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.dynamics import simulate
-from rlcontroller.physics.excitation import GroundMotion, read_at2
+from rlcontroller.physics.excitation import Load, read_at2
 from rlcontroller.physics.records import synthetic_suite
 
 NOISE_FREE = Experiment(
@@ -75,9 +75,9 @@ def test_steps_match_the_whole_record_simulation(records):
         shears.append(info["base_shear"])
     assert truncated
     forces = np.clip(actions, -1, 1) * 1e5
-    from rlcontroller.physics.excitation import for_control_step
-
-    samples, substeps = for_control_step(motion, 0.02)
+    from rlcontroller.physics.excitation import on_control_grid
+    grid = on_control_grid(motion, 0.02)
+    samples, substeps = grid.ground, grid.substeps
     reference = simulate(env.building, env.step_map(substeps), samples, forces)
     np.testing.assert_allclose(drifts, reference.drift[1:], rtol=SAME_PHYSICS, atol=1e-12)
     np.testing.assert_allclose(accelerations, reference.absolute_acceleration[1:], rtol=SAME_PHYSICS, atol=1e-9)
@@ -102,7 +102,7 @@ def test_reward_is_the_weighted_sum_of_scaled_squares():
 
 
 def test_observation_holds_the_history_newest_first():
-    motion = GroundMotion("ramp", 0.02, np.linspace(0.0, 3.0, 101))
+    motion = Load("ramp", 0.02, np.linspace(0.0, 3.0, 101))
     env = BuildingEnv(NOISE_FREE)
     first, _ = env.reset(seed=0, options={"motion": motion})
     assert np.all(first == 0)  # at rest and the ramp starts at zero
@@ -147,7 +147,7 @@ def test_a_selected_sensor_layout_and_force_reward():
 
 def test_step_after_the_end_is_refused():
     env = BuildingEnv()
-    env.reset(options={"motion": GroundMotion("short", 0.02, np.zeros(3))})
+    env.reset(options={"motion": Load("short", 0.02, np.zeros(3))})
     env.step(np.zeros(3))
     assert env.step(np.zeros(3))[3]
     with pytest.raises(RuntimeError, match="reset"):
@@ -282,8 +282,8 @@ def test_a_reward_per_motion_does_not_depend_on_the_motion_intensity():
     ]
     quiet = {"ground_noise_std": 0.0, "measurements": [{"quantity": "absolute_acceleration", "scale": 5.0}]}
     weak = synthetic_suite(count=1)[0]
-    weak = GroundMotion("weak", weak.dt, weak.acceleration * (0.001 / np.abs(weak.acceleration).max()))
-    strong = GroundMotion("strong", weak.dt, 20.0 * weak.acceleration)
+    weak = Load("weak", weak.dt, weak.acceleration * (0.001 / np.abs(weak.acceleration).max()))
+    strong = Load("strong", weak.dt, 20.0 * weak.acceleration)
     returns = {}
     for per_motion in (True, False):
         experiment = Experiment.model_validate({"sensors": quiet, "reward": {"terms": terms, "per_motion": per_motion}})

@@ -10,7 +10,7 @@ import scipy.optimize
 
 from rlcontroller.config import Experiment
 from rlcontroller.physics.dynamics import simulate
-from rlcontroller.physics.excitation import for_control_step
+from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 from rlcontroller.physics.structure import warburton_optimum
@@ -75,7 +75,8 @@ def experiment_with(devices, actuators=None) -> Experiment:
 
 def test_a_vanishing_tuned_mass_leaves_the_building_as_it_was(records):
     motion = load_records(records)[0][0]
-    samples, substeps = for_control_step(motion, 0.02)
+    grid = on_control_grid(motion, 0.02)
+    samples, substeps = grid.ground, grid.substeps
     bare = Plant(Experiment())
     tiny = Plant(experiment_with([{"type": "tuned_mass", "floor": 5, "mass_ratio": 1e-9}]))
     assert tiny.building.n_dofs == 6 and tiny.building.n_floors == 5
@@ -97,7 +98,8 @@ def test_mass_devices_match_an_independent_integration_of_their_equations(record
     plant = Plant(experiment_with(devices))
     building = plant.building
     motion = load_records(records)[0][0]
-    samples, substeps = for_control_step(motion, plant.control_dt)
+    grid = on_control_grid(motion, plant.control_dt)
+    samples, substeps = grid.ground, grid.substeps
     samples = samples[: 400 * substeps + 1]  # the first 8 s
     steps = (samples.size - 1) // substeps
     forces = np.random.default_rng(3).uniform(-1.0, 1.0, (steps, 4)) * building.force_limits

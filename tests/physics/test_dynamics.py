@@ -12,7 +12,7 @@ from rlcontroller.physics.dynamics import (
     state_space,
     step_map,
 )
-from rlcontroller.physics.excitation import GroundMotion, for_control_step, read_at2
+from rlcontroller.physics.excitation import Load, on_control_grid, read_at2
 
 MASS, STIFFNESS = 2.0e4, 8.0e5  # kg, N/m -> omega = 6.32 rad/s
 
@@ -154,7 +154,8 @@ def test_newmark_agrees_with_exact_to_a_few_percent(paper_building, records):
     peaks = {}
     for method in ("exact", "newmark"):
         for dt in (0.02, 0.01):
-            samples, substeps = for_control_step(motion, dt)
+            grid = on_control_grid(motion, dt)
+            samples, substeps = grid.ground, grid.substeps
             result = simulate(
                 paper_building,
                 step_map(paper_building, SimulationConfig(control_dt=dt, method=method), substeps),
@@ -169,7 +170,8 @@ def test_newmark_agrees_with_exact_to_a_few_percent(paper_building, records):
 def test_substeps_never_decimate_a_fine_record(paper_building):
     ground_dt = 0.005
     ground = rayleigh_motion(dt=ground_dt)
-    samples, substeps = for_control_step(GroundMotion("fine", ground_dt, ground), 0.02)
+    grid = on_control_grid(Load("fine", ground_dt, ground), 0.02)
+    samples, substeps = grid.ground, grid.substeps
     assert substeps == 4 and samples.size == ground.size
     coarse = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02), substeps), samples)
     fine = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=ground_dt)), ground)

@@ -6,12 +6,12 @@ import pytest
 from rlcontroller.config import KanaiTajimiConfig, NoiseImpulsesConfig
 from rlcontroller.physics.excitation import (
     STANDARD_GRAVITY,
-    GroundMotion,
+    Load,
     MotionError,
-    for_control_step,
     generate_suite,
     kanai_tajimi,
     noise_impulses,
+    on_control_grid,
     read_at2,
     read_csv,
     resample,
@@ -89,9 +89,9 @@ def test_binary_bytes_are_not_a_record(tmp_path):
 
 
 def test_a_motion_shorter_than_one_control_step_is_refused():
-    motion = GroundMotion("short", 0.005, np.array([0.0, 1.0, 0.0]))
+    motion = Load("short", 0.005, np.array([0.0, 1.0, 0.0]))
     with pytest.raises(MotionError, match="short: lasts 0.01 s, shorter than one control step"):
-        for_control_step(motion, 0.02)
+        on_control_grid(motion, 0.02)
 
 
 def test_truncated_header(tmp_path):
@@ -135,7 +135,7 @@ def test_uneven_csv_is_interpolated(tmp_path):
 
 
 def test_resample_preserves_a_piecewise_linear_motion():
-    motion = GroundMotion("m", 0.02, np.array([0.0, 1.0, -1.0, 0.5]))
+    motion = Load("m", 0.02, np.array([0.0, 1.0, -1.0, 0.5]))
     fine = resample(motion, 0.005)
     assert fine.acceleration.size == 13
     np.testing.assert_allclose(fine.acceleration[::4], motion.acceleration)
@@ -143,16 +143,18 @@ def test_resample_preserves_a_piecewise_linear_motion():
 
 
 def test_control_step_keeps_every_sample_and_subdivides_odd_steps():
-    samples, substeps = for_control_step(GroundMotion("m", 0.005, np.arange(9.0)), 0.02)
+    grid = on_control_grid(Load("m", 0.005, np.arange(9.0)), 0.02)
+    samples, substeps = grid.ground, grid.substeps
     assert substeps == 4 and samples.size == 9
-    samples, substeps = for_control_step(GroundMotion("m", 0.015, np.arange(5.0)), 0.02)
+    grid = on_control_grid(Load("m", 0.015, np.arange(5.0)), 0.02)
+    samples, substeps = grid.ground, grid.substeps
     assert substeps == 2 and np.isclose(samples[1], 0.01 / 0.015)
-    _, substeps = for_control_step(GroundMotion("m", 0.02, np.arange(5.0)), 0.02)
+    substeps = on_control_grid(Load("m", 0.02, np.arange(5.0)), 0.02).substeps
     assert substeps == 1
 
 
 def test_scale_to_pga():
-    motion = scale_to_pga(GroundMotion("m", 0.01, np.array([0.0, -2.0, 1.0])), 3.0)
+    motion = scale_to_pga(Load("m", 0.01, np.array([0.0, -2.0, 1.0])), 3.0)
     np.testing.assert_allclose(motion.acceleration, [0.0, -3.0, 1.5])
 
 

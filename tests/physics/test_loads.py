@@ -60,14 +60,14 @@ def test_with_a_tuned_mass_the_loads_stay_on_the_floors():
 
 
 def wind_record(plant: Plant, seconds: float = 120.0, seed: int = 0):
-    from rlcontroller.physics.excitation import GroundMotion
+    from rlcontroller.physics.excitation import Load
     from rlcontroller.physics.wind import WindField, fluctuating_forces, mean_force
 
     heights = 3.0 * np.arange(1, 6)
     field = WindField(heights=heights, speed=30.0, reference_height=10.0, roughness=0.3, width=20.0)
     dt = 0.01
     forces = mean_force(field) + fluctuating_forces(field, seconds, dt, np.random.default_rng(seed))
-    return GroundMotion(f"wind_{seed}", dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
+    return Load(f"wind_{seed}", dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
 
 
 def test_a_batch_under_wind_gives_each_records_env_rollout():
@@ -102,7 +102,7 @@ def test_the_floor_loads_need_a_linear_plant():
 
     raw = Experiment().model_dump()
     raw["plant"] = {"hysteresis": {"yield_drift": 0.01}}
-    with pytest.raises(ValueError, match="loads on the floors"):
+    with pytest.raises(ValueError, match=r"floor loads \(wind\) on a building with yielding stories"):
         Plant(Experiment.model_validate(raw)).load_map(1)
 
 

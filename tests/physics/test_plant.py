@@ -7,7 +7,7 @@ from conftest import SAME_PHYSICS
 from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.dynamics import output_matrices
-from rlcontroller.physics.excitation import GroundMotion
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 
 
@@ -92,7 +92,7 @@ def test_the_design_model_is_the_experiment_without_its_plant_part():
 def delivered_forces(plant: Plant, commands: np.ndarray) -> np.ndarray:
     """The env's delivered force after each command, on a quiet ground."""
     env = BuildingEnv(plant)
-    env.reset(seed=0, options={"motion": GroundMotion("quiet", 0.02, np.full(commands.shape[0] + 2, 1e-9))})
+    env.reset(seed=0, options={"motion": Load("quiet", 0.02, np.full(commands.shape[0] + 2, 1e-9))})
     forces = []
     for command in commands:
         env.step(command)
@@ -130,7 +130,7 @@ def test_a_delay_shifts_the_delivered_force_and_the_response_exactly(lag):
 def test_sensor_faults_dead_floor_bias_and_noise():
     plant = plant_with(sensors={"dead_floors": [3], "bias": [{"floor": 1, "value": 0.5}], "noise_factor": 4.0})
     env = BuildingEnv(plant)
-    quiet = GroundMotion("quiet", 0.02, np.full(2001, 1e-9))
+    quiet = Load("quiet", 0.02, np.full(2001, 1e-9))
     observation, _ = env.reset(seed=1, options={"motion": quiet})
     readings = [observation[:5]]
     for _ in range(2000):

@@ -134,7 +134,7 @@ def sinusoid_test(volts_action: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """The paper's test: the prototype damper (capacity alpha(V_max) z_max of Table 1, so unscaled)
     stroked 1.5 cm at 2.5 Hz at a constant voltage, between the ground and a 10^9 kg floor on a 1 N/m
     spring that stays still; returns the damper's force (N), stroke (m) and stroke velocity (m/s)."""
-    from rlcontroller.physics.excitation import GroundMotion
+    from rlcontroller.physics.excitation import Load
 
     z_max = np.sqrt(301.0 / (2 * 363.0e4))
     prototype = (140.0e2 + 695.0e2 * 2.25) * z_max
@@ -150,7 +150,7 @@ def sinusoid_test(volts_action: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     envelope = np.where(time < 0.8, envelope * (10 - 15 * (time / 0.8) + 6 * (time / 0.8) ** 2), 1.0)
     displacement = 0.015 * envelope * np.sin(omega * time)
     acceleration = np.gradient(np.gradient(displacement, dt), dt)
-    motion = GroundMotion(name="sinusoid", dt=dt, acceleration=acceleration)
+    motion = Load(name="sinusoid", dt=dt, acceleration=acceleration)
     ((result, _),) = batch_rollout(plant, [motion], [Commands(np.full((1, 1), volts_action))])[0]
     last = result.time >= 1.2  # two cycles after the start-up
     return -result.force[last, 0], result.drift[last, 0], result.device_velocity[last, 0]
