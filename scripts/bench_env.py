@@ -27,7 +27,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.physics.dynamics import simulate, step_map
-from rlcontroller.physics.excitation import generate_suite
+from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import build
 from rlcontroller.simulation.batch import batch_rollout

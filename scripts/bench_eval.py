@@ -28,7 +28,8 @@ from rlcontroller.control.policy import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, generate_suite
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load
+from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 

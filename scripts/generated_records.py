@@ -16,7 +16,8 @@ from pathlib import Path
 
 from rlcontroller.config import ExcitationConfig, read_yaml
 from rlcontroller.files import atomic_write, new_folder
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, generate_suite
+from rlcontroller.physics.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.generators import generate_suite
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 

@@ -21,7 +21,8 @@ import numpy as np
 from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.physics.excitation import MotionError, generate_suite
+from rlcontroller.physics.excitation import MotionError
+from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import batch_rollout

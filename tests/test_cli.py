@@ -216,3 +216,21 @@ def test_an_internal_error_is_one_line_naming_its_traceback_file(monkeypatch, tm
     assert isinstance(debugged.exception, RuntimeError) and "internal error" not in debugged.output
     monkeypatch.setenv("RLC_DEBUG", "1")
     assert isinstance(CliRunner().invoke(app, ["info", "configs/five_story.yaml"]).exception, RuntimeError)
+
+
+def test_the_command_line_starts_without_the_library():
+    """`rlc --help` must not wait for numpy, pandas, gymnasium, pydantic or torch: the command modules import
+    the library inside each command (start-up is measured in scripts/bench_startup.py, not here)."""
+    code = "import sys, rlcontroller.cli; print(sorted({m.split('.')[0] for m in sys.modules}))"
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    for heavy in ("numpy", "pandas", "gymnasium", "pydantic", "torch", "scipy", "yaml"):
+        assert f"'{heavy}'" not in loaded, heavy
+
+
+def test_the_env_is_registered_by_the_learning_package_in_a_fresh_process():
+    code = (
+        "import rlcontroller.learning, gymnasium; env = gymnasium.make(rlcontroller.ENV_ID); "
+        "print(env.observation_space.shape, rlcontroller.__version__)"
+    )
+    printed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert printed.strip().endswith(importlib.metadata.version("rlcontroller"))

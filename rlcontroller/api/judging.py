@@ -120,7 +120,8 @@ def compare_lqg(
         mean_metric,
         preview_study,
     )
-    from rlcontroller.evaluation.report import write_damper_sweep, write_preview, write_report, write_sweep
+    from rlcontroller.evaluation.report import write_report
+    from rlcontroller.evaluation.study_report import write_damper_sweep, write_preview, write_sweep
 
     if config is not None and run_dir is not None:
         raise ConfigError("--config: either a run folder or --config, not both")
@@ -210,9 +211,9 @@ def robustness(
     controller), the suite's label, the scenarios run, the seconds taken and the folder written."""
     from rlcontroller.config import load_scenarios
     from rlcontroller.control.policy import read_policy
-    from rlcontroller.evaluation.report import write_robustness
     from rlcontroller.evaluation.robustness import robustness as run_robustness
     from rlcontroller.evaluation.robustness import summary
+    from rlcontroller.evaluation.study_report import write_robustness
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
 

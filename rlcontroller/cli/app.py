@@ -1,5 +1,6 @@
 """The `rlc` application: its options shared by many commands, the one-line handling of every error, and
-the `Report` that prints a command's lines, notes and progress bars."""
+the `Report` that prints a command's lines, notes and progress bars. The command modules import the
+library (`rlcontroller.api`) inside each command, so `rlc --help` loads none of it."""
 
 from __future__ import annotations
 
@@ -19,9 +20,7 @@ try:  # typer 0.2x carries its own click (typer._click) and no longer installs c
 except ImportError:
     from click import ClickException as CommandLineError
 
-from rlcontroller.api.common import Report
-from rlcontroller.config import ConfigError
-from rlcontroller.physics.excitation import MotionError
+from rlcontroller.errors import ConfigError, MotionError
 
 app = typer.Typer(
     add_completion=False,
@@ -141,8 +140,8 @@ def show_progress(progress: bool | None) -> bool:
     return sys.stdout.isatty() if progress is None else progress
 
 
-class Printed(Report):
-    """A command's report on the terminal: its lines on stdout, notes on stderr, and (when `bars`) a
+class Printed:
+    """A command's `api.Report` on the terminal: its lines on stdout, notes on stderr, and (when `bars`) a
     progress bar on stderr while a long step runs (what it does, done/total, elapsed, time left), gone
     when it ends."""
 

@@ -7,9 +7,8 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller import api
+from rlcontroller.bounds import MAX_SEED, MAX_TOTAL_STEPS
 from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, positive_finite, user_errors
-from rlcontroller.config import MAX_SEED, MAX_TOTAL_STEPS
 
 
 @app.command(short_help="An experiment resolved: building, periods, actuators.")
@@ -19,6 +18,8 @@ def info(
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
     the simulated plant when there is a plant part), actuator layout and devices."""
+    from rlcontroller import api
+
     typer.echo(api.describe(api.load(config)))
 
 
@@ -53,6 +54,8 @@ def train(
 ) -> None:
     """Train a controller (SAC, PPO, TD3, DDPG, A2C or random search) on generated ground motions;
     checkpoints resume."""
+    from rlcontroller import api
+
     report = Printed(progress)
     trained = api.train(
         config, resume, total_steps, seed, run_dir, device, time_limit, report.bars, tensorboard, report
@@ -78,6 +81,8 @@ def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None
     """The main job end to end: learn a controller from nothing, with no model of the building
     (configs/experiments/demo.yaml, about 30 s), evaluate it against LQG and the uncontrolled building, and
     run the safety check on it."""
+    from rlcontroller import api
+
     report = Printed(progress)
     trained = api.demo(records, report.bars, report)
     print_verdict(trained.verdict, trained.verdict_file)

@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller import api
 from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.cli.app import (
     SCENARIOS_DEFAULT,
@@ -36,6 +35,8 @@ def evaluate(
     progress: ProgressOption = None,
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
+    from rlcontroller import api
+
     evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress))
     typer.echo(api.summary_text(evaluation, out))
 
@@ -71,6 +72,8 @@ def compare_lqg(
     progress: ProgressOption = None,
 ) -> None:
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
+    from rlcontroller import api
+
     compared = api.compare_lqg(run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress))
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):
@@ -89,6 +92,8 @@ def compare_passive(
 ) -> None:
     """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
     active mass drivers as the tuned masses they are without a command; strokes and damper energy."""
+    from rlcontroller import api
+
     evaluation, out = api.compare_passive(config, records, out, scale_pga, Printed(progress))
     typer.echo(api.summary_text(evaluation, out))
 
@@ -110,6 +115,7 @@ def robustness(
     progress: ProgressOption = None,
 ) -> None:
     """Every controller on every scenario's plant and every record: how each copes with model error."""
+    from rlcontroller import api
     from rlcontroller.evaluation.tables import markdown_table
 
     mean_j1, label, named, seconds, out = api.robustness(
@@ -142,6 +148,8 @@ def check(
     """The safety check a controller passes before it is shipped: never worse than no control on a
     broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
     the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
+    from rlcontroller import api
+
     report = Printed(progress)
     folder = api.model_folder(run_dir, report)
     if show:

@@ -8,7 +8,6 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller import api
 from rlcontroller.cli.app import ModelOption, Printed, app, user_errors
 
 
@@ -16,6 +15,8 @@ from rlcontroller.cli.app import ModelOption, Printed, app, user_errors
 @user_errors
 def models() -> None:
     """The shipped controllers: learner, training steps, safety verdict; the default is marked."""
+    from rlcontroller import api
+
     typer.echo("models/ (card.md in each says what it is, what it observes and its numbers)")
     for line in api.shipped_models():
         typer.echo(line)
@@ -39,6 +40,8 @@ def export(
     model: ModelOption = "best",
 ) -> None:
     """The trained controller as one file: sensor readings (SI) and its own state in, forces (N) out."""
+    from rlcontroller import api
+
     api.export(run_dir, out, model, Printed())
 
 
@@ -57,5 +60,7 @@ def convert(
 ) -> None:
     """Write a run's stable-baselines3 models as policy data (best/final_policy.yaml + .npz), the files
     that evaluate, check and export read without unpickling. Runs trained by this rlc have them already."""
+    from rlcontroller import api
+
     for path in api.convert(run_dir, trust_pickle):
         typer.echo(f"wrote {path} and its .npz")

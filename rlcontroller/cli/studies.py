@@ -8,7 +8,6 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller import api
 from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, user_errors
 
 
@@ -34,6 +33,8 @@ def tune(
 ) -> None:
     """Search hyperparameters with Optuna (TPE, median pruning on the validation J1); run the same
     command on more machines with one --storage to share the study."""
+    from rlcontroller import api
+
     ran, name, folder = api.tune(config, trials, storage, study, jobs, out)
     typer.echo(f"{ran} trials run here; study {name!r}: trials.csv, best.yaml and plots in {folder}")
 
@@ -59,6 +60,8 @@ def sweep(
 ) -> None:
     """Train and evaluate every combination of seeds and settings, then aggregate over seeds. Running
     the same command again redoes only what is missing."""
+    from rlcontroller import api
+
     try:
         results, written, folder = api.sweep(
             config, seeds, set_, engine.value, address, workers, records, out, Printed()
@@ -86,6 +89,8 @@ def aggregate(
     progress: ProgressOption = None,
 ) -> None:
     """Per controller and metric over runs: mean, std, interquartile mean, 95 % stratified-bootstrap intervals."""
+    from rlcontroller import api
+
     typer.echo(api.aggregate(runs, out, Printed(progress)))
     if out is not None:
         typer.echo(f"aggregate.csv, aggregate.md and aggregate.png in {out}")

@@ -19,7 +19,9 @@ bound (the `MAX_*` constants of `base`); the message names the bound.
 | `excitation` | ground-motion generators |
 | `plant` | integration, the simulated plant's differences, randomisation |
 | `learning` | learner, policy network, schedule, search space |
-| `experiment` | the whole experiment: parts, loading, cross-checks, overrides |
+| `experiment` | the whole experiment and its parts |
+| `loading` | reading an experiment from YAML files, overrides |
+| `checks` | the parts checked against each other, once, at loading |
 | `studies` | robustness scenarios, the safety check's standard |
 """
 
@@ -81,6 +83,7 @@ from rlcontroller.config.building import (  # noqa: F401
     VariableDamperConfig,
     paper_actuators,
 )
+from rlcontroller.config.checks import check_algorithm, check_plant  # noqa: F401
 from rlcontroller.config.control import (  # noqa: F401
     RewardConfig,
     RewardTerm,
@@ -100,21 +103,13 @@ from rlcontroller.config.excitation import (  # noqa: F401
     load_wind_suite,
     names_wind_suite,
 )
-from rlcontroller.config.experiment import (  # noqa: F401
-    OPTIONAL_PARTS,
-    PARTS,
-    Experiment,
-    build_experiment,
-    check_algorithm,
-    check_plant,
-    load_experiment,
-    with_overrides,
-)
+from rlcontroller.config.experiment import OPTIONAL_PARTS, PARTS, Experiment  # noqa: F401
 from rlcontroller.config.learning import (  # noqa: F401
     AlgorithmConfig,
     PolicyConfig,
     SearchRange,
 )
+from rlcontroller.config.loading import build_experiment, load_experiment, with_overrides  # noqa: F401
 from rlcontroller.config.plant import (  # noqa: F401
     RANDOMIZED_FIELDS,
     ActuatorDynamicsConfig,

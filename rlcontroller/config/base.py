@@ -17,44 +17,21 @@ from pydantic import (
     ValidationError,
 )
 
-
-class ConfigError(ValueError):
-    """A user mistake in a configuration file; `str()` is the one-line message to print."""
-
-
-# Sane bounds: beyond them a value is a typo or a unit mistake, not a building.
-MAX_FLOORS = 100
-
-
-MAX_MASS = 1.0e9  # kg per floor
-
-
-MAX_STIFFNESS = 1.0e12  # N/m per story
-
-
-MAX_FORCE = 1.0e9  # N
-
-
-MAX_GROUND_ACCELERATION = 100.0  # m/s^2, about 10 g
-
-
-MIN_TIME_STEP, MAX_TIME_STEP = 1.0e-4, 1.0  # s
-
-
-MAX_DURATION = 3600.0  # s, one motion
-
-
-MAX_HISTORY = 500  # control steps in the observation
-
-
-MAX_SEED = 2**32 - 1
-
-
-MAX_TOTAL_STEPS = 10**9
-
-
-MAX_ENVS = 256
-
+from rlcontroller.bounds import (  # noqa: F401  (the bounds every part is checked against)
+    MAX_DURATION,
+    MAX_ENVS,
+    MAX_FLOORS,
+    MAX_FORCE,
+    MAX_GROUND_ACCELERATION,
+    MAX_HISTORY,
+    MAX_MASS,
+    MAX_SEED,
+    MAX_STIFFNESS,
+    MAX_TIME_STEP,
+    MAX_TOTAL_STEPS,
+    MIN_TIME_STEP,
+)
+from rlcontroller.errors import ConfigError  # noqa: F401
 
 Scale = Annotated[float, Field(ge=1.0e-9, le=1.0e12)]  # a quantity's scale, in its SI unit
 

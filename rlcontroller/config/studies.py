@@ -11,8 +11,9 @@ from pydantic import (
 )
 
 from rlcontroller.config.base import Seed, StrictModel, first_repeat, read_model
+from rlcontroller.config.checks import check_plant
 from rlcontroller.config.excitation import GeneratorConfig
-from rlcontroller.config.experiment import Experiment, check_plant
+from rlcontroller.config.experiment import Experiment
 from rlcontroller.config.plant import PlantConfig
 
 

@@ -27,7 +27,8 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
-from rlcontroller.physics.plant import Plant, centre_of_ranges
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.variations import centre_of_ranges
 
 NOMINAL_LQG = "LQG (nominal design)"
 NOMINAL_GROUND_MODEL = "LQG + ground model (nominal design)"

@@ -36,7 +36,8 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, generate_suite
+from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load
+from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
 

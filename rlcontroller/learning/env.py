@@ -46,7 +46,8 @@ from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
-from rlcontroller.physics.plant import Plant, draw_plant
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
 

@@ -27,7 +27,7 @@ import scipy.linalg
 from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Quantity, SimulationConfig
-from rlcontroller.physics.excitation import GroundModel
+from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.structure import Building
 
 QUANTITIES: tuple[str, ...] = typing.get_args(Quantity)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
-from rlcontroller.physics import excitation
+from rlcontroller.physics import generators
 from rlcontroller.physics.excitation import FLOOR_FORCES, Load
 from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
 from rlcontroller.physics.structure import Building
@@ -26,7 +26,7 @@ def generate(config: GeneratorConfig, rng: np.random.Generator, building: Buildi
     """One load record from the configured generator, on `building` (whose floors wind loads)."""
     if isinstance(config, WindGeneratorConfig):
         return generated_wind(config, building, rng, name or "wind")
-    return excitation.generate(config, rng, name)
+    return generators.generate(config, rng, name)
 
 
 def generate_suite(config: GeneratorConfig, count: int, seed: int, building: Building) -> list[Load]:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import SensorConfig
-from rlcontroller.physics.excitation import GroundModel
+from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.structure import Building
 
 

@@ -23,23 +23,17 @@ the non-linear integrator, and every output is still linear in that state and th
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from rlcontroller.config import (
-    RANDOMIZED_FIELDS,
     SEMI_ACTIVE,
     ActuatorConfig,
-    BuildingConfig,
     Experiment,
-    MatrixBuildingConfig,
-    PlantConfig,
-    PlantRandomization,
     Quantity,
     SensorConfig,
     WindGeneratorConfig,
-    randomized_plant,
 )
 from rlcontroller.physics.dynamics import (
     LoadMap,
@@ -55,125 +49,15 @@ from rlcontroller.physics.dynamics import (
     state_space,
     step_map,
 )
-from rlcontroller.physics.excitation import FLOOR_FORCES, GroundModel, LoadGrid
+from rlcontroller.physics.excitation import FLOOR_FORCES, LoadGrid
+from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.semi_active import SemiActiveDampers
+from rlcontroller.physics.sensors import sensor_matrices
 from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
+from rlcontroller.physics.variations import scaled_damper, true_building
 from rlcontroller.physics.wind import WindLoadModel, floor_field, load_model
-
-
-@dataclass(frozen=True)
-class SensorMatrices:
-    """The readings y = c z + d u + load F (SI units, one row per reading; F the floor forces, N),
-    their scales and noise std."""
-
-    c: np.ndarray
-    d: np.ndarray  # per newton of actuator force
-    load: np.ndarray  # per newton of floor force (absolute accelerations only)
-    scale: np.ndarray
-    noise_std: np.ndarray
-    bias: np.ndarray  # constant added to each reading (SI), zero without sensor faults
-
-
-def sensor_matrices(plant: Plant, sensors: SensorConfig) -> SensorMatrices:
-    """The measurement rows of `sensors` on the plant's state: y = C x + D u, one row per reading,
-    with the plant's sensor faults (dead floors read zero, noise times a factor, constant bias)."""
-    rows_c, rows_d, rows_load, scales, noises, floors = [], [], [], [], [], []
-    for measurement in sensors.measurements:
-        c, d = plant.outputs(measurement.quantity)
-        index = list(range(c.shape[0])) if measurement.floors is None else [f - 1 for f in measurement.floors]
-        rows_c.append(c[index])
-        rows_d.append(d[index])
-        rows_load.append(load_feedthrough(plant.building, measurement.quantity)[index])
-        scales.append(np.full(len(index), measurement.scale))
-        noises.append(np.full(len(index), measurement.noise_std))
-        floors.extend(i + 1 for i in index)
-    c, d, load, noise = np.vstack(rows_c), np.vstack(rows_d), np.vstack(rows_load), np.concatenate(noises)
-    bias = np.zeros(c.shape[0])
-    faults = plant.config.sensors if plant.config is not None else None
-    if faults is not None:
-        floors_array = np.array(floors)
-        noise = noise * faults.noise_factor
-        for entry in faults.bias:
-            bias[floors_array == entry.floor] += entry.value
-        dead = np.isin(floors_array, faults.dead_floors)
-        c[dead], d[dead], load[dead], noise[dead], bias[dead] = 0.0, 0.0, 0.0, 0.0, 0.0
-    return SensorMatrices(c, d, load, np.concatenate(scales), noise, bias)
-
-
-def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:
-    """The design building changed by the plant part: factors and damage on stiffness, factors on
-    mass, the damping ratios (or the damping matrix) times the damping factor. A building given by
-    matrices takes scalar factors only (checked at loading)."""
-    if isinstance(building, MatrixBuildingConfig):
-        update = {
-            "mass_matrix": (np.asarray(building.mass_matrix) * plant.mass).tolist(),
-            "stiffness_matrix": (np.asarray(building.stiffness_matrix) * plant.stiffness).tolist(),
-        }
-        if building.damping_matrix is not None:
-            update["damping_matrix"] = (np.asarray(building.damping_matrix) * plant.damping).tolist()
-        else:
-            update["modal_damping"] = [ratio * plant.damping for ratio in building.modal_damping]
-        return building.model_copy(update=update)
-    n = len(building.masses)
-    stiffness = np.asarray(building.stiffnesses) * np.broadcast_to(np.asarray(plant.stiffness, dtype=float), n)
-    for damage in plant.damage:
-        stiffness[damage.story - 1] *= 1.0 + damage.stiffness
-    masses = np.asarray(building.masses) * np.broadcast_to(np.asarray(plant.mass, dtype=float), n)
-    damping = building.damping
-    if damping.rayleigh is not None:
-        pairs = tuple(pair.model_copy(update={"ratio": pair.ratio * plant.damping}) for pair in damping.rayleigh)
-        damping = damping.model_copy(update={"rayleigh": pairs})
-    else:
-        damping = damping.model_copy(update={"matrix": (np.asarray(damping.matrix) * plant.damping).tolist()})
-    return building.model_copy(
-        update={"masses": masses.tolist(), "stiffnesses": stiffness.tolist(), "damping": damping}
-    )
-
-
-def scaled_damper(damper, factor: float):
-    """A semi-active damper's config with its force times `factor`: an MR damper's capacity, a variable
-    damper's damping range."""
-    if damper.type == "mr_damper":
-        return damper.model_copy(update={"capacity": damper.capacity * factor})
-    return damper.model_copy(
-        update={"damping_min": damper.damping_min * factor, "damping_max": damper.damping_max * factor}
-    )
-
-
-def draw_plant(randomization: PlantRandomization, base: PlantConfig | None, rng: np.random.Generator) -> PlantConfig:
-    """One random plant part: the ranged fields drawn (uniform, log-uniform or whole numbers) with `rng`,
-    in the fixed order of RANDOMIZED_FIELDS (a field added there goes last: earlier draws stay), the rest
-    from `base`."""
-    values: dict[str, float] = {}
-    for key in RANDOMIZED_FIELDS:
-        bounds = getattr(randomization, key)
-        if bounds is None:
-            continue
-        if isinstance(bounds, tuple):
-            values[key] = int(rng.integers(bounds[0], bounds[1] + 1))
-        elif bounds.log:
-            values[key] = float(np.exp(rng.uniform(np.log(bounds.low), np.log(bounds.high))))
-        else:
-            values[key] = float(rng.uniform(bounds.low, bounds.high))
-    return randomized_plant(base, values)
-
-
-def centre_of_ranges(randomization: PlantRandomization, base: PlantConfig | None) -> PlantConfig:
-    """The plant part at the centre of the structural and sensor ranges (the geometric centre of log
-    ranges), with the actuator dynamics of `base` (the nominal ones): what a careful engineer designs
-    on without knowing which plant it will be."""
-    values: dict[str, float] = {}
-    for key in ("stiffness", "mass", "damping", "noise_factor", "device_frequency"):
-        bounds = getattr(randomization, key)
-        if bounds is None:
-            continue
-        if bounds.log:
-            values[key] = float(np.sqrt(bounds.low * bounds.high))
-        else:
-            values[key] = 0.5 * (bounds.low + bounds.high)
-    return randomized_plant(base, values)
 
 
 def design_wind(experiment: Experiment) -> WindLoadModel | None:
@@ -236,7 +120,8 @@ class Plant:
         held = m if self.delay_steps > 0 and not lag else 0
         self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
-        self.sensors = sensor_matrices(self, experiment.sensors)
+        faults = self.config.sensors if self.config is not None else None
+        self.sensors = sensor_matrices(self.outputs, self.building, experiment.sensors, faults)
         self.wind = design_wind(experiment)
         load_scale = np.sqrt(np.diag(self.wind.covariance)) if self.wind is not None else None
         self.layout = observation_layout(

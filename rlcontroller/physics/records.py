@@ -20,10 +20,10 @@ from rlcontroller.physics.excitation import (
     STANDARD_GRAVITY,
     Load,
     MotionError,
-    generate_suite,
     read_motion,
     scale_to_pga,
 )
+from rlcontroller.physics.generators import generate_suite
 
 RECORDS_VARIABLE = "RLC_RECORDS"
 MANIFEST = "manifest.csv"

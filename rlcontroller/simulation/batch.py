@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from gymnasium.utils import seeding
 from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.control.controllers import Controller, LQGBank, LQGController
@@ -26,7 +25,8 @@ from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
-from rlcontroller.physics.plant import Plant, draw_plant
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
 
@@ -266,6 +266,12 @@ class BuildingBatch:
         return self.states[:, : self._state_size]
 
 
+def episode_generator(seed: int) -> np.random.Generator:
+    """The generator `BuildingEnv.reset(seed=seed)` draws an episode from (gymnasium's
+    `seeding.np_random`: PCG64 on the seed's SeedSequence), made without importing gymnasium."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed)))
+
+
 ROWS_PER_BATCH = 400_000  # members x control steps simulated at once (bounds the memory to ~150 MB)
 
 
@@ -310,7 +316,7 @@ def _rollout_chunk(
     batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
     for member in reversed(range(batch.size)):  # the longest motion first: the batch is sized once
         motion = member % count
-        batch.start(member, seeding.np_random(seeds[motion])[0], motions[motion])
+        batch.start(member, episode_generator(seeds[motion]), motions[motion])
     n_steps = int(batch.steps.max())
     states = np.zeros((n_steps + 1, batch.size, batch.plant_states().shape[1]))
     commands = np.zeros((n_steps + 1, batch.size, batch.m))

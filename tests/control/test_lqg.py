@@ -10,7 +10,8 @@ from rlcontroller.control.optimal import optimal_response
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import Response, step_map
-from rlcontroller.physics.excitation import GroundModel, Load, kanai_tajimi, read_at2, scale_to_pga
+from rlcontroller.physics.excitation import Load, read_at2, scale_to_pga
+from rlcontroller.physics.generators import GroundModel, kanai_tajimi
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import build

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_experiment
-from rlcontroller.evaluation import report, tables
+from rlcontroller.evaluation import report, study_report, tables
 from rlcontroller.learning.training import train
 
 
@@ -218,15 +218,15 @@ def test_strong_part_is_the_significant_duration_of_the_ground():
 
 def test_lqg_j1_at_interpolates_in_log_j3_and_clamps():
     sweep = pd.DataFrame({"J3": [0.01, 0.1, 1.0], "J1": [0.6, 0.5, 0.3]})
-    assert report.lqg_j1_at(sweep, 0.1) == pytest.approx(0.5)
-    assert report.lqg_j1_at(sweep, np.sqrt(0.1 * 1.0)) == pytest.approx(0.4)  # halfway in log J3
-    assert report.lqg_j1_at(sweep, 10.0) == pytest.approx(0.3)
+    assert study_report.lqg_j1_at(sweep, 0.1) == pytest.approx(0.5)
+    assert study_report.lqg_j1_at(sweep, np.sqrt(0.1 * 1.0)) == pytest.approx(0.4)  # halfway in log J3
+    assert study_report.lqg_j1_at(sweep, 10.0) == pytest.approx(0.3)
 
 
 def test_equivalent_preview_reads_the_preview_curve_backwards():
     preview = pd.DataFrame({"preview_s": [0.0, 0.1, 0.2, np.inf], "J1": [0.45, 0.40, 0.30, 0.27]})
-    assert report.equivalent_preview(preview, 0.35) == pytest.approx(0.15)
-    assert report.equivalent_preview(preview, 0.46) is None
+    assert study_report.equivalent_preview(preview, 0.35) == pytest.approx(0.15)
+    assert study_report.equivalent_preview(preview, 0.46) is None
 
 
 def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():

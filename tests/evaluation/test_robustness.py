@@ -103,7 +103,8 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
 
 def test_a_randomised_run_adds_lqg_designed_on_the_centre_of_its_ranges():
     from rlcontroller.evaluation.robustness import CENTRE_LQG
-    from rlcontroller.physics.plant import Plant, centre_of_ranges
+    from rlcontroller.physics.plant import Plant
+    from rlcontroller.physics.variations import centre_of_ranges
 
     ranges = {
         "stiffness": {"low": 0.6, "high": 1.0},

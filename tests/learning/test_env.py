@@ -195,7 +195,7 @@ def test_state_estimate_in_the_observation_tracks_the_true_state():
 def test_ground_model_estimate_predicts_the_ground_reading():
     """With `ground_model` the estimate ends with the Kanai-Tajimi filter states; their output
     tracks the measured ground acceleration."""
-    from rlcontroller.physics.excitation import GroundModel
+    from rlcontroller.physics.generators import GroundModel
 
     env = BuildingEnv(Experiment(sensors=SensorConfig(state_estimate=True, ground_model=True)))
     observation, _ = env.reset(seed=3)

@@ -8,15 +8,13 @@ from rlcontroller.physics.excitation import (
     STANDARD_GRAVITY,
     Load,
     MotionError,
-    generate_suite,
-    kanai_tajimi,
-    noise_impulses,
     on_control_grid,
     read_at2,
     read_csv,
     resample,
     scale_to_pga,
 )
+from rlcontroller.physics.generators import generate_suite, kanai_tajimi, noise_impulses
 
 WEST2 = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\nACCELERATION TIME SERIES IN UNITS OF G\n"
 
@@ -201,7 +199,7 @@ def test_generated_suites_are_reproducible():
 
 def test_a_mixture_draws_from_its_components_by_weight():
     from rlcontroller.config import MixtureConfig
-    from rlcontroller.physics.excitation import generate
+    from rlcontroller.physics.generators import generate
 
     mixture = MixtureConfig(
         components=[

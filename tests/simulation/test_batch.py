@@ -115,3 +115,13 @@ def test_a_batch_of_mr_damper_buildings_gives_each_record_s_rollout():
     plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
     controllers = [ConstantCommand(0.3, 3, "constant"), ClippedOptimal(plant)]
     assert_batch_is_env(plant, mixed_motions(), controllers, ("drift", "absolute_acceleration", "force"))
+
+
+def test_an_episode_generator_is_gymnasiums_for_the_same_seed():
+    """The batch seeds its members as `BuildingEnv.reset(seed=...)` does, without importing gymnasium."""
+    from gymnasium.utils import seeding
+
+    from rlcontroller.simulation.batch import episode_generator
+
+    for seed in (0, 7, 2**32 - 1):
+        np.testing.assert_array_equal(episode_generator(seed).random(5), seeding.np_random(seed)[0].random(5))

@@ -1,0 +1,234 @@
+"""The checks across an experiment's parts, once, at loading: what the reward, sensors, supervisor and
+learner ask of the building, actuators and devices, the time steps, the randomisation ranges, a plant
+part against its building, and the learner's keyword arguments (without torch)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import Any
+
+from pydantic import ValidationError
+
+from rlcontroller.config.base import ConfigError, format_location, location
+from rlcontroller.config.building import SEMI_ACTIVE, MatrixBuildingConfig
+from rlcontroller.config.experiment import Experiment
+from rlcontroller.config.learning import LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
+from rlcontroller.config.plant import RANDOMIZED_FIELDS, PlantConfig, randomized_plant
+
+
+def check_cross_references(experiment: Experiment) -> None:
+    check_algorithm(experiment)
+    if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
+        raise ConfigError(
+            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
+        )
+    supervisor = experiment.supervisor
+    if supervisor is not None and supervisor.dissipative and not experiment.sensors.state_estimate:
+        where = location(*experiment.origin("supervisor"), "dissipative")
+        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
+    if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
+        raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
+    if experiment.sensors.ground_model and experiment.excitation.generator.kind == "wind":
+        where = location(*experiment.origin("sensors"), "ground_model")
+        raise ConfigError(f"{where}: under wind the estimate models the floor forces, not the ground; set it false")
+    cutoff = experiment.sensors.integration_cutoff
+    if cutoff is not None:
+        where = location(*experiment.origin("sensors"), "integration_cutoff")
+        if experiment.sensors.state_estimate:
+            raise ConfigError(f"{where}: the observation holds either integrated readings or state_estimate, not both")
+        nyquist = 0.5 / experiment.simulation.control_dt
+        if cutoff >= 0.5 * nyquist:
+            raise ConfigError(
+                f"{where}: {cutoff:g} Hz, expected below half the Nyquist frequency ({0.5 * nyquist:g} Hz)"
+            )
+    n_floors = len(experiment.building.masses)
+    file, prefix = experiment.origin("actuators")
+    if not experiment.actuators and not experiment.devices:
+        raise ConfigError(f"{location(file, prefix, '')}: no actuators and no devices: expected at least one")
+    for index, actuator in enumerate(experiment.actuators):
+        if actuator.story > n_floors:
+            raise ConfigError(
+                f"{file}: {prefix}[{index}].story: story {actuator.story} does not exist, expected 1..{n_floors}"
+            )
+    _check_devices(experiment)
+    file, prefix = experiment.origin("sensors")
+    masses = sum(d.type in ("tuned_mass", "active_mass") for d in experiment.devices)
+    counts = {"force": (len(experiment.command_labels()), "commanded device"), "stroke": (masses, "mass device")}
+    for index, measurement in enumerate(experiment.sensors.measurements):
+        key = format_location(("measurements", index, "floors"), prefix)
+        count, what = counts.get(measurement.quantity, (n_floors, "floor"))
+        if count == 0:
+            raise ConfigError(f"{file}: {format_location(('measurements', index), prefix)}: there is no {what}")
+        for floor in measurement.floors or []:
+            if floor > count:
+                raise ConfigError(f"{file}: {key}: {what} {floor} does not exist, expected 1..{count}")
+    _check_time_steps(experiment)
+    if any(source.kind == "wind" for source in experiment.excitation.sources()):
+        yielding = experiment.plant is not None and experiment.plant.hysteresis is not None
+        if yielding or experiment.has_dampers:
+            where = location(*experiment.origin("excitation"), "generator")
+            raise ConfigError(f"{where}: wind loads with yielding stories or dampers are not modelled")
+    if experiment.plant is not None:
+        check_plant(experiment.plant, experiment, *experiment.origin("plant"))
+    if experiment.plant_randomization is not None:
+        _check_randomization(experiment)
+
+
+def _check_devices(experiment: Experiment) -> None:
+    """Each mass device on an existing floor, tuned to an existing mode; each semi-active damper on
+    an existing story without another damper or an actuator; no residual on LQG with dampers."""
+    n_floors = len(experiment.building.masses)
+    file, prefix = experiment.origin("devices")
+    taken = {actuator.story: "an actuator" for actuator in experiment.actuators}
+    for index, device in enumerate(experiment.devices):
+        where = format_location((index,), prefix)
+        if device.type in SEMI_ACTIVE:
+            if device.story > n_floors:
+                raise ConfigError(f"{file}: {where}.story: story {device.story} does not exist, expected 1..{n_floors}")
+            if device.story in taken:
+                raise ConfigError(f"{file}: {where}.story: story {device.story} already has {taken[device.story]}")
+            taken[device.story] = f"a damper (devices[{index}])"
+            continue
+        if device.floor > n_floors:
+            raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
+        if device.mode > n_floors:
+            raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
+    if experiment.has_dampers and experiment.algorithm.residual_lqg:
+        raise ConfigError(
+            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: not with semi-active dampers "
+            "(an LQG force is not a damper command)"
+        )
+
+
+def _check_time_steps(experiment: Experiment) -> None:
+    """The control step must hold a whole number of generated samples, and every generated motion
+    at least one control step: otherwise what is simulated is not what was configured."""
+    control_dt = experiment.simulation.control_dt
+    file, prefix = experiment.origin("excitation")
+    for source in experiment.excitation.sources():
+        ratio = control_dt / source.dt
+        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
+            where = location(*experiment.origin("simulation"), "control_dt")
+            raise ConfigError(
+                f"{where}: {control_dt:g} s is not a whole multiple of the {source.kind} generator's "
+                f"dt = {source.dt:g} s; choose control_dt = r * dt"
+            )
+        if source.duration[0] < control_dt:
+            raise ConfigError(
+                f"{location(file, prefix, 'generator.duration')}: {source.duration[0]:g} s is shorter than one "
+                f"control step ({control_dt:g} s)"
+            )
+
+
+def _check_randomization(experiment: Experiment) -> None:
+    """Both ends of every range must make a valid plant for this experiment."""
+    randomization = experiment.plant_randomization
+    file, prefix = experiment.origin("plant_randomization")
+    for key in RANDOMIZED_FIELDS:
+        bounds = getattr(randomization, key)
+        if bounds is None:
+            continue
+        if key == "device_frequency" and all(device.type in SEMI_ACTIVE for device in experiment.devices):
+            raise ConfigError(f"{location(file, prefix, key)}: the experiment has no tuned or active mass to detune")
+        ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
+        for end in ends:
+            try:
+                check_plant(randomized_plant(experiment.plant, {key: end}), experiment, file, prefix)
+            except ValidationError as error:
+                detail = error.errors(include_url=False)[0]["msg"]
+                raise ConfigError(f"{location(file, prefix, key)}: {end:g} gives no valid plant: {detail}") from None
+
+
+def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
+    """Per-story lists and floor numbers of a plant part must fit the building; a building given by
+    matrices takes scalar factors only, no damage and no yielding stories."""
+    n_floors = len(experiment.building.masses)
+    if isinstance(experiment.building, MatrixBuildingConfig):
+        per_story = [key for key in ("stiffness", "mass") if isinstance(getattr(plant, key), list)]
+        per_story += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)
+        if per_story:
+            where = location(file, prefix, per_story[0])
+            raise ConfigError(f"{where}: a building given by matrices takes scalar factors only (no stories)")
+    for key in ("stiffness", "mass"):
+        value = getattr(plant, key)
+        if isinstance(value, list) and len(value) != n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {len(value)} factors, expected 1 or {n_floors}")
+    stories = [(f"damage[{i}].story", d.story) for i, d in enumerate(plant.damage)]
+    stories += [(f"sensors.bias[{i}].floor", b.floor) for i, b in enumerate(plant.sensors.bias)]
+    stories += [("sensors.dead_floors", floor) for floor in plant.sensors.dead_floors]
+    for key, number in stories:
+        if number > n_floors:
+            raise ConfigError(f"{location(file, prefix, key)}: {number} does not exist, expected 1..{n_floors}")
+    if experiment.has_dampers and (plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0):
+        where = location(file, prefix, "actuators")
+        raise ConfigError(f"{where}: actuator dynamics with semi-active dampers are not modelled; drop one of them")
+    if plant.hysteresis is not None and experiment.devices:
+        where = location(file, prefix, "hysteresis")
+        raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")
+    if plant.hysteresis is not None:
+        drift = plant.hysteresis.yield_drift
+        if isinstance(drift, list) and len(drift) != n_floors:
+            where = location(file, prefix, "hysteresis.yield_drift")
+            raise ConfigError(f"{where}: {len(drift)} values, expected 1 or {n_floors}")
+        if plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0:
+            where = location(file, prefix, "hysteresis")
+            raise ConfigError(f"{where}: yielding stories with actuator dynamics are not supported yet; use one")
+    if plant.actuators.time_constant > 0 and experiment.simulation.method != "exact":
+        raise ConfigError(f"{location(file, prefix, 'actuators.time_constant')}: an actuator lag needs method: exact")
+
+
+def check_algorithm(experiment: Experiment) -> None:
+    """Refuse keyword arguments the learner does not take, naming the file and key."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C", "RandomSearch"):
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not {algorithm.name}"
+        )
+    if algorithm.name == "RandomSearch":
+        _check_random_search(experiment)
+    if algorithm.policy.odd and algorithm.normalize_observations:
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
+            "(centring the observation breaks a(-o) = -a(o)); scale the readings in the sensors part instead"
+        )
+    accepted = LEARNER_KWARGS[algorithm.name]
+    for key, value in algorithm.kwargs.items():
+        where = location(file, prefix, f"kwargs.{key}")
+        if key in RESERVED_KWARGS:
+            raise ConfigError(f"{where}: set by rlc (use 'policy:', 'seed' or --device instead)")
+        if key not in accepted:
+            options = sorted(accepted - RESERVED_KWARGS)
+            close = difflib.get_close_matches(key, options, n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]!r}?" if close else f"expected one of: {', '.join(options)}"
+            raise ConfigError(f"{where}: not a keyword argument of {algorithm.name}; {hint}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{where}: expected a finite number, got {value!r}")
+        if key in NUMERIC_KWARGS and not _in_range(value, *NUMERIC_KWARGS[key]):
+            low, high, integer = NUMERIC_KWARGS[key]
+            kind = "an integer" if integer else "a number"
+            raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
+
+
+def _check_random_search(experiment: Experiment) -> None:
+    """RandomSearch learns a linear actor (odd, or affine with `odd: false`; a residual with
+    `residual_lqg`) on the batched env's plant."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.policy.actor_arch != []:
+        where = location(file, prefix, "policy.actor_arch")
+        raise ConfigError(f"{where}: RandomSearch trains a linear actor; expected []")
+    refused = {
+        "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
+        "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),
+    }
+    for key, (wrong, why) in refused.items():
+        if wrong:
+            raise ConfigError(f"{location(file, prefix, key)}: not for RandomSearch ({why})")
+
+
+def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
+    if isinstance(value, bool) or not isinstance(value, int | float) or (integer and not isinstance(value, int)):
+        return False
+    return low <= value <= high

@@ -1,0 +1,128 @@
+"""An experiment read from YAML files (its parts inline or in files of their own), checked part by part
+and across parts (`checks`), and changed by overrides; every problem one `ConfigError` line naming the
+file and the key."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from pydantic import TypeAdapter, ValidationError
+
+from rlcontroller.config.base import (
+    ConfigError,
+    display_path,
+    first_error,
+    inside,
+    read_yaml,
+)
+from rlcontroller.config.building import MatrixBuildingConfig
+from rlcontroller.config.checks import check_cross_references
+from rlcontroller.config.experiment import OPTIONAL_PARTS, PARTS, Experiment
+from rlcontroller.config.matrices import read_matrix_part
+
+
+def _check_part_type(part: str, value: Any, where: str) -> None:
+    expected = list if part in ("actuators", "devices") else dict
+    if not isinstance(value, expected):
+        what = f"a list of {part}" if expected is list else f"a mapping of {part} keys"
+        got = "text" if isinstance(value, str) else type(value).__name__
+        raise ConfigError(f"{where}: expected {what}, got {got}")
+
+
+OWN_FILES = "a run or model folder names only its own files"
+
+
+def _relative(target: Path, folder: Path) -> str:
+    """`target` as a path relative to `folder` (with '..' where it leaves it), both resolved."""
+    return os.path.relpath(target.resolve(), folder.resolve())
+
+
+def load_experiment(path: str | Path, self_contained: bool = False) -> Experiment:
+    """Load an experiment YAML and the part files it names; raise ConfigError on any problem. With
+    `self_contained` (the config.yaml of a run or model folder) every file it names must lie in its
+    folder: a folder from someone else never makes us read a file elsewhere."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping of experiment keys, got {type(raw).__name__}")
+    origins: dict[str, tuple[str, str]] = {}
+    for part in PARTS:
+        value = raw.get(part)
+        if self_contained and isinstance(value, str) and not inside(path.parent, value):
+            raise ConfigError(f"{path}: {part}: {value!r} is outside {path.parent}; {OWN_FILES}")
+        if isinstance(value, str):
+            part_path = (path.parent / value).resolve()
+            if not part_path.exists():
+                raise ConfigError(
+                    f"{path}: {part}: file not found: {value} (relative to {path.parent}); a part's path is "
+                    "relative to the experiment file: copy the parts along with it, or give absolute paths"
+                )
+            raw[part] = read_yaml(part_path)
+            origins[part] = (display_path(part_path), "")
+            _check_part_type(part, raw[part], display_path(part_path))
+            folder, where = part_path.parent, display_path(part_path)
+        else:
+            origins[part] = (str(path), part)
+            if part in raw and not (part in OPTIONAL_PARTS and value is None):
+                _check_part_type(part, value, f"{path}: {part}")
+            folder, where = path.parent, f"{path}: {part}"
+        if part == "building" and isinstance(raw.get(part), dict) and "matrices" in raw[part]:
+            matrices = raw[part]["matrices"]
+            if (
+                self_contained
+                and isinstance(matrices, str)
+                and not inside(path.parent, _relative(folder / matrices, path.parent))
+            ):
+                raise ConfigError(f"{where}.matrices: {matrices!r} is outside {path.parent}; {OWN_FILES}")
+            raw[part] = read_matrix_part(raw[part], folder, where)
+    return build_experiment(raw, origins, str(path))
+
+
+def build_experiment(
+    raw: dict[str, Any], origins: dict[str, tuple[str, str]] | None = None, file: str = "<config>"
+) -> Experiment:
+    """Validate a raw mapping whose parts are inlined. `origins` maps a part to the file it came
+    from and the key prefix to show in messages (empty when the part has a file of its own)."""
+    origins = origins or {}
+    for part, model in PARTS.items():
+        if part in raw and not (part in OPTIONAL_PARTS and raw[part] is None):
+            part_file, prefix = origins.get(part, (file, part))
+            if part == "building" and isinstance(raw[part], dict) and "mass_matrix" in raw[part]:
+                model = MatrixBuildingConfig
+            try:
+                TypeAdapter(model).validate_python(raw[part])
+            except ValidationError as error:
+                raise first_error(error, part_file, prefix, model) from None
+    try:
+        experiment = Experiment.model_validate(raw)
+    except ValidationError as error:
+        raise first_error(error, file, "", Experiment) from None
+    experiment._origins.update({part: origins.get(part, (file, part)) for part in PARTS})
+    check_cross_references(experiment)
+    return experiment
+
+
+def with_overrides(experiment: Experiment, values: dict[str, Any], where: str) -> Experiment:
+    """The experiment with each dotted path (`algorithm.kwargs.gamma`, `reward.terms.0.weight`) set to
+    its value, validated as a whole; errors name `where` (an option or a trial) and the path."""
+    raw = experiment.model_dump(mode="json")
+    for path, value in values.items():
+        keys = path.split(".")
+        node: Any = raw
+        for depth, key in enumerate(keys):
+            last = depth == len(keys) - 1
+            free = keys[:depth] == ["algorithm", "kwargs"]  # the learner's own keyword arguments
+            if isinstance(node, list):
+                if not key.isdigit() or int(key) >= len(node):
+                    raise ConfigError(f"{where}: {path}: {key!r} is not an index below {len(node)}")
+                key = int(key)
+            elif not isinstance(node, dict) or (key not in node and not (free and last)):
+                options = ", ".join(sorted(node)) if isinstance(node, dict) else "nothing: it is a value"
+                raise ConfigError(f"{where}: {path}: no setting {key!r}; expected one of: {options}")
+            if last:
+                node[key] = value
+            else:
+                node = node[key]
+    return build_experiment(raw, {part: (where, part) for part in PARTS}, where)
