@@ -2,7 +2,7 @@
 
 Usage: python scripts/bench_sweep.py [--runs 8] [--workers 2]
 
-The same sweep of tiny runs (configs/experiments/tiny.yaml: PPO, 256 steps; evaluated on the
+The same sweep of tiny runs (configs/testing/tiny.yaml: PPO, 256 steps; evaluated on the
 synthetic suite) on each engine, in a new folder each time. The overhead per run is the worker time
 not spent inside runs, (wall time x workers - sum of the runs' own times) / runs: engine start-up,
 fresh worker processes importing torch and stable-baselines3, scheduling, and the final aggregate.
@@ -17,9 +17,9 @@ import time
 from pathlib import Path
 
 from rlcontroller.config import load_experiment
-from rlcontroller.studies.sweep import sweep
+from rlcontroller.multirun.sweep import sweep
 
-TINY = Path(__file__).resolve().parents[1] / "configs" / "experiments" / "tiny.yaml"
+TINY = Path(__file__).resolve().parents[1] / "configs" / "testing" / "tiny.yaml"
 
 
 def main() -> None:

@@ -4,9 +4,9 @@
 # bootstrap intervals over seeds):
 #   1. configs/five_story.yaml (the benchmark) and five_story_odd.yaml (odd actor), then LQG's
 #      trade-off and the value of preview;
-#   2. configs/experiments/five_story_robust.yaml (trained on randomised plants), each seed also through
+#   2. studies/robustness/five_story_robust.yaml (trained on randomised plants), each seed also through
 #      `rlc robustness` (standard scenarios), aggregated per scenario and over all scenarios;
-#   3. configs/experiments/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior;
+#   3. studies/model_free/five_story_model_free.yaml (readings only: no model, no Kalman filter, no LQG prior;
 #      PPO), and the same linear policy learned by random search with common random numbers, on the
 #      nominal and on randomised plants (five_story_model_free_random_search[_robust].yaml), each
 #      seed of those two also through `rlc robustness`;
@@ -35,19 +35,19 @@ robustness_of() {  # rlc robustness for every seed of a folder, then the aggrega
 }
 
 sweep configs/five_story.yaml "$out" "$@"
-sweep configs/experiments/five_story_odd.yaml "$out/odd" "$@"
+sweep studies/benchmark/five_story_odd.yaml "$out/odd" "$@"
 if [ ! -f "$out/compare_lqg/summary.csv" ]; then
   rlc compare lqg "$out/seed0" --records "$records" --sweep --preview --out "$out/compare_lqg" > /dev/null
 fi
 
-sweep configs/experiments/five_story_robust.yaml "$out/robust" "$@"
+sweep studies/robustness/five_story_robust.yaml "$out/robust" "$@"
 robustness_of "$out/robust"
 
-sweep configs/experiments/five_story_model_free.yaml "$out/model_free" "$@"
+sweep studies/model_free/five_story_model_free.yaml "$out/model_free" "$@"
 
-sweep configs/experiments/five_story_model_free_random_search.yaml "$out/model_free_random_search" "$@"
+sweep studies/model_free/five_story_model_free_random_search.yaml "$out/model_free_random_search" "$@"
 robustness_of "$out/model_free_random_search"
-sweep configs/experiments/five_story_model_free_random_search_robust.yaml "$out/model_free_random_search_robust" "$@"
+sweep studies/model_free/five_story_model_free_random_search_robust.yaml "$out/model_free_random_search_robust" "$@"
 robustness_of "$out/model_free_random_search_robust"
 
 sweep configs/experiments/five_story_every_story.yaml "$out/every_story" "$@"

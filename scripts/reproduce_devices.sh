@@ -13,7 +13,7 @@
 #      (five_story_amd_estimate.yaml) and on the model-free integrated readings (five_story_amd_model_free.yaml),
 #      PPO on the model-free readings (five_story_amd_ppo_model_free.yaml); the stroke weight x 10 and x 100,
 #      a reward aimed at J1 (five_story_amd_peak.yaml), LQG + ground model over its force and stroke weights
-#      and driver detuning on the records and 200 generated motions (scripts/mass_driver_lqg_grid.py), and
+#      and driver detuning on the records and 200 generated motions (studies/devices/mass_driver_lqg_grid.py), and
 #      the residual trained on detuned drivers (five_story_amd_detuned.yaml, by PPO five_story_amd_detuned_ppo.yaml,
 #      and on the robust prior: the stroke weight x 10), each seed run on configs/scenarios/driver_detuning.yaml;
 #   3. the yielding building (five_story_yielding.yaml: residual on LQG + ground model designed on the
@@ -39,23 +39,23 @@ once() {  # run "$@" unless its output folder (the value after --out) already ha
 
 sweep configs/experiments/five_story_mr.yaml "$out/mr" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_mr.yaml --records "$records" --sweep --out "$out/mr/classical"
-sweep configs/experiments/five_story_mr_affine.yaml "$out/mr_affine" --records "$records" "$@"
-sweep configs/experiments/five_story_mr_affine_peak.yaml "$out/mr_affine_peak" --records "$records" "$@"
+sweep studies/devices/five_story_mr_affine.yaml "$out/mr_affine" --records "$records" "$@"
+sweep studies/devices/five_story_mr_affine_peak.yaml "$out/mr_affine_peak" --records "$records" "$@"
 
 sweep configs/experiments/five_story_amd.yaml "$out/amd" --records "$records" "$@"
 once rlc compare lqg --config configs/experiments/five_story_amd.yaml --records "$records" --sweep --out "$out/amd/classical"
 for ablation in ppo estimate model_free ppo_model_free peak detuned detuned_ppo; do
-  sweep "configs/experiments/five_story_amd_$ablation.yaml" "$out/amd_$ablation" --records "$records" "$@"
+  sweep "studies/devices/five_story_amd_$ablation.yaml" "$out/amd_$ablation" --records "$records" "$@"
 done
 sweep configs/experiments/five_story_amd.yaml "$out/amd_stroke" --set reward.terms.3.weight=10,100 --records "$records" "$@"
-sweep configs/experiments/five_story_amd_detuned.yaml "$out/amd_detuned_stroke" --set reward.terms.3.weight=10 \
+sweep studies/devices/five_story_amd_detuned.yaml "$out/amd_detuned_stroke" --set reward.terms.3.weight=10 \
   --records "$records" "$@"
 for run in "$out"/amd_detuned/seed[0-9]* "$out"/amd_detuned_ppo/seed[0-9]*; do
   once rlc robustness "$run" --records "$records" --scenarios configs/scenarios/driver_detuning.yaml --out "$run/detuning"
 done
 [ -d "$out/generated" ] || python scripts/generated_records.py "$out/generated" > /dev/null
 if [ ! -f "$out/amd/lqg_grid.md" ]; then
-  python scripts/mass_driver_lqg_grid.py --records "$records" "$out/generated" --plot "$out/amd/tradeoff.png" \
+  python studies/devices/mass_driver_lqg_grid.py --records "$records" "$out/generated" --plot "$out/amd/tradeoff.png" \
     --runs "$out"/amd/seed[0-9]* "$out"/amd_peak/seed[0-9]* "$out"/amd_detuned/seed[0-9]* > "$out/amd/lqg_grid.md.tmp"
   mv "$out/amd/lqg_grid.md.tmp" "$out/amd/lqg_grid.md"
 fi
@@ -71,7 +71,7 @@ done
 rlc aggregate "$out"/yielding/seed[0-9]*/strong_motions --out "$out/yielding/strong_motions_aggregate" > /dev/null
 for device in mr amd yielding; do
   check="$out/$device/classical_check.txt"
-  [ -f "$check" ] || { python scripts/check_classical.py "configs/experiments/five_story_$device.yaml" > "$check.tmp" &&
+  [ -f "$check" ] || { python studies/devices/check_classical.py "configs/experiments/five_story_$device.yaml" > "$check.tmp" &&
     mv "$check.tmp" "$check"; }
 done
 

@@ -4,7 +4,7 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
                               [--engine local|dask] [--kill-every 60 180] [--seed 0]
                               [--learner ppo|random_search]
 
-1. A quiet sweep of `--runs` seeds of a small run (configs/experiments/tiny.yaml with `--steps`
+1. A quiet sweep of `--runs` seeds of a small run (configs/testing/tiny.yaml with `--steps`
    training steps and a checkpoint every `--checkpoint-every`; its PPO, or with `--learner
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
 2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), a kill falls
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.studies.sweep import WORKER_LOSSES
+from rlcontroller.multirun.sweep import WORKER_LOSSES
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 
@@ -72,7 +72,7 @@ def main() -> None:
     arguments = parser.parse_args()
     out: Path = arguments.out
     out.mkdir(parents=True)
-    config = yaml.safe_load((REPOSITORY / "configs" / "experiments" / "tiny.yaml").read_text())
+    config = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
     if arguments.learner == "random_search":
         config["algorithm"] = yaml.safe_load((REPOSITORY / "configs" / "algorithms" / "random_search.yaml").read_text())
     every = arguments.checkpoint_every

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 
-SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
+SMOKE = REPOSITORY / "configs" / "testing" / "smoke.yaml"
 DAMPING = "building:\n  damping: {{matrix: {matrix}}}\n"
 ZEROS = [[0.0] * 5 for _ in range(5)]
 

@@ -113,7 +113,7 @@ def test_a_sweep_whose_disk_fills_at_its_table_resumes_without_retraining(tmp_pa
     import yaml
 
     config = tmp_path / "tiny.yaml"
-    config.write_text((REPOSITORY / "configs" / "experiments" / "tiny.yaml").read_text())
+    config.write_text((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
     out = tmp_path / "sweep"
     fill_disk_at(monkeypatch, 1)  # the workers (other processes) write their runs; the sweep's table fails
     line = one_filesystem_line(CliRunner().invoke(app, ["sweep", str(config), "--seeds", "0", "--out", str(out)]))

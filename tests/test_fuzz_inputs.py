@@ -192,7 +192,7 @@ def test_a_fuzzed_wind_suite_is_accepted_or_refused_in_one_line(tmp_path, key, b
     suite = dict(WIND_SUITE) | {key: yaml.safe_load(bad)}
     (tmp_path / "wind.yaml").write_text(yaml.safe_dump(suite))
     out = tmp_path / "out"
-    smoke = Path(__file__).resolve().parents[1] / "configs" / "experiments" / "smoke.yaml"
+    smoke = Path(__file__).resolve().parents[1] / "configs" / "testing" / "smoke.yaml"
     arguments = ["compare", "lqg", "--config", str(smoke), "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
     result = CliRunner().invoke(app, arguments)
     assert "Traceback" not in result.output
@@ -329,7 +329,7 @@ SET_VALUES = (
 @pytest.mark.parametrize("text", SET_VALUES)
 def test_a_bad_sweep_setting_is_refused_before_any_run(tmp_path, text):
     from rlcontroller.config import ConfigError, Experiment
-    from rlcontroller.studies.sweep import parse_setting, plan
+    from rlcontroller.multirun.sweep import parse_setting, plan
 
     with pytest.raises(ConfigError) as error:
         plan(Experiment(), [0], [parse_setting(text)], tmp_path / "out")

@@ -5,10 +5,17 @@ import numpy as np
 import pytest
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+STUDIES = SCRIPTS.parent / "studies"
+
+
+def script_path(name: str) -> Path:
+    """A benchmark or reproduction entry point in scripts/, or a study's own script in studies/PAGE/."""
+    (path,) = [path for path in (SCRIPTS / f"{name}.py", *STUDIES.glob(f"*/{name}.py")) if path.is_file()]
+    return path
 
 
 def load_script(name: str):
-    spec = importlib.util.spec_from_file_location(name, SCRIPTS / f"{name}.py")
+    spec = importlib.util.spec_from_file_location(name, script_path(name))
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module

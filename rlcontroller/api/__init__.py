@@ -6,9 +6,9 @@ with a one-line message. docs/architecture.md has an example per command."""
 from rlcontroller.api.common import QUIET, Report, load, model_folder
 from rlcontroller.api.describe import describe
 from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
+from rlcontroller.api.multirun import aggregate, sweep, tune
 from rlcontroller.api.safety import check, unchecked_note, verdict_lines, verdict_state
 from rlcontroller.api.shipping import convert, export, shipped_models
-from rlcontroller.api.studies import aggregate, sweep, tune
 from rlcontroller.api.training import demo, train
 
 __all__ = [

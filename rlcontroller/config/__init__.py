@@ -22,7 +22,7 @@ bound (the `MAX_*` constants of `base`); the message names the bound.
 | `experiment` | the whole experiment and its parts |
 | `loading` | reading an experiment from YAML files, overrides |
 | `checks` | the parts checked against each other, once, at loading |
-| `studies` | robustness scenarios, the safety check's standard |
+| `scenarios` | robustness scenarios, the safety check's standard |
 """
 
 from rlcontroller.config.base import (  # noqa: F401
@@ -123,7 +123,7 @@ from rlcontroller.config.plant import (  # noqa: F401
     SimulationConfig,
     randomized_plant,
 )
-from rlcontroller.config.studies import (  # noqa: F401
+from rlcontroller.config.scenarios import (  # noqa: F401
     SafetyCheckConfig,
     Scenario,
     ScenarioFile,

@@ -12,7 +12,7 @@ from rlcontroller import api
 from rlcontroller.cli import app
 from rlcontroller.config import ConfigError
 
-SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
+SMOKE = REPOSITORY / "configs" / "testing" / "smoke.yaml"
 
 
 class Recorded(api.Report):
@@ -99,7 +99,7 @@ def test_shipped_models_mark_the_default():
 
 def test_the_api_is_what_the_commands_call():
     """Each command module only parses and prints: no physics, RL or evaluation imported at its top."""
-    for module in ("experiments", "judging", "studies", "shipping"):
+    for module in ("experiments", "judging", "multirun", "shipping"):
         text = (REPOSITORY / "rlcontroller" / "cli" / f"{module}.py").read_text()
         assert "rlcontroller.physics" not in text and "rlcontroller.learning" not in text, module
         assert "rlcontroller.evaluation.evaluation" not in text and "Plant(" not in text, module

@@ -25,9 +25,24 @@ def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
     np.testing.assert_allclose(design_lqg(Plant(benchmark)).feedback, design_lqg(Plant(paper)).feedback, rtol=1e-6)
 
 
-@pytest.mark.parametrize(
-    "path", [CONFIGS / "five_story.yaml", *sorted((CONFIGS / "experiments").glob("*.yaml"))], ids=lambda p: p.name
-)
+EXPERIMENTS = [
+    CONFIGS / "five_story.yaml",
+    *sorted((CONFIGS / "experiments").glob("*.yaml")),
+    *sorted((CONFIGS / "testing").glob("*.yaml")),
+    *sorted((CONFIGS.parent / "studies").glob("*/*.yaml")),
+]
+
+
+def test_the_experiments_a_user_starts_from_are_few_and_each_is_named_in_the_configs_readme():
+    """configs/experiments/ holds what a user starts from; the configs behind one docs number live in studies/."""
+    starts = sorted((CONFIGS / "experiments").glob("*.yaml"))
+    assert 0 < len(starts) <= 10
+    readme = (CONFIGS / "README.md").read_text()
+    assert all(f"experiments/{path.name}" in readme for path in starts)
+    assert len(EXPERIMENTS) > len(starts) + 20  # the studies' configs are still checked below
+
+
+@pytest.mark.parametrize("path", EXPERIMENTS, ids=lambda p: p.name)
 def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(path: Path):
     experiment = load_experiment(path)
     assert experiment.name == path.stem

@@ -18,7 +18,7 @@ from rlcontroller.learning.training import train
 
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):
-    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "smoke.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
     run = tmp_path_factory.mktemp("smoke") / "run"
     train(
         experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 500})}),

@@ -17,7 +17,7 @@ from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.batch import batch_rollout
 
-MODEL_FREE = REPOSITORY / "configs" / "experiments" / "five_story_model_free_random_search.yaml"
+MODEL_FREE = REPOSITORY / "studies" / "model_free" / "five_story_model_free_random_search.yaml"
 
 
 def tiny(config=MODEL_FREE, **algorithm):
@@ -113,7 +113,7 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
     from rlcontroller.control.controllers import LinearFeedback, LQGController
     from rlcontroller.control.lqg import design_lqg_ground_model
 
-    robust = REPOSITORY / "configs" / "experiments" / "five_story_robust.yaml"  # its sensors hold the Kalman estimate
+    robust = REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"  # its sensors hold the Kalman estimate
     experiment = tiny(robust, name="RandomSearch", policy={"actor_arch": [], "odd": True}, normalize_rewards=False)
     experiment = experiment.model_validate(experiment.model_dump() | {"plant_randomization": None})
     model = new_model(experiment)

@@ -22,7 +22,7 @@ from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 
-SMOKE = REPOSITORY / "configs" / "experiments" / "smoke.yaml"
+SMOKE = REPOSITORY / "configs" / "testing" / "smoke.yaml"
 
 
 def smoke(**algorithm):
@@ -93,7 +93,7 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     config = yaml.safe_load(SMOKE.read_text())
     config.update(
         {
-            key: f"{REPOSITORY}/configs/experiments/{value}"
+            key: f"{REPOSITORY}/configs/testing/{value}"
             for key, value in config.items()
             if isinstance(value, str) and value.endswith(".yaml")
         }
@@ -384,7 +384,7 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
 
     monkeypatch.setattr(run_folder, "KEPT_CHECKPOINTS", 100)
     monkeypatch.setattr(training, "Validator", ScriptedValidator)
-    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "tiny.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": select_by}
     experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
     summary = train(experiment, run_dir=tmp_path / "run", device="cpu")
@@ -409,7 +409,7 @@ def test_a_run_that_only_gets_worse_keeps_its_starting_policy_as_best(tmp_path, 
     from rlcontroller.learning import training
 
     monkeypatch.setattr(training, "Validator", WorseningValidator)
-    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "tiny.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": "J1"}
     experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
     summary = train(experiment, run_dir=tmp_path / "run", device="cpu")

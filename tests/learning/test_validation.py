@@ -11,7 +11,7 @@ from rlcontroller.physics.plant import Plant
 
 
 def test_the_lqg_references_are_designed_on_the_design_model_and_run_on_the_plant():
-    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "smoke.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
     softer = Plant(experiment.model_copy(update={"plant": PlantConfig(stiffness=0.7)}))
     validator = Validator(softer)
     nominal = validator.run(LQGController(design_lqg(softer.design), softer.design))
@@ -21,7 +21,7 @@ def test_the_lqg_references_are_designed_on_the_design_model_and_run_on_the_plan
 
 
 def test_the_ground_model_reference_exists_with_actuator_delays_on_the_plant():
-    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "smoke.yaml")
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
     delayed = Plant(experiment.model_copy(update={"plant": PlantConfig(actuators={"delay_steps": 1})}))
     reference, nominal = Validator(delayed).reference, Validator(Plant(experiment)).reference
     assert set(reference) == set(nominal) and all(np.isfinite(value) for value in reference.values())
