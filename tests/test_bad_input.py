@@ -177,6 +177,7 @@ CONFIG_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("text", "expected"), list(CONFIG_CASES.values()), ids=list(CONFIG_CASES))
 def test_bad_experiment_files_give_one_line_naming_file_and_key(tmp_path, text, expected):
     path = tmp_path / "bad.yaml"

@@ -44,7 +44,7 @@ def one_filesystem_line(result, message: str = "No space left on device") -> str
 
 
 def aggregate_inputs(tmp_path):
-    from studies.test_aggregate import write_metrics
+    from multirun.test_aggregate import write_metrics
 
     return [str(write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.05 * s, 0.6]})) for s in range(3)]
 
@@ -87,6 +87,7 @@ def test_export_on_a_full_disk(tmp_path, monkeypatch):
     assert CliRunner().invoke(app, ["export", str(folder), "--out", str(out)]).exit_code == 0 and out.is_file()
 
 
+@pytest.mark.slow
 def test_check_on_a_full_disk_keeps_the_old_verdict(tmp_path, monkeypatch):
     import yaml
 
@@ -129,7 +130,7 @@ def test_a_sweep_whose_disk_fills_at_its_table_resumes_without_retraining(tmp_pa
 @pytest.mark.slow
 def test_tune_on_a_full_disk_fails_the_trial_and_the_same_command_finishes_the_study(tmp_path, monkeypatch):
     import yaml
-    from studies.test_tuning import TUNED
+    from multirun.test_tuning import TUNED
 
     config = tmp_path / "tuned.yaml"
     config.write_text(yaml.safe_dump(TUNED))

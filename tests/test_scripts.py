@@ -29,6 +29,7 @@ def test_prediction_r2_is_one_for_a_sine_and_zero_for_white_noise():
     assert abs(prediction_r2(noise, horizon=1)) < 0.02
 
 
+@pytest.mark.slow
 def test_generated_records_are_read_back_as_written(tmp_path):
     import subprocess
     import sys
@@ -133,6 +134,7 @@ def classical_verdicts(experiment: str, motions: int, tmp_path: Path) -> dict:
     return {v.controller: v for v in load_script("check_classical").classical_verdicts(config, path)}
 
 
+@pytest.mark.slow
 def test_the_classical_dampers_are_checked_and_more_voltage_means_less_drift(tmp_path):
     verdicts = classical_verdicts("five_story_mr.yaml", 8, tmp_path)
     assert list(verdicts) == ["passive-off", "passive-on", "clipped-optimal"]

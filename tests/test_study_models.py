@@ -26,6 +26,7 @@ def test_every_study_model_is_described_and_none_is_listed_by_rlc_models():
         assert folder.name not in listed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("folder", FOLDERS, ids=lambda folder: folder.name)
 def test_a_study_model_fails_the_check_and_reproduces_its_stated_j1(folder, records, tmp_path):
     verdict = yaml.safe_load((folder / "best_check.yaml").read_text())

@@ -47,6 +47,7 @@ def test_describe_is_what_rlc_info_prints():
     assert "1.444" in printed.output  # the paper's first period
 
 
+@pytest.mark.slow
 def test_compare_lqg_reports_its_notes_and_progress_and_prints_nothing(tmp_path, monkeypatch, capsys):
     monkeypatch.delenv("RLC_RECORDS", raising=False)
     report = Recorded()

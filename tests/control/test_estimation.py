@@ -120,6 +120,7 @@ def test_the_integration_filter_is_the_backward_euler_image_of_its_transfer_func
             np.testing.assert_allclose(response[1 - channel :: 2, channel], 0.0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_integrated_accelerations_give_velocity_and_displacement_and_forget_a_bias():
     """a = -W^2 A sin(W t) + bias, well above the cutoff: after the transient, d = A sin(W t) and
     v = A W cos(W t) to 5 % (the three poles at 0.02 Hz lead by 3 atan(0.01), 3 % of the amplitude), whatever the

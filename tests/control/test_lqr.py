@@ -2,6 +2,7 @@
 simulated free response), and no other gain does better from the same state."""
 
 import numpy as np
+import pytest
 from conftest import REPOSITORY
 
 from rlcontroller.config import Experiment, load_experiment
@@ -20,6 +21,7 @@ def cost_to_go(step, cost, gain, limits, start: np.ndarray, steps: int = 20_000)
     return total
 
 
+@pytest.mark.slow
 def test_the_riccati_solution_is_the_summed_cost_of_the_closed_loop_and_the_least():
     for experiment in (
         Experiment(),

@@ -89,6 +89,7 @@ def test_an_unstabilisable_model_is_an_error_in_one_line():
     assert "\n" not in str(error.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["five_story_every_story", "five_story_amd", "seventy_six_story_atmd"])
 def test_every_shipped_building_gets_its_lqg_designs(name):
     """The 76-story benchmark's damping leaves modes that die within a 0.1 s step: its Kalman designs failed

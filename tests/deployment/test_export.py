@@ -100,6 +100,7 @@ def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     assert_same_forces_open_loop(plant, policy_controller(model, None, normalize), tmp_path / "sac.onnx")
 
 
+@pytest.mark.slow
 def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
     """The integration filter runs in the graph as the env runs it."""
     import torch

@@ -69,6 +69,7 @@ def test_the_sweep_designs_lqg_on_the_design_model_and_runs_it_on_the_plant():
     assert abs(mean_metric(oracle, "LQG", "J1") - table["J1"].iloc[0]) > 1e-3
 
 
+@pytest.mark.slow
 def test_a_records_numbers_do_not_depend_on_the_folder_or_order_it_is_evaluated_in(records):
     """The sensor noise is seeded by the record's content: Kobe alone, among the seven and in reverse
     order gives the same LQG metrics."""
@@ -137,6 +138,7 @@ def test_with_mass_devices_uncontrolled_is_the_bare_building_and_passive_the_tun
     assert np.isnan(summary.loc["uncontrolled", "stroke_m"])
 
 
+@pytest.mark.slow
 def test_semi_active_dampers_are_compared_with_passive_off_on_and_clipped_optimal(records):
     from rlcontroller.evaluation.evaluation import compare
 
@@ -151,6 +153,7 @@ def test_semi_active_dampers_are_compared_with_passive_off_on_and_clipped_optima
     assert summary.loc["passive-on", "dissipated_energy_J"] > 0.0
 
 
+@pytest.mark.slow
 def test_the_damper_sweep_ends_at_passive_off_and_on_and_passes_through_clipped_optimal(records):
     """Its end points are the classical rows of the same evaluation; more voltage, less drift."""
     from rlcontroller.evaluation.evaluation import compare, damper_sweep
@@ -168,6 +171,7 @@ def test_the_damper_sweep_ends_at_passive_off_and_on_and_passes_through_clipped_
     assert clipped["J3"].iloc[1] < clipped["J3"].iloc[0]  # heavier force weights, less force
 
 
+@pytest.mark.slow
 def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_same_wind(tmp_path):
     """`--records WIND.yaml`: generated wind loads on the floors; LQG with an accelerometer Kalman
     filter reduces the drift; the records differ, the same suite file gives the same numbers."""
@@ -197,6 +201,7 @@ def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_s
     assert top["index"].unique().tolist() == [1] and (top["value"] > 0).all()
 
 
+@pytest.mark.slow
 def test_rlc_compare_lqg_sweep_of_a_damper_experiment_writes_its_trade_off(records, tmp_path):
     import shutil
 

@@ -95,6 +95,7 @@ def test_compare_lqg_without_a_run_on_the_synthetic_suite(tmp_path, monkeypatch)
     assert "SYNTHETIC" in pd.read_csv(tmp_path / "metrics.csv")["suite"].iloc[0]
 
 
+@pytest.mark.slow
 def test_missing_records_exit_2_with_one_line(smoke_run, records, tmp_path):
     shutil.copy(records / "manifest.csv", tmp_path)
     result = CliRunner().invoke(
@@ -257,6 +258,7 @@ def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
     assert np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0
 
 
+@pytest.mark.slow
 def test_the_drawing_process_draws_the_same_plots_and_reports_its_failures(tmp_path):
     """`rlc evaluate`'s plots drawn by the forked drawing process are byte for byte the ones drawn here;
     a job that fails there is an error here, with its traceback, never a missing plot."""

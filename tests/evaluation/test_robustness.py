@@ -125,6 +125,7 @@ def test_a_randomised_run_adds_lqg_designed_on_the_centre_of_its_ranges():
     assert means.loc[("soft", CENTRE_LQG), "J1"] < means.loc[("soft", NOMINAL_LQG), "J1"]
 
 
+@pytest.mark.slow
 def test_under_wind_the_nominal_designs_are_lqg_and_lqg_with_the_wind_model():
     """An experiment trained under wind is judged on wind with LQG + wind model among the nominal
     designs; on the nominal plant it is the one evaluate runs."""

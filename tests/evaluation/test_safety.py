@@ -195,6 +195,7 @@ def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypa
     assert (DEFAULT_MODEL / "best_check.yaml").read_bytes() == shipped
 
 
+@pytest.mark.slow
 def test_against_the_passive_devices_a_switched_off_driver_scores_exactly_one():
     """With `reference: passive devices`, a driver that never pushes is the reference itself: every
     significant motion scores 1 and it passes; judged against the bare building its tuned mass is

@@ -76,6 +76,7 @@ def saved_policy(run, model):
     return read_policy(run, model, Plant(load_experiment(run / "config.yaml")))
 
 
+@pytest.mark.slow
 def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     summary = train(tiny(total_steps=40000), run_dir=tmp_path / "run")
     assert summary.steps >= 40000 and summary.best["eval_J1"] < 0.95  # no control: 1
@@ -87,6 +88,7 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     assert controller.actor.odd and np.all(controller.act(np.zeros(weights.shape[1], np.float32)) == 0.0)
 
 
+@pytest.mark.slow
 def test_an_affine_search_on_dampers_learns_a_bias_and_its_model_acts_as_clip_w_o_plus_b(tmp_path):
     dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
     policy = {"actor_arch": [], "odd": False}

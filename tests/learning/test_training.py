@@ -305,6 +305,7 @@ def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finishe
     assert train(resume=run).steps == 900
 
 
+@pytest.mark.slow
 def test_a_run_stopped_after_its_last_step_before_the_final_save_resumes_to_the_end(finished_run, tmp_path):
     """A stop (a sweep's pool sending SIGTERM, say) between the last checkpoint and the final save leaves a
     checkpoint at the last step and no final model; resuming has no step left to train and must still
@@ -462,6 +463,7 @@ def test_tensorboard_without_the_package_is_one_line(tmp_path, monkeypatch):
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.slow
 def test_training_under_generated_wind_validates_on_wind(tmp_path):
     """A wind generator in the excitation: the env and validation load the floors, not the ground."""
     from rlcontroller.config import ExcitationConfig, WindGeneratorConfig

@@ -79,6 +79,7 @@ def test_rlc_sweep_on_local_processes(tmp_path):
     assert refused.returncode == 2 and "--address: only with --engine dask" in refused.stderr
 
 
+@pytest.mark.slow
 def test_a_sweep_evaluates_its_runs_on_a_wind_suite_as_rlc_evaluate_does(tmp_path):
     config = tmp_path / "tiny.yaml"
     config.write_text(yaml.safe_dump(TINY))

@@ -53,6 +53,7 @@ def test_warburtons_random_tuning_minimises_the_mean_square_displacement(mass_ra
     np.testing.assert_allclose(tuned, best.x, rtol=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mass_ratio", [0.01, 0.02, 0.05])
 def test_warburtons_harmonic_tuning_minimises_the_peak_response(mass_ratio):
     tuned = warburton_optimum(mass_ratio, "harmonic")
@@ -87,6 +88,7 @@ def test_a_vanishing_tuned_mass_leaves_the_building_as_it_was(records):
         np.testing.assert_allclose(got.quantity(quantity), expected.quantity(quantity), atol=1e-6 * scale)
 
 
+@pytest.mark.slow
 def test_mass_devices_match_an_independent_integration_of_their_equations(records):
     """Floors of the paper's building with a tuned mass on floor 3 and an active mass driver on the
     roof, pushed by its three actuators and the driver with random held forces, on a real record:

@@ -2,6 +2,7 @@
 forces match an independent integration, and a building with a TMD takes them on its floors only."""
 
 import numpy as np
+import pytest
 import scipy.integrate
 
 from rlcontroller.config import Experiment
@@ -23,6 +24,7 @@ def test_a_constant_floor_load_settles_at_the_static_displacement():
     np.testing.assert_allclose(result.story_shear[-1], -shears, rtol=1e-4)
 
 
+@pytest.mark.slow
 def test_random_floor_loads_match_solve_ivp_with_two_samples_per_step():
     plant = Plant(Experiment())
     building = plant.building

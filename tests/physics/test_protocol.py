@@ -89,6 +89,7 @@ def test_an_outside_plant_gives_the_built_in_responses_through_env_and_batch(pla
     np.testing.assert_allclose(env_run[0].drift, batched[0][0].drift, atol=1e-9 * np.abs(batched[0][0].drift).max())
 
 
+@pytest.mark.slow
 def test_an_outside_plant_is_evaluated_like_any_other(plants, short_motions):
     built, outside = plants
     expected = compare(built, short_motions, "two motions").metrics

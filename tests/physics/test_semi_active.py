@@ -46,6 +46,7 @@ def first_seconds(records, seconds: float):
     return replace(motion, acceleration=motion.acceleration[: round(seconds / motion.dt) + 1])
 
 
+@pytest.mark.slow
 def test_mr_dampers_in_the_building_match_radau_on_spencers_equations(records):
     plant = damper_plant(MR)
     motion = first_seconds(records, 6.0)
@@ -170,6 +171,7 @@ def test_mr_loops_have_a_voltage_dependent_plateau_and_hysteresis():
     assert np.all(np.abs(on_force[turning]) > 0.6 * np.abs(on_force).max())
 
 
+@pytest.mark.slow
 def test_variable_dampers_in_the_building_match_radau(records):
     """c = c_min + (c_max - c_min)(a + 1)/2 held over each control step, F = c d' on stories 2 and 4."""
     devices = [
