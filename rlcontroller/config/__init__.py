@@ -25,8 +25,7 @@ bound (the `MAX_*` constants of `base`); the message names the bound.
 | `scenarios` | robustness scenarios, the safety check's standard |
 """
 
-from rlcontroller.config.base import (  # noqa: F401
-    GENERATOR_KINDS,
+from rlcontroller.bounds import (  # noqa: F401
     MAX_DURATION,
     MAX_ENVS,
     MAX_FLOORS,
@@ -34,12 +33,15 @@ from rlcontroller.config.base import (  # noqa: F401
     MAX_GROUND_ACCELERATION,
     MAX_HISTORY,
     MAX_MASS,
-    MAX_NESTING,
     MAX_SEED,
     MAX_STIFFNESS,
     MAX_TIME_STEP,
     MAX_TOTAL_STEPS,
     MIN_TIME_STEP,
+)
+from rlcontroller.config.base import (  # noqa: F401
+    GENERATOR_KINDS,
+    MAX_NESTING,
     AccelerationRange,
     ConfigError,
     DurationRange,

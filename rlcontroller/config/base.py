@@ -17,20 +17,7 @@ from pydantic import (
     ValidationError,
 )
 
-from rlcontroller.bounds import (  # noqa: F401  (the bounds every part is checked against)
-    MAX_DURATION,
-    MAX_ENVS,
-    MAX_FLOORS,
-    MAX_FORCE,
-    MAX_GROUND_ACCELERATION,
-    MAX_HISTORY,
-    MAX_MASS,
-    MAX_SEED,
-    MAX_STIFFNESS,
-    MAX_TIME_STEP,
-    MAX_TOTAL_STEPS,
-    MIN_TIME_STEP,
-)
+from rlcontroller.bounds import MAX_DURATION, MAX_GROUND_ACCELERATION, MAX_SEED, MAX_TIME_STEP, MIN_TIME_STEP
 from rlcontroller.errors import ConfigError  # noqa: F401
 
 Scale = Annotated[float, Field(ge=1.0e-9, le=1.0e12)]  # a quantity's scale, in its SI unit

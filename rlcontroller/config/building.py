@@ -12,12 +12,8 @@ from pydantic import (
     model_validator,
 )
 
+from rlcontroller.bounds import MAX_FLOORS, MAX_FORCE, MAX_HISTORY, MAX_MASS, MAX_STIFFNESS
 from rlcontroller.config.base import (
-    MAX_FLOORS,
-    MAX_FORCE,
-    MAX_HISTORY,
-    MAX_MASS,
-    MAX_STIFFNESS,
     NoiseStd,
     Quantity,
     Scale,

@@ -10,7 +10,8 @@ from pydantic import (
     model_validator,
 )
 
-from rlcontroller.config.base import MAX_ENVS, MAX_TOTAL_STEPS, StrictModel
+from rlcontroller.bounds import MAX_ENVS, MAX_TOTAL_STEPS
+from rlcontroller.config.base import StrictModel
 
 
 class PolicyConfig(StrictModel):

@@ -326,10 +326,7 @@ class Plant:
         forcing = np.zeros((n_steps, self.n_state + c.shape[0]))
         if self.integrator is None:
             forcing[:, : self.n_state] = self.step_map(grid.substeps).ground_terms(grid.ground)
-        if grid.floor_forces is not None:
-            refusal = self.cannot_take(FLOOR_FORCES)
-            if refusal is not None:
-                raise ValueError(refusal)
+        if grid.floor_forces is not None:  # load_map refuses them where the plant cannot take them
             forcing[:, : self.n_state] += self.load_map(grid.substeps).terms(grid.floor_forces)
             forcing[:, self.n_state :] = grid.floor_forces[grid.substeps :: grid.substeps][:n_steps] @ load_rows.T
         forcing[:, self.n_state :] += forcing[:, : self.n_state] @ c.T
