@@ -60,30 +60,7 @@ def device_lines(experiment: Experiment, building) -> list[str]:
     masses = iter(building.devices)
     lines = []
     for config in experiment.devices:
-        if config.type == "mr_damper":
-            command = labels.index(f"MR {config.story}") + 1
-            lines.append(
-                f"mr_damper on story {config.story}, capacity {config.capacity / 1e3:g} kN, "
-                f"0-{config.max_voltage:g} V, eta {config.eta:g} 1/s (command {command})"
-            )
-            continue
-        if config.type == "variable_damper":
-            command = labels.index(f"VD {config.story}") + 1
-            lines.append(
-                f"variable_damper on story {config.story}, c {config.damping_min:g}-{config.damping_max:g} N*s/m, "
-                f"capacity {config.capacity / 1e3:g} kN (command {command})"
-            )
-            continue
-        device = next(masses)
-        frequency = np.sqrt(device.stiffness / device.mass) / (2 * np.pi)
-        text = (
-            f"{device.kind} on floor {device.floor}, {device.mass / 1e3:.4g} t ({device.mass_ratio:g} of mode "
-            f"{config.mode}'s modal mass, {device.mass / total:.3%} of the building's), {frequency:.4g} Hz "
-            f"(ratio {device.frequency_ratio:.4f}), damping ratio {device.damping_ratio:.4f}"
-        )
-        if device.stroke_limit is not None:
-            text += f", stroke limit {device.stroke_limit:g} m"
-        if device.active:
-            text += f", force limit {device.force_limit / 1e3:g} kN (command {labels.index(f'AMD {device.floor}') + 1})"
-        lines.append(text)
+        line = config.describe(None if config.semi_active else next(masses), total)
+        label = config.command_label()
+        lines.append(line if label is None else f"{line} (command {labels.index(label) + 1})")
     return lines

@@ -68,21 +68,15 @@ from rlcontroller.config.base import (  # noqa: F401
     unique,
 )
 from rlcontroller.config.building import (  # noqa: F401
-    SEMI_ACTIVE,
-    ActiveMassConfig,
     ActuatorConfig,
     Actuators,
     BuildingConfig,
     DampingConfig,
-    DeviceConfig,
     Devices,
     MatrixBuildingConfig,
     MeasurementConfig,
-    MRDamperConfig,
     RayleighPair,
     SensorConfig,
-    TunedMassConfig,
-    VariableDamperConfig,
     paper_actuators,
 )
 from rlcontroller.config.checks import check_algorithm, check_plant  # noqa: F401
@@ -131,4 +125,11 @@ from rlcontroller.config.scenarios import (  # noqa: F401
     ScenarioFile,
     load_safety_check,
     load_scenarios,
+)
+from rlcontroller.devices import (  # noqa: F401
+    ActiveMassConfig,
+    DeviceConfig,
+    MRDamperConfig,
+    TunedMassConfig,
+    VariableDamperConfig,
 )

@@ -12,13 +12,13 @@ import yaml
 from pydantic import (
     AfterValidator,
     BaseModel,
-    ConfigDict,
     Field,
     ValidationError,
 )
 
 from rlcontroller.bounds import MAX_DURATION, MAX_GROUND_ACCELERATION, MAX_SEED, MAX_TIME_STEP, MIN_TIME_STEP
 from rlcontroller.errors import ConfigError  # noqa: F401
+from rlcontroller.schema import StrictModel  # noqa: F401
 
 Scale = Annotated[float, Field(ge=1.0e-9, le=1.0e12)]  # a quantity's scale, in its SI unit
 
@@ -67,10 +67,6 @@ Quantity = Literal[
     "force",  # actuator force (N), one per commanded device (actuators, then active masses)
     "stroke",  # an auxiliary mass' displacement relative to its floor (m), one per mass device
 ]
-
-
-class StrictModel(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 def first_repeat(values: list[Any]) -> tuple[int, int] | None:

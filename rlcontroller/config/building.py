@@ -21,6 +21,7 @@ from rlcontroller.config.base import (
     first_repeat,
     unique,
 )
+from rlcontroller.devices import DeviceConfig
 
 
 class RayleighPair(StrictModel):
@@ -176,69 +177,6 @@ def _one_per_story(actuators: list[ActuatorConfig]) -> list[ActuatorConfig]:
 Actuators = Annotated[list[ActuatorConfig], AfterValidator(_one_per_story)]  # may be empty when there are devices
 
 
-class TunedMassConfig(StrictModel):
-    """A passive tuned mass damper: an auxiliary mass on `floor`, joined to it by a spring and a
-    dashpot; its stroke is its displacement relative to the floor (m).
-
-    `mass_ratio` is its mass over the modal mass of the target `mode` (shape scaled to 1 at
-    `floor`). `frequency_ratio` (its frequency over the mode's) and `damping_ratio` default to
-    Warburton's optimum for an undamped primary under base acceleration, `tuning` random (white
-    noise, least mean-square displacement) or harmonic (least peak of the frequency response)."""
-
-    type: Literal["tuned_mass"]
-    floor: PositiveInt
-    mass_ratio: Annotated[float, Field(gt=0.0, le=0.5)]
-    mode: PositiveInt = 1
-    tuning: Literal["random", "harmonic"] = "random"
-    frequency_ratio: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
-    damping_ratio: Annotated[float, Field(ge=0.0, lt=1.0)] | None = None
-    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)] | None = None  # m, reported against
-
-
-class ActiveMassConfig(TunedMassConfig):
-    """An active mass driver (active tuned mass damper): a tuned mass with an actuator between the
-    floor and the mass, commanded like an actuator, with a force limit (N) and a stroke limit (m)."""
-
-    type: Literal["active_mass"]  # type: ignore[assignment]
-    force_limit: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
-    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)]  # type: ignore[assignment]
-
-
-class VariableDamperConfig(StrictModel):
-    """A semi-active ideal variable damper on `story`: force c (drift velocity), c commanded in
-    [damping_min, damping_max] (N*s/m); it can only dissipate. `capacity` (N) is the force the
-    clipped-optimal controller's LQG designs with (its force limit)."""
-
-    type: Literal["variable_damper"]
-    story: PositiveInt
-    damping_min: Annotated[float, Field(ge=0.0, le=MAX_STIFFNESS)]
-    damping_max: Annotated[float, Field(gt=0.0, le=MAX_STIFFNESS)]
-    capacity: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
-
-    @model_validator(mode="after")
-    def _ordered(self) -> VariableDamperConfig:
-        if self.damping_min >= self.damping_max:
-            raise ValueError(f"damping_min {self.damping_min:g} must be below damping_max {self.damping_max:g}")
-        return self
-
-
-class MRDamperConfig(StrictModel):
-    """A semi-active magnetorheological damper on `story`: Spencer, Dyke, Sain and Carlson's (1997)
-    phenomenological model (`physics.semi_active`), its force parameters scaled so that the
-    damper's yield-like force alpha(V_max) z_max is `capacity` (N); commanded in voltage,
-    0..`max_voltage` (V), through the current driver's first-order lag (`eta`, 1/s)."""
-
-    type: Literal["mr_damper"]
-    story: PositiveInt
-    capacity: Annotated[float, Field(gt=0.0, le=MAX_FORCE)]
-    max_voltage: Annotated[float, Field(gt=0.0, le=10.0)] = 2.25
-    eta: Annotated[float, Field(gt=0.0, le=1.0e4)] = 190.0
-
-
-DeviceConfig = Annotated[
-    TunedMassConfig | ActiveMassConfig | VariableDamperConfig | MRDamperConfig, Field(discriminator="type")
-]
-SEMI_ACTIVE = ("variable_damper", "mr_damper")
 Devices = Annotated[list[DeviceConfig], Field(max_length=MAX_FLOORS)]
 
 

@@ -11,7 +11,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from rlcontroller.config.base import ConfigError, format_location, location
-from rlcontroller.config.building import SEMI_ACTIVE, MatrixBuildingConfig
+from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.experiment import Experiment
 from rlcontroller.config.learning import LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
 from rlcontroller.config.plant import RANDOMIZED_FIELDS, PlantConfig, randomized_plant
@@ -83,7 +83,7 @@ def _check_devices(experiment: Experiment) -> None:
     taken = {actuator.story: "an actuator" for actuator in experiment.actuators}
     for index, device in enumerate(experiment.devices):
         where = format_location((index,), prefix)
-        if device.type in SEMI_ACTIVE:
+        if device.semi_active:
             if device.story > n_floors:
                 raise ConfigError(f"{file}: {where}.story: story {device.story} does not exist, expected 1..{n_floors}")
             if device.story in taken:
@@ -129,7 +129,7 @@ def _check_randomization(experiment: Experiment) -> None:
         bounds = getattr(randomization, key)
         if bounds is None:
             continue
-        if key == "device_frequency" and all(device.type in SEMI_ACTIVE for device in experiment.devices):
+        if key == "device_frequency" and all(device.semi_active for device in experiment.devices):
             raise ConfigError(f"{location(file, prefix, key)}: the experiment has no tuned or active mass to detune")
         ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
         for end in ends:

@@ -15,7 +15,6 @@ from rlcontroller.config.base import (
     StrictModel,
 )
 from rlcontroller.config.building import (
-    SEMI_ACTIVE,
     Actuators,
     BuildingConfig,
     Devices,
@@ -77,15 +76,15 @@ class Experiment(StrictModel):
     @property
     def has_dampers(self) -> bool:
         """Semi-active dampers among the devices."""
-        return any(device.type in SEMI_ACTIVE for device in self.devices)
+        return any(device.semi_active for device in self.devices)
 
     def command_labels(self) -> list[str]:
         """Short labels of the commanded devices, in the order of the action: each actuator's story,
-        each active mass driver's floor ("AMD 5"), each damper's story ("MR 1", "VD 1")."""
+        then each commanded mass device's ("AMD 5"), then each damper's ("MR 1", "VD 1")."""
         labels = [str(actuator.story) for actuator in self.actuators]
-        labels += [f"AMD {device.floor}" for device in self.devices if device.type == "active_mass"]
-        short = {"mr_damper": "MR", "variable_damper": "VD"}
-        return labels + [f"{short[device.type]} {device.story}" for device in self.devices if device.type in short]
+        commanded = [device for device in self.devices if device.command_label() is not None]
+        labels += [device.command_label() for device in commanded if not device.semi_active]
+        return labels + [device.command_label() for device in commanded if device.semi_active]
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)

@@ -28,7 +28,6 @@ from dataclasses import replace
 import numpy as np
 
 from rlcontroller.config import (
-    SEMI_ACTIVE,
     ActuatorConfig,
     Experiment,
     Quantity,
@@ -56,7 +55,7 @@ from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.sensors import sensor_matrices
 from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
-from rlcontroller.physics.variations import scaled_damper, true_building
+from rlcontroller.physics.variations import true_building
 from rlcontroller.physics.wind import WindLoadModel, floor_field, load_model
 
 
@@ -99,10 +98,10 @@ class Plant:
                 )
             self.building = with_devices(self.building, devices)
         if experiment.has_dampers:
-            dampers = [d for d in experiment.devices if d.type in SEMI_ACTIVE]
+            dampers = [d for d in experiment.devices if d.semi_active]
             factor = self.config.devices.force if self.config is not None else 1.0
             if factor != 1.0:  # as built: stronger or weaker than designed
-                dampers = [scaled_damper(d, factor) for d in dampers]
+                dampers = [d.scaled(factor) for d in dampers]
             self.building = with_dampers(self.building, dampers)
         hysteresis = self.config.hysteresis if self.config is not None else None
         self.yielding = None
@@ -163,11 +162,10 @@ class Plant:
         damper's capacity: what clipped-optimal control designs its LQG on (on the design model, or
         on the plant itself for the robustness study's oracle)."""
         experiment = self.experiment
-        dampers = [d for d in experiment.devices if d.type in SEMI_ACTIVE]
+        dampers = [d for d in experiment.devices if d.semi_active]
         actuators = [*experiment.actuators, *(ActuatorConfig(story=d.story, force_limit=d.capacity) for d in dampers)]
-        masses = [d for d in experiment.devices if d.type not in SEMI_ACTIVE]
-        active_masses = [d for d in masses if d.type == "active_mass"]
-        if active_masses:  # the action's order: actuators, active masses, dampers
+        masses = [d for d in experiment.devices if not d.semi_active]
+        if any(d.command_label() is not None for d in masses):  # the action's order: actuators, drivers, dampers
             raise ValueError("clipped-optimal control with active mass drivers and dampers together is not built")
         return Plant(experiment.model_copy(update={"actuators": actuators, "devices": masses}))
 

@@ -4,21 +4,8 @@ A damper on story j (drift d = x_j - x_{j-1}, drift velocity d') pushes floor j 
 j - 1 with +F, where F is its force on the story (positive when it resists a positive drift
 velocity). The action a in [-1, 1] of each damper is its command for the whole control step:
 
-- ideal variable damper: F = c d', c = c_min + (c_max - c_min) (a + 1) / 2 (N*s/m): it can only
-  dissipate (F d' >= 0 for any command).
-- magnetorheological damper: Spencer, Dyke, Sain and Carlson (1997, J. Eng. Mech. 123(3), 230-238),
-  the phenomenological model with voltage-dependent parameters, with d as the damper's stroke:
-
-      F = c1 y' + k1 d,   y' = [alpha z + c0 d' + k0 (d - y)] / (c0 + c1),
-      z' = -gamma |d' - y'| z |z| - beta (d' - y') z^2 + A (d' - y')        (n = 2),
-      alpha, c0, c1 = (..._a + ..._b u),   u' = -eta (u - v),   v = V_max (a + 1) / 2.
-
-  The prototype's parameters (the paper's Table 1 as widely reproduced, converted to SI: N, m, s,
-  V; not re-read from the paper here) are `SPENCER_1997`; a damper of another capacity multiplies
-  every force parameter (c0, c1, k0, k1, alpha) by capacity / (alpha(V_max) z_max), z_max =
-  sqrt(A / (beta + gamma)) being the value z saturates at, so that its yield-like force
-  alpha(V_max) z_max is `capacity`. The accumulator's
-  preload k1 x0 is left out: it only shifts the building's static equilibrium.
+each damper type's law (`devices.variable_damper`, `devices.mr_damper`) is a branch of the compiled
+step in `integrators.py`, numbered by the type's `kernel`, reading its `kernel_row`.
 
 The plant's state is [x; x'; per damper (y, z, u, F)]: the floors' (and mass devices')
 displacements and velocities, then each damper's internal displacement y (m), evolutionary
@@ -39,34 +26,8 @@ import numpy as np
 from rlcontroller.physics.dynamics import StateSpace, exact_substep, state_space
 from rlcontroller.physics.structure import Building
 
-VARIABLE_DAMPER, MR_DAMPER = 0, 1
 INTERNAL = 4  # y, z, u, F per damper
 SUBSTEP_S = 0.001  # the longest sub-step (s)
-
-# Spencer et al. (1997), Table 1 (prototype MR damper, N-cm-s units converted to SI).
-SPENCER_1997 = {
-    "c0a": 21.0e2,  # N s/m
-    "c0b": 3.50e2,  # N s/(m V)
-    "k0": 46.9e2,  # N/m
-    "c1a": 283.0e2,  # N s/m
-    "c1b": 2.95e2,  # N s/(m V)
-    "k1": 5.00e2,  # N/m
-    "alpha_a": 140.0e2,  # N/m
-    "alpha_b": 695.0e2,  # N/(m V)
-    "gamma": 363.0e4,  # 1/m^2
-    "beta": 363.0e4,  # 1/m^2
-    "A": 301.0,
-}
-PARAMETERS = ("c0a", "c0b", "k0", "c1a", "c1b", "k1", "alpha_a", "alpha_b", "gamma", "beta", "A")
-FORCE_PARAMETERS = ("c0a", "c0b", "k0", "c1a", "c1b", "k1", "alpha_a", "alpha_b")
-
-
-def mr_parameters(capacity: float, max_voltage: float) -> dict[str, float]:
-    """Spencer's parameters with every force parameter scaled so that alpha(V_max) z_max = capacity (N)."""
-    base = SPENCER_1997
-    z_max = np.sqrt(base["A"] / (base["beta"] + base["gamma"]))
-    scale = capacity / ((base["alpha_a"] + base["alpha_b"] * max_voltage) * z_max)
-    return {key: value * scale if key in FORCE_PARAMETERS else value for key, value in base.items()}
 
 
 @dataclass(frozen=True)
@@ -75,27 +36,19 @@ class SemiActiveDampers:
 
     building: Building
     first_command: int  # the action's index of the first damper (after the active devices)
-    kinds: np.ndarray  # (d,) VARIABLE_DAMPER | MR_DAMPER
+    kinds: np.ndarray  # (d,) each damper type's `kernel` number
     stories: np.ndarray  # (d,) 1-based
-    parameters: np.ndarray  # (d, 13): PARAMETERS, V_max, eta of an MR damper; c_min, c_max (rest 0) of a variable one
+    parameters: np.ndarray  # (d, 13): each damper's `kernel_row`
     _maps: dict = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def of(cls, building: Building) -> SemiActiveDampers:
-        rows = []
-        for damper in building.dampers:
-            config = damper.config
-            if damper.kind == "variable_damper":
-                rows.append([config.damping_min, config.damping_max] + [0.0] * 11)
-            else:
-                values = mr_parameters(config.capacity, config.max_voltage)
-                rows.append([values[key] for key in PARAMETERS] + [config.max_voltage, config.eta])
         return cls(
             building=building,
             first_command=building.n_actuators - len(building.dampers),
-            kinds=np.array([VARIABLE_DAMPER if d.kind == "variable_damper" else MR_DAMPER for d in building.dampers]),
+            kinds=np.array([d.kernel for d in building.dampers]),
             stories=np.array([d.story for d in building.dampers]),
-            parameters=np.array(rows, dtype=float),
+            parameters=np.array([d.kernel_row() for d in building.dampers], dtype=float),
         )
 
     @property

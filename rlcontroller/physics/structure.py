@@ -19,39 +19,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from rlcontroller.config import ActuatorConfig, BuildingConfig, DeviceConfig, MatrixBuildingConfig
-
-
-@dataclass(frozen=True)
-class MassDevice:
-    """A tuned mass (active or not) as built: on `floor` (1-based), mass (kg), stiffness (N/m) and
-    damping (N*s/m) to its floor, the tuning it came from, and its limits."""
-
-    kind: str  # tuned_mass | active_mass
-    floor: int
-    mass: float
-    stiffness: float
-    damping: float
-    frequency_ratio: float
-    damping_ratio: float
-    mass_ratio: float
-    stroke_limit: float | None
-    force_limit: float | None  # active masses only
-
-    @property
-    def active(self) -> bool:
-        return self.kind == "active_mass"
-
-
-@dataclass(frozen=True)
-class Damper:
-    """A semi-active damper on `story` (1-based), as configured (`config.VariableDamperConfig` or
-    `config.MRDamperConfig`); `capacity` (N) is the force clipped-optimal control designs with."""
-
-    kind: str  # variable_damper | mr_damper
-    story: int
-    capacity: float
-    config: object
+from rlcontroller.config import ActuatorConfig, BuildingConfig, MatrixBuildingConfig
+from rlcontroller.devices import Damper as DamperConfig
+from rlcontroller.devices import DeviceConfig, MassDevice
 
 
 @dataclass(frozen=True)
@@ -70,7 +40,7 @@ class Building:
     force_limits: np.ndarray
     story_heights: np.ndarray | None = None
     devices: tuple[MassDevice, ...] = ()
-    dampers: tuple[Damper, ...] = ()  # their forces are the last columns of Gamma
+    dampers: tuple[DamperConfig, ...] = ()  # semi-active, as configured; their commands are the last columns of Gamma
 
     @property
     def n_dofs(self) -> int:
@@ -157,51 +127,10 @@ def actuator_matrix(n_floors: int, actuators: list[ActuatorConfig]) -> np.ndarra
     return gamma
 
 
-def warburton_optimum(mass_ratio: float, tuning: str = "random") -> tuple[float, float]:
-    """Warburton's optimum (frequency ratio, damping ratio) of a tuned mass on an undamped primary
-    under base acceleration (Warburton 1982, Earthquake Eng. Struct. Dyn. 10, 381-401, Table I):
-    the same frequency ratio sqrt(1 - mu/2) / (1 + mu) for both; damping for white-noise
-    (`random`, least mean-square displacement) sqrt(mu (1 - mu/4) / (4 (1 + mu)(1 - mu/2))), for
-    `harmonic` excitation (least peak response) sqrt(3 mu / (8 (1 + mu)(1 - mu/2)))."""
-    mu = mass_ratio
-    frequency = np.sqrt(1.0 - mu / 2.0) / (1.0 + mu)
-    if tuning == "random":
-        return float(frequency), float(np.sqrt(mu * (1.0 - mu / 4.0) / (4.0 * (1.0 + mu) * (1.0 - mu / 2.0))))
-    if tuning == "harmonic":
-        return float(frequency), float(np.sqrt(3.0 * mu / (8.0 * (1.0 + mu) * (1.0 - mu / 2.0))))
-    raise ValueError(f"unknown tuning {tuning!r}, expected random or harmonic")
-
-
 def tune_devices(building: Building, devices: list[DeviceConfig]) -> tuple[MassDevice, ...]:
-    """The mass devices' masses, stiffnesses and damping, tuned on `building` (the design model:
-    a plant that differs from it gets a detuned device, as a real one would): the mass is
-    mass_ratio x the modal mass of the target mode with its shape scaled to 1 at the device's floor."""
+    """The mass devices among `devices`, tuned on `building` (the design model)."""
     omega, shapes = natural_modes(building.mass, building.stiffness)
-    tuned = []
-    for device in devices:
-        if device.type not in ("tuned_mass", "active_mass"):
-            continue
-        shape = shapes[:, device.mode - 1] / shapes[device.floor - 1, device.mode - 1]
-        mass = device.mass_ratio * float(shape @ building.mass @ shape)
-        frequency_ratio, damping_ratio = warburton_optimum(device.mass_ratio, device.tuning)
-        frequency_ratio = device.frequency_ratio if device.frequency_ratio is not None else frequency_ratio
-        damping_ratio = device.damping_ratio if device.damping_ratio is not None else damping_ratio
-        frequency = frequency_ratio * omega[device.mode - 1]
-        tuned.append(
-            MassDevice(
-                kind=device.type,
-                floor=device.floor,
-                mass=mass,
-                stiffness=mass * frequency**2,
-                damping=2.0 * damping_ratio * mass * frequency,
-                frequency_ratio=frequency_ratio,
-                damping_ratio=damping_ratio,
-                mass_ratio=device.mass_ratio,
-                stroke_limit=device.stroke_limit,
-                force_limit=getattr(device, "force_limit", None),
-            )
-        )
-    return tuple(tuned)
+    return tuple(device.tuned(building.mass, omega, shapes) for device in devices if not device.semi_active)
 
 
 def with_devices(building: Building, devices: tuple[MassDevice, ...]) -> Building:
@@ -231,7 +160,7 @@ def with_devices(building: Building, devices: tuple[MassDevice, ...]) -> Buildin
     )  # fmt: skip
 
 
-def with_dampers(building: Building, dampers: list[DeviceConfig]) -> Building:
+def with_dampers(building: Building, dampers: list[DamperConfig]) -> Building:
     """`building` with its semi-active dampers: an inter-story column of Gamma each, after the other
     commanded devices, with a unit "limit" (the action itself is the damper's command)."""
     gamma = actuator_matrix(building.n_dofs, [ActuatorConfig(story=damper.story) for damper in dampers])
@@ -239,7 +168,7 @@ def with_dampers(building: Building, dampers: list[DeviceConfig]) -> Building:
         building,
         actuator_matrix=np.hstack([building.actuator_matrix, gamma]),
         force_limits=np.concatenate([building.force_limits, np.ones(len(dampers))]),
-        dampers=tuple(Damper(d.type, d.story, d.capacity, d) for d in dampers),
+        dampers=tuple(dampers),
     )
 
 

@@ -1,5 +1,5 @@
 """How a simulated plant differs from its design model: the `plant` part's factors and damage applied to
-the building, dampers stronger or weaker than designed, and random plant parts drawn from a
+the building (a damper stronger or weaker than designed is its own `scaled`), and random plant parts drawn from a
 `plant_randomization` (or its centre, what a careful engineer designs on)."""
 
 from __future__ import annotations
@@ -43,16 +43,6 @@ def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfi
         damping = damping.model_copy(update={"matrix": (np.asarray(damping.matrix) * plant.damping).tolist()})
     return building.model_copy(
         update={"masses": masses.tolist(), "stiffnesses": stiffness.tolist(), "damping": damping}
-    )
-
-
-def scaled_damper(damper, factor: float):
-    """A semi-active damper's config with its force times `factor`: an MR damper's capacity, a variable
-    damper's damping range."""
-    if damper.type == "mr_damper":
-        return damper.model_copy(update={"capacity": damper.capacity * factor})
-    return damper.model_copy(
-        update={"damping_min": damper.damping_min * factor, "damping_max": damper.damping_max * factor}
     )
 
 

@@ -185,9 +185,7 @@ def floor_field(config: WindSuiteConfig | WindGeneratorConfig, building: Buildin
     )
 
 
-def generated_wind(
-    config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str
-) -> Load:
+def generated_wind(config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str) -> Load:
     """One wind load record for training: a mean speed and a duration drawn in the generator's ranges."""
     speed = float(rng.uniform(*config.speed))
     duration = float(rng.uniform(*config.duration))

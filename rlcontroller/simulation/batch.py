@@ -92,9 +92,11 @@ class BuildingBatch:
         self._state_size, self.states, self._forcing = state_size, states, forcing
         self._stacked = None
 
-    def start(self, member: int, rng: np.random.Generator, motion: Load | None = None) -> None:
-        """Start `member` from rest: draw its plant (with randomisation) and motion (unless given), then
-        its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
+    def start(
+        self, member: int, rng: np.random.Generator, motion: Load | None = None, grid: LoadGrid | None = None
+    ) -> None:
+        """Start `member` from rest: draw its plant (with randomisation) and motion (unless given, with
+        its `grid` when known), then its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
         plant = self.plant
         if self.randomization is not None:
             drawn = draw_plant(self.randomization, plant.experiment.plant, rng)
@@ -105,7 +107,7 @@ class BuildingBatch:
                 motion = self.motions[int(rng.integers(len(self.motions)))]
             else:
                 motion = generate(plant.experiment.excitation.generator, rng, plant.building)
-        grid = on_control_grid(motion, self.control_dt)
+        grid = on_control_grid(motion, self.control_dt) if grid is None else grid
         n_steps = grid.n_steps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
         size = self._state_size
@@ -291,7 +293,8 @@ def batch_rollout(
     if not controllers:
         return []
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
-    lengths = [on_control_grid(motion, plant.control_dt).n_steps for motion in motions]  # control steps
+    grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
+    lengths = [grid.n_steps for grid in grids]  # control steps
     order = sorted(range(len(motions)), key=lambda i: lengths[i])
     results: list[list] = [[None] * len(motions) for _ in controllers]
     while order:
@@ -299,7 +302,7 @@ def batch_rollout(
         while order and len(controllers) * (len(chunk) + 1) * lengths[order[0]] <= ROWS_PER_BATCH:
             chunk.append(order.pop(0))
         responses = _rollout_chunk(
-            plant, [motions[i] for i in chunk], controllers, [seeds[i] for i in chunk], randomize
+            plant, [(motions[i], grids[i]) for i in chunk], controllers, [seeds[i] for i in chunk], randomize
         )
         for c, runs in enumerate(responses):
             for index, response in zip(chunk, runs, strict=True):
@@ -310,13 +313,13 @@ def batch_rollout(
 
 
 def _rollout_chunk(
-    plant: Plant, motions: list[Load], controllers: list[Controller], seeds: list[int], randomize: bool
+    plant: Plant, loads: list[tuple[Load, LoadGrid]], controllers: list[Controller], seeds: list[int], randomize: bool
 ) -> list[list[tuple[Response, float]]]:
-    count = len(motions)
+    count = len(loads)
     batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
     for member in reversed(range(batch.size)):  # the longest motion first: the batch is sized once
         motion = member % count
-        batch.start(member, episode_generator(seeds[motion]), motions[motion])
+        batch.start(member, episode_generator(seeds[motion]), *loads[motion])
     n_steps = int(batch.steps.max())
     states = np.zeros((n_steps + 1, batch.size, batch.plant_states().shape[1]))
     commands = np.zeros((n_steps + 1, batch.size, batch.m))

@@ -76,6 +76,7 @@ def test_steps_match_the_whole_record_simulation(records):
     assert truncated
     forces = np.clip(actions, -1, 1) * 1e5
     from rlcontroller.physics.excitation import on_control_grid
+
     grid = on_control_grid(motion, 0.02)
     samples, substeps = grid.ground, grid.substeps
     reference = simulate(env.building, env.step_map(substeps), samples, forces)

@@ -7,9 +7,9 @@ import pytest
 import scipy.integrate
 
 from rlcontroller.config import Experiment
+from rlcontroller.devices.mr_damper import mr_parameters
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
-from rlcontroller.physics.semi_active import mr_parameters
 from rlcontroller.simulation.batch import batch_rollout
 
 
