@@ -315,6 +315,7 @@ STUDY_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("arguments", "expected"), list(STUDY_CASES.values()), ids=list(STUDY_CASES))
 def test_bad_study_and_export_arguments_stop_before_any_work(tmp_path, arguments, expected):
     result = CliRunner().invoke(

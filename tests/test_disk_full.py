@@ -49,6 +49,7 @@ def aggregate_inputs(tmp_path):
     return [str(write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.05 * s, 0.6]})) for s in range(3)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("write_number", [1, 2, 3])
 def test_aggregate_on_a_full_disk(tmp_path, monkeypatch, write_number):
     runs = aggregate_inputs(tmp_path)

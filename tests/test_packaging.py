@@ -4,6 +4,8 @@ installs one and runs the demo with it)."""
 import re
 from pathlib import Path
 
+import pytest
+
 REPOSITORY = Path(__file__).resolve().parents[1]
 
 
@@ -19,6 +21,7 @@ def test_every_subpackage_is_installed_with_the_package():
     assert folders <= listed, sorted(folders - listed)
 
 
+@pytest.mark.slow
 def test_every_imported_distribution_is_a_declared_dependency():
     """A module imported by the package but installed only by another package's dependencies (click came with
     typer until typer vendored it) works in the development environment and fails in a wheel install."""

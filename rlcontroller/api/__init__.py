@@ -8,7 +8,7 @@ from rlcontroller.api.describe import describe
 from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
 from rlcontroller.api.multirun import aggregate, sweep, tune
 from rlcontroller.api.safety import check, unchecked_note, verdict_lines, verdict_state
-from rlcontroller.api.shipping import convert, export, shipped_models
+from rlcontroller.api.shipping import convert, design, export, shipped_models
 from rlcontroller.api.training import demo, train
 
 __all__ = [
@@ -23,6 +23,7 @@ __all__ = [
     "convert",
     "demo",
     "describe",
+    "design",
     "evaluate",
     "export",
     "load",

@@ -63,9 +63,8 @@ def unchecked_note(folder: Path, model: str) -> str | None:
 
     state = verdict_state(folder, model)
     if state.passed is None:
-        return (
-            f"note: {folder}'s {model} policy counts as never safety-checked ({state.reason}); run 'rlc check {folder}'"
-        )
+        why = "" if state.reason == "never safety-checked" else f" ({state.reason})"
+        return f"note: {folder}'s {model} policy counts as never safety-checked{why}; run 'rlc check {folder}'"
     if not state.passed:
         return (
             f"warning: {folder}'s {model} policy FAILED the safety check (it can be worse than no control): "

@@ -22,11 +22,46 @@ def shipped_models() -> list[str]:
         state = verdict_state(folder, "best")
         verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
         mark = " (default)" if folder == DEFAULT_MODEL else ""
-        lines.append(
-            f"{folder.name}{mark}: {policy['algorithm']}, {policy['training_steps']:,} steps, "
-            f"{verdict or f'never checked ({state.reason})'}"
-        )
+        made = (
+            f"classical, {policy['law']}" if policy.get("kind") == "classical"
+            else f"{policy['algorithm']}, {policy['training_steps']:,} steps"
+        )  # fmt: skip
+        lines.append(f"{folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}")
     return lines
+
+
+def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
+    """A classical controller as a controller folder: `law` (a key of `control.policy.LAWS`: the
+    experiment's LQG on its Kalman estimate, or passive-on / passive-off dampers) designed for the
+    experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
+    an existing one). evaluate, check and export then treat it like a trained policy. Returns `out`."""
+    from rlcontroller.config import load_experiment
+    from rlcontroller.control.policy import LAWS, PolicyController, write_policy
+    from rlcontroller.files import atomic_write
+    from rlcontroller.physics.plant import Plant
+
+    if out.exists():
+        raise ConfigError(f"--out {out}: exists; a controller folder is never overwritten (choose another --out)")
+    if law not in LAWS:
+        raise ConfigError(f"--law {law}: expected one of {', '.join(LAWS)}")
+    experiment = load_experiment(config)
+    plant = Plant(experiment)
+    if law.startswith("lqg"):
+        terms = ", ".join(
+            f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in experiment.reward.terms if t.quadratic
+        )
+        designed = (
+            f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
+            f"on its sensors and their noise, both on the design model; no training"
+        )
+    else:
+        designed = f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
+    controller = PolicyController.classical(plant, law, designed)
+    out.mkdir(parents=True)
+    atomic_write(out / "config.yaml", experiment.to_yaml())
+    write_policy(controller, plant, out, "best")
+    report.line(f"wrote {out}: {designed}")
+    return out
 
 
 def export(run_dir: Path | None = None, out: Path | None = None, model: str = "best", report: Report = QUIET) -> Path:

@@ -126,7 +126,7 @@ def robustness(
     typer.echo(f"{len(named)} scenarios evaluated in {seconds:.0f} s; tables and plot in {out}")
 
 
-@app.command(short_help="The safety check: never worse than no control.")
+@app.command(short_help="The safety check: never worse than failed safe.")
 @user_errors
 def check(
     run_dir: Annotated[
@@ -145,8 +145,9 @@ def check(
         bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
     ] = False,
 ) -> None:
-    """The safety check a controller passes before it is shipped: never worse than no control on a
-    broad suite of generated motions, still at rest, a stable closed loop. Writes MODEL_check.yaml in
+    """The safety check a controller passes before it is shipped: on a broad suite of generated motions
+    never worse than the building when the controller fails safe (no control; devices at their fail-safe
+    command), no higher floor accelerations on average, quiet at rest, a stable closed loop. Writes MODEL_check.yaml in
     the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
     from rlcontroller import api
 

@@ -1,4 +1,4 @@
-"""Commands about controllers that leave the project: `rlc models`, `export`, `convert`."""
+"""Commands about controllers that leave the project: `rlc models`, `design`, `export`, `convert`."""
 
 from __future__ import annotations
 
@@ -20,6 +20,26 @@ def models() -> None:
     typer.echo("models/ (card.md in each says what it is, what it observes and its numbers)")
     for line in api.shipped_models():
         typer.echo(line)
+
+
+@app.command(short_help="A classical controller (LQG, passive dampers) as data.")
+@user_errors
+def design(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML the controller is designed for.")],
+    out: Annotated[Path, typer.Option(help="New controller folder; never overwritten.")],
+    law: Annotated[
+        str,
+        typer.Option(
+            help="lqg_ground_model, lqg_ground or lqg_wind_model (the experiment's LQG on its Kalman estimate, "
+            "as its sensors give), passive-on or passive-off (dampers)."
+        ),
+    ] = "lqg_ground_model",
+) -> None:
+    """Design a classical controller for an experiment and save it as data (config.yaml, best_policy.yaml
+    and .npz), so that evaluate, check, export and the model list treat it like a trained policy."""
+    from rlcontroller import api
+
+    api.design(config, law, out, Printed())
 
 
 class ExportFormat(str, Enum):

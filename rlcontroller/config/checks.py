@@ -94,6 +94,11 @@ def _check_devices(experiment: Experiment) -> None:
             raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
         if device.mode > n_floors:
             raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
+    if experiment.has_dampers and experiment.supervisor is not None:
+        raise ConfigError(
+            f"{location(*experiment.origin('supervisor'))}: not with semi-active dampers (a damper's "
+            "action 0 is its middle command, not off, and a damper dissipates by itself); leave the supervisor out"
+        )
     if experiment.has_dampers and experiment.algorithm.residual_lqg:
         raise ConfigError(
             f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: not with semi-active dampers "

@@ -64,3 +64,12 @@ class SupervisorConfig(StrictModel):
 
     trigger: AccelerationRange | None = None  # m/s^2: [off below, full authority from], on the peak ground reading
     dissipative: bool = False  # pass only forces that take energy out of the building (estimated velocities)
+    # m/s: with `dissipative`, a force that would feed its story is faded out as the estimated stroke velocity
+    # grows to this (passing near a velocity reversal: no force step); 0: blocked at once (the hard clip)
+    fade_velocity: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
+
+    @model_validator(mode="after")
+    def _fade_needs_dissipative(self) -> SupervisorConfig:
+        if self.fade_velocity > 0.0 and not self.dissipative:
+            raise ValueError("fade_velocity fades the dissipative rule: set dissipative: true, or leave it out")
+        return self

@@ -86,5 +86,13 @@ class Experiment(StrictModel):
         labels += [device.command_label() for device in commanded if not device.semi_active]
         return labels + [device.command_label() for device in commanded if device.semi_active]
 
+    def fail_safe_actions(self) -> list[float]:
+        """The action, in the order of `command_labels`, of a controller that has failed safe: each
+        actuator off (0), each device at its fail-safe action (a driver off, a damper at its minimum)."""
+        commanded = [device for device in self.devices if device.fail_safe_action is not None]
+        actions = [0.0] * len(self.actuators)
+        actions += [device.fail_safe_action for device in commanded if not device.semi_active]
+        return actions + [device.fail_safe_action for device in commanded if device.semi_active]
+
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)

@@ -69,8 +69,9 @@ class AlgorithmConfig(StrictModel):
     correction to LQG. `checkpoint_every` and
     `eval_every` count environment steps; `best_model` is the validation with the highest reward, or
     with `select_by: J1` the lowest mean J1 (every validation motion counts alike, weak or strong,
-    where the reward is dominated by the strongest). `search` is `rlc tune`'s search space: dotted paths into
-    the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
+    where the reward is dominated by the strongest), with `J1+J2` the lowest mean J1 + mean J2 (drift
+    and floor acceleration weighed alike, as the safety check gates both). `search` is `rlc tune`'s
+    search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
     `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
 
@@ -86,7 +87,7 @@ class AlgorithmConfig(StrictModel):
     torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
-    select_by: Literal["reward", "J1"] = "reward"
+    select_by: Literal["reward", "J1", "J1+J2"] = "reward"
     search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated
 
 from pydantic import (
     AfterValidator,
@@ -49,9 +49,8 @@ class SafetyCheckConfig(StrictModel):
     """The safety check's standard (`evaluation.safety`): a suite of `motions` generated motions drawn
     with its own `seed`, the drift below which a motion is insignificant (a ratio of the story
     height; `story_height` (m) where the building gives none), and the at-rest test: `rest_runs`
-    noise realisations of `rest_duration` (s) without ground motion. `reference`: the building a
-    controller must never be worse than — without its devices (the standard), or with its tuned and
-    active masses and no command."""
+    noise realisations of `rest_duration` (s) without ground motion. The reference a controller must
+    never be worse than is the building with its controller failed safe (`evaluation.safety.fail_safe`)."""
 
     motions: Annotated[int, Field(ge=1, le=100_000)] = 320
     seed: Seed = 31_337
@@ -60,7 +59,6 @@ class SafetyCheckConfig(StrictModel):
     story_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 3.0
     rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
     rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
-    reference: Literal["uncontrolled", "passive devices"] = "uncontrolled"
 
 
 def load_safety_check(path: str | Path) -> SafetyCheckConfig:

@@ -175,17 +175,19 @@ class LQGPrior:
 
 
 class ConstantCommand:
-    """Every commanded device held at one action: for dampers, passive-off (-1: the least voltage
-    or damping) and passive-on (+1: the most)."""
+    """Every commanded device held at one action (`value`: one for all, or one per command): for
+    dampers, passive-off (-1: the least voltage or damping) and passive-on (+1: the most); each
+    device's fail-safe action (`Experiment.fail_safe_actions`)."""
 
-    def __init__(self, value: float, n_commands: int, name: str) -> None:
-        self.value, self.n_commands, self.name = value, n_commands, name
+    def __init__(self, value: float | np.ndarray, n_commands: int, name: str) -> None:
+        self.value = np.broadcast_to(np.asarray(value, dtype=float), (n_commands,))
+        self.n_commands, self.name = n_commands, name
 
     def reset(self) -> None:
         pass
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        return np.full(np.shape(observation)[:-1] + (self.n_commands,), self.value)
+        return np.broadcast_to(self.value, np.shape(observation)[:-1] + (self.n_commands,)).copy()
 
 
 class ClippedOptimal:

@@ -11,6 +11,12 @@ A run or model folder holds, for NAME = best or final, beside the experiment's `
                        observation_var (normalised observations); prior_feedback (m, estimate) and
                        prior_feedforward (m,) on the scaled observation (residual policies)
 
+A classical controller is the same data (`kind: classical`, its `law` and how it was `designed`): a
+network of one layer with zero weights whose bias is the action — zero for an LQG law, which is then
+its prior alone (the LQG gains on the env's own Kalman estimate), the held command for a constant one
+(passive-on, passive-off). The reader checks that it is exactly that, so evaluate, check and export
+treat it like a learned policy and it acts as its law.
+
 Reading never unpickles (`np.load(..., allow_pickle=False)`, `yaml.safe_load`) and imports neither
 torch nor stable-baselines3: a controller from someone else is data, never code. The actor is the
 deterministic one: PPO/A2C's Gaussian mean, SAC's tanh-squashed mean, TD3's output.
@@ -36,6 +42,13 @@ FORMAT = "rlcontroller-policy"
 FORMAT_VERSION = 1
 MODELS = ("best", "final")
 PRIORS = ("none", "lqg_ground", "lqg_ground_model", "lqg_wind_model")
+LAWS = {  # a classical law: its name in tables
+    "lqg_ground": "LQG + ground",
+    "lqg_ground_model": "LQG + ground model",
+    "lqg_wind_model": "LQG + wind model",
+    "passive-on": "passive-on",
+    "passive-off": "passive-off",
+}
 
 
 def gelu(x: np.ndarray) -> np.ndarray:
@@ -119,9 +132,30 @@ class PolicyController:
         source: str = "",
         steps: int = 0,
         algorithm: str = "",
+        law: str | None = None,
+        designed: str = "",
     ) -> None:
         self.actor, self.normalizer, self.prior = actor, normalizer, prior
         self.name, self.source, self.steps, self.algorithm = name, source, steps, algorithm
+        self.law, self.designed = law, designed  # a classical controller's law (a key of LAWS) and its design
+
+    @classmethod
+    def classical(cls, plant: Plant, law: str, designed: str) -> PolicyController:
+        """`law` for `plant` as a controller file holds it: LQG (the experiment's own, on its Kalman
+        estimate, designed on the design model with the experiment's cost) or a constant command."""
+        m, size = plant.building.n_actuators, plant.layout.size
+        if law not in LAWS:
+            raise ConfigError(f"law {law!r}: expected one of {', '.join(LAWS)}")
+        prior, bias = None, np.zeros(m, dtype=np.float32)
+        if law.startswith("lqg"):
+            if not plant.experiment.sensors.state_estimate or law != prior_kind(plant):
+                raise ConfigError(f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
+                                  " (needs sensors.state_estimate: true)")  # fmt: skip
+            prior = LQGPrior.design(plant)
+        else:
+            bias[:] = 1.0 if law == "passive-on" else -1.0
+        actor = Actor((Layer(np.zeros((m, size), dtype=np.float32), bias, None),), squash=False)
+        return cls(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed)
 
     def reset(self) -> None:
         pass
@@ -164,6 +198,7 @@ def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[
     description = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
+        **({"kind": "classical", "law": controller.law, "designed": controller.designed} if controller.law else {}),
         "algorithm": controller.algorithm,
         "training_steps": int(controller.steps),
         "network": {
@@ -208,6 +243,8 @@ def read_policy(folder: Path, model: str, plant: Plant, name: str = "RL") -> Pol
     try:
         weights = _read_npz(weights_path, description, plant)
         controller = _controller(description, weights, plant, name)
+        if controller.law is not None and name == "RL":  # beside the evaluation's own classical rows
+            controller.name = f"{LAWS[controller.law]} ({folder.resolve().name})"
     except ConfigError:  # names the weights file
         raise
     except KeyError as error:
@@ -232,6 +269,9 @@ KEYS = {
         "actions",
         "force_limits_N",
         "control_dt_s",
+        "kind",
+        "law",
+        "designed",
     },
     "network": {"activations", "squash", "odd"},
     "observation": {"size", "normalize", "epsilon", "clip"},
@@ -359,4 +399,31 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
     steps = description["training_steps"]
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
         raise ValueError(f"training_steps {steps!r}: expected a whole number of steps, 0 or more")
-    return PolicyController(actor, normalizer, prior, name, steps=steps, algorithm=str(description["algorithm"]))
+    law = _classical_law(description, actor, normalizer, prior)
+    return PolicyController(
+        actor, normalizer, prior, name, steps=steps,
+        algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")),
+    )  # fmt: skip
+
+
+def _classical_law(
+    description: dict, actor: Actor, normalizer: Normalizer | None, prior: LQGPrior | None
+) -> str | None:
+    """A classical file's law once its data is checked to be exactly that law (ValueError otherwise)."""
+    kind = description.get("kind", "learned")
+    if kind not in ("learned", "classical"):
+        raise ValueError(f"kind {kind!r}: expected learned or classical")
+    if kind == "learned":
+        return None
+    law = description.get("law")
+    if law not in LAWS:
+        raise ValueError(f"law {law!r}: expected one of {', '.join(LAWS)}")
+    (layer,) = actor.layers if len(actor.layers) == 1 else (None,)
+    if layer is None or np.any(layer.weight != 0.0) or normalizer is not None or actor.squash or actor.odd:
+        raise ValueError(f"a classical {law} law has one layer of zero weights and no normalisation")
+    expected_bias = {"passive-on": 1.0, "passive-off": -1.0}.get(law, 0.0)
+    if np.any(layer.bias != expected_bias) or (prior is None) != (law in ("passive-on", "passive-off")):
+        raise ValueError(f"a classical {law} law: its bias must be {expected_bias:g} and its prior {law}")
+    if prior is not None and description["prior"] != law:
+        raise ValueError(f"a classical {law} law: its prior is {description['prior']}")
+    return law

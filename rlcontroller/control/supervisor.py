@@ -11,7 +11,11 @@ experiment alike (LQG, learned, uncontrolled), so comparisons stay fair:
 - **dissipative**: an actuator's force passes only when it takes energy out of the building,
   u_j (Γ_jᵀ v) ≤ 0 with Γ the actuator matrix and v the filter's estimate of the floor velocities
   (relative to the ground); otherwise that actuator's action is 0. For an inter-story actuator this
-  is a force opposing the estimated story velocity, as a damper's does.
+  is a force opposing the estimated story velocity, as a damper's does. With `fade_velocity` v_f
+  (m/s) the rule is continuous: a force that would feed energy in is scaled by
+  max(0, 1 - |Γ_jᵀ v| / v_f) instead, so it passes near a velocity reversal and fades out as the
+  story moves faster the wrong way. The hard rule switches the force off at every reversal, and a
+  force step is a floor-acceleration step (docs/safety_check.md, the supervisor study).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ class Supervisor:
             start = layout.estimate.start + n  # the estimate is [x; v (; ground filter)], scaled
             self.velocity = slice(start, start + n)
             self.actuator_matrix = plant.building.actuator_matrix  # Γ: v @ Γ is each actuator's stroke velocity
+            self.fade = config.fade_velocity / layout.estimate_scale[n]  # in the estimate's scaled units
         self.peak_ground = np.zeros(size)
 
     def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
@@ -51,8 +56,12 @@ class Supervisor:
 
     def __call__(self, observations: np.ndarray, actions: np.ndarray) -> None:
         if self.velocity is not None:
-            stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled: the sign is what counts
-            actions[actions * stroke_velocity > 0.0] = 0.0
+            stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled (one scale for all)
+            feeding = actions * stroke_velocity > 0.0
+            if self.fade > 0.0:
+                actions[feeding] *= np.maximum(1.0 - np.abs(stroke_velocity[feeding]) / self.fade, 0.0)
+            else:
+                actions[feeding] = 0.0
         if self.trigger is not None:
             actions *= self.gain(observations)[:, None]
 

@@ -177,7 +177,13 @@ def _supervised(g: _Graph, plant: Plant, observation: str, action: str) -> tuple
         feeds = g.node(
             "Greater", [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)], "feeds_energy"
         )
-        action = g.node("Where", [feeds, g.constant("no_action", 0.0), action], "dissipative_action")
+        blocked = g.constant("no_action", 0.0)
+        if supervisor.fade_velocity > 0.0:  # scaled as the estimate is, like `control.supervisor`
+            fade = supervisor.fade_velocity / layout.estimate_scale[n]
+            speed = g.node("Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio")
+            kept = g.clip(g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor")
+            blocked = g.node("Mul", [action, kept], "faded_action")
+        action = g.node("Where", [feeds, blocked, action], "dissipative_action")
     if supervisor.trigger is None:
         return action, None
     reading = g.columns(stored, layout.ground, layout.ground + 1, "stored_ground")
@@ -202,7 +208,9 @@ def _supervisor_text(supervisor) -> str:
     parts = []
     if supervisor.trigger is not None:
         parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak ground reading")
-    if supervisor.dissipative:
+    if supervisor.dissipative and supervisor.fade_velocity > 0.0:
+        parts.append(f"forces feeding energy in faded out by {supervisor.fade_velocity:g} m/s of stroke velocity")
+    elif supervisor.dissipative:
         parts.append("dissipative forces only")
     return "; ".join(parts) or "none"
 

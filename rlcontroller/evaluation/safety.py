@@ -1,13 +1,17 @@
-"""The safety check: a controller must never make the building worse than no control.
+"""The safety check: a controller must never make the building worse than it is when the controller fails safe.
 
-Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds):
+The reference is the building as it stands when its controller fails safe (`fail_safe`): without
+devices, the building with no control; with devices, each at its fail-safe action (tuned masses as
+tuned, mass drivers switched off: the tuned masses they are, dampers at their minimum command:
+passive-off). Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds):
 
 1. **check suite** — on every one of its generated motions (own seed, never used in training or
    selection): the building's peak inter-story drift (max over stories and time) is no larger than
-   the uncontrolled building's and the mean over stories of J1 is at most 1 (with the standard's
-   `reference: passive devices`: than the building's with its tuned and active masses uncommanded);
-   on a motion whose uncontrolled peak drift ratio is below the insignificance bound, the controlled
-   peak drift ratio stays below the bound instead. The mean J1 over the significant motions is at most 1 as well.
+   the reference's and the mean over stories of J1 (to the reference) is at most 1; on a motion whose
+   reference peak drift ratio is below the insignificance bound, the controlled peak drift ratio
+   stays below the bound instead. Over the significant motions the mean J1 and the mean J2 (peak
+   absolute floor acceleration, to the reference's, mean over floors) are at most 1 as well: a
+   controller that trades floor accelerations for drift does not pass.
 2. **at rest** — sensor noise only, no ground motion: the peak drift ratio stays below the bound.
 3. **closed-loop stability** — for a policy (a function of the observation), the closed loop
    linearised at rest on the design model, without the experiment's supervisor (whose trigger
@@ -31,10 +35,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from rlcontroller.config import ConfigError, SafetyCheckConfig, Scenario
-from rlcontroller.control.controllers import Controller
+from rlcontroller.config import SafetyCheckConfig, Scenario
+from rlcontroller.control.controllers import ConstantCommand, Controller
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
+from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load
 from rlcontroller.physics.generators import generate_suite
@@ -42,6 +46,7 @@ from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
 
 ROUNDING = 1e-9  # a controller that never acts equals the uncontrolled building to this relative rounding
+FAIL_SAFE = "fail-safe"
 
 
 @dataclass
@@ -55,7 +60,8 @@ class Verdict:
 
     def to_yaml(self) -> str:
         fields = {"controller": self.controller, "passed": self.passed, "criteria": self.criteria}
-        return yaml.safe_dump(fields | ({"judged": self.judged} if self.judged else {}), sort_keys=False)
+        fields |= {"judged": self.judged} if self.judged else {}
+        return yaml.safe_dump(fields, sort_keys=False, default_flow_style=None)  # a motion's numbers on one line
 
     def lines(self) -> list[str]:
         head = f"safety check of {self.controller}: {'PASSED' if self.passed else 'FAILED'}"
@@ -73,6 +79,30 @@ def drift_bounds(plant: Plant, standard: SafetyCheckConfig) -> np.ndarray:
     return standard.insignificant_drift_ratio * np.asarray(heights, dtype=float)
 
 
+def fail_safe(plant: Plant) -> tuple[Controller | None, str]:
+    """The check's reference: the controller a failed one is replaced by, every command at its device's
+    fail-safe action (None without devices: the evaluation's uncontrolled building), and its words."""
+    experiment = plant.experiment
+    if not experiment.devices:
+        return None, "no control"
+    parts = []
+    if any(not device.semi_active and device.fail_safe_action is None for device in experiment.devices):
+        parts.append("tuned masses as tuned")
+    if any(not device.semi_active and device.fail_safe_action is not None for device in experiment.devices):
+        parts.append("mass drivers switched off")
+    if experiment.has_dampers:
+        parts.append("dampers at their minimum command")
+    if experiment.actuators:
+        parts.append("actuators off")
+    actions = np.array(experiment.fail_safe_actions())
+    return ConstantCommand(actions, actions.size, FAIL_SAFE), f"the devices failed safe ({', '.join(parts)})"
+
+
+def peak_acceleration(response) -> np.ndarray:
+    """Each floor's peak absolute acceleration (m/s^2)."""
+    return np.max(np.abs(response.absolute_acceleration), axis=0)
+
+
 def safety_check(
     plant: Plant,
     controller: Controller,
@@ -82,8 +112,6 @@ def safety_check(
 ) -> Verdict:
     """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`;
     `on_criterion(name)` is called as each criterion is judged (a progress bar)."""
-    if standard.reference == PASSIVE and (not plant.building.devices or plant.building.dampers):
-        raise ConfigError("reference: passive devices: the building has no tuned or active mass (or has dampers)")
     bounds = drift_bounds(plant, standard)
     judges = {
         "check suite": lambda: suite_criterion(plant, controller, standard, bounds),
@@ -102,42 +130,54 @@ def safety_check(
 
 def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
     motions = generate_suite(standard.generator, standard.motions, standard.seed)
-    evaluation = evaluate(plant, motions, [controller], "safety check suite", include_optimal=False)
-    failures, j1_means, worst = [], [], None
+    reference, words = fail_safe(plant)
+    controllers = [controller] if reference is None else [controller, reference]
+    evaluation = evaluate(plant, motions, controllers, "safety check suite", include_optimal=False)
+    key = "uncontrolled" if reference is None else FAIL_SAFE
+    failures, per_motion, worst, worst_j2 = [], {}, None, None
     for motion in motions:
-        bare = evaluation.responses[standard.reference, motion.name].drift
-        controlled = evaluation.responses[controller.name, motion.name].drift
-        bare_peak, peak = np.max(np.abs(bare), axis=0), np.max(np.abs(controlled), axis=0)
+        fail_safe_run = evaluation.responses[key, motion.name]
+        controlled = evaluation.responses[controller.name, motion.name]
+        bare_peak, peak = np.max(np.abs(fail_safe_run.drift), axis=0), np.max(np.abs(controlled.drift), axis=0)
+        row = {"motion": motion.name, "pga_g": round(motion.pga / STANDARD_GRAVITY, 5)}
         if np.max(bare_peak / bounds) < 1.0:  # insignificant: stay below the bound
             score = float(np.max(peak / bounds))
             ok, kind = score < 1.0, "peak drift / insignificance bound"
         else:
             j1 = float(np.mean(peak / bare_peak))
-            j1_means.append(j1)
+            j2 = float(np.mean(peak_acceleration(controlled) / peak_acceleration(fail_safe_run)))
+            per_motion[motion.name] = [round(j1, 4), round(j2, 4)]
+            if worst_j2 is None or j2 > worst_j2["value"]:
+                worst_j2 = row | {"value": round(j2, 4)}
             score = float(np.max(peak) / np.max(bare_peak))
             ok = score <= 1.0 + ROUNDING and j1 <= 1.0 + ROUNDING
-            score, kind = max(score, j1), f"peak drift ratio to {standard.reference} (or mean J1, the larger)"
-        row = {"motion": motion.name, "pga_g": round(motion.pga / STANDARD_GRAVITY, 5), "value": round(score, 4)}
+            score, kind = max(score, j1), "peak drift ratio to the reference (or mean J1, the larger)"
+        row["value"] = round(score, 4)
         if not ok:
             failures.append(row)
         if worst is None or score > worst["value"]:
             worst = row | {"measure": kind}
-    mean_j1 = float(np.mean(j1_means)) if j1_means else float("nan")
-    passed = not failures and (not j1_means or mean_j1 <= 1.0 + ROUNDING)
-    reference = "no control" if standard.reference == "uncontrolled" else "the passive devices"
+    significant = len(per_motion)
+    mean_j1, mean_j2 = (float(v) for v in np.mean(list(per_motion.values()), axis=0)) if significant else (np.nan,) * 2
+    passed = not failures and (not significant or (mean_j1 <= 1.0 + ROUNDING and mean_j2 <= 1.0 + ROUNDING))
     summary = (
-        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {reference} "
-        f"({len(motions) - len(j1_means)} insignificant); mean J1 {mean_j1:.3f}; worst {worst['motion']} "
-        f"(PGA {worst['pga_g']:g} g): {worst['value']:.3f}"
+        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {words} "
+        f"({len(motions) - significant} insignificant); mean J1 {mean_j1:.3f}, mean J2 {mean_j2:.3f}; "
+        f"worst {worst['motion']} (PGA {worst['pga_g']:g} g): {worst['value']:.3f}"
     )
+    if worst_j2 is not None:
+        summary += f"; worst J2 {worst_j2['value']:.3f} ({worst_j2['motion']})"
     return {
         "passed": passed,
         "summary": summary,
-        "reference": standard.reference,
+        "reference": words,
         "motions": len(motions),
-        "insignificant_motions": len(motions) - len(j1_means),
+        "insignificant_motions": len(motions) - significant,
         "mean_J1": round(mean_j1, 4),
+        "mean_J2": round(mean_j2, 4),
         "worst": worst,
+        "worst_J2": worst_j2,
+        "J1_J2_per_motion": per_motion,  # the significant motions
         "failures": failures[:20],
         "failure_count": len(failures),
     }

@@ -114,8 +114,10 @@ def _callback(
 
 
 def selection_score(result: dict[str, float], select_by: str) -> float:
-    """Higher is better: the validation reward, or minus the validation J1 (`algorithm.select_by`)."""
-    return result["eval_reward"] if select_by == "reward" else -result["eval_J1"]
+    """Higher is better: the validation reward, or minus the validation J1 or J1 + J2 (`algorithm.select_by`)."""
+    if select_by == "reward":
+        return result["eval_reward"]
+    return -result["eval_J1"] - (result["eval_J2"] if select_by == "J1+J2" else 0.0)
 
 
 @dataclass

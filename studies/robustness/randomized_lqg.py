@@ -49,9 +49,7 @@ def randomized_lqg(experiment: Experiment, count: int, seed: int) -> tuple[list[
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--config", type=Path, default=REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"
-    )
+    parser.add_argument("--config", type=Path, default=REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml")
     parser.add_argument("--count", type=int, default=200)
     parser.add_argument("--seed", type=int, default=20_000)
     arguments = parser.parse_args()

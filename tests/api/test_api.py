@@ -86,9 +86,7 @@ def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
     report = Recorded()
     out = api.export(copy, tmp_path / "controller.onnx", report=report)
     assert out.is_file()
-    assert report.notes == [
-        f"note: {copy}'s best policy counts as never safety-checked (never safety-checked); run 'rlc check {copy}'"
-    ]
+    assert report.notes == [f"note: {copy}'s best policy counts as never safety-checked; run 'rlc check {copy}'"]
     assert report.lines == [f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"]
 
 

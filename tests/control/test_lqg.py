@@ -230,6 +230,7 @@ def test_ground_model_keeps_the_building_gain_and_is_stable():
     assert np.max(np.abs(np.linalg.eigvals(kalman.phi - kalman.gain @ kalman.sensor_c @ kalman.phi))) < 1.0
 
 
+@pytest.mark.slow
 def test_ground_model_lqg_wins_on_the_motions_it_models():
     """On stationary Kanai-Tajimi ground motion with the model's own parameters, weak enough that no
     force saturates, the LQG that predicts the ground has the better reward of the three LQGs."""

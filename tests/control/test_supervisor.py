@@ -114,3 +114,33 @@ def test_a_bad_supervisor_is_one_line_naming_the_field(supervisor, message):
 def test_a_dissipative_supervisor_needs_the_state_estimate():
     with pytest.raises(ConfigError, match=r"^<config>: supervisor.dissipative: needs sensors.state_estimate: true"):
         build_experiment({"supervisor": {"dissipative": True}})
+
+
+def test_a_faded_rule_scales_a_force_that_feeds_energy_by_the_stroke_speed():
+    """With fade_velocity v_f a force that would feed its story passes scaled by 1 - |v| / v_f (none from
+    v_f on): continuous where the hard rule switches at every velocity reversal."""
+    fade = 0.05  # m/s
+    env = BuildingEnv(experiment({"trigger": [0.25, 1.0], "dissipative": True, "fade_velocity": fade}))
+    layout, n = env.layout, 5
+    seen, wanted, applied = run(env, lqg(env.plant), synthetic_suite(count=1)[0])
+    peak_ground = np.maximum.accumulate(np.abs(seen[:, layout.ground] * layout.ground_scale))
+    gain = np.clip((peak_ground - 0.25) / 0.75, 0.0, 1.0)
+    velocity = seen[:, layout.estimate][:, n : 2 * n] * layout.estimate_scale[n : 2 * n]  # m/s
+    story_velocity = velocity - np.hstack([np.zeros((len(velocity), 1)), velocity[:, :-1]])
+    action = np.clip(wanted, -1, 1)
+    feeds_energy = action * story_velocity > 0.0
+    kept = np.where(feeds_energy, np.clip(1.0 - np.abs(story_velocity) / fade, 0.0, 1.0), 1.0)
+    np.testing.assert_allclose(applied, action * kept * gain[:, None], rtol=1e-5, atol=1e-6)  # float32 observation
+    partly = feeds_energy & (np.abs(story_velocity) < fade) & (gain[:, None] > 0)
+    assert partly.sum() > 10  # forces that the hard rule would have cut pass in part
+
+
+def test_a_fade_without_the_dissipative_rule_is_refused():
+    with pytest.raises(ConfigError, match=r"^<config>: supervisor: .*fade_velocity fades the dissipative rule"):
+        build_experiment({"sensors": SENSORS, "supervisor": {"trigger": [0.25, 1.0], "fade_velocity": 0.1}})
+
+
+def test_dampers_take_no_supervisor():
+    dampers = [{"type": "mr_damper", "story": 1, "capacity": 1.0e5}]
+    with pytest.raises(ConfigError, match=r"^<config>: supervisor: not with semi-active dampers"):
+        build_experiment({"actuators": [], "devices": dampers, "supervisor": {"trigger": [0.25, 1.0]}})

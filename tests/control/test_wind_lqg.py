@@ -76,6 +76,7 @@ def test_a_zero_residual_on_the_wind_prior_is_lqg_with_the_wind_model(wind_exper
     assert np.abs(lqg.force).max() > 1e3
 
 
+@pytest.mark.slow
 def test_under_wind_the_wind_model_beats_the_ground_model_in_comfort(wind_experiment):
     """The same cost, the same sensors: modelling the disturbance as floor forces (not ground
     shaking) gives lower RMS floor accelerations on generated wind."""

@@ -54,6 +54,7 @@ def assert_same_forces(plant, python_controller, path, motions):
         np.testing.assert_allclose(actual, expected.force, rtol=0.0, atol=1e-4 * scale)
 
 
+@pytest.mark.slow
 def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
     path = export_onnx(COMMITTED, "best", tmp_path / "controller.onnx")
     plant = Plant(load_experiment(COMMITTED / "config.yaml"))
@@ -66,12 +67,25 @@ def test_the_committed_policy_exported_gives_the_python_forces(tmp_path):
     assert str(REPOSITORY) not in onnx.load(path).SerializeToString().decode("latin-1")  # no local path
 
 
+def with_supervisor(tmp_path, supervisor: dict):
+    """A copy of the default model behind another supervisor (its LQG law does not depend on it)."""
+    import shutil
+
+    import yaml
+
+    folder = tmp_path / "model"
+    shutil.copytree(DEFAULT_MODEL, folder)
+    config = yaml.safe_load((folder / "config.yaml").read_text())
+    (folder / "config.yaml").write_text(yaml.safe_dump(config | {"supervisor": supervisor}))
+    return folder
+
+
+@pytest.mark.slow
 def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
-    """The default model acts behind a trigger and a dissipative rule: the graph applies both (same
-    forces as the supervised env, zero at rest), and its metadata says so."""
-    folder = DEFAULT_MODEL
+    """Behind the standard trigger and the hard dissipative rule the graph applies both (same forces as
+    the supervised env, zero at rest), and its metadata says so."""
+    folder = with_supervisor(tmp_path, {"trigger": [0.25, 1.0], "dissipative": True})
     plant = Plant(load_experiment(folder / "config.yaml"))
-    assert plant.experiment.supervisor is not None
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
     assert_same_forces(plant, read_policy(folder, "best", plant), path, synthetic_suite(count=2))
     still = Load("at rest", plant.control_dt, np.zeros(1001), synthetic=True)
@@ -79,6 +93,38 @@ def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
     assert np.all(forces == 0.0)
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
     assert metadata["supervisor"] == "trigger 0.25-1 m/s^2 on the peak ground reading; dissipative forces only"
+
+
+def test_the_default_exports_with_its_faded_supervisor(tmp_path):
+    """The graph fades a force that feeds energy in as the env's supervisor does: fed the readings the
+    supervised env gave the Python controller, it gives that step's force. The graph's filter reads the
+    float32 readings the observation holds, so its estimate differs from the env's by about 1e-5 m/s;
+    the fade (force / 0.1 m/s per m/s) turns that into up to 1e-4 of the force (a missing or misscaled
+    fade differs by up to the whole force). In the closed loop such differences grow over a record, where
+    the hard rule masks them."""
+    plant = Plant(load_experiment(DEFAULT_MODEL / "config.yaml"))
+    assert plant.experiment.supervisor.fade_velocity == 0.1
+    path = export_onnx(DEFAULT_MODEL, "best", tmp_path / "controller.onnx")
+    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
+    controller = read_policy(DEFAULT_MODEL, "best", plant)
+    observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
+    python, onnx_forces, faded = [], [], 0
+    for _ in range(info["steps"]):
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        onnx_forces.append(graph.step(readings[None], ground)[0])
+        action = controller.act(observation)
+        observation, *_ = env.step(action)
+        python.append(env.command)
+        faded += np.sum((np.abs(env.command) > 1.0) & (np.abs(env.command) < 0.99 * np.abs(action) * 1e5))
+    python, onnx_forces = np.array(python), np.array(onnx_forces)
+    assert faded > 10  # forces the supervisor scaled (trigger or fade), not cut
+    np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
+    metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
+    assert metadata["supervisor"] == (
+        "trigger 0.1-0.3 m/s^2 on the peak ground reading; "
+        "forces feeding energy in faded out by 0.1 m/s of stroke velocity"
+    )
 
 
 @pytest.mark.slow
@@ -117,6 +163,7 @@ def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
     assert_same_forces_open_loop(plant, policy_controller(model, None), tmp_path / "model_free.onnx")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["five_story_amd", "five_story_mr"])
 def test_policies_for_devices_export_too(tmp_path, name):
     """An active mass driver's force (N) and MR dampers' commands in [-1, 1] come out of the graph as

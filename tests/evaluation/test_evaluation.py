@@ -59,6 +59,7 @@ def test_sweep_trades_force_energy_for_drift():
     assert table["J1"].iloc[-1] > table["J1"].iloc[0]
 
 
+@pytest.mark.slow
 def test_the_sweep_designs_lqg_on_the_design_model_and_runs_it_on_the_plant():
     softer = Plant(Experiment(plant={"stiffness": 0.7}))
     motions = synthetic_suite(count=2)

@@ -94,7 +94,8 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} == {"robustness.csv", "robustness.md", "robustness.png"}
     table = pd.read_csv(out / "robustness.csv")
-    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, NOMINAL_GROUND_MODEL, ORACLE_LQG, "RL"}
+    default = "LQG + ground model (five_story_every_story)"  # the default model, a classical one
+    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, NOMINAL_GROUND_MODEL, ORACLE_LQG, default}
     assert (
         set(table["scenario"]) == {"nominal", "soft"}
         and "## Mean J1 per scenario" in (out / "robustness.md").read_text()

@@ -141,7 +141,8 @@ def test_tampered_weights_are_reported_as_unchecked_by_every_command(tmp_path):
 
 def test_check_show_prints_a_current_verdict():
     result = CliRunner().invoke(app, ["check", "--show"])
-    assert result.exit_code == 0 and "safety check of RL: PASSED" in result.output and "match" in result.output
+    assert result.exit_code == 0 and "match" in result.output
+    assert "safety check of LQG + ground model (five_story_every_story): PASSED" in result.output
 
 
 @pytest.mark.slow
@@ -177,6 +178,7 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     assert verdict.passed, verdict.lines()
 
 
+@pytest.mark.slow
 def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypatch):
     import yaml
 
@@ -196,39 +198,82 @@ def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypa
 
 
 @pytest.mark.slow
-def test_against_the_passive_devices_a_switched_off_driver_scores_exactly_one():
-    """With `reference: passive devices`, a driver that never pushes is the reference itself: every
-    significant motion scores 1 and it passes; judged against the bare building its tuned mass is
-    worse on some motions. Only the reference key differs between the two committed standards."""
-    import yaml
-
+@pytest.mark.parametrize(
+    ("config", "fail_safe_action", "words"),
+    [
+        ("five_story_amd.yaml", 0.0, "mass drivers switched off"),
+        ("five_story_mr.yaml", -1.0, "dampers at their minimum command"),
+    ],
+)
+def test_a_controller_that_fails_safe_is_its_own_reference(config, fail_safe_action, words):
+    """With devices the reference is the building with them failed safe: a driver switched off, dampers
+    at their minimum command. That controller scores exactly 1 on every significant motion and passes;
+    against the building without its devices (the old reference) the tuned mass alone is worse on some."""
     from rlcontroller.config import load_experiment
     from rlcontroller.control.controllers import ConstantCommand
+    from rlcontroller.evaluation.safety import fail_safe
 
-    committed = {
-        name: yaml.safe_load((STANDARD.parent / f"{name}.yaml").read_text()) for name in ("standard", "passive_devices")
-    }
-    assert (
-        committed["passive_devices"].pop("reference") == "passive devices"
-        and committed["passive_devices"] == committed["standard"]
+    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / config))
+    reference, description = fail_safe(plant)
+    m = plant.building.n_actuators
+    np.testing.assert_array_equal(reference.act(np.zeros(plant.layout.size)), np.full(m, fail_safe_action))
+    assert words in description
+    verdict = safety_check(plant, ConstantCommand(fail_safe_action, m, "failed"), small_standard(motions=40), [])
+    suite = verdict.criteria["check suite"]
+    assert verdict.passed and suite["reference"] == description
+    assert suite["mean_J1"] == pytest.approx(1.0, abs=1e-9) and suite["mean_J2"] == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_the_check_s_j2_is_each_motion_s_j2_against_the_reference():
+    """Without devices the reference is the uncontrolled building: the verdict's J2 of a motion is the
+    evaluation's J2 (mean over floors), and its mean J2 their mean."""
+    from rlcontroller.control.controllers import LQGController
+    from rlcontroller.control.lqg import design_lqg
+    from rlcontroller.evaluation.evaluation import evaluate
+    from rlcontroller.physics.generators import generate_suite
+
+    plant = Plant(Experiment())
+    lqg = LQGController(design_lqg(plant.design), plant.design, "LQG")
+    standard = small_standard()
+    suite = safety_check(plant, lqg, standard, []).criteria["check suite"]
+    motions = generate_suite(standard.generator, standard.motions, standard.seed)
+    metrics = evaluate(plant, motions, [lqg], "", include_optimal=False).metrics
+    j2 = metrics[(metrics["controller"] == "LQG") & (metrics["metric"] == "J2")].groupby("record")["value"].mean()
+    per_motion = suite["J1_J2_per_motion"]
+    assert len(per_motion) == standard.motions - suite["insignificant_motions"] > 5
+    for name, (_, value) in per_motion.items():
+        assert value == pytest.approx(j2[name], abs=1e-4)
+    assert suite["mean_J2"] == pytest.approx(np.mean([value for _, value in per_motion.values()]), abs=1e-4)
+    assert suite["worst_J2"]["value"] == max(value for _, value in per_motion.values())
+    assert suite["reference"] == "no control"
+
+
+@pytest.mark.slow
+def test_a_controller_that_trades_floor_accelerations_for_drift_fails_on_j2():
+    """LQG + ground model behind a low trigger and the hard dissipative rule never drifts more than the
+    building without control, but the rule's force steps raise the floor accelerations (docs/safety_check.md):
+    no motion fails, the mean J2 above 1 fails the check."""
+    from rlcontroller.control.controllers import LQGController
+    from rlcontroller.control.lqg import design_lqg_ground_model
+
+    plant = Plant(
+        Experiment.model_validate(
+            {
+                "actuators": [{"story": story} for story in range(1, 6)],
+                "sensors": {"state_estimate": True, "ground_model": True},
+                "supervisor": {"trigger": [0.1, 0.3], "dissipative": True},
+            }
+        )
     )
-    plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_amd.yaml"))
-    off = ConstantCommand(0.0, 1, "driver off")
-    against_passive = safety_check(plant, off, small_standard(motions=40, reference="passive devices"), [])
-    suite = against_passive.criteria["check suite"]
-    assert against_passive.passed and suite["reference"] == "passive devices"
-    assert suite["worst"]["value"] == pytest.approx(1.0, abs=1e-9) or suite["insignificant_motions"] == 40
-    against_bare = safety_check(plant, off, small_standard(motions=40), []).criteria["check suite"]
-    assert against_bare["failure_count"] > 0 and against_bare["reference"] == "uncontrolled"
+    lqg = LQGController(design_lqg_ground_model(plant.design), plant.design, "LQG + ground model")
+    verdict = safety_check(plant, lqg, small_standard(motions=40), [])
+    suite = verdict.criteria["check suite"]
+    assert suite["failure_count"] == 0 and suite["mean_J1"] < 1.0 < suite["mean_J2"]
+    assert not verdict.passed and f"mean J2 {suite['mean_J2']:.3f}" in suite["summary"]
 
 
-def test_a_passive_devices_reference_needs_a_tuned_or_active_mass(tmp_path):
-    from rlcontroller.config import ConfigError
-
-    with pytest.raises(ConfigError, match="reference: passive devices: the building has no tuned or active mass"):
-        safety_check(Plant(Experiment()), Uncontrolled(3), small_standard(reference="passive devices"), [])
-
-
+@pytest.mark.slow
 def test_a_verdict_under_another_standard_does_not_replace_the_standard_s(tmp_path):
     import shutil
 
@@ -246,16 +291,15 @@ def test_a_verdict_under_another_standard_does_not_replace_the_standard_s(tmp_pa
     assert (folder / "best_check.yaml").read_bytes() == standard_verdict
 
 
-def test_rlc_check_names_the_standard_that_asks_for_a_mass_the_building_lacks(tmp_path):
+def test_a_standard_that_names_a_reference_is_refused_in_one_line(tmp_path):
+    """The reference is the standard's own (the building failed safe), no longer a key of the file."""
     import shutil
 
     import yaml
 
     folder = tmp_path / "model"
     shutil.copytree(NETWORK_POLICY, folder)
-    wrong = tmp_path / "passive.yaml"
-    wrong.write_text(
-        yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "passive devices"})
-    )
-    result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(wrong)])
-    assert result.exit_code == 2 and f"error: {wrong}: reference: passive devices: the building has no" in result.output
+    old = tmp_path / "passive.yaml"
+    old.write_text(yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "uncontrolled"}))
+    result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(old)])
+    assert result.exit_code == 2 and f"error: {old}: reference: unknown key" in result.output

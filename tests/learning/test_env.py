@@ -267,6 +267,7 @@ def test_the_last_actions_are_kept_newest_first():
     np.testing.assert_allclose(observation[layout.action], actions[-1], rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_reward_per_motion_does_not_depend_on_the_motion_intensity():
     """Noise-free sensors and LQG (linear in the readings): with `reward.per_motion` a motion and the
     same motion x 20 give the same return for homogeneous terms of powers 2 and 4 and a force change;

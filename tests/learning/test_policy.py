@@ -146,6 +146,7 @@ def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where
             assert "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_a_folder_with_only_a_stable_baselines3_zip_is_refused_with_the_way_to_convert(tmp_path):
     folder = tmp_path / "old_run"
     folder.mkdir()
@@ -239,6 +240,7 @@ def test_every_shipped_model_loads_and_acts_from_a_fresh_clone(name):
         (lambda f: (f / "best_policy.npz").unlink(), "missing (the policy's weights)"),
     ],
 )
+@pytest.mark.slow
 def test_a_damaged_policy_file_is_one_line_naming_it(tmp_path, damage, expected):
     folder = tmp_path / "model"
     shutil.copytree(NETWORK_POLICY, folder)

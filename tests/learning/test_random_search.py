@@ -39,6 +39,7 @@ def new_model(experiment, seed: int = 0):
     return model
 
 
+@pytest.mark.slow
 def test_plus_and_minus_run_on_the_same_motions_and_noise():
     model = new_model(tiny())
     rng = np.random.default_rng(3)
@@ -149,6 +150,7 @@ def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_p
     np.testing.assert_array_equal(final[0], final[1])
 
 
+@pytest.mark.slow
 def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
     import re
 

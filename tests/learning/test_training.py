@@ -220,6 +220,7 @@ def test_time_limit_stops_cleanly_and_the_run_resumes(tmp_path):
     assert train(resume=tmp_path / "run").steps == 600
 
 
+@pytest.mark.slow
 def test_a_residual_policy_trains_and_starts_at_lqg(tmp_path):
     experiment = smoke(
         name="PPO", kwargs={"n_steps": 64, "batch_size": 64}, n_envs=2, total_steps=128, residual_lqg=True
@@ -267,6 +268,7 @@ def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
     assert summary.steps == 600 and not summary.time_limit_reached
 
 
+@pytest.mark.slow
 def test_a_stop_at_the_time_limit_prints_the_resume_command(tmp_path):
     run = tmp_path / "run"
     arguments = ["train", str(SMOKE), "--run-dir", str(run), "--total-steps", "3000", "--time-limit", "0.0001"]
@@ -375,6 +377,7 @@ class ScriptedValidator:
         return {"eval_reward": float(self.calls), "eval_peak_drift_m": 0.01, "eval_J1": j1, "eval_J2": j1} | reference
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("select_by", "best_steps"), [("reward", 1024), ("J1", 256)])
 def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypatch, select_by, best_steps):
     """best_model.zip is the model of the best validation by reward, or by mean J1 (a checkpoint is
@@ -402,6 +405,7 @@ class WorseningValidator(ScriptedValidator):
     J1 = [0.4, 0.9, 0.5, 0.7, 0.8, 0.6, 0.9, 0.95, 0.99]
 
 
+@pytest.mark.slow
 def test_a_run_that_only_gets_worse_keeps_its_starting_policy_as_best(tmp_path, monkeypatch):
     """The policy training starts from (for a residual: its prior) is validated at step 0 and is the
     best model while nothing validates better, instead of the least bad of the later ones."""
@@ -479,3 +483,14 @@ def test_training_under_generated_wind_validates_on_wind(tmp_path):
 
     validator = Validator(Plant(experiment))
     assert all(motion.floor_forces is not None and not motion.acceleration.any() for motion in validator.motions)
+
+
+def test_select_by_j1_plus_j2_weighs_floor_accelerations_alike():
+    """A validation that cuts drift a little more by raising floor accelerations wins on J1, loses on J1+J2."""
+    from rlcontroller.learning.training import selection_score
+
+    drift_only = {"eval_reward": -1.0, "eval_J1": 0.30, "eval_J2": 0.90}
+    balanced = {"eval_reward": -2.0, "eval_J1": 0.32, "eval_J2": 0.60}
+    assert selection_score(drift_only, "J1") > selection_score(balanced, "J1")
+    assert selection_score(balanced, "J1+J2") > selection_score(drift_only, "J1+J2")
+    assert selection_score(drift_only, "reward") > selection_score(balanced, "reward")

@@ -225,6 +225,7 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
 
 
+@pytest.mark.slow
 def test_a_worker_stopped_by_sigterm_before_training_leaves_no_lock(tmp_path):
     """A broken pool SIGTERMs its other workers; one still setting its run up (before training's own
     handler) must release its run's lock on the way out, or the sweep charges that run with the death

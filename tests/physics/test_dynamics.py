@@ -141,6 +141,7 @@ def runge_kutta_reference(building, ground: np.ndarray, ground_dt: float, refine
     return np.array(drifts)
 
 
+@pytest.mark.slow
 def test_exact_discretisation_matches_a_40_times_finer_reference(paper_building):
     dt = 0.02
     ground = rayleigh_motion(dt=dt, seconds=8.0)

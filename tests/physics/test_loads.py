@@ -72,6 +72,7 @@ def wind_record(plant: Plant, seconds: float = 120.0, seed: int = 0):
     return Load(f"wind_{seed}", dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
 
 
+@pytest.mark.slow
 def test_a_batch_under_wind_gives_each_records_env_rollout():
     """The batch and the Gymnasium env load the floors alike, with LQG reading the accelerometers."""
     from rlcontroller.control.controllers import LQGController, Uncontrolled

@@ -75,6 +75,7 @@ def test_the_plants_rlc_builds_and_the_outside_one_implement_the_protocol(plants
     )
 
 
+@pytest.mark.slow
 def test_an_outside_plant_gives_the_built_in_responses_through_env_and_batch(plants, short_motions):
     built, outside = plants
     lqg = LQGController(design_lqg(built.design), built.design)  # designed on the design model, as always

@@ -113,6 +113,7 @@ def test_a_variable_damper_never_injects_energy(records):
     assert np.all(power <= 1e-9 * np.abs(power).max()) and np.abs(power).max() > 0.0
 
 
+@pytest.mark.slow
 def test_an_mr_building_s_energy_balances(records):
     """Ground input = the building's damping + what the dampers dissipated (the integral of their
     force times the drift velocity) + what is left, on a real record at full voltage."""

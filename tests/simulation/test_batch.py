@@ -52,6 +52,7 @@ def mixed_motions():
     return [shortened, finer, coarser]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(PLANTS))
 def test_a_batch_of_records_gives_each_record_s_rollout(case):
     plant = Plant(Experiment.model_validate(PLANTS[case]))
@@ -106,6 +107,7 @@ def test_the_policy_acts_on_the_batch_as_on_each_record():
         np.testing.assert_allclose(result.force, alone.force, rtol=1e-4, atol=1e-4 * scale)
 
 
+@pytest.mark.slow
 def test_a_batch_of_mr_damper_buildings_gives_each_record_s_rollout():
     """Members of one damper plant step in one compiled call per sampling; each as the env alone."""
     from conftest import REPOSITORY

@@ -1,0 +1,64 @@
+"""Classical controllers as controller files (control/policy.py): written by `rlc design`, read back as
+exactly their law — an LQG on the env's estimate acts as the evaluation's own LQG, a passive damper
+setting as the constant command — and a file that claims a law it does not hold is refused."""
+
+import numpy as np
+import pytest
+from conftest import REPOSITORY
+
+from rlcontroller import api
+from rlcontroller.config import ConfigError, load_experiment
+from rlcontroller.control.controllers import ConstantCommand, LQGController
+from rlcontroller.control.lqg import design_lqg_ground_model
+from rlcontroller.control.policy import read_policy
+from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.records import synthetic_suite
+from rlcontroller.simulation.batch import batch_rollout
+
+EXPERIMENTS = REPOSITORY / "configs" / "experiments"
+
+
+def test_a_designed_lqg_file_acts_as_the_evaluation_s_lqg(tmp_path):
+    folder = api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqg_ground_model", tmp_path / "lqg")
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    from_file = read_policy(folder, "best", plant)
+    assert from_file.name == "LQG + ground model (lqg)" and from_file.law == "lqg_ground_model"
+    built = LQGController(design_lqg_ground_model(plant.design), plant.design, "LQG + ground model")
+    motions = synthetic_suite(count=2)
+    runs = batch_rollout(plant, motions, [from_file, built])
+    for (file_run, _), (built_run, _) in zip(*runs, strict=True):
+        scale = np.abs(built_run.force).max()
+        assert scale > 1e3
+        # the file's law reads the float32 estimate the observation holds, the built LQG its own float64 one:
+        # 1e-8 apart, grown by the faded supervisor over a record to below 1e-4 of the force
+        np.testing.assert_allclose(file_run.force, built_run.force, rtol=0.0, atol=1e-4 * scale)
+
+
+@pytest.mark.parametrize(("law", "value"), [("passive-on", 1.0), ("passive-off", -1.0)])
+def test_a_passive_damper_file_holds_its_command(tmp_path, law, value):
+    folder = api.design(EXPERIMENTS / "five_story_mr.yaml", law, tmp_path / law)
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    controller = read_policy(folder, "best", plant)
+    observations = np.random.default_rng(0).normal(size=(4, plant.layout.size))
+    expected = ConstantCommand(value, 3, law).act(observations)
+    np.testing.assert_array_equal(controller.act(observations), expected)
+
+
+def test_a_classical_file_whose_weights_are_not_zero_is_refused(tmp_path):
+    folder = api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqg_ground_model", tmp_path / "lqg")
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    weights = dict(np.load(folder / "best_policy.npz"))
+    weights["layer0_weight"][0, 0] = 0.5  # a network hidden under a classical label
+    np.savez(folder / "best_policy.npz", **weights)
+    with pytest.raises(ConfigError, match="a classical lqg_ground_model law has one layer of zero weights"):
+        read_policy(folder, "best", plant)
+
+
+def test_design_refuses_a_law_the_experiment_cannot_hold_and_an_existing_folder(tmp_path):
+    with pytest.raises(ConfigError, match="law lqg_ground: this experiment's LQG on its estimate is lqg_ground_model"):
+        api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqg_ground", tmp_path / "a")
+    with pytest.raises(ConfigError, match="--law lqr: expected one of"):
+        api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqr", tmp_path / "b")
+    (tmp_path / "c").mkdir()
+    with pytest.raises(ConfigError, match="exists; a controller folder is never overwritten"):
+        api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqg_ground_model", tmp_path / "c")
