@@ -78,21 +78,23 @@ class Experiment(StrictModel):
         """Semi-active dampers among the devices."""
         return any(device.semi_active for device in self.devices)
 
+    def commanded_devices(self) -> list:
+        """The devices that take a command, in the action's order after the actuators: the mass
+        drivers, then the dampers."""
+        commanded = [device for device in self.devices if device.command_label() is not None]
+        return [d for d in commanded if not d.semi_active] + [d for d in commanded if d.semi_active]
+
     def command_labels(self) -> list[str]:
         """Short labels of the commanded devices, in the order of the action: each actuator's story,
-        then each commanded mass device's ("AMD 5"), then each damper's ("MR 1", "VD 1")."""
-        labels = [str(actuator.story) for actuator in self.actuators]
-        commanded = [device for device in self.devices if device.command_label() is not None]
-        labels += [device.command_label() for device in commanded if not device.semi_active]
-        return labels + [device.command_label() for device in commanded if device.semi_active]
+        then each commanded device's ("AMD 5", "MR 1", "VD 1")."""
+        return [str(actuator.story) for actuator in self.actuators] + [
+            device.command_label() for device in self.commanded_devices()
+        ]
 
     def fail_safe_actions(self) -> list[float]:
         """The action, in the order of `command_labels`, of a controller that has failed safe: each
         actuator off (0), each device at its fail-safe action (a driver off, a damper at its minimum)."""
-        commanded = [device for device in self.devices if device.fail_safe_action is not None]
-        actions = [0.0] * len(self.actuators)
-        actions += [device.fail_safe_action for device in commanded if not device.semi_active]
-        return actions + [device.fail_safe_action for device in commanded if device.semi_active]
+        return [0.0] * len(self.actuators) + [device.fail_safe_action for device in self.commanded_devices()]
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)

@@ -59,3 +59,21 @@ def test_a_scaled_variable_damper_scales_its_damping_range():
     scaled = damper.scaled(0.5)
     assert (scaled.damping_min, scaled.damping_max) == (0.5e4, 0.5e6)
     assert scaled.capacity == damper.capacity  # the design force is what the designer assumed, not what was built
+
+
+def test_commands_and_their_fail_safe_actions_follow_the_action_s_order():
+    """Actuators first, then mass drivers, then dampers, whatever order the devices are listed in."""
+    from rlcontroller.config import build_experiment
+
+    experiment = build_experiment(
+        {
+            "actuators": [{"story": 2}],
+            "devices": [
+                {"type": "mr_damper", "story": 3, "capacity": 1.0e5},
+                {"type": "tuned_mass", "floor": 4, "mass_ratio": 0.01},
+                {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e5, "stroke_limit": 0.5},
+            ],
+        }
+    )
+    assert experiment.command_labels() == ["2", "AMD 5", "MR 3"]
+    assert experiment.fail_safe_actions() == [0.0, 0.0, -1.0]
