@@ -46,21 +46,11 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
         raise ConfigError(f"--law {law}: expected one of {', '.join(LAWS)}")
     experiment = load_experiment(config)
     plant = Plant(experiment)
-    if law.startswith("lqg"):
-        terms = ", ".join(
-            f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in experiment.reward.terms if t.quadratic
-        )
-        designed = (
-            f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
-            f"on its sensors and their noise, both on the design model; no training"
-        )
-    else:
-        designed = f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
-    controller = PolicyController.classical(plant, law, designed)
+    controller = PolicyController.classical(plant, law)
     out.mkdir(parents=True)
     atomic_write(out / "config.yaml", experiment.to_yaml())
     write_policy(controller, plant, out, "best")
-    report.line(f"wrote {out}: {designed}")
+    report.line(f"wrote {out}: {controller.designed}")
     return out
 
 

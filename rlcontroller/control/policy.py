@@ -49,6 +49,7 @@ LAWS = {  # a classical law: its name in tables
     "passive-on": "passive-on",
     "passive-off": "passive-off",
 }
+PASSIVE_COMMANDS = {"passive-on": 1.0, "passive-off": -1.0}  # a passive law's held action
 
 
 def gelu(x: np.ndarray) -> np.ndarray:
@@ -140,9 +141,10 @@ class PolicyController:
         self.law, self.designed = law, designed  # a classical controller's law (a key of LAWS) and its design
 
     @classmethod
-    def classical(cls, plant: Plant, law: str, designed: str) -> PolicyController:
-        """`law` for `plant` as a controller file holds it: LQG (the experiment's own, on its Kalman
-        estimate, designed on the design model with the experiment's cost) or a constant command."""
+    def classical(cls, plant: Plant, law: str) -> PolicyController:
+        """`law` for `plant` as a controller file holds it, with how it was designed: LQG (the experiment's
+        own, on its Kalman estimate, designed on the design model with the experiment's cost) or a
+        constant command."""
         m, size = plant.building.n_actuators, plant.layout.size
         if law not in LAWS:
             raise ConfigError(f"law {law!r}: expected one of {', '.join(LAWS)}")
@@ -152,8 +154,16 @@ class PolicyController:
                 raise ConfigError(f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
                                   " (needs sensors.state_estimate: true)")  # fmt: skip
             prior = LQGPrior.design(plant)
+            terms = ", ".join(
+                f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in plant.experiment.reward.terms if t.quadratic
+            )
+            designed = (
+                f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
+                f"on its sensors and their noise, both on the design model; no training"
+            )
         else:
-            bias[:] = 1.0 if law == "passive-on" else -1.0
+            bias[:] = PASSIVE_COMMANDS[law]
+            designed = f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
         actor = Actor((Layer(np.zeros((m, size), dtype=np.float32), bias, None),), squash=False)
         return cls(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed)
 
@@ -421,8 +431,8 @@ def _classical_law(
     (layer,) = actor.layers if len(actor.layers) == 1 else (None,)
     if layer is None or np.any(layer.weight != 0.0) or normalizer is not None or actor.squash or actor.odd:
         raise ValueError(f"a classical {law} law has one layer of zero weights and no normalisation")
-    expected_bias = {"passive-on": 1.0, "passive-off": -1.0}.get(law, 0.0)
-    if np.any(layer.bias != expected_bias) or (prior is None) != (law in ("passive-on", "passive-off")):
+    expected_bias = PASSIVE_COMMANDS.get(law, 0.0)
+    if np.any(layer.bias != expected_bias) or (prior is None) != (law in PASSIVE_COMMANDS):
         raise ValueError(f"a classical {law} law: its bias must be {expected_bias:g} and its prior {law}")
     if prior is not None and description["prior"] != law:
         raise ValueError(f"a classical {law} law: its prior is {description['prior']}")
