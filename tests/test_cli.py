@@ -8,6 +8,7 @@ import sys
 
 import pandas as pd
 import pytest
+import yaml
 from conftest import REPOSITORY, records_folder, run_at_a_terminal
 from typer.testing import CliRunner
 
@@ -123,11 +124,11 @@ def test_top_level_help_cuts_nothing_and_says_where_to_start():
     assert not any(line.endswith("...") for line in commands) and "Start with 'rlc demo'" in result.output
 
 
-def test_an_experiment_yaml_given_as_a_run_folder_says_what_to_do(tmp_path):
+def test_an_experiment_yaml_without_a_shipped_controller_says_what_to_do(tmp_path):
     config = REPOSITORY / "configs" / "five_story.yaml"
     result = CliRunner().invoke(app, ["evaluate", str(config), "--out", str(tmp_path / "out")])
-    assert result.exit_code == 2 and "an experiment YAML, expected a run or model folder" in result.output
-    assert f"rlc compare lqg --config {config}" in result.output
+    assert result.exit_code == 2 and "no shipped controller for its paper five-story" in result.output
+    assert f"rlc compare lqg --config {config}" in result.output and len(result.output.splitlines()) == 1
 
 
 @pytest.mark.slow
@@ -238,3 +239,19 @@ def test_the_env_is_registered_by_the_learning_package_in_a_fresh_process():
     )
     printed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert printed.strip().endswith(importlib.metadata.version("rlcontroller"))
+
+
+@pytest.mark.slow
+def test_compare_passive_states_the_devices_own_verdict(records, tmp_path):
+    config = REPOSITORY / "configs" / "experiments" / "five_story_tmd.yaml"
+    out = tmp_path / "passive"
+    result = CliRunner().invoke(app, ["compare", "passive", str(config), "--records", str(records), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    verdict = yaml.safe_load((out / "passive_check.yaml").read_text())
+    assert verdict["controller"] == "passive devices" and verdict["passed"] is False
+    suite = verdict["criteria"]["check suite"]
+    assert (
+        f"{320 - suite['failure_count']} of 320 motions no worse than the building without its devices" in result.output
+    )
+    assert len(suite["failures"]) == suite["failure_count"]  # every failing motion listed
+    assert (out / "metrics_per_story.png").is_file()

@@ -8,7 +8,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from rlcontroller.assets import DAMPER_SCENARIOS, DEFAULT_MODEL, DEVICE_SCENARIOS, STANDARD_SCENARIOS
+from rlcontroller.assets import DAMPER_SCENARIOS, DEFAULT_MODEL, DEVICE_SCENARIOS, MODELS, STANDARD_SCENARIOS
 from rlcontroller.config import ConfigError, Experiment, load_experiment
 
 Advance = Callable[..., None]
@@ -44,14 +44,25 @@ def folder_experiment(folder: Path) -> Experiment:
     return load_experiment(folder / "config.yaml", self_contained=True)
 
 
+def shipped_folders() -> list[Path]:
+    """The shipped controller folders under models/, by name."""
+    return sorted(path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file())
+
+
+def shipped_for(experiment: Experiment) -> Path | None:
+    """The shipped controller made for `experiment`'s building, actuators, devices and load
+    (`Experiment.hardware`): the default when it is one of them, else the first by name; None when none is."""
+    made_for = experiment.hardware()
+    matching = [folder for folder in shipped_folders() if folder_experiment(folder).hardware() == made_for]
+    return DEFAULT_MODEL if DEFAULT_MODEL in matching else next(iter(matching), None)
+
+
 def model_folder(run_dir: Path | None, report: Report = QUIET) -> Path:
-    """The run folder given, or the committed default model; says when another process still writes it."""
+    """The run folder given; for an experiment YAML, the controller shipped for its building and devices
+    (`shipped_for`); with neither, the committed default model. Says when another process still writes it."""
     folder = run_dir or DEFAULT_MODEL
     if folder.is_file() and folder.suffix in (".yaml", ".yml"):
-        raise ConfigError(
-            f"{folder}: an experiment YAML, expected a run or model folder: train it first "
-            f"('rlc train {folder}'), or compare LQG on it with 'rlc compare lqg --config {folder}'"
-        )
+        folder = _shipped_for_config(folder, report)
     if not (folder / "config.yaml").is_file():
         hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
         raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
@@ -60,6 +71,21 @@ def model_folder(run_dir: Path | None, report: Report = QUIET) -> Path:
     holder = active_holder(folder)
     if holder is not None:
         report.note(f"note: {folder} is still in use by {holder}; reading its newest complete files")
+    return folder
+
+
+def _shipped_for_config(config: Path, report: Report) -> Path:
+    from rlcontroller.api.describe import hardware_label
+
+    experiment = load_experiment(config)
+    folder = shipped_for(experiment)
+    if folder is None:
+        raise ConfigError(
+            f"{config}: no shipped controller for its {hardware_label(experiment)} (rlc models): train one "
+            f"('rlc train {config}'), design one ('rlc design {config} --out FOLDER'), or compare LQG on it "
+            f"('rlc compare lqg --config {config}')"
+        )
+    report.note(f"{config}: using {folder}, the shipped controller for its {hardware_label(experiment)}")
     return folder
 
 

@@ -38,6 +38,24 @@ def describe(experiment: Experiment) -> str:
     return "\n".join(lines)
 
 
+def hardware_label(experiment: Experiment) -> str:
+    """What a controller is made for, in a few words: "paper five-story under ground motion, actuators on
+    stories 1, 2, 3, 4, 5", "... mr_damper on stories 1, 3, 5", "... active_mass on floor 5" (`Experiment.hardware`)."""
+    where: dict[str, list[int]] = {}
+    if experiment.actuators:
+        where["actuators on story"] = [actuator.story for actuator in experiment.actuators]
+    for device in experiment.devices:
+        story = getattr(device, "story", None)
+        where.setdefault(f"{device.type} on {'floor' if story is None else 'story'}", []).append(story or device.floor)
+    parts = [
+        f"{key.replace('story', 'stories') if len(places) > 1 else key} {', '.join(map(str, places))}"
+        for key, places in where.items()
+    ] or ["no actuators or devices"]
+    plant = experiment.plant
+    simulated = "" if plant is None else " (yielding stories)" if plant.hysteresis is not None else " (its plant part)"
+    return f"{experiment.building.name}{simulated} under {experiment.load_kind}, {'; '.join(parts)}"
+
+
 def resolved_text(experiment: Experiment) -> str:
     """The resolved experiment as YAML, a building's matrices shown by their size and source."""
     import yaml

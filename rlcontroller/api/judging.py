@@ -20,6 +20,7 @@ from rlcontroller.api.common import (
     output_folder,
     standard_scenarios,
 )
+from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.files import check_new_folder, new_folder
 
@@ -177,10 +178,14 @@ def compare_passive(
     report: Report = QUIET,
 ):
     """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
-    active mass drivers as the tuned masses they are without a command; returns the evaluation and its
-    folder."""
+    active mass drivers as the tuned masses they are without a command; under ground motion also the
+    devices' own verdict: the safety check's suite criterion, the passive devices against the building
+    without them (passive_check.yaml). Returns the evaluation, its folder and the verdict (None under wind)."""
+    from rlcontroller.config import load_safety_check
+    from rlcontroller.evaluation.evaluation import PASSIVE
     from rlcontroller.evaluation.evaluation import evaluate as evaluate_controllers
     from rlcontroller.evaluation.report import write_report
+    from rlcontroller.evaluation.safety import Verdict, passive_verdict
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
@@ -193,9 +198,18 @@ def compare_passive(
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
+    verdict = None
+    if experiment.load_kind == "ground motion":
+        standard = load_safety_check(SAFETY_STANDARD)
+        with report.progress(f"devices' verdict, {standard.motions} motions", 1) as advance:
+            criterion = passive_verdict(plant, standard)
+            advance(1)
+        verdict = Verdict(PASSIVE, criterion["passed"], {"check suite": criterion})
     with new_folder(out) as staging:
         write_report(evaluation, staging)
-    return evaluation, out
+        if verdict is not None:
+            (staging / "passive_check.yaml").write_text(verdict.to_yaml(), encoding="utf-8")
+    return evaluation, out, verdict
 
 
 def robustness(

@@ -5,19 +5,23 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, model_folder
+from rlcontroller.api.common import QUIET, Report, folder_experiment, model_folder, shipped_folders
 from rlcontroller.api.safety import unchecked_note, verdict_state
-from rlcontroller.assets import DEFAULT_MODEL, MODELS
+from rlcontroller.assets import CONFIGS, DEFAULT_MODEL
 from rlcontroller.config import ConfigError
 
 
 def shipped_models() -> list[str]:
-    """One line per shipped controller under models/: learner, training steps, safety verdict; the
-    default is marked."""
+    """The shipped controllers under models/ grouped by what they are made for (building, load, actuators,
+    devices), one line each: how it was made, its safety verdict, the default marked; then what the
+    experiments under configs/experiments are made for that no controller ships for."""
     import yaml
 
-    lines = []
-    for folder in sorted(path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file()):
+    from rlcontroller.api.describe import hardware_label
+    from rlcontroller.config import load_experiment
+
+    groups: dict[str, list[str]] = {}
+    for folder in shipped_folders():
         policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
         state = verdict_state(folder, "best")
         verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
@@ -26,7 +30,23 @@ def shipped_models() -> list[str]:
             f"classical, {policy['law']}" if policy.get("kind") == "classical"
             else f"{policy['algorithm']}, {policy['training_steps']:,} steps"
         )  # fmt: skip
-        lines.append(f"{folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}")
+        line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}"
+        groups.setdefault(hardware_label(folder_experiment(folder)), []).append(line)
+    lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
+    unserved: dict[str, list[str]] = {}
+    passive: list[str] = []
+    for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
+        experiment = load_experiment(config)
+        label = hardware_label(experiment)
+        if not experiment.command_labels():
+            passive.append(config.stem)
+        elif label not in groups:
+            unserved.setdefault(label, []).append(config.stem)
+    if unserved:
+        lines.append("none ships yet (models/README.md says why) for:")
+        lines += [f"  {label} ({', '.join(names)})" for label, names in unserved.items()]
+    if passive:
+        lines.append(f"nothing to command, its verdict from 'rlc compare passive': {', '.join(passive)}")
     return lines
 
 

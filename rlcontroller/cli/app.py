@@ -123,6 +123,10 @@ ScaleOption = Annotated[
     float | None, typer.Option(callback=positive_finite(10.0), help="Scale every record to this PGA (g).")
 ]
 ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: best or final.")]
+RUN_HELP = (
+    "Run or model folder, or an experiment YAML for the controller shipped for its building and devices "
+    "(default: the default model; see rlc models)."
+)
 OutOption = Annotated[
     Path | None, typer.Option(help="Output folder, new or empty (default: a new folder under results/).")
 ]

@@ -9,6 +9,7 @@ import typer
 
 from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.cli.app import (
+    RUN_HELP,
     SCENARIOS_DEFAULT,
     ModelOption,
     OutOption,
@@ -21,7 +22,7 @@ from rlcontroller.cli.app import (
 )
 from rlcontroller.cli.experiments import print_verdict
 
-RunOption = Annotated[Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")]
+RunOption = Annotated[Path | None, typer.Argument(help=RUN_HELP)]
 
 
 @app.command(short_help="A controller against LQG and no control on records.")
@@ -53,7 +54,7 @@ app.add_typer(compare_app, name="compare")
 @user_errors
 def compare_lqg(
     run_dir: Annotated[
-        Path | None, typer.Argument(help="Run or model folder whose policy joins (default: the default model).")
+        Path | None, typer.Argument(help=f"Whose policy joins: {RUN_HELP[0].lower()}{RUN_HELP[1:]}")
     ] = None,
     config: Annotated[Path | None, typer.Option(help="Experiment YAML instead of a run: LQG only.")] = None,
     records: RecordsOption = None,
@@ -91,11 +92,15 @@ def compare_passive(
     progress: ProgressOption = None,
 ) -> None:
     """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
-    active mass drivers as the tuned masses they are without a command; strokes and damper energy."""
+    active mass drivers as the tuned masses they are without a command; strokes and damper energy. Under
+    ground motion also the devices' own verdict: the safety check's suite, passive devices against the
+    building without them (passive_check.yaml)."""
     from rlcontroller import api
 
-    evaluation, out = api.compare_passive(config, records, out, scale_pga, Printed(progress))
+    evaluation, out, verdict = api.compare_passive(config, records, out, scale_pga, Printed(progress))
     typer.echo(api.summary_text(evaluation, out))
+    if verdict is not None:
+        typer.echo("\n".join(verdict.lines()).replace("safety check of", "the devices' own verdict:", 1))
 
 
 @app.command(short_help="Every controller on plants that differ from the design.")
@@ -129,9 +134,7 @@ def robustness(
 @app.command(short_help="The safety check: never worse than failed safe.")
 @user_errors
 def check(
-    run_dir: Annotated[
-        Path | None, typer.Argument(help="Run or model folder (default: the default model, see rlc models).")
-    ] = None,
+    run_dir: Annotated[Path | None, typer.Argument(help=RUN_HELP)] = None,
     model: ModelOption = "best",
     standard: Annotated[
         Path,

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller.cli.app import ModelOption, Printed, app, user_errors
+from rlcontroller.cli.app import RUN_HELP, ModelOption, Printed, app, user_errors
 
 
 @app.command(short_help="The shipped controllers and their safety verdicts.")
@@ -49,9 +49,7 @@ class ExportFormat(str, Enum):
 @app.command(short_help="The controller as one ONNX file.")
 @user_errors
 def export(
-    run_dir: Annotated[
-        Path | None, typer.Argument(help="Run folder (default: the default model, see rlc models).")
-    ] = None,
+    run_dir: Annotated[Path | None, typer.Argument(help=RUN_HELP)] = None,
     format: Annotated[ExportFormat, typer.Option("--format", help="File format.")] = ExportFormat.onnx,
     out: Annotated[
         Path | None,

@@ -23,7 +23,7 @@ from rlcontroller.config.building import (
     paper_actuators,
 )
 from rlcontroller.config.control import RewardConfig, SupervisorConfig
-from rlcontroller.config.excitation import ExcitationConfig
+from rlcontroller.config.excitation import ExcitationConfig, WindGeneratorConfig
 from rlcontroller.config.learning import (
     AlgorithmConfig,
 )
@@ -78,6 +78,17 @@ class Experiment(StrictModel):
         """Semi-active dampers among the devices."""
         return any(device.semi_active for device in self.devices)
 
+    @property
+    def load_kind(self) -> str:
+        """What the building is controlled against: "wind" or "ground motion" (its excitation's kind)."""
+        return "wind" if isinstance(self.excitation.generator, WindGeneratorConfig) else "ground motion"
+
+    def hardware(self) -> dict:
+        """What a controller is made for, beyond its own sensors and cost: the building (and the plant part
+        simulated for it), its actuators and devices, and the load: experiments that agree here can share one."""
+        parts = {name: getattr(self, name) for name in ("building", "plant", "actuators", "devices")}
+        return {name: _dumped(part) for name, part in parts.items()} | {"load": self.load_kind}
+
     def commanded_devices(self) -> list:
         """The devices that take a command, in the action's order after the actuators: the mass
         drivers, then the dampers."""
@@ -98,3 +109,9 @@ class Experiment(StrictModel):
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+
+
+def _dumped(part: Any) -> Any:
+    if isinstance(part, list):
+        return [_dumped(item) for item in part]
+    return part.model_dump(mode="json") if part is not None else None

@@ -155,10 +155,12 @@ def per_story_data(evaluation: Evaluation) -> dict:
     """What `draw_metrics_per_story` draws: J1-J4 per story (J3 per commanded device), the mean over
     records, per controller."""
     mean = evaluation.metrics.groupby(["metric", "controller", "index"], sort=True)["value"].mean()
+    present = set(mean.index.droplevel("index"))  # no J3 for passive devices: nothing commanded
     lines = {
         metric: [
             (controller, mean.loc[metric, controller].index.to_numpy(), mean.loc[metric, controller].to_numpy())
             for controller in evaluation.controllers
+            if (metric, controller) in present
         ]
         for metric in METRICS
     }
@@ -182,7 +184,7 @@ def draw_metrics_per_story(data: dict, path: Path) -> Path:
                 label=controller,
             )
             axis.set_xticks(index)
-        if metric == "J3":
+        if metric == "J3" and data["command_labels"]:
             axis.set_xticklabels([data["command_labels"][i - 1] for i in axis.get_xticks()])
         axis.set(
             xlabel="story of the commanded device" if metric == "J3" else "story",

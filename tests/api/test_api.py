@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 from rlcontroller import api
 from rlcontroller.cli import app
-from rlcontroller.config import ConfigError
+from rlcontroller.config import ConfigError, load_experiment
 
 SMOKE = REPOSITORY / "configs" / "testing" / "smoke.yaml"
 
@@ -90,10 +90,36 @@ def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
     assert report.lines == [f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"]
 
 
-def test_shipped_models_mark_the_default():
+def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_default():
     lines = api.shipped_models()
-    assert any(line.startswith("five_story_every_story (default): ") for line in lines)
+    group = "paper five-story under ground motion, actuators on stories 1, 2, 3, 4, 5:"
+    assert lines[lines.index(group) + 1].startswith("  five_story_every_story (default): ")
     assert all("never checked" not in line for line in lines)
+    unserved = lines[lines.index("none ships yet (models/README.md says why) for:") + 1 :]
+    assert "  paper five-story under ground motion, mr_damper on stories 1, 3, 5 (five_story_mr)" in unserved
+    assert (
+        "  76-story wind benchmark (Yang et al. 2004) under wind, active_mass on floor 75 (seventy_six_story_atmd)"
+        in unserved
+    )
+    assert lines[-1] == "nothing to command, its verdict from 'rlc compare passive': five_story_tmd"
+
+
+def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_devices():
+    from rlcontroller.api.common import shipped_for
+    from rlcontroller.assets import DEFAULT_MODEL
+
+    experiments = REPOSITORY / "configs" / "experiments"
+    robust = load_experiment(experiments / "five_story_every_story_robust.yaml")  # other training, same hardware
+    assert shipped_for(robust) == DEFAULT_MODEL
+    report = Recorded()
+    assert api.model_folder(experiments / "five_story_every_story_robust.yaml", report) == DEFAULT_MODEL
+    assert report.notes[0].endswith(f"using {DEFAULT_MODEL}, the shipped controller for its paper five-story under "
+                                    "ground motion, actuators on stories 1, 2, 3, 4, 5")  # fmt: skip
+    for name in ("five_story_wind", "five_story_yielding", "paper_sac", "five_story_mr"):  # load, plant, layout, device
+        assert shipped_for(load_experiment(experiments / f"{name}.yaml")) is None, name
+    with pytest.raises(ConfigError, match=r"five_story_mr.yaml: no shipped controller for its paper five-story under "
+                       r"ground motion, mr_damper on stories 1, 3, 5 \(rlc models\): train one"):  # fmt: skip
+        api.model_folder(experiments / "five_story_mr.yaml")
 
 
 def test_the_api_is_what_the_commands_call():

@@ -9,18 +9,21 @@ from typer.testing import CliRunner
 
 from rlcontroller.assets import DEFAULT_MODEL
 from rlcontroller.cli import app
-from rlcontroller.config import Experiment, load_safety_check
+from rlcontroller.config import Experiment, load_experiment, load_safety_check
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.policy import Actor, Layer, PolicyController
 from rlcontroller.evaluation.safety import (
     VerdictState,
     closed_loop_matrix,
+    energy_near,
     judged_digests,
+    passive_verdict,
     read_verdict,
     safety_check,
     spectral_radius,
     write_verdict,
 )
+from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
 
 STANDARD = REPOSITORY / "configs" / "checks" / "standard.yaml"
@@ -303,3 +306,29 @@ def test_a_standard_that_names_a_reference_is_refused_in_one_line(tmp_path):
     old.write_text(yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "uncontrolled"}))
     result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(old)])
     assert result.exit_code == 2 and f"error: {old}: reference: unknown key" in result.output
+
+
+def test_energy_near_a_mode_is_the_share_of_a_sine_at_that_frequency():
+    time = np.arange(0.0, 40.0, 0.02)
+    at_mode = Load("at the mode", 0.02, np.sin(2 * np.pi * 0.7 * time), synthetic=True)
+    far = Load("three times higher", 0.02, np.sin(2 * np.pi * 2.1 * time), synthetic=True)
+    assert energy_near(at_mode, 0.7) > 0.98 and energy_near(far, 0.7) < 0.01
+    both = Load("both", 0.02, at_mode.acceleration + far.acceleration, synthetic=True)
+    assert energy_near(both, 0.7) == pytest.approx(0.5, abs=0.02)  # equal amplitudes: half the energy each
+
+
+@pytest.mark.slow
+def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
+    """The active mass driver of five_story_amd without a command is the tuned mass of five_story_tmd: the
+    devices' own verdicts agree motion by motion, and their failures are the motions whose ground energy
+    lies away from the first mode."""
+    standard = load_safety_check(STANDARD)
+    verdicts = [
+        passive_verdict(Plant(load_experiment(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")), standard)
+        for name in ("five_story_tmd", "five_story_amd")
+    ]
+    assert verdicts[0]["failures"] == verdicts[1]["failures"] and verdicts[0]["failure_count"] > 0
+    assert verdicts[0]["J1_J2_per_motion"] == verdicts[1]["J1_J2_per_motion"]
+    assert verdicts[0]["reference"] == "the building without its devices" and not verdicts[0]["passed"]
+    failing = np.median([row["ground_energy_near_first_mode"] for row in verdicts[0]["failures"]])
+    assert f"median {failing:.1%} of their ground energy" in verdicts[0]["summary"]
