@@ -26,3 +26,4 @@ STANDARD_SCENARIOS = CONFIGS / "scenarios" / "standard.yaml"
 DEVICE_SCENARIOS = CONFIGS / "scenarios" / "devices.yaml"  # the standard's for buildings with mass devices
 DAMPER_SCENARIOS = CONFIGS / "scenarios" / "dampers.yaml"  # and with semi-active dampers
 SAFETY_STANDARD = CONFIGS / "checks" / "standard.yaml"
+WIND_STANDARD = CONFIGS / "checks" / "wind.yaml"  # the check's standard for experiments under wind

@@ -63,18 +63,21 @@ def test_train_without_a_config_is_a_usage_error_not_a_four_hour_run(tmp_path):
 
 
 def test_the_default_model_follows_the_stated_rule_on_the_committed_verdicts():
-    """models/README.md: the shipped controller that passes the safety check with the lowest mean J1 +
-    mean J2 on the check suite; while none passes, the one with the fewest failing check motions."""
+    """models/README.md: among the shipped controllers made for one building and its devices, the one that
+    passes the safety check with the lowest mean J1 + mean J2 on the check suite; while none passes, the one
+    with the fewest failing check motions."""
     import yaml
 
-    from rlcontroller.cli import DEFAULT_MODEL, MODELS
+    from rlcontroller.api.common import folder_experiment, shipped_folders
+    from rlcontroller.cli import DEFAULT_MODEL
 
+    assert all((folder / "card.md").is_file() for folder in shipped_folders())
+    made_for = folder_experiment(DEFAULT_MODEL).hardware()
     verdicts = {
         folder: yaml.safe_load((folder / "best_check.yaml").read_text())
-        for folder in MODELS.iterdir()
-        if (folder / "best_policy.yaml").is_file()
+        for folder in shipped_folders()
+        if folder_experiment(folder).hardware() == made_for
     }
-    assert verdicts and all((folder / "card.md").is_file() for folder in verdicts)
 
     def rank(folder):
         suite = verdicts[folder]["criteria"]["check suite"]

@@ -8,7 +8,15 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from rlcontroller.assets import DAMPER_SCENARIOS, DEFAULT_MODEL, DEVICE_SCENARIOS, MODELS, STANDARD_SCENARIOS
+from rlcontroller.assets import (
+    DAMPER_SCENARIOS,
+    DEFAULT_MODEL,
+    DEVICE_SCENARIOS,
+    MODELS,
+    SAFETY_STANDARD,
+    STANDARD_SCENARIOS,
+    WIND_STANDARD,
+)
 from rlcontroller.config import ConfigError, Experiment, load_experiment
 
 Advance = Callable[..., None]
@@ -111,6 +119,12 @@ def standard_scenarios(experiment: Experiment) -> Path:
     if experiment.has_dampers:
         return DAMPER_SCENARIOS
     return DEVICE_SCENARIOS if experiment.devices else STANDARD_SCENARIOS
+
+
+def safety_standard(experiment: Experiment) -> Path:
+    """The safety check's standard for an experiment: generated wind for one controlled against wind,
+    generated ground motions otherwise."""
+    return WIND_STANDARD if experiment.load_kind == "wind" else SAFETY_STANDARD
 
 
 def motions_text(count: int) -> str:

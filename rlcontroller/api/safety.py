@@ -5,22 +5,23 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, output_folder
+from rlcontroller.api.common import QUIET, Report, folder_experiment, output_folder, safety_standard
 from rlcontroller.api.common import standard_scenarios as default_scenarios
-from rlcontroller.assets import MODELS, SAFETY_STANDARD
+from rlcontroller.assets import MODELS
 from rlcontroller.config import ConfigError
 
 
 def check(
     folder: Path,
     model: str = "best",
-    standard: Path = SAFETY_STANDARD,
+    standard: Path | None = None,
     scenarios: Path | None = None,
     report: Report = QUIET,
 ):
-    """The safety check of a folder's saved policy: returns the verdict and the file it was written to,
-    MODEL_check.yaml in the folder (MODEL_check-STANDARD.yaml under another standard), or for a shipped
-    model (whose files stay as shipped) in a new folder under results/."""
+    """The safety check of a folder's saved policy under `standard` (default: the project's standard for
+    its experiment, `safety_standard`): returns the verdict and the file it was written to, MODEL_check.yaml
+    in the folder (MODEL_check-STANDARD.yaml under another standard), or for a shipped model (whose files
+    stay as shipped) in a new folder under results/."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.safety import judged_digests, safety_check, write_verdict
@@ -29,9 +30,12 @@ def check(
     experiment = folder_experiment(folder)
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
+    own = safety_standard(experiment)
+    standard = standard or own
     checking = load_safety_check(standard)
+    loads = "wind loads" if checking.generator.kind == "wind" else "motions"
     report.line(
-        f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated motions, "
+        f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated {loads}, "
         f"{checking.rest_runs} runs at rest, closed-loop stability..."
     )
     named = load_scenarios(scenarios or default_scenarios(experiment), experiment)
@@ -45,16 +49,16 @@ def check(
     if folder.resolve().is_relative_to(MODELS.resolve()):
         target = output_folder(None, f"check-{folder.name}")
         target.mkdir(parents=True)
-    other = "" if standard.resolve() == SAFETY_STANDARD.resolve() else standard.stem  # keeps the standard's verdict
+    other = "" if standard.resolve() == own.resolve() else standard.stem  # keeps the standard's verdict
     return verdict, write_verdict(verdict, target, model, other)
 
 
 def verdict_state(folder: Path, model: str):
-    """The verdict on a folder's policy under the project's standard, if it judged these files."""
+    """The verdict on a folder's policy under the project's standard for its experiment, if it judged these files."""
     from rlcontroller.config import load_safety_check
     from rlcontroller.evaluation.safety import read_verdict
 
-    return read_verdict(folder, model, load_safety_check(SAFETY_STANDARD))
+    return read_verdict(folder, model, load_safety_check(safety_standard(folder_experiment(folder))))
 
 
 def unchecked_note(folder: Path, model: str) -> str | None:

@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.cli.app import (
     RUN_HELP,
     SCENARIOS_DEFAULT,
@@ -137,9 +136,12 @@ def check(
     run_dir: Annotated[Path | None, typer.Argument(help=RUN_HELP)] = None,
     model: ModelOption = "best",
     standard: Annotated[
-        Path,
-        typer.Option(help="The check's standard: suite, seed, bounds.", show_default="configs/checks/standard.yaml"),
-    ] = SAFETY_STANDARD,
+        Path | None,
+        typer.Option(
+            help="The check's standard: suite, seed, bounds.",
+            show_default="configs/checks/standard.yaml; under wind configs/checks/wind.yaml",
+        ),
+    ] = None,
     scenarios: Annotated[
         Path | None, typer.Option(help="Plants for the stability report.", show_default=SCENARIOS_DEFAULT)
     ] = None,
@@ -149,9 +151,10 @@ def check(
     ] = False,
 ) -> None:
     """The safety check a controller passes before it is shipped: on a broad suite of generated motions
-    never worse than the building when the controller fails safe (no control; devices at their fail-safe
-    command), no higher floor accelerations on average, quiet at rest, a stable closed loop. Writes MODEL_check.yaml in
-    the run folder (for a shipped model: in a new folder under results/); exit code 1 when it fails."""
+    (generated wind for a controller against wind) never worse than the building when the controller fails
+    safe (no control; devices at their fail-safe command), no higher floor accelerations on average, quiet
+    at rest, a stable closed loop. Writes MODEL_check.yaml in the run folder (for a shipped model: in a new
+    folder under results/); exit code 1 when it fails."""
     from rlcontroller import api
 
     report = Printed(progress)

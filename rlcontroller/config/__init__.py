@@ -123,6 +123,7 @@ from rlcontroller.config.scenarios import (  # noqa: F401
     SafetyCheckConfig,
     Scenario,
     ScenarioFile,
+    check_generator,
     load_safety_check,
     load_scenarios,
 )

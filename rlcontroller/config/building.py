@@ -209,7 +209,13 @@ class SensorConfig(StrictModel):
     `integration_cutoff` (Hz) is the model-free alternative to `state_estimate`: every reading
     (ground included) is integrated to a velocity and a displacement through a high-pass at that
     frequency, as structural health monitoring does (`control.estimation.integration_filter`),
-    and those are added instead, divided by `velocity_scale` and `displacement_scale`."""
+    and those are added instead, divided by `velocity_scale` and `displacement_scale`.
+
+    `input_noise` robustifies every Kalman filter designed for the experiment (the observation's and
+    LQG's): fictitious process noise at the actuators' inputs, of this standard deviation per step as a
+    fraction of each force limit (loop transfer recovery, Doyle and Stein 1979, IEEE TAC 24(4)). The
+    filter then trusts the model's response to the forces less, and LQG keeps more of LQR's stability
+    margins when the building differs from the design model (a detuned device)."""
 
     history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 5
     action_history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 1
@@ -223,5 +229,6 @@ class SensorConfig(StrictModel):
     state_estimate: bool = False
     ground_model: bool = False
     integration_cutoff: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
+    input_noise: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
     displacement_scale: Scale = 0.02
     velocity_scale: Scale = 0.2

@@ -12,7 +12,7 @@ from pydantic import (
 
 from rlcontroller.config.base import Seed, StrictModel, first_repeat, read_model
 from rlcontroller.config.checks import check_plant
-from rlcontroller.config.excitation import GeneratorConfig
+from rlcontroller.config.excitation import GeneratorConfig, WindGeneratorConfig
 from rlcontroller.config.experiment import Experiment
 from rlcontroller.config.plant import PlantConfig
 
@@ -59,6 +59,16 @@ class SafetyCheckConfig(StrictModel):
     story_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 3.0
     rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
     rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
+
+
+def check_generator(standard: SafetyCheckConfig, experiment: Experiment) -> GeneratorConfig:
+    """The generator of the check suite: the standard's; for a wind standard and an experiment trained under
+    wind, the standard's speeds and durations on the experiment's own site, facade and sampling (reference
+    height, roughness, drag coefficient, width, coherence, dt, cutoff: what belongs to the building)."""
+    generator, own = standard.generator, experiment.excitation.generator
+    if isinstance(generator, WindGeneratorConfig) and isinstance(own, WindGeneratorConfig):
+        return own.model_copy(update={"speed": generator.speed, "duration": generator.duration})
+    return generator
 
 
 def load_safety_check(path: str | Path) -> SafetyCheckConfig:

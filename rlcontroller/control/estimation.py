@@ -107,6 +107,13 @@ def update_on_block(
     return new
 
 
+def input_noise(plant: Plant, action_gain: np.ndarray) -> np.ndarray:
+    """The fictitious process noise of `sensors.input_noise` (loop transfer recovery): that standard
+    deviation of each action (a fraction of its force limit) per step, through `action_gain`."""
+    level = plant.experiment.sensors.input_noise
+    return level**2 * (action_gain @ action_gain.T)
+
+
 def design_kalman(plant: Plant, known_ground: bool = False, ground_std: float = 1.0) -> KalmanFilter:
     """Filter for the plant's sensors; `ground_std` (m/s^2) is the ground's process-noise level per
     step (halved when the ground is measured: only its change over the step is unknown). The
@@ -116,10 +123,12 @@ def design_kalman(plant: Plant, known_ground: bool = False, ground_std: float = 
     c, d = sensors.c, sensors.d
     measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
     process_std = ground_std * (0.5 if known_ground else 1.0)
+    action_gain = step.force_gain * building.force_limits
     process = process_std**2 * np.outer(ground_gain, ground_gain) + 1e-12 * np.eye(step.phi.shape[0])
+    process += input_noise(plant, action_gain)
     return KalmanFilter(
         phi=step.phi,
-        action_gain=step.force_gain * building.force_limits,
+        action_gain=action_gain,
         ground_gain=ground_gain,
         sensor_c=c,
         sensor_d=d * building.force_limits,
@@ -146,10 +155,12 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     noise = np.maximum(
         np.append(sensors.noise_std, config.ground_noise_std), 1e-3 * np.append(sensors.scale, config.ground_scale)
     )
+    action_gain = step.force_gain * building.force_limits
     process = intensity * np.outer(noise_gain, noise_gain) + 1e-12 * np.eye(size + 2)
+    process += input_noise(plant, action_gain)
     return KalmanFilter(
         phi=step.phi,
-        action_gain=step.force_gain * building.force_limits,
+        action_gain=action_gain,
         ground_gain=np.zeros(size + 2),
         sensor_c=sensor_c,
         sensor_d=sensor_d,
@@ -169,12 +180,14 @@ def design_kalman_wind_model(plant: Plant, model: WindLoadModel) -> KalmanFilter
     size, floors = 2 * building.n_dofs, building.n_floors
     intensity = np.zeros_like(system.a)
     intensity[size:, size:] = 2.0 * model.covariance / model.time_constant  # stationary covariance: model's
+    action_gain = step.force_gain * building.force_limits
     process = discrete_noise(system.a, intensity, step.phi) + 1e-12 * np.eye(size + floors)
+    process += input_noise(plant, action_gain)
     sensor_c = np.hstack([sensors.c, sensors.load])
     measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
     return KalmanFilter(
         phi=step.phi,
-        action_gain=step.force_gain * building.force_limits,
+        action_gain=action_gain,
         ground_gain=np.zeros(size + floors),
         sensor_c=sensor_c,
         sensor_d=sensors.d * building.force_limits,

@@ -157,9 +157,11 @@ class PolicyController:
             terms = ", ".join(
                 f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in plant.experiment.reward.terms if t.quadratic
             )
+            robust = plant.experiment.sensors.input_noise
+            recovery = f" and loop transfer recovery's input noise ({robust:g} of the force limits)" if robust else ""
             designed = (
                 f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
-                f"on its sensors and their noise, both on the design model; no training"
+                f"on its sensors and their noise{recovery}, both on the design model; no training"
             )
         else:
             bias[:] = PASSIVE_COMMANDS[law]

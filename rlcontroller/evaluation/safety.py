@@ -3,7 +3,8 @@
 The reference is the building as it stands when its controller fails safe (`fail_safe`): without
 devices, the building with no control; with devices, each at its fail-safe action (tuned masses as
 tuned, mass drivers switched off: the tuned masses they are, dampers at their minimum command:
-passive-off). Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds):
+passive-off). Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds;
+for a building controlled against wind `configs/checks/wind.yaml`, whose suite is generated wind):
 
 1. **check suite** — on every one of its generated motions (own seed, never used in training or
    selection): the building's peak inter-story drift (max over stories and time) is no larger than
@@ -35,13 +36,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from rlcontroller.config import SafetyCheckConfig, Scenario
+from rlcontroller.config import SafetyCheckConfig, Scenario, check_generator
 from rlcontroller.control.controllers import ConstantCommand, Controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
+from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
 
@@ -128,8 +129,14 @@ def safety_check(
     return Verdict(controller.name, passed, criteria)
 
 
+def check_suite(plant: Plant, standard: SafetyCheckConfig) -> list[Load]:
+    """The standard's suite of generated loads on `plant` (`config.check_generator`)."""
+    generator = check_generator(standard, plant.experiment)
+    return generate_suite(generator, standard.motions, standard.seed, plant.building)
+
+
 def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
-    motions = generate_suite(standard.generator, standard.motions, standard.seed)
+    motions = check_suite(plant, standard)
     reference, words = fail_safe(plant)
     controllers = [controller] if reference is None else [controller, reference]
     evaluation = evaluate(plant, motions, controllers, "safety check suite", include_optimal=False)
@@ -140,7 +147,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
 def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
     """The check suite's criterion for a building's devices left passive (tuned masses as tuned, drivers
     off, dampers at their least command) against the building without them: what the devices alone do."""
-    motions = generate_suite(standard.generator, standard.motions, standard.seed)
+    motions = check_suite(plant, standard)
     evaluation = evaluate(plant, motions, [], "safety check suite", include_optimal=False)
     bounds = drift_bounds(plant, standard)
     verdict = judge_suite(evaluation, motions, PASSIVE, "uncontrolled", "the building without its devices", bounds)
@@ -179,7 +186,7 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
         reference_run = evaluation.responses[reference, motion.name]
         controlled = evaluation.responses[judged, motion.name]
         reference_peak, peak = np.max(np.abs(reference_run.drift), axis=0), np.max(np.abs(controlled.drift), axis=0)
-        row = {"motion": motion.name, "pga_g": round(motion.pga / STANDARD_GRAVITY, 5)}
+        row = {"motion": motion.name} | strength(motion)
         if np.max(reference_peak / bounds) < 1.0:  # insignificant: stay below the bound
             score = float(np.max(peak / bounds))
             ok, kind = score < 1.0, "peak drift / insignificance bound"
@@ -203,10 +210,13 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
     summary = (
         f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {words} "
         f"({len(motions) - significant} insignificant); mean J1 {mean_j1:.3f}, mean J2 {mean_j2:.3f}; "
-        f"worst {worst['motion']} (PGA {worst['pga_g']:g} g): {worst['value']:.3f}"
+        f"worst {worst['motion']} ({strength_text(worst)}): {worst['value']:.3f}"
     )
     if worst_j2 is not None:
         summary += f"; worst J2 {worst_j2['value']:.3f} ({worst_j2['motion']})"
+    strokes = {name: peak_strokes(evaluation, name, motions) for name in (judged, reference)}
+    if strokes[judged].size:
+        summary += f"; peak stroke {_metres(strokes[judged])} ({_metres(strokes[reference])} for the reference)"
     return {
         "passed": passed,
         "summary": summary,
@@ -220,7 +230,28 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
         "J1_J2_per_motion": per_motion,  # the significant motions
         "failures": failures,
         "failure_count": len(failures),
-    }
+    } | ({"peak_stroke_m": [round(float(value), 4) for value in strokes[judged]]} if strokes[judged].size else {})
+
+
+def peak_strokes(evaluation, name: str, motions: list[Load]) -> np.ndarray:
+    """Each mass device's largest stroke (m) over the motions, under the controller `name`."""
+    peaks = [np.max(np.abs(evaluation.responses[name, motion.name].stroke), axis=0) for motion in motions]
+    return np.max(peaks, axis=0)
+
+
+def _metres(values: np.ndarray) -> str:
+    return ", ".join(f"{value:.2f}" for value in values) + " m"
+
+
+def strength(motion: Load) -> dict:
+    """How strong a load is, for a verdict's rows: a ground motion's PGA (g), a wind load's mean speed."""
+    if motion.kind == FLOOR_FORCES:
+        return {"load": motion.description or "floor forces"}
+    return {"pga_g": round(motion.pga / STANDARD_GRAVITY, 5)}
+
+
+def strength_text(row: dict) -> str:
+    return f"PGA {row['pga_g']:g} g" if "pga_g" in row else row["load"]
 
 
 def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:

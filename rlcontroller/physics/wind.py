@@ -190,7 +190,8 @@ def generated_wind(config: WindGeneratorConfig, building: Building, rng: np.rand
     speed = float(rng.uniform(*config.speed))
     duration = float(rng.uniform(*config.duration))
     forces = fluctuating_forces(floor_field(config, building, speed), duration, config.dt, rng, config.cutoff)
-    return Load(name, config.dt, np.zeros(forces.shape[0]), synthetic=True, floor_forces=forces)
+    zero = np.zeros(forces.shape[0])
+    return Load(name, config.dt, zero, synthetic=True, description=f"wind {speed:.1f} m/s", floor_forces=forces)
 
 
 def wind_suite(suite: WindSuiteConfig, building: Building) -> list[Load]:

@@ -1,6 +1,6 @@
 """Diagnostic: does the field's classical answer for an experiment's devices pass the safety check?
 
-Usage: python studies/devices/check_classical.py CONFIG [--standard configs/checks/standard.yaml]
+Usage: python studies/devices/check_classical.py CONFIG [--standard STANDARD.yaml]
 
 Runs the safety check's suite and at-rest criteria (`rlc check`'s own code, `evaluation.safety`) on
 every classical controller of the experiment (`classical_controllers`: the LQGs for actuators and
@@ -17,7 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from rlcontroller.assets import SAFETY_STANDARD
+from rlcontroller.api.common import safety_standard
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.config.scenarios import load_safety_check
 from rlcontroller.control.controllers import ConstantCommand
@@ -26,10 +26,11 @@ from rlcontroller.evaluation.safety import Verdict, safety_check
 from rlcontroller.physics.plant import Plant
 
 
-def classical_verdicts(config: Path, standard: Path = SAFETY_STANDARD) -> list[Verdict]:
-    """The safety-check verdict of each classical controller of the experiment in `config`."""
+def classical_verdicts(config: Path, standard: Path | None = None) -> list[Verdict]:
+    """The safety-check verdict of each classical controller of the experiment in `config`, under `standard`
+    (default: the project's for the experiment, `configs/checks/standard.yaml` or under wind `wind.yaml`)."""
     plant = Plant(load_experiment(config))
-    check = load_safety_check(standard)
+    check = load_safety_check(standard or safety_standard(plant.experiment))
     controllers = classical_controllers(plant)
     if plant.building.devices and not plant.building.dampers:  # active mass drivers: the passive masses too
         controllers.append(ConstantCommand(0.0, plant.building.n_actuators, "drivers off (tuned masses)"))
@@ -39,7 +40,7 @@ def classical_verdicts(config: Path, standard: Path = SAFETY_STANDARD) -> list[V
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("config", type=Path, help="an experiment YAML")
-    parser.add_argument("--standard", type=Path, default=SAFETY_STANDARD)
+    parser.add_argument("--standard", type=Path, default=None, help="default: the experiment's (ground or wind)")
     arguments = parser.parse_args()
     try:
         verdicts = classical_verdicts(arguments.config, arguments.standard)

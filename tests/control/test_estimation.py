@@ -5,8 +5,10 @@ functions, and velocity and displacement recovered from an acceleration."""
 import numpy as np
 import pytest
 import scipy.linalg
+from conftest import REPOSITORY
 
-from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
+from rlcontroller.config import Experiment, MeasurementConfig, PlantConfig, SensorConfig, load_experiment
+from rlcontroller.config.plant import DeviceFactors
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model, integration_filter, kalman_gain
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.excitation import Load
@@ -132,3 +134,23 @@ def test_integrated_accelerations_give_velocity_and_displacement_and_forget_a_bi
     late = time > 150.0
     np.testing.assert_allclose(states[late, 1], amplitude * np.sin(w * time[late]), atol=0.05 * amplitude)
     np.testing.assert_allclose(states[late, 2], amplitude * w * np.cos(w * time[late]), atol=0.05 * amplitude * w)
+
+
+@pytest.mark.slow
+def test_loop_transfer_recovery_keeps_lqg_stable_with_a_detuned_damper():
+    """The 76-story active tuned mass damper's LQG + wind model goes unstable when the damper's frequency is
+    10 % off its design; with sensors.input_noise (fictitious noise at the driver's input) it does not."""
+    from rlcontroller.control.policy import PolicyController
+    from rlcontroller.evaluation.safety import spectral_radius
+
+    config = REPOSITORY / "studies" / "safety_check" / "seventy_six_story_atmd_stroke_weighted.yaml"
+    robust = load_experiment(config)
+    assert robust.sensors.input_noise == 0.1
+    plain = robust.model_copy(update={"sensors": robust.sensors.model_copy(update={"input_noise": 0.0})})
+    detuned = PlantConfig(devices=DeviceFactors(frequency=0.9))
+    radii = {}
+    for name, experiment in (("plain", plain), ("robust", robust)):
+        controller = PolicyController.classical(Plant(experiment), "lqg_wind_model")
+        radii[name] = spectral_radius(Plant(experiment.model_copy(update={"plant": detuned})), controller)
+        assert spectral_radius(Plant(experiment), controller) < 1.0  # both stable on the design model
+    assert radii["plain"] > 1.0 > radii["robust"]

@@ -225,6 +225,11 @@ def test_a_controller_that_fails_safe_is_its_own_reference(config, fail_safe_act
     suite = verdict.criteria["check suite"]
     assert verdict.passed and suite["reference"] == description
     assert suite["mean_J1"] == pytest.approx(1.0, abs=1e-9) and suite["mean_J2"] == pytest.approx(1.0, abs=1e-9)
+    if plant.building.devices:  # the driver's mass: its stroke is the reference's, reported in the verdict
+        assert len(suite["peak_stroke_m"]) == 1 and suite["peak_stroke_m"][0] > 0.0
+        assert (
+            f"peak stroke {suite['peak_stroke_m'][0]:.2f} m ({suite['peak_stroke_m'][0]:.2f} m for" in suite["summary"]
+        )
 
 
 @pytest.mark.slow
@@ -332,3 +337,44 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     assert verdicts[0]["reference"] == "the building without its devices" and not verdicts[0]["passed"]
     failing = np.median([row["ground_energy_near_first_mode"] for row in verdicts[0]["failures"]])
     assert f"median {failing:.1%} of their ground energy" in verdicts[0]["summary"]
+
+
+WIND_STANDARD = REPOSITORY / "configs" / "checks" / "wind.yaml"
+
+
+def test_a_wind_standard_loads_the_experiment_s_own_site_with_its_own_speeds():
+    from rlcontroller.api.common import safety_standard
+    from rlcontroller.config import check_generator
+
+    atmd = load_experiment(REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml")
+    wind = load_safety_check(WIND_STANDARD)
+    generator, own = check_generator(wind, atmd), atmd.excitation.generator
+    assert (
+        (generator.speed, generator.duration)
+        == (wind.generator.speed, wind.generator.duration)
+        != (
+            own.speed,
+            own.duration,
+        )
+    )
+    assert generator.model_dump(exclude={"speed", "duration"}) == own.model_dump(exclude={"speed", "duration"})
+    assert (generator.width, generator.roughness, generator.dt) == (42.0, 1.0, 0.1)  # the benchmark's facade, city
+    ground = load_safety_check(STANDARD)
+    assert check_generator(ground, atmd) == ground.generator  # a ground-motion standard stays as it is
+    assert check_generator(wind, Experiment()) == wind.generator  # no site of its own: the standard's
+    assert safety_standard(atmd) == WIND_STANDARD and safety_standard(Experiment()) == STANDARD
+
+
+def test_under_a_wind_standard_the_failed_safe_building_is_its_own_reference():
+    """The five-story building under wind: the check's loads are wind records (rows name their mean speed),
+    and the controller that never acts scores exactly 1 against the uncontrolled building."""
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml")
+    standard = load_safety_check(WIND_STANDARD)
+    generator = standard.generator.model_copy(update={"duration": (20.0, 30.0), "speed": (25.0, 40.0)})
+    small = standard.model_copy(update={"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "generator": generator})
+    verdict = safety_check(Plant(experiment), Uncontrolled(5), small, [])
+    suite = verdict.criteria["check suite"]
+    assert verdict.passed and suite["mean_J1"] == pytest.approx(1.0, abs=1e-9)
+    assert suite["mean_J2"] == pytest.approx(1.0, abs=1e-9) and suite["insignificant_motions"] < 3
+    assert suite["worst"]["load"].startswith("wind ") and 25.0 <= float(suite["worst"]["load"].split()[1]) <= 40.0
+    assert "pga_g" not in suite["worst"] and "peak_stroke_m" not in suite
