@@ -255,8 +255,8 @@ def robustness(
 
 def summary_text(evaluation, out: Path) -> str:
     """The tables a command prints after an evaluation: J1-J4 per controller, the improvement over LQG,
-    J1 by PGA band, and where the files are."""
-    from rlcontroller.evaluation.tables import LEGEND, improvement_table, j1_by_pga, markdown_table, summary_table
+    J1 and J2 by PGA band, and where the files are."""
+    from rlcontroller.evaluation.tables import LEGEND, by_pga, improvement_table, markdown_table, summary_table
 
     lines = [f"# {evaluation.label}"]
     lines += [f"{name}: {source}" for name, source in evaluation.sources.items()]
@@ -264,7 +264,9 @@ def summary_text(evaluation, out: Path) -> str:
     improvement = improvement_table(evaluation)
     if improvement is not None:
         lines.append(markdown_table(improvement, digits=1))
-    lines.append(markdown_table(j1_by_pga(evaluation)))
+    for metric in ("J1", "J2"):
+        banded = markdown_table(by_pga(evaluation, metric))
+        lines += [f"mean {metric} by the record's PGA (records in the band):", banded]
     count = len(evaluation.records)
     lines.append(f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}")
     return "\n".join(lines)

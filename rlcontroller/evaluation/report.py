@@ -17,8 +17,8 @@ from rlcontroller.evaluation.tables import (
     FAIRNESS,
     LEGEND,
     METRIC_NAMES,
+    by_pga,
     improvement_table,
-    j1_by_pga,
     markdown_table,
     per_record_frame,
     summary_table,
@@ -60,9 +60,12 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     text += [markdown_table(summary), ""]
     if improvement is not None:
         text += [markdown_table(improvement, digits=1), ""]
-    by_pga = j1_by_pga(evaluation)
-    written.append(atomic_write(out / "j1_by_pga.csv", by_pga.assign(suite=evaluation.label).to_csv()))
-    text += ["Mean J1 by the record's PGA (number of records in the band):", "", markdown_table(by_pga), ""]
+    for metric in ("J1", "J2"):
+        banded = by_pga(evaluation, metric)
+        written.append(
+            atomic_write(out / f"{metric.lower()}_by_pga.csv", banded.assign(suite=evaluation.label).to_csv())
+        )
+        text += [f"Mean {metric} by the record's PGA (number of records in the band):", "", markdown_table(banded), ""]
     text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
     atomic_write(out / "summary.md", "\n".join(text))
     stories = ", ".join(evaluation.experiment.command_labels())

@@ -75,12 +75,12 @@ def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataF
 PGA_BANDS_G = (0.0, 0.02, 0.1, 0.3, np.inf)  # weak motions, where sensor noise is as large as the signal, first
 
 
-def j1_by_pga(evaluation: Evaluation) -> pd.DataFrame:
-    """Controller x PGA band: mean J1 of the records in the band (mean over stories), and per
-    controller the number of records with J1 > 1 (worse than no control). Loads with no ground
-    acceleration (wind) have no band: one column of every record."""
-    j1 = evaluation.metrics[evaluation.metrics["metric"] == "J1"].groupby(["controller", "record"], sort=False)["value"]
-    per_record = j1.mean().unstack("record")
+def by_pga(evaluation: Evaluation, metric: str = "J1") -> pd.DataFrame:
+    """Controller x PGA band: the mean `metric` (J1 or J2) of the records in the band (mean over stories or
+    floors), and per controller the number of records where it is above 1 (worse than no control). Loads
+    with no ground acceleration (wind) have no band: one column of every record."""
+    values = evaluation.metrics[evaluation.metrics["metric"] == metric]
+    per_record = values.groupby(["controller", "record"], sort=False)["value"].mean().unstack("record")
     pga = pd.Series({record: evaluation.pgas[record] / STANDARD_GRAVITY for record in per_record.columns})
     table = pd.DataFrame(index=pd.Index(evaluation.controllers, name="controller"))
     bands = zip(PGA_BANDS_G[:-1], PGA_BANDS_G[1:], strict=True)
@@ -91,7 +91,7 @@ def j1_by_pga(evaluation: Evaluation) -> pd.DataFrame:
         chosen = pga[(pga >= low) & (pga < high)].index
         label = f"PGA ≥ {low:g} g" if np.isinf(high) else f"PGA {low:g}–{high:g} g"
         table[f"{label} ({len(chosen)})"] = per_record[chosen].mean(axis=1) if len(chosen) else np.nan
-    table["records with J1 > 1"] = (per_record > 1.0 + 1e-9).sum(axis=1).astype(object)
+    table[f"records with {metric} > 1"] = (per_record > 1.0 + 1e-9).sum(axis=1).astype(object)
     return table
 
 

@@ -40,6 +40,8 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
         "summary.csv",
         "summary.md",
         "per_record.md",
+        "j1_by_pga.csv",
+        "j2_by_pga.csv",
         "time_histories.png",
         "metrics_per_story.png",
     ):
@@ -234,10 +236,10 @@ def test_equivalent_preview_reads_the_preview_curve_backwards():
     assert study_report.equivalent_preview(preview, 0.46) is None
 
 
-def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
+def test_j1_and_j2_by_pga_band_count_records_and_flag_controllers_worse_than_none():
     from rlcontroller.control.controllers import Uncontrolled
     from rlcontroller.evaluation.evaluation import evaluate
-    from rlcontroller.evaluation.tables import j1_by_pga
+    from rlcontroller.evaluation.tables import by_pga
     from rlcontroller.physics.excitation import STANDARD_GRAVITY, scale_to_pga
     from rlcontroller.physics.plant import Plant
     from rlcontroller.physics.records import synthetic_suite
@@ -250,7 +252,8 @@ def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
 
     motions = synthetic_suite(count=3)
     motions = [scale_to_pga(m, g * STANDARD_GRAVITY) for m, g in zip(motions, (0.01, 0.05, 0.5), strict=True)]
-    table = j1_by_pga(evaluate(Plant(Experiment()), motions, [Pushing(3)], "SYNTHETIC test", include_optimal=False))
+    evaluation = evaluate(Plant(Experiment()), motions, [Pushing(3)], "SYNTHETIC test", include_optimal=False)
+    table = by_pga(evaluation)
     assert list(table.columns) == [
         "PGA 0–0.02 g (1)",
         "PGA 0.02–0.1 g (1)",
@@ -260,6 +263,12 @@ def test_j1_by_pga_band_counts_records_and_flags_controllers_worse_than_none():
     ]
     assert table.loc["uncontrolled", "records with J1 > 1"] == 0 and table.loc["pushes", "records with J1 > 1"] >= 2
     assert np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0
+    accelerations = by_pga(evaluation, "J2")
+    assert list(accelerations.columns) == [*table.columns[:-1], "records with J2 > 1"]
+    j2 = evaluation.metrics[evaluation.metrics["metric"] == "J2"].groupby(["controller", "record"])["value"].mean()
+    strong = motions[2].name
+    assert accelerations.loc["pushes", "PGA ≥ 0.3 g (1)"] == pytest.approx(j2["pushes", strong])
+    assert accelerations.loc["uncontrolled", "records with J2 > 1"] == 0
 
 
 @pytest.mark.slow
