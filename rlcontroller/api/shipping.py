@@ -21,7 +21,8 @@ def shipped_models() -> list[str]:
     from rlcontroller.config import load_experiment
 
     groups: dict[str, list[str]] = {}
-    for folder in shipped_folders():
+    shipped = {folder: folder_experiment(folder) for folder in shipped_folders()}
+    for folder, experiment in shipped.items():
         policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
         state = verdict_state(folder, "best")
         verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
@@ -31,17 +32,17 @@ def shipped_models() -> list[str]:
             else f"{policy['algorithm']}, {policy['training_steps']:,} steps"
         )  # fmt: skip
         line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}"
-        groups.setdefault(hardware_label(folder_experiment(folder)), []).append(line)
+        groups.setdefault(hardware_label(experiment), []).append(line)
     lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
+    served = [experiment.hardware() for experiment in shipped.values()]
     unserved: dict[str, list[str]] = {}
     passive: list[str] = []
     for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
         experiment = load_experiment(config)
-        label = hardware_label(experiment)
         if not experiment.command_labels():
             passive.append(config.stem)
-        elif label not in groups:
-            unserved.setdefault(label, []).append(config.stem)
+        elif experiment.hardware() not in served:
+            unserved.setdefault(hardware_label(experiment), []).append(config.stem)
     if unserved:
         lines.append("none ships yet (models/README.md says why) for:")
         lines += [f"  {label} ({', '.join(names)})" for label, names in unserved.items()]
