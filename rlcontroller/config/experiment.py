@@ -85,9 +85,11 @@ class Experiment(StrictModel):
 
     def hardware(self) -> dict:
         """What a controller is made for, beyond its own sensors and cost: the building (and the plant part
-        simulated for it), its actuators and devices, and the load: experiments that agree here can share one."""
-        parts = {name: getattr(self, name) for name in ("building", "plant", "actuators", "devices")}
-        return {name: _dumped(part) for name, part in parts.items()} | {"load": self.load_kind}
+        simulated for it), its actuators and devices, and the load: experiments that agree here can share one.
+        Where a building's matrices were read from (`source`) is not what it is."""
+        parts = {name: getattr(self, name) for name in ("plant", "actuators", "devices")}
+        building = self.building.model_dump(mode="json", exclude={"source"})
+        return {"building": building} | {name: _dumped(part) for name, part in parts.items()} | {"load": self.load_kind}
 
     def commanded_devices(self) -> list:
         """The devices that take a command, in the action's order after the actuators: the mass

@@ -128,6 +128,36 @@ def test_the_default_exports_with_its_faded_supervisor(tmp_path):
 
 
 @pytest.mark.slow
+def test_the_shipped_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path, monkeypatch):
+    """Named by its experiment from another folder, the 76-story building's shipped controller (LQG + wind
+    model with loop transfer recovery) exports; under a generated wind load its graph gives the forces the
+    Python controller commands in the env."""
+    from rlcontroller import api
+    from rlcontroller.physics.loads import generate
+
+    monkeypatch.chdir(tmp_path)
+    folder = api.model_folder(REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml")
+    assert folder.name == "seventy_six_story_atmd"
+    plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
+    generator = plant.experiment.excitation.generator.model_copy(update={"duration": (60.0, 60.0)})
+    wind = generate(generator, np.random.default_rng(0), plant.building, "wind")
+    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
+    controller = read_policy(folder, "best", plant)
+    observation, info = env.reset(seed=0, options={"motion": wind})
+    python, onnx_forces = [], []
+    for _ in range(info["steps"]):
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        onnx_forces.append(graph.step(readings[None], ground)[0])
+        observation, *_ = env.step(controller.act(observation))
+        python.append(env.command)
+    python, onnx_forces = np.array(python), np.array(onnx_forces)
+    assert np.abs(python).max() > 1e4  # the driver works (N)
+    np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=1e-3 * np.abs(python).max())
+
+
+@pytest.mark.slow
 def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
     import torch
 
