@@ -86,6 +86,7 @@ def test_the_default_model_follows_the_stated_rule_on_the_committed_verdicts():
     assert min(verdicts, key=rank) == DEFAULT_MODEL
 
 
+@pytest.mark.slow
 def test_rlc_models_lists_every_shipped_controller_and_marks_the_default():
     from rlcontroller.cli import MODELS
 

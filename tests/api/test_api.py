@@ -90,6 +90,7 @@ def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
     assert report.lines == [f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"]
 
 
+@pytest.mark.slow
 def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_default():
     lines = api.shipped_models()
     group = "paper five-story under ground motion, actuators on stories 1, 2, 3, 4, 5:"
@@ -102,6 +103,7 @@ def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_defau
     assert lines[-1] == "nothing to command, its verdict from 'rlc compare passive': five_story_tmd"
 
 
+@pytest.mark.slow
 def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_devices():
     from rlcontroller.api.common import shipped_for
     from rlcontroller.assets import DEFAULT_MODEL
