@@ -22,6 +22,7 @@ from rlcontroller.control.policy import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness, summary
 from rlcontroller.evaluation.safety import Verdict
+from rlcontroller.evaluation.tables import markdown_table
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.loads import load_suite
 from rlcontroller.physics.plant import Plant
@@ -98,7 +99,7 @@ def card(folder: Path, records: Path) -> str:
     wind = WIND_SUITES.get(folder.name)
     motions, label = load_suite(wind or records, None, plant)
     label = label.replace(f"{REPOSITORY}/", "")
-    table = compare(plant, motions, label, policy).summary().round(3)
+    table = compare(plant, motions, label, policy).summary()
     scenarios = load_scenarios(standard_scenarios(experiment), experiment)
     per_scenario = summary(robustness(experiment, scenarios, motions, label, policy)[0])["J1"].unstack("controller")
     verdict = Verdict(**yaml.safe_load((folder / "best_check.yaml").read_text()))
@@ -120,8 +121,7 @@ def card(folder: Path, records: Path) -> str:
     ]
     columns = WIND_COLUMNS if wind else ("J1", "J2", "J3", "J4")
     title = f"{label}" if wind else "The seven records (../shared/records: PEER NGA-West2, as recorded)"
-    lines += ["", f"## {title}", "", f"| controller | {' | '.join(columns)} |", "|---" * (len(columns) + 1) + "|"]
-    lines += [f"| {name} | {' | '.join(_number(row[c]) for c in columns)} |" for name, row in table.iterrows()]
+    lines += ["", f"## {title}", "", markdown_table(table[list(columns)])]
     count = len(scenarios)
     lines += [
         "",
@@ -130,10 +130,6 @@ def card(folder: Path, records: Path) -> str:
     lines += ["", "| controller | mean J1 |", "|---|---|"]
     lines += [f"| {name} | {value:.3f} |" for name, value in per_scenario.mean().items()]
     return "\n".join(lines) + "\n"
-
-
-def _number(value: float) -> str:
-    return "–" if value != value else f"{value:.3f}"  # NaN: not applicable (no stroke without a device)
 
 
 def main() -> None:
