@@ -87,9 +87,8 @@ class Experiment(StrictModel):
         """What a controller is made for, beyond its own sensors and cost: the building (and the plant part
         simulated for it), its actuators and devices, and the load: experiments that agree here can share one.
         Where a building's matrices were read from (`source`) is not what it is."""
-        parts = {name: getattr(self, name) for name in ("plant", "actuators", "devices")}
-        building = self.building.model_dump(mode="json", exclude={"source"})
-        return {"building": building} | {name: _dumped(part) for name, part in parts.items()} | {"load": self.load_kind}
+        parts = {"building", "plant", "actuators", "devices"}
+        return self.model_dump(mode="json", include=parts, exclude={"building": {"source"}}) | {"load": self.load_kind}
 
     def commanded_devices(self) -> list:
         """The devices that take a command, in the action's order after the actuators: the mass
@@ -111,9 +110,3 @@ class Experiment(StrictModel):
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
-
-
-def _dumped(part: Any) -> Any:
-    if isinstance(part, list):
-        return [_dumped(item) for item in part]
-    return part.model_dump(mode="json") if part is not None else None
