@@ -1,6 +1,6 @@
-"""The two kinds of user mistake every command reports in one line (no traceback): a configuration that
-cannot be used, and a load file that cannot be read. Kept apart from the modules that raise them so the
-command line can catch them without loading those."""
+"""The kinds of user mistake every command reports in one line (no traceback): a configuration that
+cannot be used, a load file that cannot be read, and a model of the user's (an OpenSees file) that fails.
+Kept apart from the modules that raise them so the command line can catch them without loading those."""
 
 
 class ConfigError(ValueError):
@@ -9,3 +9,8 @@ class ConfigError(ValueError):
 
 class MotionError(ValueError):
     """A ground-motion (or load) file that cannot be read; `str()` names the file and line."""
+
+
+class ModelError(RuntimeError):
+    """A model from outside `rlc` (an OpenSees file) that cannot be built or does not converge; `str()` names
+    the file, or the record and the time."""

@@ -14,14 +14,16 @@ def describe(experiment: Experiment) -> str:
     lines = ["# resolved configuration", resolved_text(experiment)]
     floors_only = " (floors only, without the devices)" if experiment.devices else ""
     buildings = [(f"design model{floors_only}", plant.design.bare.building)]
-    if experiment.plant is not None:
+    if plant.fe_model is None and experiment.plant is not None:
         buildings.append((f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building))
     for title, building in buildings:
-        lines.append(f"# modes of the {title}")
-        lines.append(f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}")
-        ratios = building.modal_damping_ratios()
-        for mode, (period, ratio) in enumerate(zip(building.periods(), ratios, strict=True), 1):
-            lines.append(f"{mode:>4}  {period:>10.3f}  {1 / period:>14.3f}  {ratio:>13.4f}")
+        lines += mode_lines(title, building.periods(), building.modal_damping_ratios())
+    if plant.fe_model is not None:
+        from rlcontroller.physics.opensees import fe_modes
+
+        design = plant.design.bare.building.periods()
+        fe_periods, ratios = fe_modes(plant.fe_model.path, plant.fe_model.function, len(design))
+        lines += mode_lines(f"simulated plant (OpenSees model {plant.fe_model.path.name})", fe_periods, ratios, design)
     lines.append("\n# actuators")
     for index, actuator in enumerate(experiment.actuators):
         floors = f"floor {actuator.story}"
@@ -38,6 +40,22 @@ def describe(experiment: Experiment) -> str:
     return "\n".join(lines)
 
 
+def mode_lines(title: str, periods, ratios, design=None) -> list[str]:
+    """A table of modes: period (s), frequency (Hz), damping ratio, and with `design` (its periods, s) the
+    design model's period error in each."""
+    error = "  design model's period error" if design is not None else ""
+    lines = [
+        f"# modes of the {title}",
+        f"{'mode':>4}  {'period (s)':>10}  {'frequency (Hz)':>14}  {'damping ratio':>13}{error}",
+    ]
+    for mode, (period, ratio) in enumerate(zip(periods, ratios, strict=True), 1):
+        line = f"{mode:>4}  {period:>10.3f}  {1 / period:>14.3f}  {ratio:>13.4f}"
+        if design is not None:
+            line += f"  {design[mode - 1] / period - 1.0:>+27.2%}"
+        lines.append(line)
+    return lines
+
+
 def hardware_label(experiment: Experiment) -> str:
     """What a controller is made for, in a few words: "paper five-story under ground motion, actuators on
     stories 1, 2, 3, 4, 5", "... mr_damper on stories 1, 3, 5", "... active_mass on floor 5" (`Experiment.hardware`)."""
@@ -52,7 +70,15 @@ def hardware_label(experiment: Experiment) -> str:
         for key, places in where.items()
     ] or ["no actuators or devices"]
     plant = experiment.plant
-    simulated = "" if plant is None else " (yielding stories)" if plant.hysteresis is not None else " (its plant part)"
+    simulated = (
+        ""
+        if plant is None
+        else " (OpenSees model)"
+        if plant.opensees is not None
+        else " (yielding stories)"
+        if plant.hysteresis is not None
+        else " (its plant part)"
+    )
     return f"{experiment.building.name}{simulated} under {experiment.load_kind}, {'; '.join(parts)}"
 
 

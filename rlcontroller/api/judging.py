@@ -40,6 +40,8 @@ def comparison(
     from rlcontroller.physics.plant import Plant
 
     plant = Plant(experiment)
+    if plant.fe_model is not None:
+        report.note(f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})")
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
@@ -53,16 +55,19 @@ def evaluate(
     scale_pga: float | None = None,
     model: str = "best",
     report: Report = QUIET,
+    config: Path | None = None,
 ):
     """A run's (default: the default model's) policy against LQG and no control on the records: returns
-    the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to."""
+    the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to. `config`: the
+    experiment to judge it in instead of its own (another plant, e.g. an OpenSees model, for the same
+    design: its building, actuators and sensors)."""
     from rlcontroller.api.safety import unchecked_note
     from rlcontroller.evaluation.report import write_report
 
     folder = model_folder(run_dir, report)
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
-    experiment = folder_experiment(folder)
+    experiment = folder_experiment(folder) if config is None else load(config)
     note = unchecked_note(folder, model)
     if note is not None:
         report.note(note)

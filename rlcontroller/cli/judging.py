@@ -33,11 +33,15 @@ def evaluate(
     scale_pga: ScaleOption = None,
     model: ModelOption = "best",
     progress: ProgressOption = None,
+    config: Annotated[
+        Path | None,
+        typer.Option(help="Experiment YAML to judge the controller in (e.g. an OpenSees plant); default its own."),
+    ] = None,
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
     from rlcontroller import api
 
-    evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress))
+    evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config)
     typer.echo(api.summary_text(evaluation, out))
 
 

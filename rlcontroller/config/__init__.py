@@ -111,6 +111,7 @@ from rlcontroller.config.plant import (  # noqa: F401
     ActuatorDynamicsConfig,
     DamageConfig,
     HysteresisConfig,
+    OpenSeesConfig,
     PlantConfig,
     PlantRandomization,
     RandomRange,

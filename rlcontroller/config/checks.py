@@ -42,6 +42,13 @@ def check_cross_references(experiment: Experiment) -> None:
             raise ConfigError(
                 f"{where}: {cutoff:g} Hz, expected below half the Nyquist frequency ({0.5 * nyquist:g} Hz)"
             )
+    fe_model = experiment.plant.opensees if experiment.plant is not None else None
+    if fe_model is not None and (experiment.devices or experiment.plant_randomization is not None):
+        part = "devices" if experiment.devices else "plant_randomization"
+        raise ConfigError(
+            f"{location(*experiment.origin(part), '')}: not with an OpenSees plant: model devices in its file; "
+            "randomise the design model instead (an experiment without the plant part)"
+        )
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     if not experiment.actuators and not experiment.devices:

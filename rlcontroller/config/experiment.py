@@ -109,4 +109,9 @@ class Experiment(StrictModel):
         return [0.0] * len(self.actuators) + [device.fail_safe_action for device in self.commanded_devices()]
 
     def to_yaml(self) -> str:
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+        """The resolved experiment as a folder keeps it. An OpenSees plant is left out (a folder never runs
+        code, `config.loading.UNTRUSTED_MODEL`): a comment names its file; the building is its reduced model."""
+        if self.plant is None or self.plant.opensees is None:
+            return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+        note = f"# plant: the OpenSees model {self.plant.opensees.model} (not kept: a folder never runs code)\n"
+        return note + yaml.safe_dump(self.model_dump(mode="json") | {"plant": None}, sort_keys=False)

@@ -77,7 +77,34 @@ def load_experiment(path: str | Path, self_contained: bool = False) -> Experimen
             ):
                 raise ConfigError(f"{where}.matrices: {matrices!r} is outside {path.parent}; {OWN_FILES}")
             raw[part] = read_matrix_part(raw[part], folder, where)
+        if part == "plant" and isinstance(raw.get(part), dict) and isinstance(raw[part].get("opensees"), dict):
+            if self_contained:
+                raise ConfigError(f"{where}.opensees: {UNTRUSTED_MODEL}")
+            _resolve_fe_model(raw, folder, where)
     return build_experiment(raw, origins, str(path))
+
+
+UNTRUSTED_MODEL = (
+    "names an OpenSees model file, which is code: a run or model folder never runs one; to run it, name "
+    "the experiment yourself (--config EXPERIMENT.yaml)"
+)
+
+
+def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str) -> None:
+    """The plant's model file made absolute; an experiment with no building of its own gets the FE
+    model's reduced one as its design model (the file runs: the user named this experiment)."""
+    fe = raw["plant"]["opensees"] = dict(raw["plant"]["opensees"])
+    model = fe.get("model")
+    if not isinstance(model, str) or not (folder / model).is_file():
+        raise ConfigError(
+            f"{where}.opensees.model: expected the path of a Python file (relative to {folder}), got {model!r}"
+        )
+    fe["model"] = str((folder / model).resolve())
+    if "building" in raw:
+        return
+    from rlcontroller.physics.opensees import reduced_building  # runs the model: only here, when asked
+
+    raw["building"] = reduced_building(Path(fe["model"]), fe.get("function", "build_model"))
 
 
 def build_experiment(

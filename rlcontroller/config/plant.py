@@ -84,6 +84,17 @@ class DeviceFactors(StrictModel):
     force: Factor = 1.0
 
 
+class OpenSeesConfig(StrictModel):
+    """An OpenSees finite-element model as the plant (`physics.opensees`): the Python file that builds it
+    (code: run only when the user names it; absolute once loaded), the function in it, and the longest
+    analysis step (s; Newmark average acceleration, on every ground sample: 2.5 ms keeps the five-story
+    model within 0.1 % of the exact integration, 10 ms is 0.5 % off)."""
+
+    model: str = Field(min_length=1)
+    function: str = Field("build_model", pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
+    analysis_dt: float = Field(0.0025, gt=0.0, le=0.1)
+
+
 class PlantConfig(StrictModel):
     """How the simulated building differs from the design model (the experiment's building,
     actuators and sensors, on which every controller is designed). Factors are a scalar or one
@@ -97,6 +108,22 @@ class PlantConfig(StrictModel):
     sensors: SensorFaultConfig = SensorFaultConfig()
     hysteresis: HysteresisConfig | None = None  # None: linear stories
     devices: DeviceFactors = DeviceFactors()
+    opensees: OpenSeesConfig | None = None  # None: rlc's own plant of the design model
+
+    @model_validator(mode="after")
+    def _fe_model_alone(self) -> PlantConfig:
+        if self.opensees is not None:
+            defaults = {
+                key: info.get_default(call_default_factory=True) for key, info in type(self).model_fields.items()
+            }
+            changed = [
+                key for key in defaults if key not in ("opensees", "sensors") and getattr(self, key) != defaults[key]
+            ]
+            if changed:
+                raise ValueError(
+                    f"opensees: an FE model is the plant as it is: model {', '.join(changed)} in its file instead"
+                )
+        return self
 
 
 class RandomRange(StrictModel):

@@ -24,6 +24,7 @@ the non-linear integrator, and every output is still linear in that state and th
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -52,6 +53,7 @@ from rlcontroller.physics.excitation import FLOOR_FORCES, LoadGrid
 from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
+from rlcontroller.physics.opensees import OpenSeesIntegrator
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.sensors import sensor_matrices
 from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
@@ -108,7 +110,14 @@ class Plant:
         if hysteresis is not None:  # a shear building's (checked at loading)
             self.yielding = BoucWen.of(self.building, hysteresis, np.asarray(building.stiffnesses, dtype=float))
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
-        self.integrator = self.yielding or self.semi_active  # its own step, when the step is not linear
+        fe = self.config.opensees if self.config is not None else None
+        self.fe_model = None
+        if fe is not None:  # the building is its design model; the FE model steps itself
+            stories = [actuator.story for actuator in experiment.actuators]
+            self.fe_model = OpenSeesIntegrator(
+                Path(fe.model), fe.function, fe.analysis_dt, stories, self.building.force_limits
+            )
+        self.integrator = self.fe_model or self.yielding or self.semi_active  # its own step, when not linear
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
         dynamics = self.config.actuators if self.config is not None else None
@@ -119,6 +128,7 @@ class Plant:
         held = m if self.delay_steps > 0 and not lag else 0
         self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
+        self.n_state += n if self.fe_model is not None else 0  # [x; v; absolute accelerations]
         faults = self.config.sensors if self.config is not None else None
         self.sensors = sensor_matrices(self.outputs, self.building, experiment.sensors, faults)
         self.wind = design_wind(experiment)
@@ -185,6 +195,8 @@ class Plant:
 
     def outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """(C, D) with quantity = C x + D u on this plant's state x and command u (N)."""
+        if self.fe_model is not None:
+            return self._fe_outputs(quantity)
         if self.yielding is not None:
             return self._yielding_outputs(quantity)
         if self.semi_active is not None:
@@ -200,6 +212,18 @@ class Plant:
         else:
             full[:, -m:] = d  # the register of the force applied over the last step
         return full, np.zeros_like(d)
+
+    def _fe_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
+        """Outputs on the FE model's [x; v; a] at its floors: the kinematic ones as the design building's,
+        the absolute accelerations read, the story shears their floors' inertia forces above."""
+        c, d = output_matrices(self.building, quantity)
+        n = self.building.n_dofs
+        if quantity == "absolute_acceleration":
+            return np.hstack([np.zeros((n, 2 * n)), np.eye(n)]), np.zeros_like(d)
+        if quantity in ("story_shear", "base_shear"):
+            shear = np.triu(np.ones((n, n))) @ self.building.mass
+            return np.hstack([np.zeros((n, 2 * n)), shear])[: c.shape[0]], np.zeros_like(d)
+        return np.hstack([c, np.zeros((c.shape[0], n))]), d
 
     def _yielding_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """Outputs on [x; v; z]: the restoring force is D' (a k d + (1 - a) k d_y z)."""

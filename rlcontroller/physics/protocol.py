@@ -1,7 +1,8 @@
 """The plant protocol: what the closed loop (`learning.env`, `simulation.batch`), evaluation and the
 controllers' designs read of a plant. `physics.plant.Plant` implements it for every plant `rlc` builds
-(linear, with actuator dynamics, yielding stories, semi-active dampers); a model from outside (a
-finite-element program, an identified state-space model) implements the same and nothing else changes.
+(linear, with actuator dynamics, yielding stories, semi-active dampers, an OpenSees model as its `fe_model`
+integrator, `physics.opensees`); a model from outside (an identified state-space model) implements the
+same and nothing else changes.
 
 Like do-mpc's `model`, one object serves the simulator, the estimator and the controllers:
 
@@ -47,6 +48,7 @@ class SimulatedPlant(Protocol):
     n_state: int  # length of the state x
     force_limits: np.ndarray  # N, one per command
     integrator: Integrator | None  # None: the step is `step_map`
+    fe_model: Integrator | None  # a model of one domain per process (OpenSees): runs fan out over processes
 
     @property
     def design(self) -> SimulatedPlant: ...

@@ -14,7 +14,10 @@ its outputs are not used.
 
 from __future__ import annotations
 
+import multiprocessing
+import os
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -25,6 +28,7 @@ from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
+from rlcontroller.physics.opensees import NonConvergence
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
@@ -294,6 +298,8 @@ def batch_rollout(
         return []
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
     grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
+    if plant.fe_model is not None:
+        return _fanned_rollout(plant, list(zip(motions, grids, strict=True)), controllers, seeds, randomize, on_motions)
     lengths = [grid.n_steps for grid in grids]  # control steps
     order = sorted(range(len(motions)), key=lambda i: lengths[i])
     results: list[list] = [[None] * len(motions) for _ in controllers]
@@ -310,6 +316,52 @@ def batch_rollout(
         if on_motions is not None:
             on_motions(len(chunk))
     return results
+
+
+_FANNED: tuple = ()  # what forked workers read: set before the pool starts
+
+
+def _fanned_rollout(
+    plant: Plant,
+    loads: list[tuple[Load, LoadGrid]],
+    controllers: list[Controller],
+    seeds: list[int],
+    randomize: bool,
+    on_motions: Callable[[int], None] | None,
+) -> list[list[tuple[Response, float]]]:
+    """`batch_rollout` on a plant that holds one model per process (an OpenSees model): each controller on
+    each load alone, fanned out over as many forked processes as there are cores."""
+    global _FANNED
+    runs = [(c, i) for i in range(len(loads)) for c in range(len(controllers))]
+    results: list[list] = [[None] * len(loads) for _ in controllers]
+    left = [len(controllers)] * len(loads)
+    _FANNED = (plant, loads, controllers, seeds, randomize)
+    workers = min(os.cpu_count() or 1, len(runs))
+    try:
+        if workers == 1:
+            finished = map(_fanned_run, runs)
+        else:
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+            finished = pool.map(_fanned_run, runs)
+        for (c, i), result in zip(runs, finished, strict=True):
+            results[c][i] = result
+            left[i] -= 1
+            if on_motions is not None and left[i] == 0:
+                on_motions(1)
+    finally:
+        if workers > 1:
+            pool.shutdown(cancel_futures=True)
+        _FANNED = ()
+    return results
+
+
+def _fanned_run(run: tuple[int, int]) -> tuple[Response, float]:
+    plant, loads, controllers, seeds, randomize = _FANNED
+    c, i = run
+    try:
+        return _rollout_chunk(plant, [loads[i]], [controllers[c]], [seeds[i]], randomize)[0][0]
+    except NonConvergence as error:
+        raise NonConvergence(f"{loads[i][0].name}, {controllers[c].name}: {error}") from None
 
 
 def _rollout_chunk(

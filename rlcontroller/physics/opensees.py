@@ -1,0 +1,342 @@
+"""An OpenSees finite-element model as the plant, and the reduced model controllers are designed on.
+
+A model file is Python (code, not data: `docs/opensees.md`, "The trust boundary"): it defines a function
+(default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
+(nodes, masses, elements, damping) and returns a `FEDescription` mapping:
+
+- `floors`: per floor from the first up, the nodes of its level (the first is its control node: where the
+  actuators push and the sensors read; the masses of all are the floor's mass);
+- `direction`: the degree of freedom of the lateral direction (1 = x);
+- `story_heights`: m, per story;
+- `modal_damping` (ratios per mode, the last repeated) or `rayleigh` ([a0, a1], C = a0 M + a1 K): the
+  damping the file gave the model, for the reduced model to match.
+
+`rlc` owns the time loop (`OpenSeesIntegrator`): each control step the ground acceleration enters as a
+uniform excitation (its samples over the step, linear between them), the actuator forces as nodal loads
+held over the step (+f on the floor above a story, -f on the floor below), and the model's own analysis
+advances Newmark average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with Newton-Raphson,
+falling back to modified
+Newton, then Newton with line search, then smaller steps; a step that still does not converge raises
+`NonConvergence` (the evaluation reports the record, never a silent zero).
+
+The reduced model (`reduced_building`): the floor masses, the lateral stiffness condensed statically to the
+control nodes (the inverse of the flexibility under unit floor loads), and the file's damping matched
+mode by mode at the FE model's frequencies.
+"""
+
+from __future__ import annotations
+
+import atexit
+import importlib.util
+import math
+import os
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rlcontroller.errors import ConfigError, ModelError
+
+MISSING = (
+    'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '
+    "LAPACK: apt-get install libblas3 liblapack3)"
+)
+ALGORITHMS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
+HALVINGS = 4  # after the algorithms, a step is retried in halves, down to 1/16
+GROUND_SERIES, GROUND_PATTERN, FORCE_SERIES, FORCE_PATTERN = 101, 101, 102, 102
+
+
+class NonConvergence(ModelError):
+    """The FE model's analysis failed at a control step with every fallback."""
+
+
+def opensees():
+    """The `openseespy.opensees` module, or one line saying what to install."""
+    try:
+        import openseespy.opensees as ops
+    except ImportError as error:  # also "libblas.so.3: cannot open shared object file"
+        raise ConfigError(f"{MISSING} ({error})") from None
+    if not _QUIET_EXIT:
+        atexit.register(_quiet_exit)
+        _QUIET_EXIT.append(True)
+    return ops
+
+
+_QUIET_EXIT: list[bool] = []
+
+
+def _quiet_exit() -> None:
+    """OpenSees' library prints "Process 0 Terminating" to stderr as the interpreter ends, after every
+    atexit handler: the standard error is closed for it (nothing of rlc's is left to say by then)."""
+    sys.stderr.flush()
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)
+
+
+@dataclass(frozen=True)
+class FEDescription:
+    """What `rlc` needs of a model built in the OpenSees domain (see the module's docstring)."""
+
+    floors: tuple[tuple[int, ...], ...]
+    direction: int
+    story_heights: tuple[float, ...]
+    modal_damping: tuple[float, ...] | None = None
+    rayleigh: tuple[float, float] | None = None
+
+    @property
+    def control_nodes(self) -> list[int]:
+        return [nodes[0] for nodes in self.floors]
+
+    @classmethod
+    def of(cls, raw: object, where: str) -> FEDescription:
+        if not isinstance(raw, dict):
+            raise ModelError(f"{where}: expected the model function to return a mapping, got {type(raw).__name__}")
+        missing = sorted({"floors", "direction", "story_heights"} - set(raw))
+        if missing:
+            raise ModelError(f"{where}: the model function's mapping lacks {', '.join(missing)}")
+        floors = tuple(tuple(int(n) for n in ([f] if isinstance(f, int) else f)) for f in raw["floors"])
+        heights = tuple(float(h) for h in raw["story_heights"])
+        if not floors or any(not nodes for nodes in floors) or len(heights) != len(floors):
+            raise ModelError(f"{where}: expected one list of nodes and one story height per floor")
+        if (raw.get("modal_damping") is None) == (raw.get("rayleigh") is None):
+            raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has)")
+        modal = raw.get("modal_damping")
+        rayleigh = raw.get("rayleigh")
+        return cls(
+            floors=floors,
+            direction=int(raw["direction"]),
+            story_heights=heights,
+            modal_damping=None if modal is None else tuple(float(r) for r in modal),
+            rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
+        )
+
+
+def model_function(path: Path, function: str) -> Callable:
+    """The model file's function (the file runs here: only ever for a file the user named)."""
+    spec = importlib.util.spec_from_file_location(f"rlc_opensees_model_{abs(hash(str(path)))}", path)
+    if spec is None or spec.loader is None:
+        raise ModelError(f"{path}: not a Python file")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as error:
+        raise ModelError(f"{path}: {type(error).__name__}: {error}") from None
+    if not callable(getattr(module, function, None)):
+        raise ModelError(f"{path}: no function {function!r}")
+    return getattr(module, function)
+
+
+def build_model(path: Path, function: str) -> FEDescription:
+    """Wipe the OpenSees domain and build the model of `path` in it."""
+    ops = opensees()
+    ops.wipe()
+    try:
+        built = model_function(path, function)(ops)
+    except ModelError:
+        raise
+    except Exception as error:  # the user's code: whatever it raises is a fault of the model
+        raise ModelError(f"{path}: {function}: {type(error).__name__}: {error}") from None
+    return FEDescription.of(built, f"{path}: {function}")
+
+
+def floor_masses(description: FEDescription) -> np.ndarray:
+    """Each floor's mass in the lateral direction (kg): the sum over its nodes."""
+    ops = opensees()
+    return np.array([sum(ops.nodeMass(n, description.direction) for n in nodes) for nodes in description.floors])
+
+
+def periods(count: int) -> np.ndarray:
+    """The first `count` natural periods (s) of the model in the domain."""
+    ops = opensees()
+    ops.wipeAnalysis()  # an eigen analysis of its own (one the model file ran may be left over)
+    with _quiet():
+        try:
+            eigenvalues = ops.eigen(count)
+        except ops.OpenSeesError:  # ARPACK wants more equations than modes: a model of as many as asked
+            eigenvalues = ops.eigen("-fullGenLapack", count)
+    return 2.0 * np.pi / np.sqrt(np.asarray(eigenvalues, dtype=float))
+
+
+@contextmanager
+def _quiet() -> Iterator[None]:
+    """OpenSees' own messages (on the standard error) silenced: a failed first try that has a fallback."""
+    sys.stderr.flush()
+    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def condensed_stiffness(description: FEDescription) -> np.ndarray:
+    """The lateral stiffness at the control nodes (N/m): the inverse of the flexibility measured by a
+    linear static analysis under a unit load at each (small: an elastic response of a yielding model)."""
+    ops = opensees()
+    nodes, dof = description.control_nodes, description.direction
+    ndf = len(ops.nodeDisp(nodes[0]))
+    flexibility = np.zeros((len(nodes), len(nodes)))
+    ops.timeSeries("Linear", FORCE_SERIES)
+    for j, node in enumerate(nodes):
+        ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
+        ops.load(node, *[1.0 if d == dof else 0.0 for d in range(1, ndf + 1)])
+        _static_analysis(ops)
+        if ops.analyze(1) != 0:
+            raise NonConvergence("the static analysis for the condensed stiffness did not converge")
+        flexibility[:, j] = [ops.nodeDisp(n, dof) for n in nodes]
+        ops.remove("loadPattern", FORCE_PATTERN)
+        ops.wipeAnalysis()
+        ops.reset()
+        ops.setTime(0.0)
+    ops.remove("timeSeries", FORCE_SERIES)
+    stiffness = np.linalg.inv(flexibility)
+    return 0.5 * (stiffness + stiffness.T)
+
+
+def _static_analysis(ops) -> None:
+    ops.constraints("Transformation")
+    ops.numberer("RCM")
+    ops.system("UmfPack")
+    ops.test("NormDispIncr", 1e-12, 20)
+    ops.algorithm("Newton")
+    ops.integrator("LoadControl", 1.0)
+    ops.analysis("Static")
+
+
+def damping_ratios(description: FEDescription, circular_frequencies: np.ndarray) -> list[float]:
+    """The model's damping ratio in each mode: its own modal ratios, or its Rayleigh pair's at the FE
+    model's frequencies (rad/s)."""
+    if description.modal_damping is not None:
+        ratios = list(description.modal_damping)
+        return (ratios + [ratios[-1]] * len(circular_frequencies))[: len(circular_frequencies)]
+    a0, a1 = description.rayleigh
+    return [float(a0 / (2.0 * w) + a1 * w / 2.0) for w in circular_frequencies]
+
+
+def fe_modes(path: Path, function: str, count: int) -> tuple[np.ndarray, list[float]]:
+    """The first `count` periods (s) of the FE model in `path` and its damping ratio in each."""
+    description = build_model(path, function)
+    fe_periods = periods(count)
+    opensees().wipe()
+    return fe_periods, damping_ratios(description, 2.0 * np.pi / fe_periods)
+
+
+def reduced_building(path: Path, function: str) -> dict:
+    """The design model of the FE model in `path`: a building part of matrices (SI) with its floors'
+    masses, the condensed stiffness and the model's damping matched mode by mode, and the FE model's
+    first periods (s) for `rlc info`."""
+    description = build_model(path, function)
+    n = len(description.floors)
+    fe_periods = periods(n)
+    masses = floor_masses(description)
+    stiffness = condensed_stiffness(description)
+    ratios = damping_ratios(description, 2.0 * np.pi / fe_periods)
+    opensees().wipe()
+    return {
+        "name": f"reduced from {path.name}",
+        "source": str(path),
+        "mass_matrix": np.diag(masses).tolist(),
+        "stiffness_matrix": stiffness.tolist(),
+        "modal_damping": ratios,
+        "story_heights": list(description.story_heights),
+    }
+
+
+class OpenSeesIntegrator:
+    """The FE model stepped one control step at a time (`physics.protocol.Integrator`).
+
+    Its state x is [floor displacements; floor velocities (relative to the ground); floor absolute
+    accelerations] at the control nodes (m, m/s, m/s^2): every output `rlc` reads is linear in it. One
+    OpenSees domain per process: it steps one run at a time, starting afresh from a zero state.
+    """
+
+    def __init__(self, path: Path, function: str, analysis_dt: float, stories: list[int], force_limits: np.ndarray):
+        self.path, self.function, self.analysis_dt = path, function, analysis_dt
+        self.placement = np.zeros((0, len(stories)))  # floor forces per command (N/N), sized at reset
+        self.stories = stories  # the story of each command (force on the floor above, reaction below)
+        self.force_limits = force_limits
+        self._last: np.ndarray | None = None
+        self.description: FEDescription | None = None
+
+    def __getstate__(self) -> dict:  # a copy in another process builds its own domain
+        return self.__dict__ | {"_last": None, "description": None}
+
+    def reset(self) -> None:
+        ops = opensees()
+        self.description = build_model(self.path, self.function)
+        ops.timeSeries("Constant", FORCE_SERIES)
+        ops.constraints("Transformation")
+        ops.numberer("RCM")
+        ops.system("UmfPack")
+        ops.test("NormDispIncr", 1e-10, 30)
+        ops.algorithm(*ALGORITHMS[0])
+        ops.integrator("Newmark", 0.5, 0.25)
+        ops.analysis("Transient")
+        self.ndf = len(ops.nodeDisp(self.description.control_nodes[0]))
+        self.placement = np.zeros((len(self.description.floors), len(self.stories)))
+        for command, story in enumerate(self.stories):
+            self.placement[story - 1, command] = 1.0
+            if story > 1:
+                self.placement[story - 2, command] = -1.0
+
+    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+        """The state after one control step with the forces `action` * force limits (N) held and `ground`
+        the ground accelerations (m/s^2) over the step (its first and last sample at its ends)."""
+        continuing = self._last is not None and np.array_equal(state, self._last)
+        if not continuing and not np.any(state):
+            self.reset()
+        elif not continuing:
+            raise RuntimeError("the OpenSees plant steps one run at a time (one domain per process)")
+        ops, description = opensees(), self.description
+        time = ops.getTime()
+        ops.remove("loadPattern", GROUND_PATTERN)
+        ops.remove("timeSeries", GROUND_SERIES)
+        values = np.asarray(ground, dtype=float)
+        # the last sample held beyond the step: the analysis' time may pass its end by a rounding
+        interval = control_dt / (values.size - 1)
+        ops.timeSeries("Path", GROUND_SERIES, "-dt", interval, "-values", *values, "-startTime", time, "-useLast")
+        ops.pattern("UniformExcitation", GROUND_PATTERN, description.direction, "-accel", GROUND_SERIES)
+        ops.remove("loadPattern", FORCE_PATTERN)
+        ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
+        nodes = description.control_nodes
+        floor_forces = self.placement @ (np.asarray(action) * self.force_limits)  # N, per floor
+        for node, force in zip(nodes, floor_forces, strict=True):
+            if force != 0.0:
+                ops.load(node, *[float(force) if d == description.direction else 0.0 for d in range(1, self.ndf + 1)])
+        intervals = values.size - 1
+        steps = intervals * math.ceil(interval / self.analysis_dt - 1e-9)  # on every ground sample
+        for _ in range(steps):
+            _advance(ops, control_dt / steps, HALVINGS)
+        dof = description.direction
+        state = np.array(
+            [ops.nodeDisp(n, dof) for n in nodes]
+            + [ops.nodeVel(n, dof) for n in nodes]
+            + [ops.nodeAccel(n, dof) + float(ground[-1]) for n in nodes]
+        )
+        self._last = state
+        return state
+
+
+def _advance(ops, step: float, halvings: int) -> None:
+    """One analysis step of `step` (s), with each algorithm in turn (Newton stays set); where all fail,
+    two steps of half the size, `halvings` times at most; then `NonConvergence`."""
+    start = ops.getTime()
+    if ops.analyze(1, step) == 0:
+        return
+    for algorithm in ALGORITHMS[1:]:  # a failed step has been undone (the domain at its last commit)
+        ops.setTime(start)
+        ops.algorithm(*algorithm)
+        converged = ops.analyze(1, step) == 0
+        ops.algorithm(*ALGORITHMS[0])
+        if converged:
+            return
+    ops.setTime(start)
+    if halvings == 0:
+        raise NonConvergence(f"the FE model did not converge at t = {start:.3f} s")
+    _advance(ops, step / 2.0, halvings - 1)
+    _advance(ops, step / 2.0, halvings - 1)

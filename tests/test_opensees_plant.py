@@ -1,0 +1,138 @@
+"""The OpenSees plant (`physics.opensees`): the five-story model against rlc's own integration, the nine-story
+frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from rlcontroller.config import ConfigError, load_experiment, with_overrides
+from rlcontroller.config.loading import UNTRUSTED_MODEL
+from rlcontroller.errors import ModelError
+
+ops = pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+
+from rlcontroller.evaluation.evaluation import uncontrolled_responses  # noqa: E402
+from rlcontroller.physics.opensees import NonConvergence, fe_modes, reduced_building  # noqa: E402
+from rlcontroller.physics.plant import Plant  # noqa: E402
+from rlcontroller.physics.records import load_records  # noqa: E402
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+FIVE_STORY = CONFIGS.parent / "studies" / "opensees" / "five_story_opensees.yaml"
+FRAME_MODEL = CONFIGS / "opensees" / "nine_story_frame.py"
+PUBLISHED_FREQUENCIES = np.array([0.443, 1.18, 2.05])  # Hz, Ohtori et al. (2004), the nine-story building
+
+
+def _peaks(responses, quantity):
+    return np.array([np.max(np.abs(getattr(r, quantity)), axis=0) for r in responses])
+
+
+@pytest.mark.slow
+def test_five_story_model_agrees_with_rlc_on_the_seven_records(records):
+    fe, motions = Plant(load_experiment(FIVE_STORY)), load_records(records)[0]
+    fe_runs, exact_runs = uncontrolled_responses(fe, motions), uncontrolled_responses(fe.design, motions)
+    for quantity in ("drift", "absolute_acceleration", "story_shear"):
+        error = np.abs(_peaks(fe_runs, quantity) / _peaks(exact_runs, quantity) - 1.0)
+        assert error.max() <= 1e-3, quantity
+
+
+@pytest.mark.slow
+def test_actuator_forces_reach_the_model_as_rlc_applies_them(records):
+    """A command held over a step pushes floor j by +f and floor j-1 by -f in both integrations."""
+    from rlcontroller.control.controllers import ConstantCommand
+    from rlcontroller.simulation.batch import batch_rollout
+
+    fe = Plant(load_experiment(FIVE_STORY).model_copy(update={"supervisor": None}))  # the command as given
+    motion = load_records(records)[0][3]  # sampled at the control step
+    push = ConstantCommand(np.array([0.5, -0.3, 0.2, 0.0, 1.0]), 5, "push")
+    ((fe_run, _),) = batch_rollout(fe, [motion], [push])[0]
+    ((exact_run, _),) = batch_rollout(fe.design, [motion], [push])[0]
+    peaks = np.max(np.abs(fe_run.drift), axis=0) / np.max(np.abs(exact_run.drift), axis=0) - 1.0
+    assert np.max(np.abs(peaks)) <= 1e-3
+    rms = np.sqrt(np.mean((fe_run.drift - exact_run.drift) ** 2) / np.mean(exact_run.drift**2))
+    assert rms <= 2e-3  # a wrong sign or floor for a force is tens of per cent (its static drift is 33 mm)
+
+
+def test_condensed_stiffness_of_the_shear_model_is_its_stiffness_matrix():
+    building = reduced_building(CONFIGS / "opensees" / "five_story_shear.py", "build_model")
+    stiffness = np.array([5.0e6, 4.0e6, 4.0e6, 3.0e6, 3.0e6])  # N/m, story 1 first (the file's)
+    drift = np.eye(5) - np.eye(5, k=-1)
+    np.testing.assert_allclose(building["stiffness_matrix"], drift.T @ np.diag(stiffness) @ drift, rtol=1e-9, atol=1e-3)
+    np.testing.assert_allclose(np.diag(building["mass_matrix"]), [25e3, 20e3, 20e3, 18e3, 15e3])
+    assert building["modal_damping"][0] == pytest.approx(0.01) and building["modal_damping"][4] == pytest.approx(0.05)
+
+
+def test_nine_story_frame_reproduces_its_published_periods():
+    periods, ratios = fe_modes(FRAME_MODEL, "build_model", 3)
+    np.testing.assert_allclose(periods, 1.0 / PUBLISHED_FREQUENCIES, rtol=0.05)
+    assert ratios[:2] == pytest.approx([0.02, 0.02])
+
+
+def test_frame_experiment_is_designed_on_the_reduced_model_of_the_frame():
+    experiment = load_experiment(CONFIGS / "experiments" / "nine_story_frame.yaml")
+    design = Plant(experiment).design.building
+    periods, _ = fe_modes(FRAME_MODEL, "build_model", 9)
+    assert design.n_dofs == 9
+    np.testing.assert_allclose(design.periods(), periods, rtol=1e-6)  # floor masses only: condensation is exact
+
+
+def test_a_run_folder_never_runs_a_model_file(tmp_path):
+    experiment = load_experiment(FIVE_STORY)
+    kept = experiment.to_yaml()
+    assert kept.startswith("# plant: the OpenSees model") and yaml.safe_load(kept)["plant"] is None
+    (tmp_path / "config.yaml").write_text(kept.split("\n", 1)[1].replace("plant: null", ""))
+    assert load_experiment(tmp_path / "config.yaml", self_contained=True).plant is None
+    forged = kept.split("\n", 1)[1].replace(
+        "plant: null", f"plant:\n  opensees:\n    model: {CONFIGS / 'opensees' / 'five_story_shear.py'}"
+    )
+    (tmp_path / "config.yaml").write_text(forged)
+    with pytest.raises(ConfigError, match="a run or model folder never runs one"):
+        load_experiment(tmp_path / "config.yaml", self_contained=True)
+    assert "--config" in UNTRUSTED_MODEL
+
+
+def test_an_fe_plant_takes_no_factors_of_rlc_plant(tmp_path):
+    experiment = load_experiment(FIVE_STORY)
+    with pytest.raises(ConfigError, match="an FE model is the plant as it is"):
+        with_overrides(experiment, {"plant.stiffness": 0.9}, "--set")
+
+
+def test_a_model_that_does_not_converge_names_the_record(tmp_path, records):
+    model = tmp_path / "loose.py"
+    model.write_text(
+        "def build_model(ops):\n"
+        "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
+        "    ops.node(0, 0.0); ops.fix(0, 1)\n"
+        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
+        "    ops.node(2, 2.0)\n"  # massless and held by nothing: the first step's system is singular
+        "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
+        "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
+        "    return {'floors': [[1], [2]], 'direction': 1, 'story_heights': [3.0, 3.0], 'modal_damping': [0.02]}\n"
+    )
+    experiment = load_experiment(FIVE_STORY)
+    part = {"opensees": {"model": str(model), "analysis_dt": 0.005}}
+    raw = experiment.model_dump(mode="json") | {"plant": part}
+    raw["building"] = {
+        "masses": [1.0e4, 1.0],
+        "stiffnesses": [1.0e6, 1.0e6],
+        "story_heights": [3.0, 3.0],
+        "damping": {"rayleigh": [{"mode": 1, "ratio": 0.02}, {"mode": 2, "ratio": 0.02}]},
+    }
+    raw["actuators"] = [{"story": 1, "force_limit": 1.0e4}]
+    from rlcontroller.config.loading import build_experiment
+
+    plant, motion = Plant(build_experiment(raw)), load_records(records)[0][0]
+    with pytest.raises(NonConvergence, match=motion.name) as raised:
+        uncontrolled_responses(plant, [motion])
+    assert isinstance(raised.value, ModelError)
+
+
+def test_a_missing_openseespy_is_one_line_naming_the_system_libraries(monkeypatch):
+    import sys
+
+    from rlcontroller.physics import opensees
+
+    monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
+    with pytest.raises(ConfigError, match="libblas3 liblapack3"):
+        opensees.opensees()
