@@ -23,7 +23,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.physics.excitation import on_control_grid
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import batch_rollout
 

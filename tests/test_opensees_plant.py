@@ -136,3 +136,17 @@ def test_a_missing_openseespy_is_one_line_naming_the_system_libraries(monkeypatc
     monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
     with pytest.raises(ConfigError, match="libblas3 liblapack3"):
         opensees.opensees()
+
+
+@pytest.mark.slow
+def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_path):
+    """`rlc evaluate MODEL --config EXPERIMENT`: the shipped default on the five-story OpenSees model."""
+    from rlcontroller import api
+    from rlcontroller.assets import DEFAULT_MODEL
+
+    on_fe, _ = api.evaluate(DEFAULT_MODEL, records, tmp_path / "fe", config=FIVE_STORY)
+    on_rlc, _ = api.evaluate(DEFAULT_MODEL, records, tmp_path / "rlc")
+    fe, exact = on_fe.summary(), on_rlc.summary()
+    name = next(row for row in fe.index if "five_story_every_story" in row)
+    assert fe.loc[name, "J1"] == pytest.approx(exact.loc[name, "J1"], rel=0.02)
+    assert fe.loc[name, "J2"] == pytest.approx(exact.loc[name, "J2"], rel=0.02)

@@ -12,12 +12,13 @@ from rlcontroller.assets import (
     DAMPER_SCENARIOS,
     DEFAULT_MODEL,
     DEVICE_SCENARIOS,
+    MATRIX_SCENARIOS,
     MODELS,
     SAFETY_STANDARD,
     STANDARD_SCENARIOS,
     WIND_STANDARD,
 )
-from rlcontroller.config import ConfigError, Experiment, load_experiment
+from rlcontroller.config import ConfigError, Experiment, MatrixBuildingConfig, load_experiment
 
 Advance = Callable[..., None]
 """`advance(amount=1, label="")`: a long step moved on."""
@@ -115,10 +116,13 @@ def output_folder(out: Path | None, default_name: str) -> Path:
 
 def standard_scenarios(experiment: Experiment) -> Path:
     """The standard robustness scenarios, or with devices their own (no yielding stories; devices as built
-    differing from their design; no actuator dynamics with semi-active dampers)."""
+    differing from their design; no actuator dynamics with semi-active dampers), or for a building given by
+    matrices theirs (factors on the whole building only)."""
     if experiment.has_dampers:
         return DAMPER_SCENARIOS
-    return DEVICE_SCENARIOS if experiment.devices else STANDARD_SCENARIOS
+    if experiment.devices:
+        return DEVICE_SCENARIOS
+    return MATRIX_SCENARIOS if isinstance(experiment.building, MatrixBuildingConfig) else STANDARD_SCENARIOS
 
 
 def safety_standard(experiment: Experiment) -> Path:

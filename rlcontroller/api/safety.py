@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, output_folder, safety_standard
+from rlcontroller.api.common import QUIET, Report, folder_experiment, load, output_folder, safety_standard
 from rlcontroller.api.common import standard_scenarios as default_scenarios
 from rlcontroller.assets import MODELS
 from rlcontroller.config import ConfigError
@@ -17,17 +17,20 @@ def check(
     standard: Path | None = None,
     scenarios: Path | None = None,
     report: Report = QUIET,
+    config: Path | None = None,
 ):
     """The safety check of a folder's saved policy under `standard` (default: the project's standard for
     its experiment, `safety_standard`): returns the verdict and the file it was written to, MODEL_check.yaml
     in the folder (MODEL_check-STANDARD.yaml under another standard), or for a shipped model (whose files
-    stay as shipped) in a new folder under results/."""
+    stay as shipped) in a new folder under results/. `config`: the experiment to check it in instead of its
+    own (another plant for the same design, e.g. an OpenSees model); its verdict goes to a new folder under
+    results/, as it judges the policy on a plant its folder does not name."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.safety import judged_digests, safety_check, write_verdict
     from rlcontroller.physics.plant import Plant
 
-    experiment = folder_experiment(folder)
+    experiment = folder_experiment(folder) if config is None else load(config)
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
     own = safety_standard(experiment)
@@ -46,8 +49,9 @@ def check(
             raise ConfigError(f"{display_path(standard)}: {error}") from None
     verdict.judged = judged_digests(folder, model, checking)
     target = folder
-    if folder.resolve().is_relative_to(MODELS.resolve()):
-        target = output_folder(None, f"check-{folder.name}")
+    if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
+        on = "" if config is None else f"-on-{experiment.name}"
+        target = output_folder(None, f"check-{folder.resolve().name}{on}")
         target.mkdir(parents=True)
     other = "" if standard.resolve() == own.resolve() else standard.stem  # keeps the standard's verdict
     return verdict, write_verdict(verdict, target, model, other)

@@ -153,6 +153,10 @@ def check(
     show: Annotated[
         bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
     ] = False,
+    config: Annotated[
+        Path | None,
+        typer.Option(help="Experiment YAML to check the controller in (e.g. an OpenSees plant); default its own."),
+    ] = None,
 ) -> None:
     """The safety check a controller passes before it is shipped: on a broad suite of generated motions
     (generated wind for a controller against wind) never worse than the building when the controller fails
@@ -167,7 +171,7 @@ def check(
         lines, passed = api.verdict_lines(folder, model)
         typer.echo("\n".join(lines))
     else:
-        verdict, path = api.check(folder, model, standard, scenarios, report)
+        verdict, path = api.check(folder, model, standard, scenarios, report, config)
         print_verdict(verdict, path)
         passed = verdict.passed
     if not passed:

@@ -214,6 +214,8 @@ def _train(
         )
     torch.set_num_threads(experiment.algorithm.torch_threads)
     plant = Plant(experiment)
+    if plant.fe_model is not None:  # learned on the FE model's reduced one, judged on the FE model (evaluate --config)
+        plant = plant.design
     vec_env = make_vec_env(plant, experiment.seed)
     created = False
     try:
