@@ -43,11 +43,9 @@ def check_cross_references(experiment: Experiment) -> None:
                 f"{where}: {cutoff:g} Hz, expected below half the Nyquist frequency ({0.5 * nyquist:g} Hz)"
             )
     fe_model = experiment.plant.opensees if experiment.plant is not None else None
-    if fe_model is not None and (experiment.devices or experiment.plant_randomization is not None):
-        part = "devices" if experiment.devices else "plant_randomization"
+    if fe_model is not None and experiment.devices:
         raise ConfigError(
-            f"{location(*experiment.origin(part), '')}: not with an OpenSees plant: model devices in its file; "
-            "randomise the design model instead (an experiment without the plant part)"
+            f"{location(*experiment.origin('devices'), '')}: not with an OpenSees plant: model the devices in its file"
         )
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
@@ -137,6 +135,8 @@ def _check_randomization(experiment: Experiment) -> None:
     """Both ends of every range must make a valid plant for this experiment."""
     randomization = experiment.plant_randomization
     file, prefix = experiment.origin("plant_randomization")
+    fe_model = experiment.plant is not None and experiment.plant.opensees is not None
+    base = None if fe_model else experiment.plant  # an FE experiment trains on its design model
     for key in RANDOMIZED_FIELDS:
         bounds = getattr(randomization, key)
         if bounds is None:
@@ -146,7 +146,7 @@ def _check_randomization(experiment: Experiment) -> None:
         ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
         for end in ends:
             try:
-                check_plant(randomized_plant(experiment.plant, {key: end}), experiment, file, prefix)
+                check_plant(randomized_plant(base, {key: end}), experiment, file, prefix)
             except ValidationError as error:
                 detail = error.errors(include_url=False)[0]["msg"]
                 raise ConfigError(f"{location(file, prefix, key)}: {end:g} gives no valid plant: {detail}") from None

@@ -2,9 +2,10 @@
 controllers are designed on. Prints, on the seven records, the LQG variants' J1 and J2 with the reduced
 model as the plant (to set beside `rlc compare lqg --config configs/experiments/nine_story_frame.yaml`, the
 FE model as the plant) and, per record, the uncontrolled peak drift ratio (% of the story height) of the FE
-model and of the reduced model.
+model and of the reduced model, and the residual drift ratio of the FE model (uncontrolled and under LQG +
+ground model) after a settling tail of zero ground motion (`evaluation.with_settling_tail`).
 
-Usage: python studies/opensees/frame_study.py RECORDS    (≈ 5 min on 2 cores: the FE runs)
+Usage: python studies/opensees/frame_study.py RECORDS    (≈ 15 min on 2 cores: the FE runs)
 """
 
 import sys
@@ -14,9 +15,13 @@ import numpy as np
 
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
-from rlcontroller.evaluation.evaluation import compare, uncontrolled_responses
+from rlcontroller.control.controllers import LQGController, Uncontrolled
+from rlcontroller.control.lqg import design_lqg_ground_model
+from rlcontroller.evaluation.evaluation import compare, uncontrolled_responses, with_settling_tail
+from rlcontroller.physics.metrics import SETTLING_TAIL_S
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
+from rlcontroller.simulation.batch import batch_rollout
 
 experiment = load_experiment(CONFIGS / "experiments" / "nine_story_frame.yaml")
 fe = Plant(experiment)
@@ -25,10 +30,16 @@ summary = compare(fe.design, records, "seven records", None).summary()
 print("reduced model as the plant:")
 print(summary[["J1", "J2"]].round(3).to_string())
 heights = np.asarray(experiment.building.story_heights)
-fe_runs, linear_runs = uncontrolled_responses(fe, records), uncontrolled_responses(fe.design, records)
-print("uncontrolled peak drift ratio, % of the story height (FE model / reduced model):")
-for motion, fe_run, linear_run in zip(records, fe_runs, linear_runs, strict=True):
+linear_runs = uncontrolled_responses(fe.design, records)
+tailed = [with_settling_tail(motion) for motion in records]
+lqg = LQGController(design_lqg_ground_model(fe.design), fe.design, "LQG + ground model")
+uncontrolled, controlled = batch_rollout(fe, tailed, [Uncontrolled(fe.building.n_actuators), lqg])
+print("peak drift ratio FE / reduced model, uncontrolled; residual drift ratio of the FE model after")
+print(f"{SETTLING_TAIL_S:g} s at rest, uncontrolled / LQG + ground model (all % of the story height):")
+for motion, (fe_run, _), (lqg_run, _), linear_run in zip(records, uncontrolled, controlled, linear_runs, strict=True):
     peak_fe = np.max(np.abs(fe_run.drift) / heights) * 100
     peak_linear = np.max(np.abs(linear_run.drift) / heights) * 100
+    residual = [np.max(np.abs(run.drift[-1]) / heights) * 100 for run in (fe_run, lqg_run)]
     pga = np.max(np.abs(motion.acceleration)) / 9.80665
-    print(f"  {motion.name} ({pga:.2f} g): {peak_fe:.2f} / {peak_linear:.2f}")
+    peaks = f"{peak_fe:.2f} / {peak_linear:.2f}"
+    print(f"  {motion.name} ({pga:.2f} g): {peaks}; residual {residual[0]:.3f} / {residual[1]:.3f}")
