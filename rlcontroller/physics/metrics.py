@@ -102,11 +102,17 @@ def yielding_metrics(result: Response, yield_drift: np.ndarray) -> dict[str, np.
     ductility demand max|d| / d_y, residual drift |mean d| over the last RESIDUAL_WINDOW_S (m;
     the mean over several periods removes the free vibration left), and the hysteretic energy
     sum of the integral of (1 - a) k d_y z dd (J, trapezoid rule on the control steps)."""
-    dt = float(result.time[1] - result.time[0])
-    last = max(1, round(RESIDUAL_WINDOW_S / dt))
     force = result.hysteretic_force
     return {
         "ductility": peak(result.drift) / yield_drift,
-        "residual_drift_m": np.abs(np.mean(result.drift[-last:], axis=0)),
+        **residual_drift(result),
         "hysteretic_energy_J": np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(result.drift, axis=0), axis=0),
     }
+
+
+def residual_drift(result: Response) -> dict[str, np.ndarray]:
+    """Per story, for a response that ends with the settling tail: |mean drift| over the last
+    RESIDUAL_WINDOW_S (m; the mean over several periods removes the free vibration left)."""
+    dt = float(result.time[1] - result.time[0])
+    last = max(1, round(RESIDUAL_WINDOW_S / dt))
+    return {"residual_drift_m": np.abs(np.mean(result.drift[-last:], axis=0))}
