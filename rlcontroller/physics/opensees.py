@@ -13,7 +13,7 @@ A model file is Python (code, not data: `docs/opensees.md`, "The trust boundary"
 
 `rlc` owns the time loop (`OpenSeesIntegrator`): each control step the ground acceleration enters as a
 uniform excitation (its samples over the step, linear between them), the actuator forces as nodal loads
-held over the step (+f on the floor above a story, -f on the floor below), and the model's own analysis
+held over the step (on the floors the design building's actuator matrix puts them), and the model's own analysis
 advances Newmark average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with Newton-Raphson,
 falling back to modified
 Newton, then Newton with line search, then smaller steps; a step that still does not converge raises
@@ -176,10 +176,12 @@ def _quiet() -> Iterator[None]:
 
 def condensed_stiffness(description: FEDescription) -> np.ndarray:
     """The lateral stiffness at the control nodes (N/m): the inverse of the flexibility measured by a
-    linear static analysis under a unit load at each (small: an elastic response of a yielding model)."""
+    static analysis under a unit load at each (small: an elastic response of a yielding model), about the
+    model's gravity state (its P-Delta included)."""
     ops = opensees()
     nodes, dof = description.control_nodes, description.direction
     ndf = len(ops.nodeDisp(nodes[0]))
+    at_rest = np.array([ops.nodeDisp(n, dof) for n in nodes])  # under the model's gravity loads
     flexibility = np.zeros((len(nodes), len(nodes)))
     ops.timeSeries("Linear", FORCE_SERIES)
     for j, node in enumerate(nodes):
@@ -188,10 +190,10 @@ def condensed_stiffness(description: FEDescription) -> np.ndarray:
         _static_analysis(ops)
         if ops.analyze(1) != 0:
             raise NonConvergence("the static analysis for the condensed stiffness did not converge")
-        flexibility[:, j] = [ops.nodeDisp(n, dof) for n in nodes]
+        flexibility[:, j] = np.array([ops.nodeDisp(n, dof) for n in nodes]) - at_rest
         ops.remove("loadPattern", FORCE_PATTERN)
         ops.wipeAnalysis()
-        ops.reset()
+        ops.reset()  # back to the unloaded model: the next analysis takes the held gravity loads again
         ops.setTime(0.0)
     ops.remove("timeSeries", FORCE_SERIES)
     stiffness = np.linalg.inv(flexibility)
@@ -255,10 +257,9 @@ class OpenSeesIntegrator:
     OpenSees domain per process: it steps one run at a time, starting afresh from a zero state.
     """
 
-    def __init__(self, path: Path, function: str, analysis_dt: float, stories: list[int], force_limits: np.ndarray):
+    def __init__(self, path: Path, function: str, analysis_dt: float, placement: np.ndarray, force_limits: np.ndarray):
         self.path, self.function, self.analysis_dt = path, function, analysis_dt
-        self.placement = np.zeros((0, len(stories)))  # floor forces per command (N/N), sized at reset
-        self.stories = stories  # the story of each command (force on the floor above, reaction below)
+        self.placement = placement  # the floor forces of a unit command (the design building's actuator matrix)
         self.force_limits = force_limits
         self._last: np.ndarray | None = None
         self.description: FEDescription | None = None
@@ -278,11 +279,6 @@ class OpenSeesIntegrator:
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
         self.ndf = len(ops.nodeDisp(self.description.control_nodes[0]))
-        self.placement = np.zeros((len(self.description.floors), len(self.stories)))
-        for command, story in enumerate(self.stories):
-            self.placement[story - 1, command] = 1.0
-            if story > 1:
-                self.placement[story - 2, command] = -1.0
 
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state after one control step with the forces `action` * force limits (N) held and `ground`

@@ -113,9 +113,8 @@ class Plant:
         fe = self.config.opensees if self.config is not None else None
         self.fe_model = None
         if fe is not None:  # the building is its design model; the FE model steps itself
-            stories = [actuator.story for actuator in experiment.actuators]
             self.fe_model = OpenSeesIntegrator(
-                Path(fe.model), fe.function, fe.analysis_dt, stories, self.building.force_limits
+                Path(fe.model), fe.function, fe.analysis_dt, self.building.actuator_matrix, self.building.force_limits
             )
         self.integrator = self.fe_model or self.yielding or self.semi_active  # its own step, when not linear
         self.force_limits = self.building.force_limits
