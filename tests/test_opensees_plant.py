@@ -150,6 +150,3 @@ def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_
     name = next(row for row in fe.index if "five_story_every_story" in row)
     assert fe.loc[name, "J1"] == pytest.approx(exact.loc[name, "J1"], rel=0.02)
     assert fe.loc[name, "J2"] == pytest.approx(exact.loc[name, "J2"], rel=0.02)
-    # an FE plant may yield, so its residual drift is reported; this one is elastic: what is left is the free
-    # vibration after the tail (1 % damping in mode 1), 0.2 mm, where a frame needing repair is at 0.2-0.5 % (6 mm)
-    assert fe["residual_drift_m"].max() < 5e-4

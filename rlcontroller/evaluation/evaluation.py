@@ -37,7 +37,6 @@ from rlcontroller.physics.metrics import (
     YIELDING_METRICS,
     device_metrics,
     j_metrics,
-    residual_drift,
     wind_metrics,
     yielding_metrics,
 )
@@ -124,8 +123,7 @@ def evaluate(
     yielding = plant.yielding
     include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
-    settles = yielding is not None or plant.fe_model is not None  # may yield: residual drifts after a quiet tail
-    simulated = [with_settling_tail(motion) for motion in motions] if settles else motions
+    simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
     bare = uncontrolled_responses(plant.bare, simulated)
     devices = plant.building.devices
     passive = uncontrolled_responses(plant, simulated) if devices else []
@@ -146,8 +144,6 @@ def evaluate(
             metrics = j_metrics(result, bare[number])
             if yielding is not None:
                 metrics |= yielding_metrics(result, yielding.yield_drift)
-            elif plant.fe_model is not None:
-                metrics |= residual_drift(result)
             if motion.floor_forces is not None:
                 metrics |= wind_metrics(result, bare[number])
             if (devices or plant.building.dampers) and name != "uncontrolled":
