@@ -298,6 +298,7 @@ STUDY_CASES = {
     "set_bad_value": (["sweep", str(SMOKE), "--set", "algorithm.kwargs.gamma=oops"], "got 'oops'"),
     "set_twice": (["sweep", str(SMOKE), "--set", "seed=1", "--set", "seed=2"], "a key is set twice"),
     "address_without_dask": (["sweep", str(SMOKE), "--address", "tcp://h:1"], "--address: only with --engine dask"),
+    "evaluate_address_without_dask": (["evaluate", "--address", "tcp://h:1"], "--address: only with --engine dask"),
     "tune_without_space": (["tune", str(SMOKE), "--trials", "2"], "search: empty"),
     "tune_bad_storage": (
         [

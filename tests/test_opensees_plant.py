@@ -1,6 +1,7 @@
 """The OpenSees plant (`physics.opensees`): the five-story model against rlc's own integration, the nine-story
 frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -150,3 +151,70 @@ def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_
     name = next(row for row in fe.index if "five_story_every_story" in row)
     assert fe.loc[name, "J1"] == pytest.approx(exact.loc[name, "J1"], rel=0.02)
     assert fe.loc[name, "J2"] == pytest.approx(exact.loc[name, "J2"], rel=0.02)
+
+
+def _learning_on_fe_model(tmp_path: Path) -> Path:
+    """The five-story OpenSees experiment learning on the FE model itself: SAC, a few hundred steps on short motions."""
+    raw = yaml.safe_load(FIVE_STORY.read_text())
+    smoke = yaml.safe_load((CONFIGS / "testing" / "smoke.yaml").read_text())
+    for part in ("building", "actuators", "sensors", "reward", "excitation", "supervisor"):
+        if isinstance(raw[part], str):
+            raw[part] = str((FIVE_STORY.parent / raw[part]).resolve())
+    raw["plant"]["opensees"] |= {"model": str(CONFIGS / "opensees" / "five_story_shear.py"), "train_on": "fe"}
+    raw["excitation"] = smoke["excitation"]
+    raw["algorithm"] = smoke["algorithm"] | {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
+    raw["algorithm"]["kwargs"] |= {"learning_starts": 100}
+    path = tmp_path / "learning_on_fe.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    return path
+
+
+@pytest.mark.slow
+def test_train_on_fe_learns_on_the_fe_model_and_resumes_only_with_it_named(tmp_path, monkeypatch):
+    from rlcontroller import api
+    from rlcontroller.api.training import _fe_experiment_of
+    from rlcontroller.learning.training import train
+    from rlcontroller.physics.opensees import OpenSeesIntegrator
+
+    steps = []
+    original = OpenSeesIntegrator.step
+    monkeypatch.setattr(OpenSeesIntegrator, "step", lambda self, *args: steps.append(1) or original(self, *args))
+    config = _learning_on_fe_model(tmp_path)
+    summary = train(load_experiment(config), run_dir=tmp_path / "run")
+    assert summary.steps == 300 and len(steps) >= 300  # the training env stepped the FE model here
+    with pytest.raises(ConfigError, match="learned on an OpenSees model, which a run folder never runs"):
+        api.train(resume=summary.run_dir)
+    resumed = _fe_experiment_of(summary.run_dir, config)
+    assert resumed.plant.opensees.train_on == "fe" and resumed.algorithm.total_steps == 300
+    other = tmp_path / "other.yaml"
+    other.write_text(config.read_text().replace("five_story_shear.py", "nine_story_frame.py"))
+    with pytest.raises(ConfigError, match="does not name the OpenSees model"):
+        _fe_experiment_of(summary.run_dir, other)
+
+
+def test_learning_on_fe_model_takes_one_model_per_process(tmp_path):
+    experiment = load_experiment(_learning_on_fe_model(tmp_path))
+    with pytest.raises(ConfigError, match="one model per process: vec_env: subproc, or n_envs: 1"):
+        with_overrides(experiment, {"algorithm.n_envs": 4}, "--set")
+    assert with_overrides(experiment, {"algorithm.n_envs": 4, "algorithm.vec_env": "subproc"}, "--set")
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
+)
+def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
+    from rlcontroller.physics.opensees import OpenSeesIntegrator
+
+    model = tmp_path / "one_story.py"
+    model.write_text(
+        "def build_model(ops):\n"
+        "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
+        "    ops.node(0, 0.0); ops.fix(0, 1)\n"
+        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
+        "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
+        "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
+        f"    return {{'floors': [[1]], 'direction': 1, 'story_heights': [3.0], 'modal_damping': [0.02], {given}}}\n"
+    )
+    with pytest.raises(ModelError, match=re.escape(message)):
+        OpenSeesIntegrator(model, "build_model", 0.005, np.eye(1), np.ones(1)).reset()

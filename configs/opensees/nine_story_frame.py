@@ -147,6 +147,12 @@ def build_model(ops):
         "direction": 1,
         "story_heights": heights[1:],
         "rayleigh": [a0, a1],
+        # the time steps' solver (docs/opensees.md, "Speed"): the only multi-point constraints are equalDOF, the
+        # tangent is symmetric (elastic members, P-Delta, uncoupled hinges), and a test on the unbalanced force
+        # (1 N in forces of MN) needs fewer iterations than one on the displacement increment
+        "constraints": ["Plain"],
+        "system": ["SparseSYM"],
+        "test": ["NormUnbalance", 1.0, 30],
     }
 
 

@@ -9,7 +9,8 @@ from pathlib import Path
 from rlcontroller.api.common import QUIET, Report, folder_experiment
 from rlcontroller.api.safety import check
 from rlcontroller.assets import DEMO_CONFIG
-from rlcontroller.config import ConfigError, load_experiment, with_overrides
+from rlcontroller.config import ConfigError, Experiment, load_experiment, with_overrides
+from rlcontroller.config.experiment import LEARNED_ON_FE_MODEL
 
 
 @dataclass
@@ -51,10 +52,11 @@ def train(
     limit = None if time_limit_minutes is None else 60.0 * time_limit_minutes
     options = {"device": device, "progress_bar": progress_bar, "time_limit_s": limit, "tensorboard": tensorboard}
     if resume is not None:
-        if config is not None or total_steps is not None or seed is not None:
+        experiment = _fe_experiment_of(resume, config)
+        if (config is not None and experiment is None) or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
         report.line(resume_line(resume))
-        summary = run_training(resume=resume, **options)
+        summary = run_training(experiment, resume=resume, **options)
     else:
         if config is None:
             raise ConfigError(
@@ -70,7 +72,28 @@ def train(
     report.line(summary.line())
     if summary.interrupted or summary.time_limit_reached:
         return Trained(summary)
-    return Trained(summary, *check(summary.run_dir, "best", report=report))
+    fe_model = experiment.plant.opensees if experiment is not None and experiment.plant is not None else None
+    judged_in = config if fe_model is not None and fe_model.train_on == "fe" else None  # the plant it learned on
+    return Trained(summary, *check(summary.run_dir, "best", report=report, config=judged_in))
+
+
+def _fe_experiment_of(run: Path, config: Path | None) -> Experiment | None:
+    """The experiment of a run that learned on an OpenSees model, which its folder does not keep: the
+    folder's own, with the plant of `config` (named again, naming the same model file); None for any other run."""
+    kept = run / "config.yaml"
+    lines = kept.read_text().splitlines()[:2] if kept.is_file() else []
+    if not any(line.startswith(LEARNED_ON_FE_MODEL) for line in lines):
+        return None
+    if config is None:
+        raise ConfigError(
+            f"{kept}: learned on an OpenSees model, which a run folder never runs: name its experiment to "
+            f"continue (rlc train EXPERIMENT --resume {run})"
+        )
+    named = load_experiment(config)
+    fe_model = named.plant.opensees if named.plant is not None else None
+    if fe_model is None or f" {fe_model.model} " not in lines[0]:
+        raise ConfigError(f"{config}: does not name the OpenSees model {run} learned on ({lines[0].lstrip('# ')})")
+    return folder_experiment(run).model_copy(update={"plant": named.plant})
 
 
 def resume_line(run: Path) -> str:

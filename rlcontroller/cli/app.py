@@ -9,6 +9,7 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from enum import Enum
 from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any
@@ -137,6 +138,20 @@ ProgressOption = Annotated[
     ),
 ]
 SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices, dampers.yaml with dampers"
+
+
+class Engine(str, Enum):
+    local = "local"
+    dask = "dask"
+
+
+EngineOption = Annotated[
+    Engine,
+    typer.Option(help="Where runs on a one-model-per-process plant (OpenSees) fan out: local processes, or Dask."),
+]
+AddressOption = Annotated[
+    str | None, typer.Option(help="An existing Dask scheduler (tcp://HOST:8786); default: a local cluster.")
+]
 
 
 def show_progress(progress: bool | None) -> bool:

@@ -27,7 +27,10 @@ def info(
 @user_errors
 def train(
     config: Annotated[
-        Path | None, typer.Argument(help="Experiment YAML (see configs/README.md; not with --resume).")
+        Path | None,
+        typer.Argument(
+            help="Experiment YAML (see configs/README.md; with --resume: only for a run learned on an OpenSees model)."
+        ),
     ] = None,
     total_steps: Annotated[
         int | None, typer.Option(min=1, max=MAX_TOTAL_STEPS, help="Override algorithm.total_steps.")

@@ -10,6 +10,9 @@ import typer
 from rlcontroller.cli.app import (
     RUN_HELP,
     SCENARIOS_DEFAULT,
+    AddressOption,
+    Engine,
+    EngineOption,
     ModelOption,
     OutOption,
     Printed,
@@ -20,6 +23,7 @@ from rlcontroller.cli.app import (
     user_errors,
 )
 from rlcontroller.cli.experiments import print_verdict
+from rlcontroller.simulation.fanout import engine as fan_out
 
 RunOption = Annotated[Path | None, typer.Argument(help=RUN_HELP)]
 
@@ -37,11 +41,14 @@ def evaluate(
         Path | None,
         typer.Option(help="Experiment YAML to judge the controller in (e.g. an OpenSees plant); default its own."),
     ] = None,
+    engine: EngineOption = Engine.local,
+    address: AddressOption = None,
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
     from rlcontroller import api
 
-    evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config)
+    with fan_out(engine.value, address):
+        evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config)
     typer.echo(api.summary_text(evaluation, out))
 
 
@@ -74,11 +81,14 @@ def compare_lqg(
     ] = False,
     model: ModelOption = "best",
     progress: ProgressOption = None,
+    engine: EngineOption = Engine.local,
+    address: AddressOption = None,
 ) -> None:
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
     from rlcontroller import api
 
-    compared = api.compare_lqg(run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress))
+    with fan_out(engine.value, address):
+        compared = api.compare_lqg(run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress))
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):
         if text is not None:
@@ -157,6 +167,8 @@ def check(
         Path | None,
         typer.Option(help="Experiment YAML to check the controller in (e.g. an OpenSees plant); default its own."),
     ] = None,
+    engine: EngineOption = Engine.local,
+    address: AddressOption = None,
 ) -> None:
     """The safety check a controller passes before it is shipped: on a broad suite of generated motions
     (generated wind for a controller against wind) never worse than the building when the controller fails
@@ -171,7 +183,8 @@ def check(
         lines, passed = api.verdict_lines(folder, model)
         typer.echo("\n".join(lines))
     else:
-        verdict, path = api.check(folder, model, standard, scenarios, report, config)
+        with fan_out(engine.value, address):
+            verdict, path = api.check(folder, model, standard, scenarios, report, config)
         print_verdict(verdict, path)
         passed = verdict.passed
     if not passed:

@@ -2,18 +2,12 @@
 
 from __future__ import annotations
 
-from enum import Enum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, user_errors
-
-
-class Engine(str, Enum):
-    local = "local"
-    dask = "dask"
+from rlcontroller.cli.app import AddressOption, Engine, Printed, ProgressOption, RecordsOption, app, user_errors
 
 
 @app.command(short_help="Search hyperparameters with Optuna.")
@@ -51,9 +45,7 @@ def sweep(
         ),
     ] = None,
     engine: Annotated[Engine, typer.Option(help="local: processes here; dask: a Dask cluster.")] = Engine.local,
-    address: Annotated[
-        str | None, typer.Option(help="An existing Dask scheduler (tcp://HOST:8786); default: a local cluster.")
-    ] = None,
+    address: AddressOption = None,
     workers: Annotated[int, typer.Option(min=1, max=1024, help="Runs at once on a local engine or cluster.")] = 2,
     records: RecordsOption = None,
     out: Annotated[Path | None, typer.Option(help="Folder of the runs (default: results/sweep-NAME).")] = None,

@@ -47,6 +47,8 @@ def check_cross_references(experiment: Experiment) -> None:
         raise ConfigError(
             f"{location(*experiment.origin('devices'), '')}: not with an OpenSees plant: model the devices in its file"
         )
+    if fe_model is not None and fe_model.train_on == "fe":
+        _check_learning_on_fe_model(experiment)
     n_floors = len(experiment.building.masses)
     file, prefix = experiment.origin("actuators")
     if not experiment.actuators and not experiment.devices:
@@ -131,12 +133,25 @@ def _check_time_steps(experiment: Experiment) -> None:
             )
 
 
+def _check_learning_on_fe_model(experiment: Experiment) -> None:
+    """Learning on an OpenSees model: one model per process, the model as it is."""
+    algorithm = experiment.algorithm
+    if algorithm.n_envs > 1 and algorithm.vec_env != "subproc" and algorithm.name != "RandomSearch":
+        where = location(*experiment.origin("algorithm"), "vec_env")
+        raise ConfigError(
+            f"{where}: learning on an OpenSees model takes one model per process: vec_env: subproc, or n_envs: 1"
+        )
+    if experiment.plant_randomization is not None:
+        where = location(*experiment.origin("plant_randomization"), "")
+        raise ConfigError(f"{where}: not with plant.opensees.train_on: fe (the FE model is the plant as it is)")
+
+
 def _check_randomization(experiment: Experiment) -> None:
     """Both ends of every range must make a valid plant for this experiment."""
     randomization = experiment.plant_randomization
     file, prefix = experiment.origin("plant_randomization")
     fe_model = experiment.plant is not None and experiment.plant.opensees is not None
-    base = None if fe_model else experiment.plant  # an FE experiment trains on its design model
+    base = None if fe_model else experiment.plant  # randomised around an FE experiment's design model
     for key in RANDOMIZED_FIELDS:
         bounds = getattr(randomization, key)
         if bounds is None:

@@ -48,6 +48,7 @@ PARTS: dict[str, Any] = {
 }
 
 
+LEARNED_ON_FE_MODEL = "# learned on the OpenSees model"  # a run folder's config.yaml: resumed only with it named
 OPTIONAL_PARTS = ("plant", "plant_randomization", "supervisor")  # may be null: see the fields of Experiment
 
 
@@ -114,4 +115,6 @@ class Experiment(StrictModel):
         if self.plant is None or self.plant.opensees is None:
             return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
         note = f"# plant: the OpenSees model {self.plant.opensees.model} (not kept: a folder never runs code)\n"
+        if self.plant.opensees.train_on == "fe":
+            note += f"{LEARNED_ON_FE_MODEL}: resume with rlc train EXPERIMENT --resume RUN\n"
         return note + yaml.safe_dump(self.model_dump(mode="json") | {"plant": None}, sort_keys=False)

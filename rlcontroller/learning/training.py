@@ -202,7 +202,7 @@ def _train(
         run = RunFolder(resume)
         if not (resume / "config.yaml").is_file():
             raise ConfigError(f"{resume}: not a run folder (no config.yaml)")
-        experiment = run.experiment()
+        experiment = experiment or run.experiment()
     else:
         assert experiment is not None
         run = RunFolder(run_dir or default_run_dir(experiment))
@@ -214,8 +214,8 @@ def _train(
         )
     torch.set_num_threads(experiment.algorithm.torch_threads)
     plant = Plant(experiment)
-    if plant.fe_model is not None:  # learned on the FE model's reduced one, judged on the FE model (evaluate --config)
-        plant = plant.design
+    if plant.fe_model is not None and experiment.plant.opensees.train_on == "reduced":
+        plant = plant.design  # learned on the FE model's reduced one, judged on the FE model (evaluate --config)
     vec_env = make_vec_env(plant, experiment.seed)
     created = False
     try:

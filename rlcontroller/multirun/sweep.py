@@ -32,6 +32,7 @@ from rlcontroller.config import (
     check_seed,
     with_overrides,
 )
+from rlcontroller.simulation.fanout import dask_client
 
 
 @dataclass(frozen=True)
@@ -278,23 +279,9 @@ def _run_local(run: SweepRun, records: str | None) -> RunResult:
 
 
 def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str | None) -> Iterator[RunResult]:
-    try:
-        from distributed import Client, LocalCluster, as_completed
-    except ImportError:
-        raise ConfigError("--engine dask needs Dask distributed: pip install 'rlcontroller[distributed]'") from None
-    import logging
+    from distributed import as_completed
 
-    for name in [*logging.root.manager.loggerDict, "distributed", "distributed.client"]:
-        if name.startswith("distributed"):  # a lost scheduler is reported below, once, not as log tracebacks
-            logging.getLogger(name).setLevel(logging.CRITICAL)
-    cluster = None
-    if address is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-    try:
-        client = Client(cluster if cluster is not None else address, timeout="30s")
-    except OSError as error:
-        raise ConfigError(f"--address {address}: cannot reach a Dask scheduler ({error})") from None
-    try:
+    with dask_client(workers, address) as client:
         futures = {
             client.submit(run_one, run, records, pure=False, key=f"run-{i}-{run.folder.name}"): run
             for i, run in enumerate(runs)
@@ -306,10 +293,6 @@ def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str 
                     "checkpoints: run the same command again (with a scheduler) to continue"
                 )
             yield result
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def _as_completed(futures: dict, completed: Callable) -> Iterator[RunResult]:

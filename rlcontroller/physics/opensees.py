@@ -9,14 +9,20 @@ A model file is Python (code, not data: `docs/opensees.md`, "The trust boundary"
 - `direction`: the degree of freedom of the lateral direction (1 = x);
 - `story_heights`: m, per story;
 - `modal_damping` (ratios per mode, the last repeated) or `rayleigh` ([a0, a1], C = a0 M + a1 K): the
-  damping the file gave the model, for the reduced model to match.
+  damping the file gave the model, for the reduced model to match;
+- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the constraint
+  handler, the linear solver, the convergence test and the solution algorithm of the time steps (default
+  `["Transformation"]`, `["UmfPack"]`, `["NormDispIncr", 1e-10, 30]` and `["Newton"]`: any model; a model
+  whose only multi-point constraints are `equalDOF` may take `["Plain"]`, one whose tangent is symmetric
+  `["SparseSYM"]`, and a test on the unbalanced force (N) converges in fewer iterations than one on the
+  displacement increment: docs/opensees.md, "Speed").
 
 `rlc` owns the time loop (`OpenSeesIntegrator`): each control step the ground acceleration enters as a
 uniform excitation (its samples over the step, linear between them), the actuator forces as nodal loads
 held over the step (on the floors the design building's actuator matrix puts them), and the model's own analysis
-advances Newmark average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with Newton-Raphson,
-falling back to modified
-Newton, then Newton with line search, then smaller steps; a step that still does not converge raises
+advances Newmark average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with the
+model's algorithm (Newton-Raphson by default), falling back to Newton, modified Newton on the initial tangent,
+Newton with line search, then smaller steps; a step that still does not converge raises
 `NonConvergence` (the evaluation reports the record, never a silent zero).
 
 The reduced model (`reduced_building`): the floor masses, the lateral stiffness condensed statically to the
@@ -44,7 +50,7 @@ MISSING = (
     'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '
     "LAPACK: apt-get install libblas3 liblapack3)"
 )
-ALGORITHMS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
+FALLBACKS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
 HALVINGS = 4  # after the algorithms, a step is retried in halves, down to 1/16
 GROUND_SERIES, GROUND_PATTERN, FORCE_SERIES, FORCE_PATTERN = 101, 101, 102, 102
 
@@ -85,6 +91,15 @@ class FEDescription:
     story_heights: tuple[float, ...]
     modal_damping: tuple[float, ...] | None = None
     rayleigh: tuple[float, float] | None = None
+    constraints: tuple[str | float, ...] = ("Transformation",)
+    system: tuple[str | float, ...] = ("UmfPack",)
+    test: tuple[str | float, ...] = ("NormDispIncr", 1e-10, 30)
+    algorithm: tuple[str | float, ...] = FALLBACKS[0]
+
+    @property
+    def algorithms(self) -> tuple[tuple[str | float, ...], ...]:
+        """The model's algorithm, then the fallbacks for a step it does not converge."""
+        return (self.algorithm, *(fallback for fallback in FALLBACKS if fallback != self.algorithm))
 
     @property
     def control_nodes(self) -> list[int]:
@@ -105,13 +120,25 @@ class FEDescription:
             raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has)")
         modal = raw.get("modal_damping")
         rayleigh = raw.get("rayleigh")
+        solver = ("constraints", "system", "test", "algorithm")
+        options = {key: _arguments(raw[key], f"{where}: {key}") for key in solver if key in raw}
         return cls(
             floors=floors,
             direction=int(raw["direction"]),
             story_heights=heights,
             modal_damping=None if modal is None else tuple(float(r) for r in modal),
             rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
+            **options,
         )
+
+
+def _arguments(raw: object, where: str) -> tuple[str | float, ...]:
+    """An OpenSees command's arguments: a name, then names or numbers."""
+    if not isinstance(raw, list | tuple) or not raw or not isinstance(raw[0], str):
+        raise ModelError(f"{where}: expected OpenSees' arguments, a list starting with a name, got {raw!r}")
+    if not all(isinstance(a, str | int | float) and not isinstance(a, bool) for a in raw):
+        raise ModelError(f"{where}: expected names and numbers, got {raw!r}")
+    return tuple(raw)
 
 
 def model_function(path: Path, function: str) -> Callable:
@@ -271,11 +298,14 @@ class OpenSeesIntegrator:
         ops = opensees()
         self.description = build_model(self.path, self.function)
         ops.timeSeries("Constant", FORCE_SERIES)
-        ops.constraints("Transformation")
         ops.numberer("RCM")
-        ops.system("UmfPack")
-        ops.test("NormDispIncr", 1e-10, 30)
-        ops.algorithm(*ALGORITHMS[0])
+        for command in ("constraints", "system", "test", "algorithm"):
+            arguments = getattr(self.description, command)
+            try:
+                with _quiet():
+                    getattr(ops, command)(*arguments)
+            except ops.OpenSeesError:
+                raise ModelError(f"{self.path}: {command} {list(arguments)}: OpenSees does not take it") from None
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
         self.ndf = len(ops.nodeDisp(self.description.control_nodes[0]))
@@ -307,7 +337,7 @@ class OpenSeesIntegrator:
         intervals = values.size - 1
         steps = intervals * math.ceil(interval / self.analysis_dt - 1e-9)  # on every ground sample
         for _ in range(steps):
-            _advance(ops, control_dt / steps, HALVINGS)
+            _advance(ops, control_dt / steps, description.algorithms, HALVINGS)
         dof = description.direction
         state = np.array(
             [ops.nodeDisp(n, dof) for n in nodes]
@@ -318,21 +348,21 @@ class OpenSeesIntegrator:
         return state
 
 
-def _advance(ops, step: float, halvings: int) -> None:
-    """One analysis step of `step` (s), with each algorithm in turn (Newton stays set); where all fail,
+def _advance(ops, step: float, algorithms: tuple, halvings: int) -> None:
+    """One analysis step of `step` (s), with each algorithm in turn (the first stays set); where all fail,
     two steps of half the size, `halvings` times at most; then `NonConvergence`."""
     start = ops.getTime()
     if ops.analyze(1, step) == 0:
         return
-    for algorithm in ALGORITHMS[1:]:  # a failed step has been undone (the domain at its last commit)
+    for algorithm in algorithms[1:]:  # a failed step has been undone (the domain at its last commit)
         ops.setTime(start)
         ops.algorithm(*algorithm)
         converged = ops.analyze(1, step) == 0
-        ops.algorithm(*ALGORITHMS[0])
+        ops.algorithm(*algorithms[0])
         if converged:
             return
     ops.setTime(start)
     if halvings == 0:
         raise NonConvergence(f"the FE model did not converge at t = {start:.3f} s")
-    _advance(ops, step / 2.0, halvings - 1)
-    _advance(ops, step / 2.0, halvings - 1)
+    _advance(ops, step / 2.0, algorithms, halvings - 1)
+    _advance(ops, step / 2.0, algorithms, halvings - 1)

@@ -14,10 +14,7 @@ its outputs are not used.
 
 from __future__ import annotations
 
-import multiprocessing
-import os
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -31,6 +28,7 @@ from rlcontroller.physics.loads import generate
 from rlcontroller.physics.opensees import NonConvergence
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
+from rlcontroller.simulation.fanout import fanned_map
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
 
@@ -318,9 +316,6 @@ def batch_rollout(
     return results
 
 
-_FANNED: tuple = ()  # what forked workers read: set before the pool starts
-
-
 def _fanned_rollout(
     plant: Plant,
     loads: list[tuple[Load, LoadGrid]],
@@ -330,33 +325,21 @@ def _fanned_rollout(
     on_motions: Callable[[int], None] | None,
 ) -> list[list[tuple[Response, float]]]:
     """`batch_rollout` on a plant that holds one model per process (an OpenSees model): each controller on
-    each load alone, fanned out over as many forked processes as there are cores."""
-    global _FANNED
+    each load alone, fanned out over processes (`simulation.fanout`)."""
     runs = [(c, i) for i in range(len(loads)) for c in range(len(controllers))]
     results: list[list] = [[None] * len(loads) for _ in controllers]
     left = [len(controllers)] * len(loads)
-    _FANNED = (plant, loads, controllers, seeds, randomize)
-    workers = min(os.cpu_count() or 1, len(runs))
-    try:
-        if workers == 1:
-            finished = map(_fanned_run, runs)
-        else:
-            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
-            finished = pool.map(_fanned_run, runs)
-        for (c, i), result in zip(runs, finished, strict=True):
-            results[c][i] = result
-            left[i] -= 1
-            if on_motions is not None and left[i] == 0:
-                on_motions(1)
-    finally:
-        if workers > 1:
-            pool.shutdown(cancel_futures=True)
-        _FANNED = ()
+    finished = fanned_map(_fanned_run, (plant, loads, controllers, seeds, randomize), runs)
+    for (c, i), result in zip(runs, finished, strict=True):
+        results[c][i] = result
+        left[i] -= 1
+        if on_motions is not None and left[i] == 0:
+            on_motions(1)
     return results
 
 
-def _fanned_run(run: tuple[int, int]) -> tuple[Response, float]:
-    plant, loads, controllers, seeds, randomize = _FANNED
+def _fanned_run(shared: tuple, run: tuple[int, int]) -> tuple[Response, float]:
+    plant, loads, controllers, seeds, randomize = shared
     c, i = run
     try:
         return _rollout_chunk(plant, [loads[i]], [controllers[c]], [seeds[i]], randomize)[0][0]
