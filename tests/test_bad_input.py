@@ -285,7 +285,7 @@ def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypa
     line = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "s.yaml"]))
     assert line == (
         "error: s.yaml: scenarios[0].plant.colour: unknown key; "
-        "expected one of: stiffness, mass, damping, damage, actuators, sensors, hysteresis, devices, opensees"
+        "expected one of: building, stiffness, mass, damping, damage, actuators, sensors, hysteresis, devices, opensees"
     )
     missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
     assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()

@@ -128,6 +128,12 @@ from rlcontroller.config.scenarios import (  # noqa: F401
     load_safety_check,
     load_scenarios,
 )
+from rlcontroller.config.state_space import (  # noqa: F401
+    BuildingPart,
+    StateSpaceBuildingConfig,
+    StateSpaceInputs,
+    StateSpaceOutputs,
+)
 from rlcontroller.devices import (  # noqa: F401
     ActiveMassConfig,
     DeviceConfig,

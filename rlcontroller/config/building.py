@@ -59,6 +59,10 @@ class BuildingConfig(StrictModel):
     )
     story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]] | None = None
 
+    @property
+    def n_floors(self) -> int:
+        return len(self.masses)
+
     @model_validator(mode="after")
     def _consistent(self) -> BuildingConfig:
         n = len(self.masses)
@@ -115,6 +119,10 @@ class MatrixBuildingConfig(StrictModel):
     def masses(self) -> list[float]:
         """The floor masses: the diagonal of M (kg)."""
         return [row[i] for i, row in enumerate(self.mass_matrix)]
+
+    @property
+    def n_floors(self) -> int:
+        return len(self.mass_matrix)
 
     @model_validator(mode="after")
     def _consistent(self) -> MatrixBuildingConfig:

@@ -15,6 +15,7 @@ from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.experiment import Experiment
 from rlcontroller.config.learning import LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
 from rlcontroller.config.plant import RANDOMIZED_FIELDS, PlantConfig, randomized_plant
+from rlcontroller.config.state_space import StateSpaceBuildingConfig
 
 
 def check_cross_references(experiment: Experiment) -> None:
@@ -49,7 +50,14 @@ def check_cross_references(experiment: Experiment) -> None:
         )
     if fe_model is not None and fe_model.train_on == "fe":
         _check_learning_on_fe_model(experiment)
-    n_floors = len(experiment.building.masses)
+    models = [(experiment.building, *experiment.origin("building"))]
+    if experiment.plant is not None and experiment.plant.building is not None:
+        file, prefix = experiment.origin("plant")
+        models.append((experiment.plant.building, file, location("", prefix, "building").lstrip(": ")))
+    for building, file, prefix in models:
+        if isinstance(building, StateSpaceBuildingConfig):
+            _check_state_space(building, experiment, file, prefix)
+    n_floors = experiment.building.n_floors
     file, prefix = experiment.origin("actuators")
     if not experiment.actuators and not experiment.devices:
         raise ConfigError(f"{location(file, prefix, '')}: no actuators and no devices: expected at least one")
@@ -82,10 +90,74 @@ def check_cross_references(experiment: Experiment) -> None:
         _check_randomization(experiment)
 
 
+def _check_state_space(building: StateSpaceBuildingConfig, experiment: Experiment, file: str, prefix: str) -> None:
+    """What a state-space model can be in an experiment: a building with its actuators' inputs and the
+    responses its sensors and reward read, no devices, stepped exactly at a multiple of its sample time."""
+    count, columns = len(experiment.actuators), len(building.inputs.actuators)
+    if count != columns:
+        where = location(file, prefix, "inputs.actuators")
+        raise ConfigError(f"{where}: {columns} columns, expected one per actuator ({count}, in the actuators' order)")
+    refusals = {
+        "devices": (
+            experiment.devices,
+            "devices on a state-space model are not modelled (it has no floors to attach them to)",
+        ),
+        "simulation": (
+            experiment.simulation.method != "exact",
+            "method: newmark needs M, K, C; a state-space model is stepped exactly",
+        ),
+        "plant_randomization": (experiment.plant_randomization, "a state-space model has no stories to randomise"),
+        "excitation": (
+            any(source.kind == "wind" for source in experiment.excitation.sources()),
+            "a state-space model takes the ground acceleration only, not floor forces (wind)",
+        ),
+    }
+    for part, (refused, why) in refusals.items():
+        if refused:
+            raise ConfigError(f"{location(*experiment.origin(part))}: {why}")
+    plant = experiment.plant
+    if plant is not None:
+        changed = [key for key in ("stiffness", "mass", "damping") if getattr(plant, key) != 1.0]
+        changed += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)
+        if changed:
+            where = location(*experiment.origin("plant"), changed[0])
+            raise ConfigError(f"{where}: a state-space model has no stiffness, mass or stories to change")
+    if building.sample_time is not None:
+        ratio = experiment.simulation.control_dt / building.sample_time
+        if abs(ratio - round(ratio)) > 1e-6 * ratio or round(ratio) < 1:
+            raise ConfigError(
+                f"{location(file, prefix, 'sample_time')}: {building.sample_time:g} s does not divide the control "
+                f"step ({experiment.simulation.control_dt:g} s); resample the model or choose control_dt = r * dt"
+            )
+    declared = set(building.outputs.declared()) | {"force"}
+    declared |= {"base_shear"} if "story_shear" in declared else set()
+    asked = [("sensors", m.quantity) for m in experiment.sensors.measurements]
+    asked += [("reward", term.quantity) for term in experiment.reward.terms if term.quantity != "force_change"]
+    for part, quantity in asked:
+        if quantity not in declared:
+            raise ConfigError(
+                f"{location(*experiment.origin(part))}: reads {quantity}, which the state-space model "
+                f"{location(file, prefix, 'outputs')} does not declare (it has {', '.join(sorted(declared))})"
+            )
+    physical = experiment.sensors.state_estimate or (
+        experiment.supervisor is not None and experiment.supervisor.dissipative
+    )
+    if physical and building.state != "physical":
+        raise ConfigError(
+            f"{location(*experiment.origin('sensors'), 'state_estimate')}: an estimate of displacements and velocities "
+            f"needs a model with state: physical ({location(file, prefix, 'state')} is abstract)"
+        )
+    if building.n_floors != experiment.building.n_floors:
+        raise ConfigError(
+            f"{location(file, prefix, 'outputs.drift')}: {building.n_floors} stories, the design model has "
+            f"{experiment.building.n_floors}"
+        )
+
+
 def _check_devices(experiment: Experiment) -> None:
     """Each mass device on an existing floor, tuned to an existing mode; each semi-active damper on
     an existing story without another damper or an actuator; no residual on LQG with dampers."""
-    n_floors = len(experiment.building.masses)
+    n_floors = experiment.building.n_floors
     file, prefix = experiment.origin("devices")
     taken = {actuator.story: "an actuator" for actuator in experiment.actuators}
     for index, device in enumerate(experiment.devices):
@@ -170,7 +242,7 @@ def _check_randomization(experiment: Experiment) -> None:
 def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
     """Per-story lists and floor numbers of a plant part must fit the building; a building given by
     matrices takes scalar factors only, no damage and no yielding stories."""
-    n_floors = len(experiment.building.masses)
+    n_floors = experiment.building.n_floors
     if isinstance(experiment.building, MatrixBuildingConfig):
         per_story = [key for key in ("stiffness", "mass") if isinstance(getattr(plant, key), list)]
         per_story += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)

@@ -18,7 +18,6 @@ from rlcontroller.config.building import (
     Actuators,
     BuildingConfig,
     Devices,
-    MatrixBuildingConfig,
     SensorConfig,
     paper_actuators,
 )
@@ -32,6 +31,7 @@ from rlcontroller.config.plant import (
     PlantRandomization,
     SimulationConfig,
 )
+from rlcontroller.config.state_space import BuildingPart
 
 PARTS: dict[str, Any] = {
     "building": BuildingConfig,
@@ -57,7 +57,7 @@ class Experiment(StrictModel):
 
     name: Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z0-9_.+-]+$")] = "paper_sac"
     seed: Seed = 0
-    building: BuildingConfig | MatrixBuildingConfig = BuildingConfig()
+    building: BuildingPart = BuildingConfig()
     actuators: Actuators = Field(default_factory=paper_actuators)
     devices: Devices = []  # tuned masses and active mass drivers (see config.building)
     sensors: SensorConfig = SensorConfig()

@@ -20,7 +20,8 @@ from rlcontroller.config.base import (
 from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.checks import check_cross_references
 from rlcontroller.config.experiment import OPTIONAL_PARTS, PARTS, Experiment
-from rlcontroller.config.matrices import read_matrix_part
+from rlcontroller.config.matrices import read_matrix_part, read_state_space_part
+from rlcontroller.config.state_space import StateSpaceBuildingConfig
 
 
 def _check_part_type(part: str, value: Any, where: str) -> None:
@@ -68,20 +69,49 @@ def load_experiment(path: str | Path, self_contained: bool = False) -> Experimen
             if part in raw and not (part in OPTIONAL_PARTS and value is None):
                 _check_part_type(part, value, f"{path}: {part}")
             folder, where = path.parent, f"{path}: {part}"
-        if part == "building" and isinstance(raw.get(part), dict) and "matrices" in raw[part]:
-            matrices = raw[part]["matrices"]
-            if (
-                self_contained
-                and isinstance(matrices, str)
-                and not inside(path.parent, _relative(folder / matrices, path.parent))
-            ):
-                raise ConfigError(f"{where}.matrices: {matrices!r} is outside {path.parent}; {OWN_FILES}")
-            raw[part] = read_matrix_part(raw[part], folder, where)
+        if part == "building" and isinstance(raw.get(part), dict):
+            raw[part] = _read_building_files(raw[part], folder, where, path.parent if self_contained else None)
+        if part == "plant" and isinstance(raw.get(part), dict) and "building" in raw[part]:
+            raw[part] = dict(raw[part])
+            raw[part]["building"] = _plant_building(
+                raw[part]["building"], folder, f"{where}.building", path, self_contained
+            )
         if part == "plant" and isinstance(raw.get(part), dict) and isinstance(raw[part].get("opensees"), dict):
             if self_contained:
                 raise ConfigError(f"{where}.opensees: {UNTRUSTED_MODEL}")
             _resolve_fe_model(raw, folder, where)
     return build_experiment(raw, origins, str(path))
+
+
+def _read_building_files(part: dict[str, Any], folder: Path, where: str, own: Path | None) -> dict[str, Any]:
+    """A building part with the file it names (`matrices:` or `state_space:`, relative to `folder`) read in;
+    with `own` (a run or model folder) that file must lie in it."""
+    for key, read in (("matrices", read_matrix_part), ("state_space", read_state_space_part)):
+        if key not in part:
+            continue
+        name = part[key]
+        if own is not None and isinstance(name, str) and not inside(own, _relative(folder / name, own)):
+            raise ConfigError(f"{where}.{key}: {name!r} is outside {own}; {OWN_FILES}")
+        return read(part, folder, where)
+    return part
+
+
+def _plant_building(value: Any, folder: Path, where: str, experiment: Path, self_contained: bool) -> Any:
+    """The plant part's own building: inline, or a building file relative to `folder`, its matrix or model
+    file read in."""
+    if isinstance(value, str):
+        if self_contained and not inside(experiment.parent, _relative(folder / value, experiment.parent)):
+            raise ConfigError(f"{where}: {value!r} is outside {experiment.parent}; {OWN_FILES}")
+        building_path = (folder / value).resolve()
+        if not building_path.is_file():
+            raise ConfigError(f"{where}: file not found: {value} (relative to {folder})")
+        value = read_yaml(building_path)
+        if not isinstance(value, dict):
+            raise ConfigError(f"{display_path(building_path)}: expected a mapping of building keys")
+        folder, where = building_path.parent, display_path(building_path)
+    if not isinstance(value, dict):
+        return value
+    return _read_building_files(value, folder, where, experiment.parent if self_contained else None)
 
 
 UNTRUSTED_MODEL = (
@@ -118,6 +148,8 @@ def build_experiment(
             part_file, prefix = origins.get(part, (file, part))
             if part == "building" and isinstance(raw[part], dict) and "mass_matrix" in raw[part]:
                 model = MatrixBuildingConfig
+            if part == "building" and isinstance(raw[part], dict) and "state_matrix" in raw[part]:
+                model = StateSpaceBuildingConfig
             try:
                 TypeAdapter(model).validate_python(raw[part])
             except ValidationError as error:

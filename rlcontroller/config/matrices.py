@@ -1,5 +1,6 @@
-"""Buildings given by matrices: reading a matrix file into a building part
-(`config.building.MatrixBuildingConfig` checks the matrices)."""
+"""Buildings given by matrices: reading a matrix file (M, K, C) or a state-space model (A, B, C, D) into a
+building part (`config.building.MatrixBuildingConfig` and `config.state_space.StateSpaceBuildingConfig` check
+them). The files are data: read without unpickling."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from rlcontroller.config.base import ConfigError, display_path
 from rlcontroller.config.building import FORCE_UNITS, LENGTH_UNITS, MASS_UNITS
 
 ARRAYS = ("M", "K", "C", "modal_damping")
+STATE_SPACE_ARRAYS = ("A", "B", "C", "D", "dt")
 
 
 def read_matrix_part(raw: dict[str, Any], folder: Path, where: str) -> dict[str, Any]:
@@ -29,14 +31,7 @@ def read_matrix_part(raw: dict[str, Any], folder: Path, where: str) -> dict[str,
         if units[key] not in table:
             raise ConfigError(f"{where}.units.{key}: {units[key]!r}, expected one of {', '.join(table)}")
     path = folder / name
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            arrays = {key: np.asarray(archive[key], dtype=float) for key in ARRAYS if key in archive.files}
-            unknown = sorted(set(archive.files) - set(ARRAYS))
-    except (OSError, ValueError, zipfile.BadZipFile) as error:
-        raise ConfigError(f"{display_path(path)}: cannot read the matrices ({type(error).__name__})") from None
-    if unknown:
-        raise ConfigError(f"{display_path(path)}: unknown arrays {unknown}, expected {', '.join(ARRAYS)}")
+    arrays = _read_arrays(path, ARRAYS)
     for key in ("M", "K"):
         if key not in arrays:
             raise ConfigError(f"{display_path(path)}: no array {key!r}; expected M, K and C or modal_damping")
@@ -51,3 +46,47 @@ def read_matrix_part(raw: dict[str, Any], folder: Path, where: str) -> dict[str,
         raw["modal_damping"] = arrays["modal_damping"].ravel().tolist()
     raw.setdefault("source", display_path(path))
     return raw
+
+
+def read_state_space_part(raw: dict[str, Any], folder: Path, where: str) -> dict[str, Any]:
+    """A building part that names `state_space: FILE.npz` (relative to `folder`; arrays A, B, C, D in SI and
+    `dt`, s, for a discrete model) as the inline part (state_matrix, input_matrix, output_matrix,
+    feedthrough_matrix, sample_time)."""
+    raw = dict(raw)
+    name = raw.pop("state_space")
+    if not isinstance(name, str):
+        raise ConfigError(f"{where}.state_space: expected the path of an .npz file, got {type(name).__name__}")
+    path = folder / name
+    arrays = _read_arrays(path, STATE_SPACE_ARRAYS)
+    for key in ("A", "B", "C", "D"):
+        if key not in arrays:
+            raise ConfigError(f"{display_path(path)}: no array {key!r}; expected A, B, C, D (and dt if discrete)")
+    for key, field in (
+        ("A", "state_matrix"),
+        ("B", "input_matrix"),
+        ("C", "output_matrix"),
+        ("D", "feedthrough_matrix"),
+    ):
+        raw[field] = np.atleast_2d(arrays[key]).tolist()
+    if "dt" in arrays:
+        if arrays["dt"].size != 1:
+            raise ConfigError(f"{display_path(path)}: dt must be one number (the sample time, s)")
+        raw["sample_time"] = float(arrays["dt"].ravel()[0])
+    raw.setdefault("source", display_path(path))
+    return raw
+
+
+def _read_arrays(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The real arrays of an .npz file, each as float; anything else in it is refused in one line."""
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            unknown = sorted(set(archive.files) - set(names))
+            raw = {key: np.asarray(archive[key]) for key in names if key in archive.files}
+    except (OSError, ValueError, zipfile.BadZipFile) as error:
+        raise ConfigError(f"{display_path(path)}: cannot read the matrices ({type(error).__name__})") from None
+    if unknown:
+        raise ConfigError(f"{display_path(path)}: unknown arrays {unknown}, expected {', '.join(names)}")
+    for key, array in raw.items():
+        if not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
+            raise ConfigError(f"{display_path(path)}: array {key!r} holds {array.dtype}, expected real numbers")
+    return {key: array.astype(float) for key, array in raw.items()}

@@ -13,6 +13,7 @@ from pydantic import (
 )
 
 from rlcontroller.config.base import Factor, IntRange, StrictModel, TimeStep, unique
+from rlcontroller.config.state_space import BuildingPart
 
 
 class SimulationConfig(StrictModel):
@@ -100,8 +101,12 @@ class OpenSeesConfig(StrictModel):
 class PlantConfig(StrictModel):
     """How the simulated building differs from the design model (the experiment's building,
     actuators and sensors, on which every controller is designed). Factors are a scalar or one
-    per story; `damping` scales the damping ratios (a damping matrix is scaled as a whole)."""
+    per story; `damping` scales the damping ratios (a damping matrix is scaled as a whole). `building`: the
+    simulated building itself where it is not the design model (a building known only from measurements is
+    designed on its identified model, the experiment's `building`, and simulated as what it is); the factors
+    then change it."""
 
+    building: BuildingPart | None = None
     stiffness: Factor | list[Factor] = 1.0
     mass: Factor | list[Factor] = 1.0
     damping: Factor = 1.0

@@ -143,7 +143,7 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     `ground_std` (m/s^2). Exact discretisation whatever the simulation method."""
     step, building, model = plant.ground_model_step(), plant.building, plant.ground_model
     config = plant.experiment.sensors
-    size = 2 * building.n_dofs
+    size = building.n_states
     noise_gain = step.ground_gain.sum(axis=1)
     stationary = scipy.linalg.solve_discrete_lyapunov(
         step.phi[size:, size:], np.outer(noise_gain, noise_gain)[size:, size:]

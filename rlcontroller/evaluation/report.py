@@ -112,7 +112,7 @@ def time_history_data(evaluation: Evaluation, story: int = 4) -> dict:
     """What `draw_time_histories` draws: drift of one story and base shear on one record, every
     controller, over the strong part of the response (plain arrays and text)."""
     record = time_history_record(evaluation)
-    story = min(story, len(evaluation.experiment.building.masses))
+    story = min(story, evaluation.experiment.building.n_floors)
     bare = evaluation.responses["uncontrolled", record]
     start, end = strong_part(bare.ground, bare.time)
     shown = slice(max(0, np.searchsorted(bare.time, start) - 1), np.searchsorted(bare.time, end) + 1)

@@ -105,7 +105,7 @@ class BuildingEnv(gym.Env):
     @property
     def state(self) -> np.ndarray:
         """Current building state z = [x; x'] (m, m/s), without actuator states."""
-        return self._state_action[: 2 * self.building.n_dofs].copy()
+        return self._state_action[: self.building.n_states].copy()
 
     @property
     def plant_state(self) -> np.ndarray:

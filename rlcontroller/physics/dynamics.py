@@ -28,6 +28,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Quantity, SimulationConfig
 from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.state_space import PER_FLOOR, StateSpaceBuilding
 from rlcontroller.physics.structure import Building
 
 QUANTITIES: tuple[str, ...] = typing.get_args(Quantity)
@@ -42,7 +43,9 @@ class StateSpace:
     b_ground: np.ndarray
 
 
-def state_space(building: Building) -> StateSpace:
+def state_space(building: Building | StateSpaceBuilding) -> StateSpace:
+    if isinstance(building, StateSpaceBuilding):
+        return StateSpace(a=building.a, b_force=building.b_force, b_ground=building.b_ground)
     n = building.n_dofs
     mass_inverse = np.linalg.inv(building.mass)
     a = np.block(
@@ -246,10 +249,11 @@ def load_map(building: Building, control_dt: float, substeps: int = 1) -> LoadMa
 
 def load_feedthrough(building: Building, quantity: str) -> np.ndarray:
     """How floor forces (N) enter a quantity directly, (rows, floors): absolute accelerations only
-    (a = M^-1 (... + F)); story shears are the restoring forces and do not feel them."""
+    (a = M^-1 (... + F)); story shears are the restoring forces and do not feel them. A state-space
+    model takes no floor forces (`Plant.cannot_take`)."""
     c, _ = output_matrices(building, quantity)
     floors = building.n_floors
-    if quantity != "absolute_acceleration":
+    if quantity != "absolute_acceleration" or isinstance(building, StateSpaceBuilding):
         return np.zeros((c.shape[0], floors))
     return np.linalg.inv(building.mass)[:floors, :floors]
 
@@ -257,7 +261,10 @@ def load_feedthrough(building: Building, quantity: str) -> np.ndarray:
 def output_matrices(building: Building, quantity: str) -> tuple[np.ndarray, np.ndarray]:
     """(C_q, D_q) with quantity = C_q z + D_q u, for z = [x; x'] over the degrees of freedom and the
     commanded forces u: a `Quantity`, or `stroke_velocity` (per mass device) and `device_velocity`
-    (the velocity across each commanded device, Gamma' x', whose product with u is its power)."""
+    (the velocity across each commanded device, Gamma' x', whose product with u is its power). A
+    state-space model's are its declared rows (`StateSpaceBuilding.outputs`)."""
+    if isinstance(building, StateSpaceBuilding):
+        return building.outputs(quantity)
     n, floors, m = building.n_dofs, building.n_floors, building.n_actuators
     zero_state, zero_force = np.zeros((floors, n)), np.zeros((floors, m))
     drift_matrix = (np.eye(n) - np.eye(n, k=-1))[:floors]
@@ -287,6 +294,22 @@ def output_matrices(building: Building, quantity: str) -> tuple[np.ndarray, np.n
     if quantity == "device_velocity":
         return np.hstack([np.zeros((m, n)), building.actuator_matrix.T]), np.zeros((m, m))
     raise ValueError(f"unknown quantity {quantity!r}, expected one of {QUANTITIES}")
+
+
+def state_space_arrays(building: Building) -> dict[str, np.ndarray]:
+    """A shear or matrix building (floors only) as a state-space model file's arrays: A, B (its actuators'
+    columns, then the ground's), C and D (displacements, velocities, drifts, absolute accelerations, story
+    shears, n rows each), on the physical state [x; x']. `state_space.state_space_outputs` declares them."""
+    system = state_space(building)
+    rows = [output_matrices(building, quantity) for quantity in PER_FLOOR]
+    c = np.vstack([row[0] for row in rows])
+    d = np.vstack([row[1] for row in rows])
+    return {
+        "A": system.a,
+        "B": np.column_stack([system.b_force, system.b_ground]),
+        "C": c,
+        "D": np.column_stack([d, np.zeros(c.shape[0])]),
+    }
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,6 @@ def observation_layout(
     """The layout of the table above for `building`, `sensors` and its n_readings readings; with
     `load_scale` (N, one per floor: an experiment trained under wind) the state estimate also holds
     the fluctuating floor forces of the wind model."""
-    n = building.n_dofs
     estimate_scale = np.zeros(0)
     if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
         channels = n_readings + 1
@@ -90,6 +89,7 @@ def observation_layout(
             [sensors.velocity_scale, sensors.displacement_scale, sensors.velocity_scale], channels
         )
     if sensors.state_estimate:
+        n = building.n_dofs
         estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
         if sensors.ground_model:
             estimate_scale = np.append(estimate_scale, GroundModel().state_scale(sensors.ground_scale))

@@ -30,9 +30,11 @@ import numpy as np
 
 from rlcontroller.config import (
     ActuatorConfig,
+    BuildingPart,
     Experiment,
     Quantity,
     SensorConfig,
+    StateSpaceBuildingConfig,
     WindGeneratorConfig,
 )
 from rlcontroller.physics.dynamics import (
@@ -56,7 +58,8 @@ from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.opensees import OpenSeesIntegrator
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.sensors import sensor_matrices
-from rlcontroller.physics.structure import build, tune_devices, with_dampers, with_devices
+from rlcontroller.physics.state_space import StateSpaceBuilding, from_state_space
+from rlcontroller.physics.structure import Building, build, tune_devices, with_dampers, with_devices
 from rlcontroller.physics.variations import true_building
 from rlcontroller.physics.wind import WindLoadModel, floor_field, load_model
 
@@ -74,6 +77,13 @@ def design_wind(experiment: Experiment) -> WindLoadModel | None:
     return load_model(floor_field(generator, bare, 0.5 * sum(generator.speed)), frequency)
 
 
+def build_any(building: BuildingPart, actuators: list[ActuatorConfig]) -> Building | StateSpaceBuilding:
+    """The building of a building part: M, K, C (`structure.build`) or a state-space model."""
+    if isinstance(building, StateSpaceBuildingConfig):
+        return from_state_space(building, actuators)
+    return build(building, actuators)
+
+
 class Plant:
     """An experiment's building with its actuators, sensors and discretisation, built once.
 
@@ -88,7 +98,7 @@ class Plant:
         self.experiment = experiment
         self.config = experiment.plant
         building = experiment.building if self.config is None else true_building(experiment.building, self.config)
-        self.building = build(building, experiment.actuators)
+        self.building = build_any(building, experiment.actuators)
         if experiment.devices:  # tuned on the design model's floors, attached to this plant's
             design = self.building if self.config is None else build(experiment.building, experiment.actuators)
             devices = tune_devices(design, experiment.devices)
@@ -122,12 +132,13 @@ class Plant:
         dynamics = self.config.actuators if self.config is not None else None
         self.time_constant = dynamics.time_constant if dynamics else 0.0
         self.delay_steps = dynamics.delay_steps if dynamics else 0
-        n, m = self.building.n_dofs, self.building.n_actuators
+        size, m = self.building.n_states, self.building.n_actuators
         lag = m if self.time_constant > 0 else 0
         held = m if self.delay_steps > 0 and not lag else 0
-        self.n_state = 2 * n + lag + self.delay_steps * m + held + (n if self.yielding is not None else 0)
+        self.n_state = size + lag + self.delay_steps * m + held
+        self.n_state += self.building.n_floors if self.yielding is not None else 0
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
-        self.n_state += n if self.fe_model is not None else 0  # [x; v; absolute accelerations]
+        self.n_state += self.building.n_dofs if self.fe_model is not None else 0  # [x; v; absolute accelerations]
         faults = self.config.sensors if self.config is not None else None
         self.sensors = sensor_matrices(self.outputs, self.building, experiment.sensors, faults)
         self.wind = design_wind(experiment)
@@ -203,11 +214,11 @@ class Plant:
         c, d = output_matrices(self.building, quantity)
         if not self.has_actuator_dynamics:
             return c, d
-        n, m = self.building.n_dofs, self.building.n_actuators
+        size, m = self.building.n_states, self.building.n_actuators
         full = np.zeros((c.shape[0], self.n_state))
-        full[:, : 2 * n] = c
+        full[:, :size] = c
         if self.time_constant > 0:
-            full[:, 2 * n : 2 * n + m] = d  # the delivered force is a state
+            full[:, size : size + m] = d  # the delivered force is a state
         else:
             full[:, -m:] = d  # the register of the force applied over the last step
         return full, np.zeros_like(d)
@@ -298,16 +309,16 @@ class Plant:
         return self._maps[key]
 
     def _actuator_step_map(self, substeps: int) -> StepMap:
-        n, m = self.building.n_dofs, self.building.n_actuators
+        size, m = self.building.n_states, self.building.n_actuators
         if self.time_constant > 0:  # [z; f] with tau f' = u - f, exact over each sub-step
             system = state_space(self.building)
-            a = np.zeros((2 * n + m, 2 * n + m))
-            a[: 2 * n, : 2 * n] = system.a
-            a[: 2 * n, 2 * n :] = system.b_force
-            a[2 * n :, 2 * n :] = -np.eye(m) / self.time_constant
+            a = np.zeros((size + m, size + m))
+            a[:size, :size] = system.a
+            a[:size, size:] = system.b_force
+            a[size:, size:] = -np.eye(m) / self.time_constant
             lagged = StateSpace(
                 a=a,
-                b_force=np.vstack([np.zeros((2 * n, m)), np.eye(m) / self.time_constant]),
+                b_force=np.vstack([np.zeros((size, m)), np.eye(m) / self.time_constant]),
                 b_ground=np.concatenate([system.b_ground, np.zeros(m)]),
             )
             core = compose(exact_substep(lagged, self.control_dt / substeps), substeps, self.control_dt)
@@ -336,6 +347,8 @@ class Plant:
         `GROUND_ACCELERATION`), in one line; None when it can."""
         if kind == FLOOR_FORCES and self.integrator is not None:
             return "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled"
+        if kind == FLOOR_FORCES and isinstance(self.building, StateSpaceBuilding):
+            return "a state-space model takes the ground acceleration only (it declares no floor-force inputs)"
         return None
 
     def forcing(self, grid: LoadGrid, c: np.ndarray, load_rows: np.ndarray) -> np.ndarray:

@@ -48,6 +48,11 @@ class Building:
         return self.mass.shape[0]
 
     @property
+    def n_states(self) -> int:
+        """Length of the state [x; x']."""
+        return 2 * self.mass.shape[0]
+
+    @property
     def n_floors(self) -> int:
         return self.mass.shape[0] - len(self.devices)
 

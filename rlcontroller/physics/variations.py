@@ -8,18 +8,23 @@ import numpy as np
 
 from rlcontroller.config import (
     RANDOMIZED_FIELDS,
-    BuildingConfig,
+    BuildingPart,
     MatrixBuildingConfig,
     PlantConfig,
     PlantRandomization,
+    StateSpaceBuildingConfig,
     randomized_plant,
 )
 
 
-def true_building(building: BuildingConfig, plant: PlantConfig) -> BuildingConfig:
-    """The design building changed by the plant part: factors and damage on stiffness, factors on
-    mass, the damping ratios (or the damping matrix) times the damping factor. A building given by
-    matrices takes scalar factors only (checked at loading)."""
+def true_building(building: BuildingPart, plant: PlantConfig) -> BuildingPart:
+    """The design building (or the plant part's own `building`) changed by the plant part: factors and
+    damage on stiffness, factors on mass, the damping ratios (or the damping matrix) times the damping
+    factor. A building given by matrices takes scalar factors only, a state-space model none (checked at
+    loading)."""
+    building = plant.building if plant.building is not None else building
+    if isinstance(building, StateSpaceBuildingConfig):
+        return building
     if isinstance(building, MatrixBuildingConfig):
         update = {
             "mass_matrix": (np.asarray(building.mass_matrix) * plant.mass).tolist(),
