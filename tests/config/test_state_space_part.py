@@ -31,10 +31,8 @@ def test_a_model_loads_and_keeps_what_it_was_given(tmp_path):
     assert experiment.building.n_floors == 5 and experiment.building.source.endswith("model.npz")
 
 
-DISCRETE_3_MS = dict(
-    zip("AB", scipy.signal.cont2discrete((ARRAYS["A"], ARRAYS["B"], ARRAYS["C"], ARRAYS["D"]), 0.003)[:2])
-)
-DISCRETE_3_MS["dt"] = 0.003
+DISCRETE_A, DISCRETE_B, *_ = scipy.signal.cont2discrete((ARRAYS["A"], ARRAYS["B"], ARRAYS["C"], ARRAYS["D"]), 0.003)
+DISCRETE_3_MS = {"A": DISCRETE_A, "B": DISCRETE_B, "dt": 0.003}
 UNSTABLE = ARRAYS["A"].copy()
 UNSTABLE[5, 0] = 1.0e6  # a floor pushed away by its own displacement
 
