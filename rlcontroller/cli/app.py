@@ -21,7 +21,7 @@ try:  # typer 0.2x carries its own click (typer._click) and no longer installs c
 except ImportError:
     from click import ClickException as CommandLineError
 
-from rlcontroller.errors import ConfigError, ModelError, MotionError
+from rlcontroller.errors import ConfigError, ModelError, MotionError, RecordingError
 
 app = typer.Typer(
     add_completion=False,
@@ -30,7 +30,12 @@ app = typer.Typer(
     help="Reinforcement-learning active control of buildings under earthquakes. New here? Start with 'rlc demo'.",
 )
 
-USER_ERRORS = (ConfigError, MotionError, ModelError)  # a design that cannot be made on a model is a ConfigError too
+USER_ERRORS = (
+    ConfigError,
+    MotionError,
+    ModelError,
+    RecordingError,
+)  # a design that cannot be made on a model is a ConfigError too
 INTERNAL_ERROR = 3  # exit code of a failure that is not the user's (user mistakes: 2, file system: 1)
 DEBUG_VARIABLE = "RLC_DEBUG"  # set to 1: tracebacks on screen, as with --debug
 debugging = False  # set for each invocation by the --debug option or the variable

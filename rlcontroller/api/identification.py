@@ -1,0 +1,163 @@
+"""Buildings known from measurements: `simulate_test` (a vibration test run on an experiment's simulated
+plant, recorded as its sensors would) and `identify` (a building's state-space model from such recordings,
+written as a building part)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from rlcontroller.api.common import QUIET, Report, load
+from rlcontroller.bounds import MAX_MASS
+from rlcontroller.config import ConfigError
+from rlcontroller.files import atomic_write, check_new_folder, new_folder
+
+
+def simulate_test(
+    config: Path,
+    out: Path,
+    duration: float = 600.0,
+    ambient_rms: float = 0.1,
+    record: Path | None = None,
+    shake: float = 0.05,
+    seed: int = 0,
+    report: Report = QUIET,
+) -> Path:
+    """A test of `duration` s on the plant of the experiment `config`: white-noise ground of `ambient_rms`
+    (m/s^2), or the ground motion `record`; with `shake` > 0 every actuator driven by white noise of that RMS
+    (a fraction of its force limit). Written as a recording CSV to the new file `out`. Returns `out`."""
+    from rlcontroller.identification.recording import ambient_ground, simulate_test
+    from rlcontroller.physics.excitation import read_motion
+    from rlcontroller.physics.plant import Plant
+
+    if out.exists():
+        raise ConfigError(f"--out {out}: exists; a recording is never overwritten (choose another --out)")
+    if not 0.0 <= shake <= 1.0:
+        raise ConfigError(f"--shake {shake:g}: expected a fraction of the force limits in [0, 1]")
+    experiment = load(config)
+    plant = Plant(experiment.model_copy(update={"supervisor": None}))  # shakers drive the actuators directly
+    if record is not None:
+        ground, what = read_motion(record), f"the record {record}"
+    else:
+        if not (0.0 < ambient_rms <= 10.0 and 0.0 < duration <= 36000.0):
+            raise ConfigError("--ambient-rms in (0, 10] m/s^2 and --duration in (0, 36000] s, expected")
+        ground = ambient_ground(ambient_rms, duration, plant.control_dt, seed)
+        what = f"ambient white-noise ground of {ambient_rms:g} m/s^2 RMS"
+    recording = simulate_test(plant, ground, shake, seed)
+    shaking = f"actuators shaking at {shake:g} of their force limits (RMS)" if shake > 0 else "actuators at rest"
+    comment = (
+        f"rlc simulate-test {config} (seed {seed}): {what}, {recording.duration:g} s, {shaking}; sensors as "
+        f"the experiment's (noise on); sampled every {recording.dt:g} s; SI units"
+    )
+    atomic_write(out, recording.to_csv(comment))
+    report.line(f"wrote {out}: {recording.duration:g} s, {len(recording.floors)} floors, {shaking}")
+    return out
+
+
+def identify(
+    recordings: list[Path],
+    out: Path,
+    modes: int | None = None,
+    band: float = 5.0,
+    masses: list[float] | None = None,
+    report: Report = QUIET,
+) -> Path:
+    """The state-space model of `modes` modes (default: one per floor) below `band` Hz identified from the
+    `recordings` (one set of sensors), written to the new folder `out` as a building part (building.yaml with
+    model.npz) and its report (identification.md: the modes with their standard errors). With the floor
+    `masses` (kg, floor 1 first: from drawings) the model also gives story shears. Returns `out`."""
+    from rlcontroller.identification.recording import read_recording
+    from rlcontroller.identification.subspace import identify as identify_model
+
+    check_new_folder(out, "identification")
+    if not 0.0 < band <= 1000.0:
+        raise ConfigError(f"--band {band:g}: expected a frequency in (0, 1000] Hz")
+    tests = [read_recording(path) for path in recordings]
+    floors = len(tests[0].floors)
+    asked = floors if modes is None else modes
+    if not 1 <= asked <= 2 * floors:
+        raise ConfigError(f"--modes {asked}: expected 1..{2 * floors} for {floors} floors")
+    if masses is not None and (len(masses) != floors or not all(0.0 < m <= MAX_MASS for m in masses)):
+        raise ConfigError(f"--masses: expected {floors} floor masses in (0, {MAX_MASS:g}] kg, floor 1 first")
+    identified = identify_model(tests, asked, band, None if masses is None else np.asarray(masses, dtype=float))
+    actuators = list(tests[0].actuators)
+    part = {
+        "name": f"identified from {', '.join(path.name for path in recordings)}",
+        "state_space": "model.npz",
+        "state": "physical" if identified.physical else "abstract",
+        "inputs": {"actuators": list(range(len(actuators))), "ground": len(actuators)},
+        "outputs": {
+            name: list(range(i * floors, (i + 1) * floors))
+            for i, name in enumerate(("displacement", "velocity", "drift", "absolute_acceleration", "story_shear"))
+            if (i + 1) * floors <= identified.arrays["C"].shape[0]
+        },
+    }
+    header = (
+        f"# Identified by rlc identify (N4SID, {asked} modes below {band:g} Hz): identification.md\n"
+        f"# inputs.actuators are the forces on stories {', '.join(actuators) or '(none: an ambient test)'}, in "
+        "that order: list the experiment's actuators so\n"
+    )
+    with new_folder(out, "identification") as staging:
+        with open(staging / "model.npz", "wb") as file:
+            np.savez(file, **identified.arrays)
+        atomic_write(staging / "building.yaml", header + yaml.safe_dump(part, sort_keys=False))
+        atomic_write(staging / "identification.md", identification_report(identified, recordings, band))
+    for line in mode_lines(identified):
+        report.line(line)
+    report.line(f"wrote {out}: building.yaml (a building part), model.npz, identification.md")
+    return out
+
+
+SHEARS = {
+    False: "Story shears are not identified (no floor masses given): J3 and J4 are unavailable on this model.",
+    True: "Story shears are the floors' inertia forces above each story, from the floor masses given (--masses).",
+}
+
+
+def mode_lines(identified) -> list[str]:
+    """One line per mode: frequency and damping ratio with their standard errors."""
+    lines = []
+    for number, mode in enumerate(identified.modes, 1):
+        lines.append(
+            f"mode {number}: {mode.frequency:.4f} ± {mode.frequency_error:.4f} Hz, damping "
+            f"{mode.damping:.2%} ± {mode.damping_error:.2%}, shape {np.array2string(mode.shape, precision=3)}"
+        )
+    return lines
+
+
+def identification_report(identified, recordings: list[Path], band: float) -> str:
+    """identification.md: what was identified from what, the modes with their uncertainty, the fit."""
+    floors = identified.explained.size
+    shapes = [
+        f"| {n} | {m.frequency:.4f} ± {m.frequency_error:.4f} | {m.damping:.2%} ± {m.damping_error:.2%} | "
+        + " ".join(f"{v:+.3f}±{e:.3f}" for v, e in zip(m.shape, m.shape_error, strict=False))
+        + " |"
+        for n, m in enumerate(identified.modes, 1)
+    ]
+    return "\n".join(
+        [
+            "# Identified building model",
+            "",
+            f"From {', '.join(str(path) for path in recordings)}: N4SID (nfoursid) with the ground and the actuators' "
+            f"forces as inputs and the {floors} floors' absolute accelerations as outputs, low-passed and decimated "
+            f"to a sample every {identified.sample_time:g} s (band {band:g} Hz), {identified.block_rows} block rows. "
+            f"State: {'physical ([x; v])' if identified.physical else 'abstract'}; displacement, velocity and drift "
+            "rows derived through the model (x = C_a A^-2 z). Standard errors from four equal segments.",
+            "",
+            "| mode | frequency (Hz) | damping ratio | shape (floor 1 first, largest 1) |",
+            "|---|---|---|---|",
+            *shapes,
+            "",
+            "Share of each floor's acceleration variance the model's response to the measured inputs explains: "
+            + ", ".join(f"floor {i + 1} {v:.1%}" for i, v in enumerate(identified.explained))
+            + ".",
+            "",
+            "The model's direct feed-through from the ground to the accelerations "
+            f"({identified.dropped_feedthrough:.3g} at most, m/s^2 per m/s^2: the sampling's share of the ground "
+            "within a step) is dropped: a structure's absolute accelerations in relative coordinates have none. "
+            + SHEARS[identified.arrays["C"].shape[0] > 4 * floors],
+            "",
+        ]
+    )
