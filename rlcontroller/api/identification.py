@@ -60,7 +60,7 @@ def identify(
     recordings: list[Path],
     out: Path,
     modes: int | None = None,
-    band: float = 5.0,
+    band: float = 20.0,
     masses: list[float] | None = None,
     report: Report = QUIET,
 ) -> Path:
@@ -141,8 +141,13 @@ def identification_report(identified, recordings: list[Path], band: float) -> st
             "# Identified building model",
             "",
             f"From {', '.join(str(path) for path in recordings)}: N4SID (nfoursid) with the ground and the actuators' "
-            f"forces as inputs and the {floors} floors' absolute accelerations as outputs, low-passed and decimated "
-            f"to a sample every {identified.sample_time:g} s (band {band:g} Hz), {identified.block_rows} block rows. "
+            f"forces as inputs and the {floors} floors' absolute accelerations as outputs, "
+            + (
+                f"low-passed and decimated by {identified.decimation} to a sample every {identified.sample_time:g} s"
+                if identified.decimation > 1
+                else f"at their own sample rate (every {identified.sample_time:g} s)"
+            )
+            + f" (band {band:g} Hz), {identified.block_rows} block rows. "
             f"State: {'physical ([x; v])' if identified.physical else 'abstract'}; displacement, velocity and drift "
             "rows derived through the model (x = C_a A^-2 z). Standard errors from four equal segments.",
             "",

@@ -50,7 +50,7 @@ def identify(
     modes: Annotated[int | None, typer.Option(help="Modes to identify (default: one per floor).")] = None,
     band: Annotated[
         float, typer.Option(help="The modes' band (Hz): the recordings are decimated to 2.5 times it.")
-    ] = 5.0,
+    ] = 20.0,
     masses: Annotated[
         str | None, typer.Option(help="Floor masses (kg, floor 1 first, comma-separated): story shears too.")
     ] = None,

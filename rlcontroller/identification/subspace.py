@@ -9,13 +9,16 @@ cannot give; and with the ground measured, ambient data goes further (the known 
 noise).
 
 The steps, each a choice a user can read in the report:
-1. every channel low-pass filtered and decimated alike (inputs and outputs through the same filter keep their
-   relation) to the lowest rate of at least 2.5 times the band of interest;
-2. N4SID of order 2 x modes, block rows spanning 8 periods of the band's edge;
-3. the continuous model that holds the discrete one between samples (`physics.state_space.continuous`), its
-   poles the modes (frequency, damping ratio), its displacement and velocity rows derived from the
-   accelerations through the model (x'' = a - a_g, so x = C_a A^-2 z, v = C_a A^-1 z: exact for a model of a
-   structure), and, with one mode per floor, the state changed to [x; v] (`state: physical`);
+1. where the recording is sampled finer than 2.5 times the band of interest (`--band`, 20 Hz by default),
+   every channel low-pass filtered and decimated alike (inputs and outputs through the same filter keep their
+   relation);
+2. N4SID of order 2 x modes, its block rows spanning 8 periods of the band's edge, then (identified again)
+   the first mode's period, as far as the recording allows;
+3. the continuous model: the ground piecewise linear between samples, the actuators' forces held between them
+   (piecewise linear too once decimation has smoothed them); its poles the modes (frequency, damping ratio);
+   its displacement and velocity rows derived from the accelerations through the model (x'' = a - a_g, so
+   x = C_a A^-2 z, v = C_a A^-1 z: exact for a model of a structure); with one mode per floor, the state
+   changed to [x; v] (`state: physical`);
 4. the uncertainty of each frequency, damping ratio and mode shape from the scatter of the same identification
    on four equal segments (standard error: their standard deviation over 2).
 
@@ -31,13 +34,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+import scipy.linalg
 import scipy.signal
 from nfoursid.nfoursid import NFourSID
 from nfoursid.utils import Decomposition, Utils
 
 from rlcontroller.errors import RecordingError
 from rlcontroller.identification.recording import Recording
-from rlcontroller.physics.state_space import continuous
 
 OVERSAMPLING = 2.5  # the decimated rate over the band's edge
 BLOCK_PERIODS = 8  # block rows span this many periods of the band's edge
@@ -65,7 +68,7 @@ class Identified:
     inputs: the actuators' forces then the ground; outputs: displacement, velocity, drift, absolute
     acceleration and, with the floor masses, story shear rows per floor), whether its state is physical,
     its modes, the variance of each floor's acceleration it explains, the ground feed-through it dropped
-    (m/s^2 per m/s^2), and the sample time and block rows it used."""
+    (m/s^2 per m/s^2), and the sample time, block rows and decimation it used."""
 
     arrays: dict[str, np.ndarray]
     physical: bool
@@ -74,6 +77,7 @@ class Identified:
     dropped_feedthrough: float
     sample_time: float
     block_rows: int
+    decimation: int  # samples of the recording per sample identified on
 
 
 def identify(recordings: list[Recording], modes: int, band: float, masses: np.ndarray | None = None) -> Identified:
@@ -107,6 +111,10 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
             f"{first.name}: {inputs.shape[0] * dt:.0f} s is too short to identify {modes} modes up to {band:g} Hz"
         )
     model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band, first.name)
+    spanning = math.ceil(2 * np.pi / np.abs(poles[0]) / dt)  # block rows spanning the first mode's period
+    if spanning > block_rows and inputs.shape[0] >= 10 * spanning * (inputs.shape[1] + floors):
+        block_rows = spanning
+        model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band, first.name)
     longest = 2 * np.pi / np.abs(poles[0])
     duration = inputs.shape[0] * dt
     if duration < MIN_PERIODS * longest:
@@ -121,7 +129,8 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
             f"{first.name}: too quiet: the model explains {np.min(explained):.0%} of floor {floor}'s acceleration "
             f"(the sensors' noise dominates); excite the building more strongly or record longer"
         )
-    arrays, physical, dropped = _structural(*model, floors, first.actuators, dt)
+    held = len(first.actuators) if factor == 1 else 0  # decimation smooths the held forces too
+    arrays, physical, dropped = _structural(*model, floors, held, dt)
     if masses is not None:  # V_i = sum over floors j >= i of m_j a_j
         shear = np.triu(np.ones((floors, floors))) * masses
         acceleration = slice(3 * floors, 4 * floors)
@@ -131,11 +140,12 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
     return Identified(
         arrays=arrays,
         physical=physical,
-        modes=_with_errors(modes_found, inputs, outputs, modes, block_rows, dt, band, floors, first.actuators),
+        modes=_with_errors(modes_found, inputs, outputs, modes, block_rows, dt, band, floors, held),
         explained=explained,
         dropped_feedthrough=dropped,
         sample_time=dt,
         block_rows=block_rows,
+        decimation=factor,
     )
 
 
@@ -193,10 +203,33 @@ def _explained(model, inputs: np.ndarray, outputs: np.ndarray) -> np.ndarray:
     return 1.0 - np.var(outputs - predicted, axis=0) / np.var(outputs, axis=0)
 
 
-def _structural(a, b, c, d, floors: int, actuators, dt: float) -> tuple[dict[str, np.ndarray], bool, float]:
+def _continuous(a, b, c, d, dt: float, held: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The continuous (A, B, D) of a discrete model identified from samples: the inputs piecewise linear
+    between samples (first-order hold: the ground; forces smoothed by decimation), the first `held` held
+    between them (zero-order hold: forces at the recording's own rate). With a linear input a step is
+    z1 = e^(A dt) z0 + M0 B u0 + M1 B u1, whose standard discrete form keeps B_d = (e^(A dt) M1 + M0) B and
+    D_d = C M1 B + D (state z - M1 B u), so B and D follow from B_d and D_d."""
+    n = a.shape[0]
+    continuous_a = np.real(scipy.linalg.logm(a)) / dt
+    augmented = np.zeros((3 * n, 3 * n))
+    augmented[:n, :n], augmented[:n, n : 2 * n], augmented[n : 2 * n, 2 * n :] = continuous_a, np.eye(n), np.eye(n)
+    exponential = scipy.linalg.expm(augmented * dt)
+    held_gain, ramp = exponential[:n, n : 2 * n], exponential[:n, 2 * n :] / dt
+    end = ramp  # M1: the weight of the step's end sample
+    start = held_gain - ramp  # M0
+    continuous_b = np.linalg.solve(a @ end + start, b)
+    continuous_d = d - c @ end @ continuous_b
+    if held:  # the first `held` inputs are held between samples (zero-order hold): B_d = M0 B + M1 B, D = D_d
+        continuous_b[:, :held] = np.linalg.solve(held_gain, b[:, :held])
+        continuous_d[:, :held] = d[:, :held]
+    return continuous_a, continuous_b, continuous_d
+
+
+def _structural(a, b, c, d, floors: int, held: int, dt: float) -> tuple[dict[str, np.ndarray], bool, float]:
     """The continuous model with the derived displacement, velocity and drift rows, its ground feed-through
-    dropped; the state made [x; v] when there is one mode per floor."""
-    a, b = continuous(a, b, dt)
+    dropped; the state made [x; v] when there is one mode per floor. The first `held` inputs were held between
+    samples (the actuators' forces at the recording's own rate)."""
+    a, b, d = _continuous(a, b, c, d, dt, held)
     inverse = np.linalg.inv(a)
     displacement = c @ inverse @ inverse
     velocity = c @ inverse
@@ -235,7 +268,7 @@ def _modes(arrays: dict[str, np.ndarray], floors: int) -> list[Mode]:
     return modes
 
 
-def _with_errors(modes, inputs, outputs, asked, block_rows, dt, band, floors, actuators) -> list[Mode]:
+def _with_errors(modes, inputs, outputs, asked, block_rows, dt, band, floors, held) -> list[Mode]:
     """`modes` with standard errors from the same identification on `SEGMENTS` equal segments (matched by
     the nearest frequency); without them (segments too short to identify) NaN."""
     length = inputs.shape[0] // SEGMENTS
@@ -246,7 +279,7 @@ def _with_errors(modes, inputs, outputs, asked, block_rows, dt, band, floors, ac
             model, _ = _n4sid(inputs[part], outputs[part], 2 * asked, block_rows, dt, band, "segment")
         except (RecordingError, np.linalg.LinAlgError, ValueError):
             return modes
-        estimates.append(_modes(_structural(*model, floors, actuators, dt)[0], floors))
+        estimates.append(_modes(_structural(*model, floors, held, dt)[0], floors))
     result = []
     for mode in modes:
         matched = [min(found, key=lambda m: abs(m.frequency - mode.frequency)) for found in estimates]
