@@ -560,3 +560,21 @@ def test_wind_on_a_building_with_dampers_is_refused_in_one_line(tmp_path):
     line = one_error_line(CliRunner().invoke(app, arguments))
     assert "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled" in line
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("arguments", "expected"),
+    [
+        (["identify", "missing.csv", "--out", "model"], "error: missing.csv: cannot read the file"),
+        (["identify", "t.csv", "--out", "model", "--masses", "25e3,x"], "error: --masses '25e3,x': expected comma-"),
+        (["identify", "t.csv", "--out", "model", "--masses", "1,2,3"], "error: --masses: expected 2 floor masses"),
+        (["identify", "t.csv", "--out", "model", "--modes", "9"], "error: --modes 9: expected 1..4 for 2 floors"),
+        (["simulate-test", "e.yaml", "--out", "t.csv"], "error: --out t.csv: exists; a recording is never overwritten"),
+        (["simulate-test", "e.yaml", "--out", "u.csv", "--shake", "2"], "error: --shake 2: expected a fraction"),
+    ],
+)
+def test_identification_mistakes_are_one_line(tmp_path, monkeypatch, arguments, expected):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "e.yaml").write_text("name: e\n")
+    (tmp_path / "t.csv").write_text("time,ground,absolute_acceleration_1,absolute_acceleration_2\n0,0,0,0\n0.1,1,1,1\n")
+    assert one_error_line(CliRunner().invoke(app, arguments)).startswith(expected)

@@ -32,7 +32,7 @@ FORCE = "force_"
 
 @dataclass(frozen=True)
 class Recording:
-    """One test: samples every `dt` s of the ground (m/s^2), the actuators' forces (N, one column per
+    """One test (`name`: its file): samples every `dt` s of the ground (m/s^2), the actuators' forces (N, one column per
     `actuators` label) and the floors' absolute accelerations (m/s^2, one column per `floors`)."""
 
     name: str
@@ -98,14 +98,14 @@ def read_recording(path: Path) -> Recording:
         rows.append(values)
     table = np.array(rows)
     steps = np.diff(table[:, 0])
-    dt = float(np.median(steps))
+    dt = float(f"{np.median(steps):.12g}")  # the step as written, not its rounding in the subtraction
     uneven = np.abs(steps - dt) > 1e-6 * dt
     if dt <= 0.0 or np.any(uneven):
         line = numbered[2 + int(np.argmax(uneven))][0] if np.any(uneven) else numbered[1][0]
         raise RecordingError(f"{path}:{line}: time must advance by the same step ({dt:g} s): a gap or a repeat")
     first = 2 + len(actuators)
     return Recording(
-        name=path.stem,
+        name=str(path),
         dt=dt,
         ground=table[:, 1],
         forces=table[:, 2:first],

@@ -110,11 +110,14 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
         raise RecordingError(
             f"{first.name}: {inputs.shape[0] * dt:.0f} s is too short to identify {modes} modes up to {band:g} Hz"
         )
-    model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band, first.name)
+    model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band)
+    _check_explained(model, inputs, outputs, first)
+    _check_modes(model, poles, modes, band, first.name)
     spanning = math.ceil(2 * np.pi / np.abs(poles[0]) / dt)  # block rows spanning the first mode's period
     if spanning > block_rows and inputs.shape[0] >= 10 * spanning * (inputs.shape[1] + floors):
         block_rows = spanning
-        model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band, first.name)
+        model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band)
+        _check_modes(model, poles, modes, band, first.name)
     longest = 2 * np.pi / np.abs(poles[0])
     duration = inputs.shape[0] * dt
     if duration < MIN_PERIODS * longest:
@@ -122,13 +125,7 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
             f"{first.name}: {duration:.0f} s holds {duration / longest:.0f} periods of the first mode "
             f"({longest:.3g} s); record at least {MIN_PERIODS} ({MIN_PERIODS * longest:.0f} s)"
         )
-    explained = _explained(model, inputs, outputs)
-    if np.min(explained) < MIN_EXPLAINED:
-        floor = first.floors[int(np.argmin(explained))]
-        raise RecordingError(
-            f"{first.name}: too quiet: the model explains {np.min(explained):.0%} of floor {floor}'s acceleration "
-            f"(the sensors' noise dominates); excite the building more strongly or record longer"
-        )
+    explained = _check_explained(model, inputs, outputs, first)
     held = len(first.actuators) if factor == 1 else 0  # decimation smooths the held forces too
     arrays, physical, dropped = _structural(*model, floors, held, dt)
     if masses is not None:  # V_i = sum over floors j >= i of m_j a_j
@@ -172,7 +169,7 @@ def _decimated(recording: Recording, factor: int) -> tuple[np.ndarray, np.ndarra
     return (scipy.signal.decimate(x, factor, axis=0, zero_phase=True) for x in (inputs, outputs))
 
 
-def _n4sid(inputs, outputs, order, block_rows, dt, band, name) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
+def _n4sid(inputs, outputs, order, block_rows, dt, band) -> tuple[tuple[np.ndarray, ...], np.ndarray]:
     """The discrete (A, B, C, D) of `order` and its continuous oscillating poles below the band, ascending."""
     columns_u = [f"u{i}" for i in range(inputs.shape[1])]
     columns_y = [f"y{i}" for i in range(outputs.shape[1])]
@@ -182,14 +179,32 @@ def _n4sid(inputs, outputs, order, block_rows, dt, band, name) -> tuple[tuple[np
     model, _ = identification.system_identification(rank=order)
     discrete = (model.a, model.b, model.c, model.d)
     poles = np.log(np.linalg.eigvals(model.a).astype(complex)) / dt
-    oscillating = np.sort_complex(poles[(poles.imag > 0) & (np.abs(poles) < 2 * np.pi * band)])
-    oscillating = oscillating[np.argsort(np.abs(oscillating))]
-    if oscillating.size < order // 2 or np.any(np.abs(np.linalg.eigvals(model.a)) >= 1.0):
+    oscillating = poles[(poles.imag > 0) & (np.abs(poles) < 2 * np.pi * band)]
+    return discrete, oscillating[np.argsort(np.abs(oscillating))]
+
+
+def _check_modes(model, poles: np.ndarray, modes: int, band: float, name: str) -> None:
+    """A stable model with the modes asked for below the band, or a `RecordingError` saying so."""
+    if poles.size < modes or np.any(np.abs(np.linalg.eigvals(model[0])) >= 1.0):
         raise RecordingError(
-            f"{name}: found {oscillating.size} stable oscillating modes below {band:g} Hz, asked for {order // 2}; "
+            f"{name}: found {poles.size} stable oscillating modes below {band:g} Hz, asked for {modes}; "
             "record longer, excite more strongly, or ask for fewer --modes"
         )
-    return discrete, oscillating
+
+
+def _check_explained(model, inputs: np.ndarray, outputs: np.ndarray, recording: Recording) -> np.ndarray:
+    """The share of each floor's acceleration variance the model's response to the measured inputs accounts
+    for (an unstable model: none); below `MIN_EXPLAINED` the recording is too quiet, a `RecordingError`."""
+    explained = np.zeros(outputs.shape[1])
+    if np.all(np.abs(np.linalg.eigvals(model[0])) < 1.0):
+        explained = _explained(model, inputs, outputs)
+    if np.min(explained) < MIN_EXPLAINED:
+        floor = recording.floors[int(np.argmin(explained))]
+        raise RecordingError(
+            f"{recording.name}: too quiet: the model explains {max(np.min(explained), 0.0):.0%} of floor {floor}'s "
+            "acceleration (the sensors' noise dominates); excite the building more strongly or record longer"
+        )
+    return explained
 
 
 def _explained(model, inputs: np.ndarray, outputs: np.ndarray) -> np.ndarray:
@@ -276,7 +291,8 @@ def _with_errors(modes, inputs, outputs, asked, block_rows, dt, band, floors, he
     for k in range(SEGMENTS):
         part = slice(k * length, (k + 1) * length)
         try:
-            model, _ = _n4sid(inputs[part], outputs[part], 2 * asked, block_rows, dt, band, "segment")
+            model, poles = _n4sid(inputs[part], outputs[part], 2 * asked, block_rows, dt, band)
+            _check_modes(model, poles, asked, band, "segment")
         except (RecordingError, np.linalg.LinAlgError, ValueError):
             return modes
         estimates.append(_modes(_structural(*model, floors, held, dt)[0], floors))
