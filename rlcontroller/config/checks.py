@@ -116,7 +116,8 @@ def _check_state_space(building: StateSpaceBuildingConfig, experiment: Experimen
         if refused:
             raise ConfigError(f"{location(*experiment.origin(part))}: {why}")
     plant = experiment.plant
-    if plant is not None:
+    simulated = plant.building if plant is not None and plant.building is not None else experiment.building
+    if plant is not None and simulated is building:  # a design model may be simulated as another building
         changed = [key for key in ("stiffness", "mass", "damping") if getattr(plant, key) != 1.0]
         changed += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)
         if changed:
