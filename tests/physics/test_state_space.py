@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.signal
 import yaml
-from conftest import SAME_PHYSICS
+from conftest import REPOSITORY, SAME_PHYSICS
 
 from rlcontroller.api import evaluate
 from rlcontroller.assets import DEFAULT_MODEL
@@ -99,3 +99,24 @@ def test_the_model_reports_the_buildings_modes(tmp_path):
     np.testing.assert_allclose(model.periods(), building.periods(), rtol=1e-9)
     np.testing.assert_allclose(model.periods(), [1.444, 0.549, 0.351, 0.281, 0.242], atol=6e-4)
     np.testing.assert_allclose(model.modal_damping_ratios()[[0, 4]], [0.01, 0.05], rtol=1e-9)
+
+
+@pytest.mark.slow
+def test_a_learner_trains_on_the_state_space_building_as_on_its_matrices(tmp_path):
+    """The smoke experiment's learner, same seed, on the building as M, K, C and as its state-space model:
+    the same validation numbers at every validation (the env steps the same maps)."""
+    from rlcontroller.learning.training import train
+
+    experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
+    model = as_state_space(experiment, tmp_path)
+    curves = []
+    for case, name in ((experiment, "mkc"), (model, "ss")):
+        train(case, run_dir=tmp_path / name)
+        curves.append((tmp_path / name / "learning_curve.csv").read_text().splitlines())
+    columns = curves[0][0].split(",")
+    wall = columns.index("wall_time_s")
+    for left, right in zip(*curves, strict=True):
+        assert [v for i, v in enumerate(left.split(",")) if i != wall] == [
+            v for i, v in enumerate(right.split(",")) if i != wall
+        ]
+    assert len(curves[0]) > 2
