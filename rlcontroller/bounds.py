@@ -13,3 +13,4 @@ MAX_HISTORY = 500  # control steps in the observation
 MAX_SEED = 2**32 - 1
 MAX_TOTAL_STEPS = 10**9
 MAX_ENVS = 256
+MAX_HORIZON = 200  # control steps of an MPC horizon

@@ -578,3 +578,18 @@ def test_identification_mistakes_are_one_line(tmp_path, monkeypatch, arguments, 
     (tmp_path / "e.yaml").write_text("name: e\n")
     (tmp_path / "t.csv").write_text("time,ground,absolute_acceleration_1,absolute_acceleration_2\n0,0,0,0\n0.1,1,1,1\n")
     assert one_error_line(CliRunner().invoke(app, arguments)).startswith(expected)
+
+
+@pytest.mark.parametrize(
+    ("arguments", "expected"),
+    [
+        (["--mpc", "0"], "error: --mpc 0: expected a horizon of 1..200 control steps"),
+        (
+            ["--mpc", "20", "--config", str(REPOSITORY / "configs/experiments/five_story_mr.yaml")],
+            "error: --mpc: MPC is built",
+        ),
+    ],
+)
+def test_mpc_mistakes_are_one_line(tmp_path, monkeypatch, arguments, expected):
+    monkeypatch.chdir(tmp_path)
+    assert one_error_line(CliRunner().invoke(app, ["compare", "lqg", *arguments])).startswith(expected)

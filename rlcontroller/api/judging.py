@@ -21,6 +21,7 @@ from rlcontroller.api.common import (
     standard_scenarios,
 )
 from rlcontroller.assets import SAFETY_STANDARD
+from rlcontroller.bounds import MAX_HORIZON
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.files import check_new_folder, new_folder
 
@@ -32,8 +33,10 @@ def comparison(
     records: Path | None,
     scale_pga: float | None,
     report: Report = QUIET,
+    mpc: int | None = None,
 ):
-    """The plant, the loads and the evaluation of every controller (the run's policy if given)."""
+    """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
+    horizon of `mpc` control steps if given)."""
     from rlcontroller.control.policy import read_policy
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.physics.loads import load_suite
@@ -43,9 +46,20 @@ def comparison(
     if plant.fe_model is not None:
         report.note(f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})")
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
+    extra = ()
+    if mpc is not None:
+        from rlcontroller.control.mpc import MPCController
+
+        extra = (MPCController(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
-        return plant, motions, compare(plant, motions, label, policy, on_motions=advance)
+        evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
+    for controller in extra:
+        if controller.fallbacks:
+            report.note(
+                f"{controller.name}: OSQP did not solve {controller.fallbacks} steps; LQR's clipped action taken"
+            )
+    return plant, motions, evaluation
 
 
 def evaluate(
@@ -110,10 +124,12 @@ def compare_lqg(
     preview: bool = False,
     model: str = "best",
     report: Report = QUIET,
+    mpc: int | None = None,
 ) -> LQGComparison:
     """LQG with the reward's cost (and its variants) against no control and, given a run, its policy;
     with `sweep` LQG's trade-off over force weights (dampers: passive levels and clipped-optimal weights),
-    with `preview` full-state LQR knowing the ground ahead."""
+    with `preview` full-state LQR knowing the ground ahead, with `mpc` MPC over that many control steps
+    (docs/mpc.md)."""
     import numpy as np
 
     from rlcontroller.evaluation.evaluation import (
@@ -138,11 +154,18 @@ def compare_lqg(
         experiment = load(config)
     if not experiment.command_labels():
         raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
+    if mpc is not None and not 1 <= mpc <= MAX_HORIZON:
+        raise ConfigError(f"--mpc {mpc}: expected a horizon of 1..{MAX_HORIZON} control steps")
+    if mpc is not None and (experiment.has_dampers or experiment.load_kind == "wind"):
+        raise ConfigError(
+            "--mpc: MPC is built for actuators and active mass drivers under ground motion (not yet for "
+            "semi-active dampers' passivity, nor with a wind model)"
+        )
     if experiment.has_dampers and preview:
         raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
-    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report)
+    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc)
     label = evaluation.label
     with new_folder(out) as staging:
         write_report(evaluation, staging)

@@ -79,16 +79,22 @@ def compare_lqg(
     preview: Annotated[
         bool, typer.Option(help="Full-state LQR knowing the ground 0-1 s ahead: what prediction could buy.")
     ] = False,
+    mpc: Annotated[
+        int | None,
+        typer.Option(help="Add MPC over this many control steps (20: 0.4 s), the force limits as constraints."),
+    ] = None,
     model: ModelOption = "best",
     progress: ProgressOption = None,
     engine: EngineOption = Engine.local,
     address: AddressOption = None,
 ) -> None:
-    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run."""
+    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run; MPC too with --mpc."""
     from rlcontroller import api
 
     with fan_out(engine.value, address):
-        compared = api.compare_lqg(run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress))
+        compared = api.compare_lqg(
+            run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress), mpc
+        )
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):
         if text is not None:

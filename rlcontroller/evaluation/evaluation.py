@@ -167,10 +167,11 @@ def compare(
     label: str,
     policy: PolicyController | None = None,
     on_motions: Callable[[int], None] | None = None,
+    extra: tuple[Controller, ...] = (),
 ) -> Evaluation:
-    """Uncontrolled, the classical controllers (`classical_controllers`), the saved `policy` (if
-    given) and the optimal reference, on every motion."""
-    controllers = classical_controllers(plant)
+    """Uncontrolled, the classical controllers (`classical_controllers`) and any `extra` ones (MPC), the
+    saved `policy` (if given) and the optimal reference, on every motion."""
+    controllers = [*classical_controllers(plant), *extra]
     sources = {}
     if policy is not None:
         controllers.append(policy)

@@ -108,6 +108,8 @@ def test_a_learner_trains_on_the_state_space_building_as_on_its_matrices(tmp_pat
     from rlcontroller.learning.training import train
 
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
+    short = {"total_steps": 400, "checkpoint_every": 200, "eval_every": 200}
+    experiment = experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update=short)})
     model = as_state_space(experiment, tmp_path)
     curves = []
     for case, name in ((experiment, "mkc"), (model, "ss")):

@@ -2,7 +2,7 @@
 against LQG on the true matrices and the uncontrolled building, on the true building (linear, and with yielding
 stories), on the seven records and a generated suite.
 
-Usage: python scripts/identification_study.py [--records ../shared/records] [--out results/identification]
+Usage: python studies/identification/identification_study.py [--records ../shared/records] [--out FOLDER]
 For each plant, budget D and seed: `rlc simulate-test` of the paper's experiment (configs/five_story.yaml; ambient
 white-noise ground of 0.1 m/s^2 RMS, actuators shaking at 5 % of their limits, the experiment's sensor noise),
 `rlc identify` with the floor masses from the drawings, then the experiment designed on that model (its `building`)
@@ -65,7 +65,7 @@ def judged(path: Path, suites: dict[str, list]) -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--records", type=Path, default=Path("../shared/records"))
-    parser.add_argument("--out", type=Path, default=Path("results/identification"))
+    parser.add_argument("--out", type=Path, default=Path("results/identification"), help="a new folder")
     arguments = parser.parse_args()
     arguments.out.mkdir(parents=True)
     experiment = load_experiment(EXPERIMENT)
