@@ -70,6 +70,7 @@ def identify(
     `masses` (kg, floor 1 first: from drawings) the model also gives story shears. Returns `out`."""
     from rlcontroller.identification.recording import read_recording
     from rlcontroller.identification.subspace import identify as identify_model
+    from rlcontroller.physics.state_space import state_space_outputs
 
     check_new_folder(out, "identification")
     if not 0.0 < band <= 1000.0:
@@ -88,10 +89,10 @@ def identify(
         "state_space": "model.npz",
         "state": "physical" if identified.physical else "abstract",
         "inputs": {"actuators": list(range(len(actuators))), "ground": len(actuators)},
-        "outputs": {
-            name: list(range(i * floors, (i + 1) * floors))
-            for i, name in enumerate(("displacement", "velocity", "drift", "absolute_acceleration", "story_shear"))
-            if (i + 1) * floors <= identified.arrays["C"].shape[0]
+        "outputs": {  # the rows `identify` writes, story shears only with the masses
+            name: rows
+            for name, rows in state_space_outputs(floors).items()
+            if rows[-1] < identified.arrays["C"].shape[0]
         },
     }
     header = (
