@@ -111,12 +111,13 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
             f"{first.name}: {inputs.shape[0] * dt:.0f} s is too short to identify {modes} modes up to {band:g} Hz"
         )
     model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band)
-    _check_explained(model, inputs, outputs, first)
+    explained = _check_explained(model, inputs, outputs, first)
     _check_modes(model, poles, modes, band, first.name)
     spanning = math.ceil(2 * np.pi / np.abs(poles[0]) / dt)  # block rows spanning the first mode's period
     if spanning > block_rows and inputs.shape[0] >= 10 * spanning * (inputs.shape[1] + floors):
         block_rows = spanning
         model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band)
+        explained = _check_explained(model, inputs, outputs, first)
         _check_modes(model, poles, modes, band, first.name)
     longest = 2 * np.pi / np.abs(poles[0])
     duration = inputs.shape[0] * dt
@@ -125,7 +126,6 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
             f"{first.name}: {duration:.0f} s holds {duration / longest:.0f} periods of the first mode "
             f"({longest:.3g} s); record at least {MIN_PERIODS} ({MIN_PERIODS * longest:.0f} s)"
         )
-    explained = _check_explained(model, inputs, outputs, first)
     held = len(first.actuators) if factor == 1 else 0  # decimation smooths the held forces too
     arrays, physical, dropped = _structural(*model, floors, held, dt)
     if masses is not None:  # V_i = sum over floors j >= i of m_j a_j
