@@ -48,16 +48,17 @@ def comparison(
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     extra = ()
     if mpc is not None:
-        from rlcontroller.control.mpc import MPCController
+        from rlcontroller.control.mpc import MPCController, SemiActiveMPC
 
-        extra = (MPCController(plant.design, mpc),)
+        extra = ((SemiActiveMPC if plant.semi_active is not None else MPCController)(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
     for controller in extra:
         if controller.fallbacks:
             report.note(
-                f"{controller.name}: OSQP did not solve {controller.fallbacks} steps; LQR's clipped action taken"
+                f"{controller.name}: OSQP did not solve {controller.fallbacks} steps; the last plan's next "
+                "action taken (LQR's clipped action where none was left)"
             )
     return plant, motions, evaluation
 
@@ -156,11 +157,8 @@ def compare_lqg(
         raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
     if mpc is not None and not 1 <= mpc <= MAX_HORIZON:
         raise ConfigError(f"--mpc {mpc}: expected a horizon of 1..{MAX_HORIZON} control steps")
-    if mpc is not None and (experiment.has_dampers or experiment.load_kind == "wind"):
-        raise ConfigError(
-            "--mpc: MPC is built for actuators and active mass drivers under ground motion (not yet for "
-            "semi-active dampers' passivity, nor with a wind model)"
-        )
+    if mpc is not None and experiment.load_kind == "wind":
+        raise ConfigError("--mpc: MPC is built for ground motion (its prediction is the ground model's), not wind")
     if experiment.has_dampers and preview:
         raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")

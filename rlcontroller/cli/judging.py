@@ -81,7 +81,10 @@ def compare_lqg(
     ] = False,
     mpc: Annotated[
         int | None,
-        typer.Option(help="Add MPC over this many control steps (20: 0.4 s), the force limits as constraints."),
+        typer.Option(
+            help="Add MPC over this many control steps (20: 0.4 s): force limits, strokes (soft) and dampers' "
+            "passivity as constraints."
+        ),
     ] = None,
     model: ModelOption = "best",
     progress: ProgressOption = None,

@@ -288,6 +288,8 @@ def check_algorithm(experiment: Experiment) -> None:
         )
     if algorithm.name == "RandomSearch":
         _check_random_search(experiment)
+    if algorithm.name == "DAgger":
+        _check_dagger(experiment)
     if algorithm.policy.odd and algorithm.normalize_observations:
         raise ConfigError(
             f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
@@ -326,6 +328,26 @@ def _check_random_search(experiment: Experiment) -> None:
     for key, (wrong, why) in refused.items():
         if wrong:
             raise ConfigError(f"{location(file, prefix, key)}: not for RandomSearch ({why})")
+
+
+def _check_dagger(experiment: Experiment) -> None:
+    """DAgger imitates MPC on raw observations (its data set holds them as the env gives them), on the batched
+    env's plant, with actuators or active mass drivers under ground motion (what MPC is built for)."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    refused = {
+        "normalize_observations": (algorithm.normalize_observations, "its data set keeps raw observations"),
+        "normalize_rewards": (algorithm.normalize_rewards, "it learns from MPC's actions, not from rewards"),
+        "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),
+    }
+    for key, (wrong, why) in refused.items():
+        if wrong:
+            raise ConfigError(f"{location(file, prefix, key)}: not for DAgger ({why})")
+    if experiment.has_dampers or experiment.load_kind == "wind":
+        raise ConfigError(
+            f"{location(file, prefix, 'name')}: DAgger imitates MPC, which is built for actuators and active mass "
+            "drivers under ground motion (not for dampers or wind)"
+        )
 
 
 def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:

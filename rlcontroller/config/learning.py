@@ -10,7 +10,7 @@ from pydantic import (
     model_validator,
 )
 
-from rlcontroller.bounds import MAX_ENVS, MAX_TOTAL_STEPS
+from rlcontroller.bounds import MAX_ENVS, MAX_HORIZON, MAX_TOTAL_STEPS
 from rlcontroller.config.base import StrictModel
 
 
@@ -55,9 +55,10 @@ class SearchRange(StrictModel):
 
 
 class AlgorithmConfig(StrictModel):
-    """The learner (a stable-baselines3 one, or `RandomSearch`: random search with common random
+    """The learner (a stable-baselines3 one; `RandomSearch`: random search with common random
     numbers on a linear policy, odd or with `policy.odd: false` affine,
-    `rlcontroller.learning.random_search`), its keyword arguments and the training schedule.
+    `rlcontroller.learning.random_search`; or `DAgger`: an MLP taught to act as MPC,
+    `rlcontroller.learning.imitation`), its keyword arguments and the training schedule.
 
     `kwargs` go to the learner's constructor (learning_rate, batch_size, buffer_size, train_freq,
     gradient_steps, n_steps, ...); `policy` sets the MLP. `n_envs` environments run as one batch
@@ -75,7 +76,7 @@ class AlgorithmConfig(StrictModel):
     `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
 
-    name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C", "RandomSearch"] = "SAC"
+    name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C", "RandomSearch", "DAgger"] = "SAC"
     total_steps: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 1_500_000
     n_envs: Annotated[int, Field(ge=1, le=MAX_ENVS)] = 1
     vec_env: Literal["batched", "dummy", "subproc"] = "batched"
@@ -134,6 +135,7 @@ LEARNER_KWARGS = {
     "TD3": _OFF_POLICY | {"policy_delay", "target_policy_noise", "target_noise_clip", "stats_window_size"},
     "DDPG": _OFF_POLICY,
     "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std", "initial_bias"},
+    "DAgger": _COMMON | {"horizon", "n_motions", "epochs", "batch_size", "max_samples"},
 }
 RESERVED_KWARGS = {
     "policy",
@@ -159,4 +161,7 @@ NUMERIC_KWARGS = {
     "n_motions": (1, 10_000, True),
     "delta_std": (1e-12, 1e6, False),
     "initial_bias": (-1.0, 1.0, False),
+    "horizon": (1, MAX_HORIZON, True),
+    "epochs": (1, 10_000, True),
+    "max_samples": (1, 10_000_000, True),
 }

@@ -211,19 +211,29 @@ class ClippedOptimal:
         self.estimate: np.ndarray | None = None
         self._previous_ground = np.zeros(())
 
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def update(self, observation: np.ndarray) -> np.ndarray:
+        """The filter's step on `observation` (the estimate kept in `estimate`); returns the measured damper
+        forces (N, on the floor above: an actuator's sign)."""
         layout, design = self.layout, self.design
         observation = np.asarray(observation, dtype=float)
         readings = observation[..., layout.readings] * layout.reading_scale
         ground = observation[..., layout.ground] * layout.ground_scale
-        measured = readings[..., self.force_rows]  # N, on the floor above (an actuator's sign)
+        measured = readings[..., self.force_rows]
         if self.estimate is None:
             self.estimate = np.zeros(observation.shape[:-1] + (design.filter.size,))
         held = measured / self.capacity
         self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
         self._previous_ground = ground
-        desired = -(self.estimate @ design.feedback.T) * self.capacity
+        return measured
+
+    @staticmethod
+    def switch(desired: np.ndarray, measured: np.ndarray) -> np.ndarray:
+        """Each damper fully on (+1) where (f_desired - f_measured) f_measured > 0, else off (-1)."""
         return np.where((desired - measured) * measured > 0.0, 1.0, -1.0)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        measured = self.update(observation)
+        return self.switch(-(self.estimate @ self.design.feedback.T) * self.capacity, measured)
 
 
 def _force_rows(plant: Plant) -> np.ndarray:

@@ -1,17 +1,23 @@
 """Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps, subject
-to the actuators' force limits, from the Kalman estimate of LQG + ground model.
+to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of LQG +
+ground model.
 
 With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the coming
 ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation) and the reward's cost
 rows (`lqr.quadratic_cost`), each step solves
 
-    min over a_0..a_{N-1}   sum_k |H_z z_k + H_u a_k|^2 + z_N' P z_N    subject to  -1 <= a_k <= 1,
+    min over a, s   sum_k |H_z z_k + H_u a_k|^2 + z_N' P z_N + sum_k,j (rho_1 s_kj + rho_2 s_kj^2 / 2)
+    subject to      -1 <= a_k <= 1,   |stroke_j(z_k)| <= limit_j (1 + s_kj),   s_kj >= 0   (k = 1..N),
 
 P the stationary Riccati solution, so that where no limit binds the first move is LQR's -K z_0 exactly. The
-predictions are condensed (z = T z_0 + S a), leaving a dense QP in the N m actions: 1/2 a' H a + (F z_0)' a,
-H and F built once; OSQP (Stellato et al. 2020, Math. Prog. Comp. 12) solves it, one warm-started solver per
-building of a batch, only the linear term updated each step. A step the solver does not finish falls back to
-LQR's clipped action and is counted (`fallbacks`).
+slack s (a stroke's excess as a fraction of its limit) keeps every problem feasible; its linear price
+`STROKE_PRICE` is an exact penalty (larger than the constraint's multiplier in every test, so that a plan
+that can keep the limit does), the quadratic one makes the excess unique. The predictions are condensed
+(z = T z_0 + S a), leaving a QP in the N m actions (and the slacks) whose Hessian and constraint matrix are
+built once, only the linear term and the stroke rows' bounds (affine in z_0) updated each step; OSQP (Stellato
+et al. 2020, Math. Prog. Comp. 12) solves it, one warm-started solver per building of a batch. A step the
+solver does not finish (OSQP's status neither solved nor solved inaccurate) is counted (`fallbacks`) and takes
+the next action of the last plan solved, or LQR's clipped action when there is none within the horizon.
 """
 
 from __future__ import annotations
@@ -24,21 +30,63 @@ from rlcontroller.config import RewardConfig
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
+from rlcontroller.physics.dynamics import output_matrices
 from rlcontroller.physics.plant import Plant
 
-DEFAULT_HORIZON = 20  # control steps (0.4 s at 20 ms)
+DEFAULT_HORIZON = 20  # control steps (0.4 s at 20 ms): studies/mpc/horizon_sweep.py, docs/mpc.md
 TOLERANCE = 1e-6  # OSQP's absolute and relative tolerances, per unit action
+SOLVED = (1, 2)  # OSQP's status values of a solution: solved, solved to a lower accuracy
+REACH_TOLERANCE = 1e-3  # a planned damper force this close to its reach (action units) is at the reach
+ALL_IT_GIVES = 1e30  # N: the demand of a force planned at a damper's reach
+STROKE_PRICE = (1e3, 1e4)  # rho_1, rho_2: the cost of a stroke's excess s (fraction of its limit) per step
 
 
 @dataclass(frozen=True)
 class MPCProblem:
-    """The condensed QP of one step: 1/2 a' hessian a + (linear @ z_0)' a over the N m actions (action units,
-    step by step), each in [-1, 1]."""
+    """The condensed QP of one step over x = [a; s] (the N m actions in action units, step by step, then the
+    slacks of the stroke rows): min 1/2 x' hessian x + (linear @ z_0 + offset)' x subject to
+    lower + lower_gain @ z_0 <= constraints x <= upper + upper_gain @ z_0."""
 
     hessian: np.ndarray
     linear: np.ndarray
+    offset: np.ndarray
+    constraints: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    lower_gain: np.ndarray
+    upper_gain: np.ndarray
     horizon: int
     actions: int
+
+    def bounds(self, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.lower + self.lower_gain @ estimate, self.upper + self.upper_gain @ estimate
+
+
+def _predictions(phi: np.ndarray, action_gain: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+    """(T, S) with [z_0; ...; z_N] = T z_0 + S [a_0; ...; a_(N-1)]."""
+    n, m = action_gain.shape
+    free = np.zeros(((horizon + 1) * n, n))
+    forced = np.zeros(((horizon + 1) * n, horizon * m))
+    free[:n] = np.eye(n)
+    for k in range(1, horizon + 1):
+        rows, previous = slice(k * n, (k + 1) * n), slice((k - 1) * n, k * n)
+        free[rows] = phi @ free[previous]
+        forced[rows] = phi @ forced[previous]
+        forced[rows, (k - 1) * m : k * m] += action_gain
+    return free, forced
+
+
+def stroke_rows(plant: Plant, size: int) -> np.ndarray:
+    """Each stroke-limited mass device's stroke as a fraction of its limit, on the state z of `size`."""
+    building = plant.building
+    devices = getattr(building, "devices", ())
+    limited = [index for index, device in enumerate(devices) if device.stroke_limit is not None]
+    if not limited:
+        return np.zeros((0, size))
+    c, _ = output_matrices(building, "stroke")
+    limits = np.array([devices[index].stroke_limit for index in limited])
+    rows = c[limited] / limits[:, None]
+    return np.pad(rows, ((0, 0), (0, size - rows.shape[1])))
 
 
 def mpc_problem(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCProblem:
@@ -48,53 +96,82 @@ def mpc_problem(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConf
     _, riccati = lqr_gain(step, cost, plant.force_limits)
     phi, action_gain = step.phi, step.force_gain * plant.force_limits
     n, m = action_gain.shape
-    free = np.zeros(((horizon + 1) * n, n))  # T: z_k from z_0
-    forced = np.zeros(((horizon + 1) * n, horizon * m))  # S: z_k from the actions
-    free[:n] = np.eye(n)
-    for k in range(1, horizon + 1):
-        rows, previous = slice(k * n, (k + 1) * n), slice((k - 1) * n, k * n)
-        free[rows] = phi @ free[previous]
-        forced[rows] = phi @ forced[previous]
-        forced[rows, (k - 1) * m : k * m] += action_gain
+    free, forced = _predictions(phi, action_gain, horizon)
     stage_state = np.kron(np.eye(horizon), cost.state)  # H_z on z_0..z_{N-1}
     stage_action = np.kron(np.eye(horizon), cost.action)  # H_u on a_0..a_{N-1}
     stage = stage_state @ forced[: horizon * n] + stage_action
     stage_free = stage_state @ free[: horizon * n]
     last = slice(horizon * n, (horizon + 1) * n)
-    hessian = 2.0 * (stage.T @ stage + forced[last].T @ riccati @ forced[last])
-    linear = 2.0 * (stage.T @ stage_free + forced[last].T @ riccati @ free[last])
-    return MPCProblem(hessian=0.5 * (hessian + hessian.T), linear=linear, horizon=horizon, actions=m)
+    action_hessian = 2.0 * (stage.T @ stage + forced[last].T @ riccati @ forced[last])
+    action_linear = 2.0 * (stage.T @ stage_free + forced[last].T @ riccati @ free[last])
+
+    strokes = np.kron(np.eye(horizon), stroke_rows(plant, n))  # on z_1..z_N
+    slacks = strokes.shape[0]
+    stroke_forced, stroke_free = strokes @ forced[n:], strokes @ free[n:]
+    size = horizon * m + slacks
+    hessian = np.zeros((size, size))
+    hessian[: horizon * m, : horizon * m] = 0.5 * (action_hessian + action_hessian.T)
+    hessian[horizon * m :, horizon * m :] = STROKE_PRICE[1] * np.eye(slacks)
+    linear = np.vstack([action_linear, np.zeros((slacks, n))])
+    offset = np.concatenate([np.zeros(horizon * m), np.full(slacks, STROKE_PRICE[0])])
+    identity, zeros = np.eye(slacks), np.zeros((slacks, horizon * m))
+    constraints = np.block(
+        [
+            [np.eye(horizon * m), np.zeros((horizon * m, slacks))],  # -1 <= a <= 1
+            [stroke_forced, -identity],  # stroke - s <= 1
+            [stroke_forced, identity],  # stroke + s >= -1
+            [zeros, identity],  # s >= 0
+        ]
+    )
+    inf, actions = np.inf, horizon * m
+    lower = np.concatenate([-np.ones(actions), np.full(slacks, -inf), -np.ones(slacks), np.zeros(slacks)])
+    upper = np.concatenate([np.ones(actions), np.ones(slacks), np.full(slacks, inf), np.full(slacks, inf)])
+    gain = np.vstack([np.zeros((actions, n)), -stroke_free, -stroke_free, np.zeros((slacks, n))])
+    return MPCProblem(
+        hessian=hessian,
+        linear=linear,
+        offset=offset,
+        constraints=constraints,
+        lower=lower,
+        upper=upper,
+        lower_gain=gain,
+        upper_gain=gain,
+        horizon=horizon,
+        actions=m,
+    )
 
 
-class MPCController:
-    """MPC on the estimate of LQG + ground model's Kalman filter (the same filter, the QP in place of its gain):
-    `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (LQR's clipped action
-    taken instead)."""
+class MPCPlanner:
+    """The QP of `problem` solved for each building of a batch (one warm-started OSQP solver per row), with the
+    last plan of each kept: `first_actions` returns each row's first planned action, or on a step OSQP did not
+    solve (counted in `fallbacks`) the last plan's next action, or the given fallback action."""
 
-    def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
-        self.name = name or f"MPC (N = {horizon})"
-        self.lqg = LQGController(design_lqg_ground_model(plant), plant, self.name)  # the filter, and the fallback
-        self.problem = mpc_problem(plant, horizon)
+    def __init__(self, problem: MPCProblem) -> None:
+        self.problem = problem
         self.fallbacks = 0
-        self._solvers: list = []
+        self.reset()
 
     def reset(self) -> None:
-        self.lqg.reset()
+        """Before a record: no plans and new solvers (OSQP adapts its step size as it goes), so that a
+        record's actions do not depend on the records run before it."""
+        self._solvers: list = []
+        self._plans: dict[int, tuple[np.ndarray, int]] = {}  # row: (its last plan's actions, steps since)
 
     def _solver(self, row: int):
         """The warm-started OSQP solver of the batch's `row`-th building (built on first use)."""
         import osqp  # only where MPC runs
         import scipy.sparse
 
+        problem = self.problem
         while len(self._solvers) <= row:
-            size = self.problem.hessian.shape[0]
+            lower, upper = problem.bounds(np.zeros(problem.linear.shape[1]))
             solver = osqp.OSQP()
             solver.setup(
-                P=scipy.sparse.csc_matrix(np.triu(self.problem.hessian)),
-                q=np.zeros(size),
-                A=scipy.sparse.identity(size, format="csc"),
-                l=-np.ones(size),
-                u=np.ones(size),
+                P=scipy.sparse.csc_matrix(np.triu(problem.hessian)),
+                q=problem.offset.copy(),
+                A=scipy.sparse.csc_matrix(problem.constraints),
+                l=lower,
+                u=upper,
                 eps_abs=TOLERANCE,
                 eps_rel=TOLERANCE,
                 polishing=False,
@@ -104,16 +181,153 @@ class MPCController:
             self._solvers.append(solver)
         return self._solvers[row]
 
+    def plan(self, row: int, estimate: np.ndarray, action_bounds: tuple | None = None) -> np.ndarray | None:
+        """The solution [a; s] of the QP from `estimate` for the batch's `row`-th building (the actions within
+        `action_bounds`, (lower, upper) per planned action, instead of [-1, 1] if given), or None when OSQP did
+        not solve it."""
+        solver = self._solver(row)
+        lower, upper = self.problem.bounds(estimate)
+        if action_bounds is not None:
+            size = self.problem.horizon * self.problem.actions
+            lower[:size], upper[:size] = action_bounds
+        solver.update(q=self.problem.linear @ estimate + self.problem.offset, l=lower, u=upper)
+        result = solver.solve(raise_error=False)
+        self.last_solve_time = result.info.solve_time  # s, OSQP's own (scripts/bench_mpc.py)
+        return result.x if result.info.status_val in SOLVED else None
+
+    def planned(self, row: int) -> np.ndarray | None:
+        """The rest of the last plan of `row` (actions by step, from the coming one), or None."""
+        if row not in self._plans:
+            return None
+        previous, since = self._plans[row]
+        return previous[since + 1 :]
+
+    def first_actions(
+        self, estimates: np.ndarray, fallback: np.ndarray, action_bounds: list | None = None
+    ) -> np.ndarray:
+        """Each row's action (action units) from its estimate; `fallback` (rows, m) where no plan is left."""
+        m = self.problem.actions
+        actions = fallback.copy()
+        for row, estimate in enumerate(estimates):
+            plan = self.plan(row, estimate, None if action_bounds is None else action_bounds[row])
+            if plan is not None:
+                self._plans[row] = (np.clip(plan[: self.problem.horizon * m], -1.0, 1.0).reshape(-1, m), 0)
+            elif row in self._plans and self._plans[row][1] + 1 < self.problem.horizon:
+                previous, since = self._plans[row]
+                self._plans[row] = (previous, since + 1)
+                self.fallbacks += 1
+            else:
+                self._plans.pop(row, None)
+                self.fallbacks += 1
+                continue
+            previous, since = self._plans[row]
+            actions[row] = previous[since]
+        return actions
+
+
+class MPCController:
+    """MPC on the estimate of LQG + ground model's Kalman filter (the same filter, the QP in place of its gain):
+    `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (the last plan's next
+    action taken instead, or LQR's clipped action)."""
+
+    def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
+        self.name = name or f"MPC (N = {horizon})"
+        self.lqg = LQGController(design_lqg_ground_model(plant), plant, self.name)  # the filter, and the fallback
+        self.planner = MPCPlanner(mpc_problem(plant, horizon))
+        self.problem = self.planner.problem
+
+    @property
+    def fallbacks(self) -> int:
+        return self.planner.fallbacks
+
+    def reset(self) -> None:
+        self.lqg.reset()
+        self.planner.reset()
+
     def act(self, observation: np.ndarray) -> np.ndarray:
         fallback = self.lqg.act(observation)  # the filter steps here; LQR's clipped action
         estimates = self.lqg.estimate.reshape(-1, self.lqg.estimate.shape[-1])
-        actions = fallback.reshape(-1, self.problem.actions).copy()
-        for row, estimate in enumerate(estimates):
-            solver = self._solver(row)
-            solver.update(q=self.problem.linear @ estimate)
-            result = solver.solve(raise_error=False)
-            if result.info.status_val == 1:  # solved
-                actions[row] = np.clip(result.x[: self.problem.actions], -1.0, 1.0)
-            else:
-                self.fallbacks += 1
+        actions = self.planner.first_actions(estimates, fallback.reshape(-1, self.problem.actions))
         return actions.reshape(fallback.shape)
+
+
+class SemiActiveMPC:
+    """MPC for semi-active dampers: the QP of the active equivalent (each damper an ideal actuator of its
+    capacity, as clipped-optimal control designs on) with passivity as bounds, on clipped-optimal control's
+    Kalman estimate (which takes the measured damper forces as applied); each damper is then switched by
+    clipped-optimal control's rule towards the first planned force.
+
+    Passivity (force u opposing the damper's velocity v, u v <= 0, and |u| within its reach) is bilinear in the
+    plan, since v depends on the forces; it is approximated by fixing the sign of each step's velocity at its
+    prediction from the last plan shifted by a step (from no force at a record's start): u_k in [-reach_k, 0]
+    where that velocity is positive, [0, reach_k] where not. The reach is the capacity for an MR damper (its
+    yield-like force) and c_max |v| for a variable damper (at most its capacity). A force planned at the reach
+    asks for all the damper gives (switched on where the measured force has its sign): an MR damper's force
+    exceeds its capacity by its viscous part at speed, and the plain rule would switch it off there. `reward`:
+    another cost (trade-off sweeps)."""
+
+    def __init__(
+        self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None, reward: RewardConfig | None = None
+    ) -> None:
+        from rlcontroller.control.controllers import ClippedOptimal
+
+        self.name = name or f"MPC (N = {horizon})"
+        self.clipped = ClippedOptimal(plant, self.name, reward)  # the filter and the switching law
+        equivalent = plant.active_equivalent
+        self.planner = MPCPlanner(mpc_problem(equivalent, horizon, reward))
+        self.problem = self.planner.problem
+        n, m = self.problem.linear.shape[1], self.problem.actions
+        dampers = [device for device in plant.experiment.devices if device.semi_active]
+        self.first_damper = m - len(dampers)
+        step = equivalent.ground_model_step()
+        free, forced = _predictions(step.phi, step.force_gain * equivalent.force_limits, horizon)
+        c, _ = output_matrices(equivalent.building, "device_velocity")
+        velocity = np.kron(np.eye(horizon), np.pad(c[self.first_damper :], ((0, 0), (0, n - c.shape[1]))))
+        self.velocity_free = velocity @ free[: horizon * n]  # v_0..v_(N-1), by step and damper
+        self.velocity_forced = velocity @ forced[: horizon * n]
+        # reach per unit velocity / capacity (variable dampers), or None (MR dampers: the capacity)
+        self.reach_slope = [
+            getattr(device, "damping_max", None) and device.damping_max / device.capacity for device in dampers
+        ]
+
+    @property
+    def fallbacks(self) -> int:
+        return self.planner.fallbacks
+
+    def reset(self) -> None:
+        self.clipped.reset()
+        self.planner.reset()
+
+    def action_bounds(self, row: int, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each planned action's bounds: [-1, 1] for actuators, passivity's for dampers."""
+        horizon, m = self.problem.horizon, self.problem.actions
+        coming = self.planner.planned(row)
+        shifted = np.zeros((horizon, m))
+        if coming is not None:
+            shifted[: len(coming)] = coming
+        velocity = (self.velocity_free @ estimate + self.velocity_forced @ shifted.ravel()).reshape(horizon, -1)
+        reach = np.ones_like(velocity)
+        for j, slope in enumerate(self.reach_slope):
+            if slope is not None:
+                reach[:, j] = np.minimum(1.0, slope * np.abs(velocity[:, j]))
+        lower, upper = -np.ones((horizon, m)), np.ones((horizon, m))
+        lower[:, self.first_damper :] = np.where(velocity > 0.0, -reach, 0.0)
+        upper[:, self.first_damper :] = np.where(velocity > 0.0, 0.0, reach)
+        return lower.ravel(), upper.ravel()
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        clipped = self.clipped
+        measured = clipped.update(observation)
+        estimates = clipped.estimate.reshape(-1, clipped.estimate.shape[-1])
+        lqr = np.clip(-(estimates @ clipped.design.feedback.T), -1.0, 1.0)
+        bounds = [self.action_bounds(row, estimate) for row, estimate in enumerate(estimates)]
+        planned = self.planner.first_actions(estimates, lqr, bounds)
+        m = self.problem.actions
+        lower, upper = (np.array([bound[side][:m] for bound in bounds]) for side in (0, 1))
+        # a force planned at the reach asks for all the damper gives (an MR damper's exceeds its capacity
+        # by its viscous part at speed): switched on wherever the measured force has the planned sign
+        at_reach = ((planned >= upper - REACH_TOLERANCE) & (upper > 0)) | (
+            (planned <= lower + REACH_TOLERANCE) & (lower < 0)
+        )
+        desired = np.where(at_reach, np.sign(planned) * ALL_IT_GIVES, planned * clipped.capacity)
+        return clipped.switch(desired.reshape(measured.shape), measured)

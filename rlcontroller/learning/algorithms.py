@@ -71,6 +71,8 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
     if algorithm.name == "RandomSearch":
         net_arch = {"pi": [], "vf": []}  # no critic is trained
+    elif algorithm.name == "DAgger":
+        net_arch = {"pi": list(algorithm.policy.actor_arch or algorithm.policy.net_arch), "vf": []}
     elif algorithm.policy.actor_arch is not None:
         critic = "vf" if algorithm.name in ("PPO", "A2C") else "qf"
         net_arch = {"pi": list(algorithm.policy.actor_arch), critic: net_arch}

@@ -24,7 +24,11 @@ from rlcontroller.physics.plant import Plant
 
 
 def algorithm_class(name: str) -> type:
-    """The learner class called `name`: a stable-baselines3 one (SAC, PPO, ...) or RandomSearch."""
+    """The learner class called `name`: a stable-baselines3 one (SAC, PPO, ...), RandomSearch or DAgger."""
+    if name == "DAgger":
+        from rlcontroller.learning.imitation import DAgger
+
+        return DAgger
     if name == "RandomSearch":
         from rlcontroller.learning.random_search import RandomSearch
 

@@ -165,7 +165,7 @@ class RandomSearch(BaseAlgorithm):
             raise ValueError("RandomSearch needs a BatchedVecEnv as its env (algorithm.vec_env: batched)")
         if progress_bar:  # stable-baselines3's own bar would advance by n_envs per iteration
             given = callback if isinstance(callback, list) else [callback] if callback is not None else []
-            callback = [*given, _StepsProgressBar()]
+            callback = [*given, StepsProgressBar()]
         total_timesteps, callback = self._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name)
         callback.on_training_start(locals(), globals())
         while self.num_timesteps < total_timesteps:
@@ -178,7 +178,7 @@ class RandomSearch(BaseAlgorithm):
         return self
 
 
-class _StepsProgressBar(ProgressBarCallback):
+class StepsProgressBar(ProgressBarCallback):
     """stable-baselines3's progress bar, advanced by the steps an iteration simulated (not by n_envs)."""
 
     def _on_step(self) -> bool:

@@ -103,7 +103,7 @@ def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:
         ),
         (
             "algorithm:\n  name: DQN\n",
-            "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C' or 'RandomSearch'",
+            "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C', 'RandomSearch' or 'DAgger'",
         ),
         ("building: [1, 2\n", "bad.yaml:2: invalid YAML"),
         ("- 1\n", "expected a mapping of experiment keys"),

@@ -1,14 +1,15 @@
 """MPC: with loose limits its first move is LQR's; with binding limits it never leaves them and its plan
-costs no more than clipped LQR's; a step the solver does not finish falls back to LQR's clipped action and
-is counted."""
+costs no more than clipped LQR's; a stroke limit is kept where it can be, and its excess paid where not; a step
+the solver does not finish takes the last plan's next action, or LQR's clipped one, and is counted."""
 
 import numpy as np
 import pytest
 
-from rlcontroller.config import Experiment
+from rlcontroller.assets import CONFIGS
+from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
-from rlcontroller.control.mpc import TOLERANCE, MPCController, mpc_problem
+from rlcontroller.control.mpc import TOLERANCE, MPCController, SemiActiveMPC, mpc_problem, stroke_rows
 from rlcontroller.physics.plant import Plant
 
 PLANT = Plant(Experiment())
@@ -21,9 +22,7 @@ def controller():
 
 
 def solve(controller, estimate):
-    solver = controller._solver(0)
-    solver.update(q=controller.problem.linear @ estimate)
-    return solver.solve(raise_error=False).x
+    return controller.planner.plan(0, estimate)
 
 
 def test_with_loose_limits_the_first_move_is_lqrs(controller):
@@ -60,8 +59,8 @@ def test_with_binding_limits_the_plan_keeps_them_and_costs_no_more_than_clipped_
 def test_a_step_the_solver_does_not_finish_falls_back_to_lqr_and_is_counted():
     controller = MPCController(PLANT, 20)
     observation = 0.5 * RNG.standard_normal((2, PLANT.layout.size))
-    controller._solver(1)
-    for solver in controller._solvers:
+    controller.planner._solver(1)
+    for solver in controller.planner._solvers:
         solver.update_settings(max_iter=1)
     actions = controller.act(observation)
     assert controller.fallbacks == 2
@@ -83,9 +82,104 @@ def test_the_problem_is_built_from_the_riccati_solution_it_ends_with():
 def test_compare_lqg_gains_an_mpc_row(tmp_path):
     """On the synthetic suite MPC ties LQG + ground model's J1 (its filter, its cost) within 5 %."""
     from rlcontroller import api
-    from rlcontroller.assets import CONFIGS
 
     evaluation = api.compare_lqg(config=CONFIGS / "five_story.yaml", out=tmp_path / "out", mpc=20).evaluation
     summary = evaluation.summary()
     assert "MPC (N = 20)" in summary.index
     assert summary.loc["MPC (N = 20)", "J1"] == pytest.approx(summary.loc["LQG + ground model", "J1"], rel=0.05)
+
+
+AMD = Plant(load_experiment(CONFIGS / "experiments" / "five_story_amd.yaml"))
+
+
+def predicted_strokes(problem, plant, estimate, plan):
+    """The plan's strokes / limits at z_1..z_N, through the design model's step map."""
+    step = plant.ground_model_step()
+    rows = stroke_rows(plant, estimate.size)
+    actions = plan[: problem.horizon * problem.actions].reshape(problem.horizon, problem.actions)
+    state, strokes = estimate, []
+    for action in actions:
+        state = step.phi @ state + step.force_gain * plant.force_limits @ action
+        strokes.append(rows @ state)
+    return np.array(strokes)
+
+
+@pytest.mark.parametrize(
+    ("stroke", "velocity", "within_reach"), [(0.5, 5.0, True), (0.6, 4.5, True), (0.5, 6.0, False), (0.8, 5.0, False)]
+)
+def test_a_plan_keeps_the_stroke_limit_where_it_can_and_pays_for_what_it_cannot(stroke, velocity, within_reach):
+    """The roof driver (10 kN, 1 m), its mass `stroke` (m) out and moving outward at `velocity` (m/s), the
+    building at rest: clipped LQR overshoots the limit; MPC's plan keeps every predicted stroke within it with
+    zero slack where it can (`within_reach`: the price is an exact penalty), and elsewhere its slack is exactly
+    what its strokes exceed the limit by; its actions stay within the force limit."""
+    design = AMD.design
+    controller = MPCController(design, 20)
+    problem = controller.problem
+    feedback = design_lqg_ground_model(design).feedback
+    step = design.ground_model_step()
+    rows = stroke_rows(design, feedback.shape[1])
+    n_floors, n_dofs = design.building.n_floors, design.building.n_dofs
+    estimate = np.zeros(feedback.shape[1])
+    estimate[n_floors], estimate[n_dofs + n_floors] = stroke, velocity
+    state, lqr_peak = estimate, 0.0
+    for _ in range(problem.horizon):
+        state = step.phi @ state + step.force_gain * design.force_limits @ np.clip(-feedback @ state, -1, 1)
+        lqr_peak = max(lqr_peak, float(np.max(np.abs(rows @ state))))
+    assert lqr_peak > 1.0
+    plan = controller.planner.plan(0, estimate)
+    actions, slack = plan[: problem.horizon], plan[problem.horizon :]
+    assert np.all(np.abs(actions) <= 1.0 + 10 * TOLERANCE)
+    strokes = np.abs(predicted_strokes(problem, design, estimate, plan)).ravel()
+    np.testing.assert_allclose(slack, np.maximum(strokes - 1.0, 0.0), atol=1e-4)
+    assert (np.max(slack) < 1e-4) == within_reach
+
+
+def test_a_step_the_solver_does_not_finish_takes_the_last_plans_next_action():
+    controller = MPCController(PLANT, 20)
+    observations = 0.5 * RNG.standard_normal((3, 1, PLANT.layout.size))
+    controller.act(observations[0])
+    planned = controller.planner._plans[0][0]
+    controller.planner._solver(0).update_settings(max_iter=1)
+    np.testing.assert_array_equal(controller.act(observations[1])[0], planned[1])
+    assert controller.fallbacks == 1
+    controller.reset()  # a new record: new solvers, no plan to fall back on
+    assert controller.planner._solvers == [] and controller.planner._plans == {}
+
+
+MR = Plant(load_experiment(CONFIGS / "experiments" / "five_story_mr.yaml"))
+
+
+def test_a_damper_plan_only_asks_for_forces_that_oppose_the_dampers_velocity():
+    """MR dampers on stories 1, 3, 5: from estimates where LQR's demand would push a damper along its velocity
+    (what no damper can do), MPC's planned forces all oppose their steps' predicted velocities (the product of
+    force and velocity, the damper's power, is never positive) and stay within the capacity."""
+    controller = SemiActiveMPC(MR.design, 20)
+    problem = controller.problem
+    feedback = controller.clipped.design.feedback
+    pushing = 0
+    for _ in range(10):
+        estimate = 0.02 * RNG.standard_normal(feedback.shape[1])
+        velocity = controller.velocity_free[: problem.actions] @ estimate
+        pushing += int(np.any(-feedback @ estimate * velocity > 1e-9))
+        controller.planner.reset()
+        plan = controller.planner.plan(0, estimate, controller.action_bounds(0, estimate))
+        actions = plan[: problem.horizon * problem.actions]
+        velocities = controller.velocity_free @ estimate + controller.velocity_forced @ np.zeros_like(actions)
+        assert np.all(actions * velocities <= 10 * TOLERANCE)
+        assert np.all(np.abs(actions) <= 1.0 + 10 * TOLERANCE)
+    assert pushing  # LQR's demand is not passive in some of them
+
+
+def test_a_variable_dampers_reach_grows_with_its_velocity():
+    """An ideal variable damper (c up to 2e6 N*s/m, capacity 1e5 N): its bound is c_max |v| / capacity, at most 1."""
+    experiment = load_experiment(CONFIGS / "experiments" / "five_story_mr.yaml")
+    devices = [
+        {"type": "variable_damper", "story": 1, "damping_min": 1e4, "damping_max": 2e6, "capacity": 1e5},
+    ]
+    plant = Plant(experiment.model_validate(experiment.model_dump() | {"devices": devices}))
+    controller = SemiActiveMPC(plant.design, 5)
+    estimate = 0.01 * RNG.standard_normal(controller.velocity_free.shape[1])
+    velocity = controller.velocity_free @ estimate
+    lower, upper = controller.action_bounds(0, estimate)
+    np.testing.assert_allclose(upper - lower, np.minimum(1.0, 20.0 * np.abs(velocity)))
+    assert np.all((velocity > 0) <= (upper == 0.0)) and np.all((velocity <= 0) <= (lower == 0.0))
