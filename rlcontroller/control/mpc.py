@@ -1,6 +1,6 @@
 """Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps, subject
 to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of LQG +
-ground model.
+ground model (`MPCController`); for semi-active dampers with passivity as bounds (`SemiActiveMPC`).
 
 With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the coming
 ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation) and the reward's cost
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import RewardConfig
-from rlcontroller.control.controllers import LQGController
+from rlcontroller.control.controllers import ClippedOptimal, LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
 from rlcontroller.physics.dynamics import output_matrices
@@ -269,8 +269,6 @@ class SemiActiveMPC:
     def __init__(
         self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None, reward: RewardConfig | None = None
     ) -> None:
-        from rlcontroller.control.controllers import ClippedOptimal
-
         self.name = name or f"MPC (N = {horizon})"
         self.clipped = ClippedOptimal(plant, self.name, reward)  # the filter and the switching law
         equivalent = plant.active_equivalent
