@@ -26,17 +26,16 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.policies import ActorCriticPolicy
 
-from rlcontroller.control.controllers import LQGPrior, residual_action
+from rlcontroller.control.controllers import residual_action
 from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
-from rlcontroller.learning.random_search import StepsProgressBar
+from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
 
 
-class DAgger(BaseAlgorithm):
+class DAgger(BatchLearner):
     """DAgger with MPC as the expert (module docstring).
 
     Parameters
@@ -68,17 +67,7 @@ class DAgger(BaseAlgorithm):
         verbose: int = 0,
         _init_setup_model: bool = True,
     ) -> None:
-        super().__init__(
-            policy,
-            env,
-            learning_rate=learning_rate,
-            policy_kwargs=policy_kwargs,
-            tensorboard_log=tensorboard_log,
-            verbose=verbose,
-            device=device,
-            seed=seed,
-            support_multi_env=True,
-        )
+        super().__init__(policy, env, learning_rate, policy_kwargs, tensorboard_log, seed, device, verbose)
         self.horizon = horizon
         self.n_motions = n_motions
         self.epochs = epochs
@@ -88,13 +77,7 @@ class DAgger(BaseAlgorithm):
             self._setup_model()
 
     def _setup_model(self) -> None:
-        self._setup_lr_schedule()
-        self.set_random_seed(self.seed)
-        policy = self.policy_class(self.observation_space, self.action_space, self.lr_schedule, **self.policy_kwargs)
-        self.policy = policy.to(self.device)
-        self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
-        residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg
-        self.prior = LQGPrior.design(self.plant) if residual else None
+        self._setup_policy_and_plant()
         self.expert = MPCController(self.plant.design, self.horizon) if self.plant is not None else None
         if not hasattr(self, "samples"):  # a new model (a loaded one brings its data set and generator)
             size, m = self.observation_space.shape[0], self.action_space.shape[0]
@@ -106,7 +89,7 @@ class DAgger(BaseAlgorithm):
             self.dagger_rng = np.random.default_rng(self.seed)
 
     def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "plant", "prior", "expert"]
+        return [*super()._excluded_save_params(), "expert"]
 
     def _get_torch_save_params(self) -> tuple[list[str], list[str]]:
         return ["policy", "policy.optimizer"], []  # Adam's moments too: a resumed run fits as the whole one
@@ -163,31 +146,11 @@ class DAgger(BaseAlgorithm):
         self._n_updates += 1
         return loss_sum / count
 
-    def learn(
-        self,
-        total_timesteps: int,
-        callback=None,
-        log_interval: int = 1,
-        tb_log_name: str = "DAgger",
-        reset_num_timesteps: bool = True,
-        progress_bar: bool = False,
-    ) -> DAgger:
-        if self.plant is None:
-            raise ValueError("DAgger needs a BatchedVecEnv as its env (algorithm.vec_env: batched)")
-        if progress_bar:
-            given = callback if isinstance(callback, list) else [callback] if callback is not None else []
-            callback = [*given, StepsProgressBar()]
-        total_timesteps, callback = self._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name)
-        callback.on_training_start(locals(), globals())
-        while self.num_timesteps < total_timesteps:
-            self.num_timesteps += self.collect(expert_acts=self._n_updates == 0)
-            self.logger.record("train/imitation_loss", self.fit())
-            self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
-            callback.update_locals(locals())
-            if not callback.on_step():
-                break
-        callback.on_training_end()
-        return self
+    def iterate(self) -> int:
+        """One DAgger iteration (MPC acts in the first): collect, then fit; returns the control steps simulated."""
+        steps = self.collect(expert_acts=self._n_updates == 0)
+        self.logger.record("train/imitation_loss", self.fit())
+        return steps
 
 
 def imitation_loss(residual: torch.Tensor, prior: torch.Tensor, expert: torch.Tensor) -> torch.Tensor:

@@ -31,18 +31,17 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import ProgressBarCallback
 from stable_baselines3.common.policies import ActorCriticPolicy
 
-from rlcontroller.control.controllers import LinearFeedback, LQGPrior
+from rlcontroller.control.controllers import LinearFeedback
+from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
 
 
-class RandomSearch(BaseAlgorithm):
+class RandomSearch(BatchLearner):
     """Augmented random search with common random numbers (module docstring).
 
     Parameters
@@ -73,17 +72,7 @@ class RandomSearch(BaseAlgorithm):
         verbose: int = 0,
         _init_setup_model: bool = True,
     ) -> None:
-        super().__init__(
-            policy,
-            env,
-            learning_rate=learning_rate,
-            policy_kwargs=policy_kwargs,
-            tensorboard_log=tensorboard_log,
-            verbose=verbose,
-            device=device,
-            seed=seed,
-            support_multi_env=True,
-        )
+        super().__init__(policy, env, learning_rate, policy_kwargs, tensorboard_log, seed, device, verbose)
         self.n_delta = n_delta
         self.n_motions = n_motions
         self.delta_std = delta_std
@@ -92,15 +81,9 @@ class RandomSearch(BaseAlgorithm):
             self._setup_model()
 
     def _setup_model(self) -> None:
-        self._setup_lr_schedule()
-        self.set_random_seed(self.seed)
-        policy = self.policy_class(self.observation_space, self.action_space, self.lr_schedule, **self.policy_kwargs)
-        self.policy = policy.to(self.device)
+        self._setup_policy_and_plant()
         if self.policy.mlp_extractor.policy_net:
             raise ValueError("RandomSearch trains a linear actor: set policy.actor_arch: []")
-        self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
-        residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg
-        self.prior = LQGPrior.design(self.plant) if residual else None
         self.affine = not isinstance(self.policy, OddActorCriticPolicy)
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
             rows, columns = self.policy.action_net.weight.shape
@@ -110,9 +93,6 @@ class RandomSearch(BaseAlgorithm):
             self.weights[:, columns:] = self.initial_bias
             self.search_rng = np.random.default_rng(self.seed)
         self._set_actor()
-
-    def _excluded_save_params(self) -> list[str]:
-        return [*super()._excluded_save_params(), "plant", "prior"]
 
     def _set_actor(self) -> None:
         with torch.no_grad():
@@ -151,36 +131,3 @@ class RandomSearch(BaseAlgorithm):
         self._set_actor()
         self._n_updates += 1
         return steps
-
-    def learn(
-        self,
-        total_timesteps: int,
-        callback=None,
-        log_interval: int = 1,
-        tb_log_name: str = "RandomSearch",
-        reset_num_timesteps: bool = True,
-        progress_bar: bool = False,
-    ) -> RandomSearch:
-        if self.plant is None:
-            raise ValueError("RandomSearch needs a BatchedVecEnv as its env (algorithm.vec_env: batched)")
-        if progress_bar:  # stable-baselines3's own bar would advance by n_envs per iteration
-            given = callback if isinstance(callback, list) else [callback] if callback is not None else []
-            callback = [*given, StepsProgressBar()]
-        total_timesteps, callback = self._setup_learn(total_timesteps, callback, reset_num_timesteps, tb_log_name)
-        callback.on_training_start(locals(), globals())
-        while self.num_timesteps < total_timesteps:
-            self.num_timesteps += self.iterate()
-            self._update_current_progress_remaining(self.num_timesteps, total_timesteps)
-            callback.update_locals(locals())
-            if not callback.on_step():
-                break
-        callback.on_training_end()
-        return self
-
-
-class StepsProgressBar(ProgressBarCallback):
-    """stable-baselines3's progress bar, advanced by the steps an iteration simulated (not by n_envs)."""
-
-    def _on_step(self) -> bool:
-        self.pbar.update(self.model.num_timesteps - self.model._num_timesteps_at_start - self.pbar.n)
-        return True
