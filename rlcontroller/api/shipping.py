@@ -53,7 +53,7 @@ def shipped_models() -> list[str]:
 
 def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
     """A classical controller as a controller folder: `law` (a key of `control.policy.LAWS`: the
-    experiment's LQG on its Kalman estimate, or passive-on / passive-off dampers) designed for the
+    experiment's LQG on its Kalman estimate, MPC on the same, or passive-on / passive-off dampers) designed for the
     experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
     an existing one). evaluate, check and export then treat it like a trained policy. Returns `out`."""
     from rlcontroller.config import load_experiment

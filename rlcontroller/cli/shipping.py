@@ -22,7 +22,7 @@ def models() -> None:
         typer.echo(line)
 
 
-@app.command(short_help="A classical controller (LQG, passive dampers) as data.")
+@app.command(short_help="A classical controller (LQG, MPC, passive dampers) as data.")
 @user_errors
 def design(
     config: Annotated[Path, typer.Argument(help="Experiment YAML the controller is designed for.")],
@@ -31,7 +31,8 @@ def design(
         str,
         typer.Option(
             help="lqg_ground_model, lqg_ground or lqg_wind_model (the experiment's LQG on its Kalman estimate, "
-            "as its sensors give), passive-on or passive-off (dampers)."
+            "as its sensors give), mpc (MPC over 20 steps on LQG + ground model's estimate; not exportable), "
+            "passive-on or passive-off (dampers)."
         ),
     ] = "lqg_ground_model",
 ) -> None:

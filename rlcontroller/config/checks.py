@@ -332,7 +332,7 @@ def _check_random_search(experiment: Experiment) -> None:
 
 def _check_dagger(experiment: Experiment) -> None:
     """DAgger imitates MPC on raw observations (its data set holds them as the env gives them), on the batched
-    env's plant, with actuators or active mass drivers under ground motion (what MPC is built for)."""
+    env's plant, under ground motion (MPC is not built for wind)."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
     refused = {
@@ -343,10 +343,9 @@ def _check_dagger(experiment: Experiment) -> None:
     for key, (wrong, why) in refused.items():
         if wrong:
             raise ConfigError(f"{location(file, prefix, key)}: not for DAgger ({why})")
-    if experiment.has_dampers or experiment.load_kind == "wind":
+    if experiment.load_kind == "wind":
         raise ConfigError(
-            f"{location(file, prefix, 'name')}: DAgger imitates MPC, which is built for actuators and active mass "
-            "drivers under ground motion (not for dampers or wind)"
+            f"{location(file, prefix, 'name')}: DAgger imitates MPC, which is built for ground motion (not for wind)"
         )
 
 

@@ -27,10 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import RewardConfig
-from rlcontroller.control.controllers import ClippedOptimal, LQGController
+from rlcontroller.control.controllers import ClippedOptimal, LQGController, LQGPrior
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
 from rlcontroller.physics.dynamics import output_matrices
+from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
 
 DEFAULT_HORIZON = 20  # control steps (0.4 s at 20 ms): studies/mpc/horizon_sweep.py, docs/mpc.md
@@ -89,56 +90,93 @@ def stroke_rows(plant: Plant, size: int) -> np.ndarray:
     return np.pad(rows, ((0, 0), (0, size - rows.shape[1])))
 
 
-def mpc_problem(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCProblem:
-    """The QP of MPC on `plant`'s ground-model map with the experiment's cost (or `reward`'s)."""
+@dataclass(frozen=True)
+class MPCDesign:
+    """What MPC is made of, as a controller file holds it: the control-step map z' = phi z + action_gain a
+    (action units; the ground model's states in z), the stage cost |cost_state z + cost_action a|^2, the
+    terminal weight z_N' terminal z_N, each stroke-limited device's stroke as a fraction of its limit
+    (`strokes` @ z), and the horizon (control steps)."""
+
+    phi: np.ndarray
+    action_gain: np.ndarray
+    cost_state: np.ndarray
+    cost_action: np.ndarray
+    terminal: np.ndarray
+    strokes: np.ndarray
+    horizon: int
+
+    def problem(self) -> MPCProblem:
+        """The condensed QP (module docstring)."""
+        horizon, phi, action_gain, cost_state, cost_action = (
+            self.horizon, self.phi, self.action_gain, self.cost_state, self.cost_action
+        )  # fmt: skip
+        n, m = action_gain.shape
+        free, forced = _predictions(phi, action_gain, horizon)
+        stage_state = np.kron(np.eye(horizon), cost_state)  # H_z on z_0..z_{N-1}
+        stage_action = np.kron(np.eye(horizon), cost_action)  # H_u on a_0..a_{N-1}
+        stage = stage_state @ forced[: horizon * n] + stage_action
+        stage_free = stage_state @ free[: horizon * n]
+        last = slice(horizon * n, (horizon + 1) * n)
+        action_hessian = 2.0 * (stage.T @ stage + forced[last].T @ self.terminal @ forced[last])
+        action_linear = 2.0 * (stage.T @ stage_free + forced[last].T @ self.terminal @ free[last])
+
+        strokes = np.kron(np.eye(horizon), self.strokes)  # on z_1..z_N
+        slacks = strokes.shape[0]
+        stroke_forced, stroke_free = strokes @ forced[n:], strokes @ free[n:]
+        size = horizon * m + slacks
+        hessian = np.zeros((size, size))
+        hessian[: horizon * m, : horizon * m] = 0.5 * (action_hessian + action_hessian.T)
+        hessian[horizon * m :, horizon * m :] = STROKE_PRICE[1] * np.eye(slacks)
+        linear = np.vstack([action_linear, np.zeros((slacks, n))])
+        offset = np.concatenate([np.zeros(horizon * m), np.full(slacks, STROKE_PRICE[0])])
+        identity, zeros = np.eye(slacks), np.zeros((slacks, horizon * m))
+        constraints = np.block(
+            [
+                [np.eye(horizon * m), np.zeros((horizon * m, slacks))],  # -1 <= a <= 1
+                [stroke_forced, -identity],  # stroke - s <= 1
+                [stroke_forced, identity],  # stroke + s >= -1
+                [zeros, identity],  # s >= 0
+            ]
+        )
+        inf, actions = np.inf, horizon * m
+        lower = np.concatenate([-np.ones(actions), np.full(slacks, -inf), -np.ones(slacks), np.zeros(slacks)])
+        upper = np.concatenate([np.ones(actions), np.ones(slacks), np.full(slacks, inf), np.full(slacks, inf)])
+        gain = np.vstack([np.zeros((actions, n)), -stroke_free, -stroke_free, np.zeros((slacks, n))])
+        return MPCProblem(
+            hessian=hessian,
+            linear=linear,
+            offset=offset,
+            constraints=constraints,
+            lower=lower,
+            upper=upper,
+            lower_gain=gain,
+            upper_gain=gain,
+            horizon=horizon,
+            actions=m,
+        )
+
+
+def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCDesign:
+    """MPC on `plant`'s ground-model map with the experiment's cost (or `reward`'s), its terminal weight the
+    stationary Riccati solution."""
     step = plant.ground_model_step()
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     _, riccati = lqr_gain(step, cost, plant.force_limits)
-    phi, action_gain = step.phi, step.force_gain * plant.force_limits
-    n, m = action_gain.shape
-    free, forced = _predictions(phi, action_gain, horizon)
-    stage_state = np.kron(np.eye(horizon), cost.state)  # H_z on z_0..z_{N-1}
-    stage_action = np.kron(np.eye(horizon), cost.action)  # H_u on a_0..a_{N-1}
-    stage = stage_state @ forced[: horizon * n] + stage_action
-    stage_free = stage_state @ free[: horizon * n]
-    last = slice(horizon * n, (horizon + 1) * n)
-    action_hessian = 2.0 * (stage.T @ stage + forced[last].T @ riccati @ forced[last])
-    action_linear = 2.0 * (stage.T @ stage_free + forced[last].T @ riccati @ free[last])
-
-    strokes = np.kron(np.eye(horizon), stroke_rows(plant, n))  # on z_1..z_N
-    slacks = strokes.shape[0]
-    stroke_forced, stroke_free = strokes @ forced[n:], strokes @ free[n:]
-    size = horizon * m + slacks
-    hessian = np.zeros((size, size))
-    hessian[: horizon * m, : horizon * m] = 0.5 * (action_hessian + action_hessian.T)
-    hessian[horizon * m :, horizon * m :] = STROKE_PRICE[1] * np.eye(slacks)
-    linear = np.vstack([action_linear, np.zeros((slacks, n))])
-    offset = np.concatenate([np.zeros(horizon * m), np.full(slacks, STROKE_PRICE[0])])
-    identity, zeros = np.eye(slacks), np.zeros((slacks, horizon * m))
-    constraints = np.block(
-        [
-            [np.eye(horizon * m), np.zeros((horizon * m, slacks))],  # -1 <= a <= 1
-            [stroke_forced, -identity],  # stroke - s <= 1
-            [stroke_forced, identity],  # stroke + s >= -1
-            [zeros, identity],  # s >= 0
-        ]
-    )
-    inf, actions = np.inf, horizon * m
-    lower = np.concatenate([-np.ones(actions), np.full(slacks, -inf), -np.ones(slacks), np.zeros(slacks)])
-    upper = np.concatenate([np.ones(actions), np.ones(slacks), np.full(slacks, inf), np.full(slacks, inf)])
-    gain = np.vstack([np.zeros((actions, n)), -stroke_free, -stroke_free, np.zeros((slacks, n))])
-    return MPCProblem(
-        hessian=hessian,
-        linear=linear,
-        offset=offset,
-        constraints=constraints,
-        lower=lower,
-        upper=upper,
-        lower_gain=gain,
-        upper_gain=gain,
+    action_gain = step.force_gain * plant.force_limits
+    return MPCDesign(
+        phi=step.phi,
+        action_gain=action_gain,
+        cost_state=cost.state,
+        cost_action=cost.action,
+        terminal=riccati,
+        strokes=stroke_rows(plant, step.phi.shape[0]),
         horizon=horizon,
-        actions=m,
     )
+
+
+def mpc_problem(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCProblem:
+    """The QP of MPC on `plant` (`mpc_design`)."""
+    return mpc_design(plant, horizon, reward).problem()
 
 
 class MPCPlanner:
@@ -225,33 +263,63 @@ class MPCPlanner:
         return actions
 
 
-class MPCController:
+class _Planned:
+    """A controller of a planner and the filter that gives it estimates (anything with `reset`)."""
+
+    planner: MPCPlanner
+    estimator: LQGController | ClippedOptimal | None
+
+    @property
+    def fallbacks(self) -> int:
+        """Steps whose QP OSQP did not solve."""
+        return self.planner.fallbacks
+
+    def reset(self) -> None:
+        if self.estimator is not None:
+            self.estimator.reset()
+        self.planner.reset()
+
+
+class MPCController(_Planned):
     """MPC on the estimate of LQG + ground model's Kalman filter (the same filter, the QP in place of its gain):
     `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (the last plan's next
     action taken instead, or LQR's clipped action)."""
 
     def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
         self.name = name or f"MPC (N = {horizon})"
-        self.lqg = LQGController(design_lqg_ground_model(plant), plant, self.name)  # the filter, and the fallback
+        self.estimator = LQGController(design_lqg_ground_model(plant), plant, self.name)  # and LQR's fallback
         self.planner = MPCPlanner(mpc_problem(plant, horizon))
         self.problem = self.planner.problem
 
-    @property
-    def fallbacks(self) -> int:
-        return self.planner.fallbacks
-
-    def reset(self) -> None:
-        self.lqg.reset()
-        self.planner.reset()
-
     def act(self, observation: np.ndarray) -> np.ndarray:
-        fallback = self.lqg.act(observation)  # the filter steps here; LQR's clipped action
-        estimates = self.lqg.estimate.reshape(-1, self.lqg.estimate.shape[-1])
+        lqg = self.estimator
+        fallback = lqg.act(observation)  # the filter steps here; LQR's clipped action
+        estimates = lqg.estimate.reshape(-1, lqg.estimate.shape[-1])
         actions = self.planner.first_actions(estimates, fallback.reshape(-1, self.problem.actions))
         return actions.reshape(fallback.shape)
 
 
-class SemiActiveMPC:
+class ObservedMPC(_Planned):
+    """MPC of `design` on the Kalman estimate the observation holds (the env's own filter, designed on the
+    design model as LQG + ground model's: `sensors.state_estimate` and `ground_model`), as a controller file
+    holds it; `prior` (LQR's action on that estimate) clipped is the fallback. Maps observations (..., size)
+    to actions (..., m)."""
+
+    estimator = None
+
+    def __init__(self, design: MPCDesign, prior: LQGPrior, layout: ObservationLayout) -> None:
+        self.design, self.prior, self.layout = design, prior, layout
+        self.planner = MPCPlanner(design.problem())
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        observation = np.asarray(observation, dtype=float)
+        rows = observation.reshape(-1, observation.shape[-1])
+        estimates = rows[:, self.layout.estimate] * self.layout.estimate_scale
+        actions = self.planner.first_actions(estimates, np.clip(self.prior(rows), -1.0, 1.0))
+        return actions.reshape(*observation.shape[:-1], actions.shape[-1])
+
+
+class SemiActiveMPC(_Planned):
     """MPC for semi-active dampers: the QP of the active equivalent (each damper an ideal actuator of its
     capacity, as clipped-optimal control designs on) with passivity as bounds, on clipped-optimal control's
     Kalman estimate (which takes the measured damper forces as applied); each damper is then switched by
@@ -270,15 +338,15 @@ class SemiActiveMPC:
         self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None, reward: RewardConfig | None = None
     ) -> None:
         self.name = name or f"MPC (N = {horizon})"
-        self.clipped = ClippedOptimal(plant, self.name, reward)  # the filter and the switching law
+        self.estimator = ClippedOptimal(plant, self.name, reward)  # the filter and the switching law
         equivalent = plant.active_equivalent
-        self.planner = MPCPlanner(mpc_problem(equivalent, horizon, reward))
+        design = mpc_design(equivalent, horizon, reward)
+        self.planner = MPCPlanner(design.problem())
         self.problem = self.planner.problem
-        n, m = self.problem.linear.shape[1], self.problem.actions
+        n, m = design.action_gain.shape
         dampers = [device for device in plant.experiment.devices if device.semi_active]
         self.first_damper = m - len(dampers)
-        step = equivalent.ground_model_step()
-        free, forced = _predictions(step.phi, step.force_gain * equivalent.force_limits, horizon)
+        free, forced = _predictions(design.phi, design.action_gain, horizon)
         c, _ = output_matrices(equivalent.building, "device_velocity")
         velocity = np.kron(np.eye(horizon), np.pad(c[self.first_damper :], ((0, 0), (0, n - c.shape[1]))))
         self.velocity_free = velocity @ free[: horizon * n]  # v_0..v_(N-1), by step and damper
@@ -287,14 +355,6 @@ class SemiActiveMPC:
         self.reach_slope = [
             getattr(device, "damping_max", None) and device.damping_max / device.capacity for device in dampers
         ]
-
-    @property
-    def fallbacks(self) -> int:
-        return self.planner.fallbacks
-
-    def reset(self) -> None:
-        self.clipped.reset()
-        self.planner.reset()
 
     def action_bounds(self, row: int, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Each planned action's bounds: [-1, 1] for actuators, passivity's for dampers."""
@@ -314,7 +374,7 @@ class SemiActiveMPC:
         return lower.ravel(), upper.ravel()
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        clipped = self.clipped
+        clipped = self.estimator
         measured = clipped.update(observation)
         estimates = clipped.estimate.reshape(-1, clipped.estimate.shape[-1])
         lqr = np.clip(-(estimates @ clipped.design.feedback.T), -1.0, 1.0)

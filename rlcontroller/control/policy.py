@@ -9,13 +9,16 @@ A run or model folder holds, for NAME = best or final, beside the experiment's `
                        control step (s) it was trained with
     NAME_policy.npz    layer{i}_weight (out, in) and layer{i}_bias (float32); observation_mean and
                        observation_var (normalised observations); prior_feedback (m, estimate) and
-                       prior_feedforward (m,) on the scaled observation (residual policies)
+                       prior_feedforward (m,) on the scaled observation (residual policies); an MPC law's
+                       mpc_phi, mpc_action_gain, mpc_cost_state, mpc_cost_action, mpc_terminal, mpc_strokes
 
 A classical controller is the same data (`kind: classical`, its `law` and how it was `designed`): a
 network of one layer with zero weights whose bias is the action — zero for an LQG law, which is then
 its prior alone (the LQG gains on the env's own Kalman estimate), the held command for a constant one
-(passive-on, passive-off). The reader checks that it is exactly that, so evaluate, check and export
-treat it like a learned policy and it acts as its law.
+(passive-on, passive-off). MPC is LQG + ground model's file with the QP's model, cost and horizon beside
+it (`control.mpc.MPCDesign`: `mpc: {horizon: N}` and the mpc_* arrays), solved on the env's Kalman estimate
+with LQR's clipped action as its fallback. The reader checks that it is exactly that, so evaluate and check
+treat it like a learned policy and it acts as its law; export refuses MPC (a QP is not an ONNX graph).
 
 Reading never unpickles (`np.load(..., allow_pickle=False)`, `yaml.safe_load`) and imports neither
 torch nor stable-baselines3: a controller from someone else is data, never code. The actor is the
@@ -34,6 +37,7 @@ import yaml
 
 from rlcontroller.config import ConfigError
 from rlcontroller.control.controllers import LQGPrior, residual_action
+from rlcontroller.control.mpc import DEFAULT_HORIZON, STROKE_PRICE, MPCDesign, ObservedMPC, mpc_design
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 from rlcontroller.untrusted import npz_headers, read_npz, safe_yaml
@@ -46,10 +50,13 @@ LAWS = {  # a classical law: its name in tables
     "lqg_ground": "LQG + ground",
     "lqg_ground_model": "LQG + ground model",
     "lqg_wind_model": "LQG + wind model",
+    "mpc": "MPC",
     "passive-on": "passive-on",
     "passive-off": "passive-off",
 }
 PASSIVE_COMMANDS = {"passive-on": 1.0, "passive-off": -1.0}  # a passive law's held action
+MPC_ARRAYS = ("phi", "action_gain", "cost_state", "cost_action", "terminal", "strokes")  # MPCDesign's, as mpc_*
+MAX_HORIZON = 200  # control steps of a file's MPC (the experiment's kwargs.horizon range)
 
 
 def gelu(x: np.ndarray) -> np.ndarray:
@@ -120,6 +127,7 @@ class PolicyController:
     actor : the deterministic network.
     normalizer : the observation normalisation of training, if it used one.
     prior : the residual prior (maps an observation to an action), or None.
+    mpc : a classical MPC law (acts in place of the network and prior), or None.
     name, source : the controller's name in tables, and what was loaded (for reports).
     steps : training steps of the saved policy; algorithm: the learner that trained it.
     """
@@ -135,22 +143,29 @@ class PolicyController:
         algorithm: str = "",
         law: str | None = None,
         designed: str = "",
+        mpc: ObservedMPC | None = None,
     ) -> None:
-        self.actor, self.normalizer, self.prior = actor, normalizer, prior
+        self.actor, self.normalizer, self.prior, self.mpc = actor, normalizer, prior, mpc
         self.name, self.source, self.steps, self.algorithm = name, source, steps, algorithm
         self.law, self.designed = law, designed  # a classical controller's law (a key of LAWS) and its design
 
     @classmethod
     def classical(cls, plant: Plant, law: str) -> PolicyController:
         """`law` for `plant` as a controller file holds it, with how it was designed: LQG (the experiment's
-        own, on its Kalman estimate, designed on the design model with the experiment's cost) or a
-        constant command."""
+        own, on its Kalman estimate, designed on the design model with the experiment's cost), MPC (the same
+        estimate and cost over `DEFAULT_HORIZON` steps) or a constant command."""
         m, size = plant.building.n_actuators, plant.layout.size
         if law not in LAWS:
             raise ConfigError(f"law {law!r}: expected one of {', '.join(LAWS)}")
-        prior, bias = None, np.zeros(m, dtype=np.float32)
-        if law.startswith("lqg"):
-            if not plant.experiment.sensors.state_estimate or law != prior_kind(plant):
+        prior, bias, mpc = None, np.zeros(m, dtype=np.float32), None
+        if law == "mpc" and (plant.semi_active is not None or prior_kind(plant) != "lqg_ground_model"):
+            raise ConfigError(
+                "law mpc: MPC as a controller file runs on the env's Kalman estimate of LQG + ground model: actuators "
+                "or mass drivers under ground motion with sensors.ground_model: true (dampers: rlc compare lqg --mpc)"
+            )
+        if law.startswith("lqg") or law == "mpc":
+            lqg = "lqg_ground_model" if law == "mpc" else law
+            if not plant.experiment.sensors.state_estimate or lqg != prior_kind(plant):
                 raise ConfigError(f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
                                   " (needs sensors.state_estimate: true)")  # fmt: skip
             prior = LQGPrior.design(plant)
@@ -160,19 +175,32 @@ class PolicyController:
             robust = plant.experiment.sensors.input_noise
             recovery = f" and loop transfer recovery's input noise ({robust:g} of the force limits)" if robust else ""
             designed = (
-                f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
+                f"{LAWS[lqg]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
                 f"on its sensors and their noise{recovery}, both on the design model; no training"
             )
+            if law == "mpc":
+                mpc = ObservedMPC(mpc_design(plant.design, DEFAULT_HORIZON), prior, plant.layout)
+                designed = (
+                    f"MPC over {DEFAULT_HORIZON} control steps ({DEFAULT_HORIZON * plant.control_dt:g} s): the "
+                    f"experiment's quadratic cost ({terms}) with the Riccati solution as terminal weight, the force "
+                    f"limits hard, the strokes soft (priced {STROKE_PRICE[0]:g} and {STROKE_PRICE[1]:g} per unit "
+                    "excess), solved by OSQP every step on the estimate of LQG + ground model's Kalman filter (its "
+                    f"sensors and their noise{recovery}, on the design model), LQR's clipped action where no plan is "
+                    "left; no training"
+                )
         else:
             bias[:] = PASSIVE_COMMANDS[law]
             designed = f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
         actor = Actor((Layer(np.zeros((m, size), dtype=np.float32), bias, None),), squash=False)
-        return cls(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed)
+        return cls(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed, mpc=mpc)
 
     def reset(self) -> None:
-        pass
+        if self.mpc is not None:
+            self.mpc.reset()
 
     def act(self, observation: np.ndarray) -> np.ndarray:
+        if self.mpc is not None:
+            return self.mpc(observation)
         raw = observation
         if self.normalizer is not None:
             observation = self.normalizer(observation)
@@ -229,6 +257,10 @@ def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[
         weights |= {"observation_mean": np.asarray(normalizer.mean), "observation_var": np.asarray(normalizer.var)}
     if controller.prior is not None:
         weights |= {"prior_feedback": controller.prior.feedback, "prior_feedforward": controller.prior.feedforward}
+    if controller.mpc is not None:
+        design = controller.mpc.design
+        description["mpc"] = {"horizon": design.horizon}
+        weights |= {f"mpc_{key}": np.asarray(getattr(design, key), dtype=float) for key in MPC_ARRAYS}
     return description, weights
 
 
@@ -284,8 +316,10 @@ KEYS = {
         "kind",
         "law",
         "designed",
+        "mpc",
     },
     "network": {"activations", "squash", "odd"},
+    "mpc": {"horizon"},
     "observation": {"size", "normalize", "epsilon", "clip"},
 }
 
@@ -367,6 +401,21 @@ def _declared_arrays(
     if description["prior"] != "none":
         estimate = plant.layout.estimate
         expected |= {"prior_feedback": (m, estimate.stop - estimate.start), "prior_feedforward": (m,)}
+    if description.get("mpc") is not None:
+        size = plant.layout.estimate.stop - plant.layout.estimate.start
+        costs = (headers.get("mpc_cost_state", ((0,), None))[0] or (0,))[0]  # cost rows: the file's own count
+        strokes = (headers.get("mpc_strokes", ((0,), None))[0] or (0,))[0]
+        if not 1 <= costs <= 10 * (size + m) or strokes > m:
+            raise ValueError(f"mpc: {costs} cost rows and {strokes} stroke rows; expected 1 to {10 * (size + m)} "
+                             f"and at most {m}")  # fmt: skip
+        expected |= {
+            "mpc_phi": (size, size),
+            "mpc_action_gain": (size, m),
+            "mpc_cost_state": (costs, size),
+            "mpc_cost_action": (costs, m),
+            "mpc_terminal": (size, size),
+            "mpc_strokes": (strokes, size),
+        }
     return expected
 
 
@@ -412,10 +461,27 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
         raise ValueError(f"training_steps {steps!r}: expected a whole number of steps, 0 or more")
     law = _classical_law(description, actor, normalizer, prior)
+    mpc = None if law != "mpc" else ObservedMPC(_mpc_design(description["mpc"], weights), prior, plant.layout)
     return PolicyController(
         actor, normalizer, prior, name, steps=steps,
-        algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")),
+        algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")), mpc=mpc,
     )  # fmt: skip
+
+
+def _mpc_design(section: dict, weights: dict[str, np.ndarray]) -> MPCDesign:
+    """An MPC law's design once its horizon is a whole number of steps within `MAX_HORIZON` and its terminal
+    weight symmetric and positive semi-definite (the QP convex; ValueError otherwise)."""
+    horizon = section.get("horizon") if isinstance(section, dict) else None
+    if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON:
+        raise ValueError(f"mpc.horizon {horizon!r}: expected a whole number of control steps in [1, {MAX_HORIZON}]")
+    terminal = weights["mpc_terminal"]
+    scale = max(1.0, float(np.max(np.abs(terminal))))
+    if (
+        not np.allclose(terminal, terminal.T, rtol=0.0, atol=1e-9 * scale)
+        or np.min(np.linalg.eigvalsh(0.5 * (terminal + terminal.T))) < -1e-9 * scale
+    ):
+        raise ValueError("mpc_terminal: expected a symmetric positive semi-definite matrix")
+    return MPCDesign(**{key: weights[f"mpc_{key}"] for key in MPC_ARRAYS}, horizon=horizon)
 
 
 def _classical_law(
@@ -425,9 +491,11 @@ def _classical_law(
     kind = description.get("kind", "learned")
     if kind not in ("learned", "classical"):
         raise ValueError(f"kind {kind!r}: expected learned or classical")
+    law = description.get("law") if kind == "classical" else None
+    if (law == "mpc") != (description.get("mpc") is not None):
+        raise ValueError("mpc: a classical mpc law has an mpc section, nothing else has")
     if kind == "learned":
         return None
-    law = description.get("law")
     if law not in LAWS:
         raise ValueError(f"law {law!r}: expected one of {', '.join(LAWS)}")
     (layer,) = actor.layers if len(actor.layers) == 1 else (None,)
@@ -436,6 +504,7 @@ def _classical_law(
     expected_bias = PASSIVE_COMMANDS.get(law, 0.0)
     if np.any(layer.bias != expected_bias) or (prior is None) != (law in PASSIVE_COMMANDS):
         raise ValueError(f"a classical {law} law: its bias must be {expected_bias:g} and its prior {law}")
-    if prior is not None and description["prior"] != law:
+    expected_prior = "lqg_ground_model" if law == "mpc" else law
+    if prior is not None and description["prior"] != expected_prior:
         raise ValueError(f"a classical {law} law: its prior is {description['prior']}")
     return law

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config import load_experiment
+from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy import PolicyController, policy_paths, read_policy
 from rlcontroller.files import atomic_write
@@ -286,6 +286,11 @@ def export_onnx(folder: Path, model: str, out: Path) -> Path:
 
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     controller = read_policy(folder, model, plant)
+    if controller.mpc is not None:
+        raise ConfigError(
+            f"{folder}: an MPC controller solves a quadratic program every step, which is not an ONNX graph "
+            "(its learned imitation exports: studies/mpc)"
+        )
     _, weights = policy_paths(folder, model)
     digest = hashlib.sha256(weights.read_bytes()).hexdigest()
     graph = controller_graph(plant, controller, source=f"{folder.resolve().name}/{weights.name} (sha256 {digest})")

@@ -3,7 +3,8 @@
 DAgger (Ross, Gordon and Bagnell 2011, AISTATS): each iteration draws `n_motions` training motions (the
 experiment's generator, never the records) with their noise seeds, runs them with the current policy (the
 first iteration with MPC itself: behaviour cloning), asks MPC (`control.mpc.MPCController` on the design
-model, horizon `horizon`) what it would do at every observation the policy met, adds those pairs to the
+model, horizon `horizon`; `SemiActiveMPC`, whose action is each damper's command, for semi-active dampers) what
+it would do at every observation the policy met, adds those pairs to the
 data set (at most `max_samples`, a uniform subset kept), and fits the actor to the whole set for `epochs`
 passes of Adam. The expert's labels come from the states the learner itself visits, so its mistakes are
 corrected where they lead, which cloning MPC's own trajectories does not do.
@@ -29,7 +30,7 @@ import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import residual_action
-from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
+from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController, SemiActiveMPC
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
@@ -78,7 +79,10 @@ class DAgger(BatchLearner):
 
     def _setup_model(self) -> None:
         self._setup_policy_and_plant()
-        self.expert = MPCController(self.plant.design, self.horizon) if self.plant is not None else None
+        self.expert = None
+        if self.plant is not None:
+            law = SemiActiveMPC if self.plant.semi_active is not None else MPCController
+            self.expert = law(self.plant.design, self.horizon)
         if not hasattr(self, "samples"):  # a new model (a loaded one brings its data set and generator)
             size, m = self.observation_space.shape[0], self.action_space.shape[0]
             self.samples = {

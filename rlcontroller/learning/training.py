@@ -148,12 +148,19 @@ class TrainingSummary:
             first = self.beat_lqg_at
             text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
         if self.best:
-            text += (
-                f"; best model at step {self.best_steps}: validation reward {self.best['eval_reward']:.2f}, "
-                f"(J1 {self.best['eval_J1']:.3f}, J2 {self.best['eval_J2']:.3f}; LQG J1 {self.best['lqg_J1']:.3f}, "
-                f"J2 {self.best['lqg_J2']:.3f}; LQG + ground J1 {self.best['lqg_ground_J1']:.3f}; "
-                f"LQG + ground model J1 {self.best['lqg_ground_model_J1']:.3f})"
-            )
+            best = self.best
+            references = [
+                f"{name} {best[key]:.3f}"
+                for name, key in (
+                    ("LQG J1", "lqg_J1"),
+                    ("J2", "lqg_J2"),
+                    ("LQG + ground J1", "lqg_ground_J1"),
+                    ("LQG + ground model J1", "lqg_ground_model_J1"),
+                )
+                if np.isfinite(best[key])  # none for dampers, which LQG cannot command
+            ]
+            scores = ", ".join([f"J1 {best['eval_J1']:.3f}", f"J2 {best['eval_J2']:.3f}", *references])
+            text += f"; best model at step {self.best_steps}: validation reward {best['eval_reward']:.2f} ({scores})"
         return text + f"; run folder: {self.run_dir}"
 
 

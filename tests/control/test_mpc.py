@@ -64,7 +64,7 @@ def test_a_step_the_solver_does_not_finish_falls_back_to_lqr_and_is_counted():
         solver.update_settings(max_iter=1)
     actions = controller.act(observation)
     assert controller.fallbacks == 2
-    np.testing.assert_array_equal(actions, (controller.lqg._state @ controller.lqg.output).clip(-1.0, 1.0))
+    np.testing.assert_array_equal(actions, (controller.estimator._state @ controller.estimator.output).clip(-1.0, 1.0))
 
 
 def test_the_problem_is_built_from_the_riccati_solution_it_ends_with():
@@ -155,7 +155,7 @@ def test_a_damper_plan_only_asks_for_forces_that_oppose_the_dampers_velocity():
     force and velocity, the damper's power, is never positive) and stay within the capacity."""
     controller = SemiActiveMPC(MR.design, 20)
     problem = controller.problem
-    feedback = controller.clipped.design.feedback
+    feedback = controller.estimator.design.feedback
     pushing = 0
     for _ in range(10):
         estimate = 0.02 * RNG.standard_normal(feedback.shape[1])

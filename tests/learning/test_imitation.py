@@ -128,11 +128,7 @@ def test_what_dagger_refuses_is_refused_at_loading(algorithm, message):
     assert str(error.value).startswith(f"<config>: {message}") and "\n" not in str(error.value)
 
 
-def test_dagger_refuses_dampers():
-    with pytest.raises(ConfigError, match="DAgger imitates MPC"):
-        build_experiment(
-            {
-                "algorithm": {"name": "DAgger", "kwargs": {}},
-                "devices": [{"type": "mr_damper", "story": 1, "capacity": 1e5}],
-            }
-        )
+def test_dagger_refuses_wind():
+    wind = {"kind": "wind", "dt": 0.02, "duration": [60.0, 60.0], "speed": [20.0, 20.0]}
+    with pytest.raises(ConfigError, match="DAgger imitates MPC, which is built for ground motion"):
+        build_experiment({"algorithm": {"name": "DAgger", "kwargs": {}}, "excitation": {"generator": wind}})
