@@ -157,41 +157,23 @@ class PolicyController:
         m, size = plant.building.n_actuators, plant.layout.size
         if law not in LAWS:
             raise ConfigError(f"law {law!r}: expected one of {', '.join(LAWS)}")
-        prior, bias, mpc = None, np.zeros(m, dtype=np.float32), None
         if law == "mpc" and (plant.semi_active is not None or prior_kind(plant) != "lqg_ground_model"):
             raise ConfigError(
                 "law mpc: MPC as a controller file runs on the env's Kalman estimate of LQG + ground model: actuators "
                 "or mass drivers under ground motion with sensors.ground_model: true (dampers: rlc compare lqg --mpc)"
             )
-        if law.startswith("lqg") or law == "mpc":
-            lqg = "lqg_ground_model" if law == "mpc" else law
-            if not plant.experiment.sensors.state_estimate or lqg != prior_kind(plant):
+        prior, bias, mpc = None, np.zeros(m, dtype=np.float32), None
+        if law in PASSIVE_COMMANDS:
+            bias[:] = PASSIVE_COMMANDS[law]
+        else:
+            if not plant.experiment.sensors.state_estimate or law not in ("mpc", prior_kind(plant)):
                 raise ConfigError(f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
                                   " (needs sensors.state_estimate: true)")  # fmt: skip
             prior = LQGPrior.design(plant)
-            terms = ", ".join(
-                f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in plant.experiment.reward.terms if t.quadratic
-            )
-            robust = plant.experiment.sensors.input_noise
-            recovery = f" and loop transfer recovery's input noise ({robust:g} of the force limits)" if robust else ""
-            designed = (
-                f"{LAWS[lqg]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
-                f"on its sensors and their noise{recovery}, both on the design model; no training"
-            )
             if law == "mpc":
                 mpc = ObservedMPC(mpc_design(plant.design, DEFAULT_HORIZON), prior, plant.layout)
-                designed = (
-                    f"MPC over {DEFAULT_HORIZON} control steps ({DEFAULT_HORIZON * plant.control_dt:g} s): the "
-                    f"experiment's quadratic cost ({terms}) with the Riccati solution as terminal weight, the force "
-                    f"limits hard, the strokes soft (priced {STROKE_PRICE[0]:g} and {STROKE_PRICE[1]:g} per unit "
-                    "excess), solved by OSQP every step on the estimate of LQG + ground model's Kalman filter (its "
-                    f"sensors and their noise{recovery}, on the design model), LQR's clipped action where no plan is "
-                    "left; no training"
-                )
-        else:
-            bias[:] = PASSIVE_COMMANDS[law]
-            designed = f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
         actor = Actor((Layer(np.zeros((m, size), dtype=np.float32), bias, None),), squash=False)
+        designed = design_note(plant, law)
         return cls(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed, mpc=mpc)
 
     def reset(self) -> None:
@@ -208,6 +190,29 @@ class PolicyController:
         if self.prior is None:
             return np.asarray(action).clip(-1.0, 1.0)
         return residual_action(action, self.prior(raw))
+
+
+def design_note(plant: Plant, law: str) -> str:
+    """How the classical `law` for `plant` was designed, in a sentence (a controller file's `designed`)."""
+    if law in PASSIVE_COMMANDS:
+        return f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
+    terms = ", ".join(
+        f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in plant.experiment.reward.terms if t.quadratic
+    )
+    robust = plant.experiment.sensors.input_noise
+    recovery = f" and loop transfer recovery's input noise ({robust:g} of the force limits)" if robust else ""
+    if law == "mpc":
+        return (
+            f"MPC over {DEFAULT_HORIZON} control steps ({DEFAULT_HORIZON * plant.control_dt:g} s): the experiment's "
+            f"quadratic cost ({terms}) with the Riccati solution as terminal weight, the force limits hard, the "
+            f"strokes soft (priced {STROKE_PRICE[0]:g} and {STROKE_PRICE[1]:g} per unit excess), solved by OSQP every "
+            f"step on the estimate of LQG + ground model's Kalman filter (its sensors and their noise{recovery}, on "
+            "the design model), LQR's clipped action where no plan is left; no training"
+        )
+    return (
+        f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
+        f"on its sensors and their noise{recovery}, both on the design model; no training"
+    )
 
 
 def policy_paths(folder: Path, model: str) -> tuple[Path, Path]:

@@ -11,6 +11,7 @@ from conftest import REPOSITORY
 from rlcontroller.config import ConfigError, build_experiment, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
+from rlcontroller.control.mpc import SemiActiveMPC
 from rlcontroller.control.policy import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.imitation import DAgger, imitation_loss
@@ -87,6 +88,44 @@ def test_iterations_bring_the_policy_to_mpc_on_states_it_visits():
     batch_rollout(plant, motions, [Judge()], [5, 6, 7])
     assert np.mean(errors["prior"]) > 1e-3  # MPC is not the prior here: the limits bind
     assert np.mean(errors["policy"]) < 0.2 * np.mean(errors["prior"])
+
+
+@pytest.mark.slow
+def test_on_dampers_the_policy_learns_mpcs_commands(tmp_path):
+    """With MR dampers the expert is `SemiActiveMPC` (its commands switch each damper on or off); after cloning
+    and two iterations the policy's commands on fresh motions agree with MPC's switching on more steps than the
+    better constant command does (labels out of step with their observations would not)."""
+    torch.manual_seed(0)
+    study = load_experiment(REPOSITORY / "studies" / "mpc" / "five_story_mr_dagger.yaml")
+    experiment = small().model_copy(
+        update={key: getattr(study, key) for key in ("devices", "actuators", "sensors", "reward", "supervisor")}
+    )
+    experiment = experiment.model_validate(experiment.model_dump())
+    plant = Plant(experiment)
+    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", None)
+    assert isinstance(model.expert, SemiActiveMPC)
+    model.ep_info_buffer = deque(maxlen=100)
+    for iteration in range(3):
+        model.collect(expert_acts=iteration == 0)
+        model.fit()
+    pairs = []
+
+    class Judge:
+        name = "judge"
+
+        def reset(self):
+            model.expert.reset()
+
+        def act(self, observation):
+            action = model.act(observation)
+            pairs.append((model.expert.act(observation), action))
+            return action
+
+    batch_rollout(plant, generate_suite(experiment.excitation.generator, 3, 99, plant.building), [Judge()], [5, 6, 7])
+    expert, learned = (np.concatenate(side) for side in zip(*pairs, strict=True))
+    on = np.mean(expert > 0.0)
+    assert 0.1 < on < 0.9  # MPC switches the dampers
+    assert np.mean(np.sign(learned) == expert) > max(on, 1.0 - on) + 0.05
 
 
 @pytest.mark.slow
