@@ -25,6 +25,9 @@ SAME_PHYSICS = 1e-5
 # A PPO residual network policy with its config and failing verdict: the retired `five_story` model (worse
 # than no control on 73 of the safety check's 320 motions), kept only as a fixture of the policy file format.
 NETWORK_POLICY = REPOSITORY / "tests" / "data" / "retired_five_story"
+# A classical controller file with the most fields: MPC for the default experiment, as written by
+# rlc design configs/experiments/five_story_every_story.yaml --law mpc --out tests/data/designed_mpc
+MPC_POLICY = REPOSITORY / "tests" / "data" / "designed_mpc"
 
 
 def records_folder() -> Path:

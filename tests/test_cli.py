@@ -92,7 +92,7 @@ def test_rlc_models_lists_every_shipped_controller_and_marks_the_default():
 
     result = CliRunner().invoke(app, ["models"])
     assert result.exit_code == 0
-    assert "five_story_every_story (default): classical, lqg_ground_model, safety check passed" in result.output
+    assert "five_story_every_story (default): DAgger, 104,933 steps, safety check passed" in result.output
     shipped = [path for path in MODELS.iterdir() if (path / "best_policy.yaml").is_file()]
     assert result.output.count("safety check passed") == len(shipped) and "FAILED" not in result.output
 

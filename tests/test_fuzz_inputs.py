@@ -206,10 +206,10 @@ def test_a_fuzzed_wind_suite_is_accepted_or_refused_in_one_line(tmp_path, key, b
 
 
 def _policy_cases():
-    from conftest import NETWORK_POLICY, REPOSITORY
+    from conftest import MPC_POLICY, NETWORK_POLICY
 
     cases = []
-    for folder in (NETWORK_POLICY, REPOSITORY / "models" / "five_story_every_story"):
+    for folder in (NETWORK_POLICY, MPC_POLICY):  # a learned file, a classical one (MPC: its own section too)
         description = yaml.safe_load((folder / "best_policy.yaml").read_text())
         for path, _ in leaves(description):
             cases += [(f"{folder.name}:{'.'.join(map(str, path))}={bad}", folder, path, bad) for bad in BAD_VALUES]

@@ -15,7 +15,7 @@ from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.evaluation import report, study_report, tables
 from rlcontroller.learning.training import train
 
-DEFAULT_NAME = "LQG + ground model (five_story_every_story)"  # the default model, classical
+DEFAULT_NAME = "RL"  # the default model, the learned MPC
 
 
 @pytest.fixture(scope="module")
@@ -168,9 +168,10 @@ def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
     assert "five_story_every_story/best_policy.yaml" in result.output
     assert "safety check" not in result.output  # said only of a controller that failed or was never checked
     summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
-    default = summary.loc[DEFAULT_NAME]  # LQG + ground model as data: the evaluation's own row to rounding
-    assert default["J1"] < 0.5 and default["J2"] < 1.0 and default["J1"] < summary.loc["LQG", "J1"]
-    assert default["J1"] == pytest.approx(summary.loc["LQG + ground model", "J1"], abs=2e-3)
+    default = summary.loc[DEFAULT_NAME]  # the learned MPC: LQG + ground model's drift, fewer floor accelerations
+    assert default["J1"] < 0.5 and default["J1"] < summary.loc["LQG", "J1"]
+    assert default["J1"] == pytest.approx(summary.loc["LQG + ground model", "J1"], rel=0.02)
+    assert default["J2"] < 0.95 * summary.loc["LQG + ground model", "J2"]
 
 
 @pytest.mark.slow

@@ -94,7 +94,7 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} == {"robustness.csv", "robustness.md", "robustness.png"}
     table = pd.read_csv(out / "robustness.csv")
-    default = "LQG + ground model (five_story_every_story)"  # the default model, a classical one
+    default = "RL"  # the default model, the learned MPC
     assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, NOMINAL_GROUND_MODEL, ORACLE_LQG, default}
     assert (
         set(table["scenario"]) == {"nominal", "soft"}

@@ -151,5 +151,5 @@ def test_rlc_evaluate_on_a_users_folder(my_records, tmp_path):
     assert result.exit_code == 0, result.output
     summary = (out / "summary.md").read_text()
     assert "3 records from" in summary and "best_policy.yaml" in summary
-    assert "Evaluated LQG + ground model (five_story_every_story): " in summary
+    assert "Evaluated RL: " in summary
     assert np.isfinite(pd.read_csv(out / "metrics.csv")["value"]).all()
