@@ -1,6 +1,8 @@
 """Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps, subject
 to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of LQG +
-ground model (`MPCController`); for semi-active dampers with passivity as bounds (`SemiActiveMPC`).
+ground model (`MPCController`; `ObservedMPC` takes the estimate an observation holds, as a controller file's MPC
+does); for semi-active dampers with passivity as bounds (`SemiActiveMPC`). `MPCDesign` is what it is made of
+(model, cost, terminal weight, stroke rows, horizon), as a controller file holds it; `MPCDesign.problem()` the QP.
 
 With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the coming
 ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation) and the reward's cost
