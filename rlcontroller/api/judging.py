@@ -48,9 +48,9 @@ def comparison(
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     extra = ()
     if mpc is not None:
-        from rlcontroller.control.mpc import MPCController, SemiActiveMPC
+        from rlcontroller.control.mpc import mpc_controller
 
-        extra = ((SemiActiveMPC if plant.semi_active is not None else MPCController)(plant.design, mpc),)
+        extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)

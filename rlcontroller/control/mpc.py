@@ -176,11 +176,6 @@ def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfi
     )
 
 
-def mpc_problem(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCProblem:
-    """The QP of MPC on `plant` (`mpc_design`)."""
-    return mpc_design(plant, horizon, reward).problem()
-
-
 class MPCPlanner:
     """The QP of `problem` solved for each building of a batch (one warm-started OSQP solver per row), with the
     last plan of each kept: `first_actions` returns each row's first planned action, or on a step OSQP did not
@@ -290,7 +285,7 @@ class MPCController(_Planned):
     def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
         self.name = name or f"MPC (N = {horizon})"
         self.estimator = LQGController(design_lqg_ground_model(plant), plant, self.name)  # and LQR's fallback
-        self.planner = MPCPlanner(mpc_problem(plant, horizon))
+        self.planner = MPCPlanner(mpc_design(plant, horizon).problem())
         self.problem = self.planner.problem
 
     def act(self, observation: np.ndarray) -> np.ndarray:
@@ -391,3 +386,9 @@ class SemiActiveMPC(_Planned):
         )
         desired = np.where(at_reach, np.sign(planned) * ALL_IT_GIVES, planned * clipped.capacity)
         return clipped.switch(desired.reshape(measured.shape), measured)
+
+
+def mpc_controller(plant: Plant, horizon: int = DEFAULT_HORIZON) -> MPCController | SemiActiveMPC:
+    """MPC for the devices of `plant` (its design model): `SemiActiveMPC` for semi-active dampers, else
+    `MPCController`."""
+    return (SemiActiveMPC if plant.semi_active is not None else MPCController)(plant, horizon)

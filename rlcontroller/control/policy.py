@@ -393,10 +393,17 @@ def _declared_arrays(
     if not isinstance(activations, list) or not activations:
         raise ValueError("network.activations: expected a list, one activation per layer")
     size, m = plant.layout.size, plant.building.n_actuators
+    estimate = plant.layout.estimate.stop - plant.layout.estimate.start
+
+    def leading(key: str) -> int:
+        """The first dimension of array `key` as its header gives it (0 if absent or of rank 0): a count the
+        file itself sets (hidden widths, cost rows); a wrong rank fails the comparison below."""
+        shape = headers.get(key, ((), None))[0]
+        return shape[0] if shape else 0
+
     expected, width = {}, size
     for index in range(len(activations)):
-        shape = headers.get(f"layer{index}_weight", ((0,), None))[0]
-        outputs = shape[0] if shape else 0  # a hidden width is the weights'; a wrong rank fails the comparison
+        outputs = leading(f"layer{index}_weight")
         expected |= {f"layer{index}_weight": (outputs, width), f"layer{index}_bias": (outputs,)}
         width = outputs
     if width != m:
@@ -404,22 +411,19 @@ def _declared_arrays(
     if description["observation"]["normalize"]:
         expected |= {"observation_mean": (size,), "observation_var": (size,)}
     if description["prior"] != "none":
-        estimate = plant.layout.estimate
-        expected |= {"prior_feedback": (m, estimate.stop - estimate.start), "prior_feedforward": (m,)}
+        expected |= {"prior_feedback": (m, estimate), "prior_feedforward": (m,)}
     if description.get("mpc") is not None:
-        size = plant.layout.estimate.stop - plant.layout.estimate.start
-        costs = (headers.get("mpc_cost_state", ((0,), None))[0] or (0,))[0]  # cost rows: the file's own count
-        strokes = (headers.get("mpc_strokes", ((0,), None))[0] or (0,))[0]
-        if not 1 <= costs <= 10 * (size + m) or strokes > m:
-            raise ValueError(f"mpc: {costs} cost rows and {strokes} stroke rows; expected 1 to {10 * (size + m)} "
-                             f"and at most {m}")  # fmt: skip
+        costs, strokes = leading("mpc_cost_state"), leading("mpc_strokes")
+        if not 1 <= costs <= 10 * (estimate + m) or strokes > m:
+            raise ValueError(f"mpc: {costs} cost rows and {strokes} stroke rows; expected 1 to "
+                             f"{10 * (estimate + m)} and at most {m}")  # fmt: skip
         expected |= {
-            "mpc_phi": (size, size),
-            "mpc_action_gain": (size, m),
-            "mpc_cost_state": (costs, size),
+            "mpc_phi": (estimate, estimate),
+            "mpc_action_gain": (estimate, m),
+            "mpc_cost_state": (costs, estimate),
             "mpc_cost_action": (costs, m),
-            "mpc_terminal": (size, size),
-            "mpc_strokes": (strokes, size),
+            "mpc_terminal": (estimate, estimate),
+            "mpc_strokes": (strokes, estimate),
         }
     return expected
 

@@ -30,7 +30,7 @@ import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import residual_action
-from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController, SemiActiveMPC
+from rlcontroller.control.mpc import DEFAULT_HORIZON, mpc_controller
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.simulation.batch import batch_rollout
@@ -79,10 +79,7 @@ class DAgger(BatchLearner):
 
     def _setup_model(self) -> None:
         self._setup_policy_and_plant()
-        self.expert = None
-        if self.plant is not None:
-            law = SemiActiveMPC if self.plant.semi_active is not None else MPCController
-            self.expert = law(self.plant.design, self.horizon)
+        self.expert = mpc_controller(self.plant.design, self.horizon) if self.plant is not None else None
         if not hasattr(self, "samples"):  # a new model (a loaded one brings its data set and generator)
             size, m = self.observation_space.shape[0], self.action_space.shape[0]
             self.samples = {

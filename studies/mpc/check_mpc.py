@@ -17,7 +17,7 @@ import sys
 from rlcontroller.api.common import safety_standard
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
-from rlcontroller.control.mpc import MPCController, SemiActiveMPC
+from rlcontroller.control.mpc import mpc_controller
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.physics.plant import Plant
 
@@ -32,8 +32,9 @@ def main() -> None:
     for path in sys.argv[1:] or EXPERIMENTS:
         experiment = load_experiment(path)
         plant = Plant(experiment)
-        law = SemiActiveMPC if plant.semi_active is not None else MPCController
-        verdict = safety_check(plant, law(plant.design, 20), load_safety_check(safety_standard(experiment)), [])
+        verdict = safety_check(
+            plant, mpc_controller(plant.design, 20), load_safety_check(safety_standard(experiment)), []
+        )
         print(f"{experiment.name}: {'PASSED' if verdict.passed else 'FAILED'}")
         for name, criterion in verdict.criteria.items():
             print(f"  {name}: {criterion['summary']}", flush=True)

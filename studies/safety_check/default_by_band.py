@@ -11,7 +11,7 @@ supervised default within 15 % of unsupervised LQG + ground model's J1 (drift, s
 
 from __future__ import annotations
 
-from supervisor_study import BAND_SEED, BANDS_G, REPOSITORY, SELECTION_SEED, in_band
+from supervisor_study import COSTS, generated_suites
 
 from rlcontroller.assets import DEFAULT_MODEL, SAFETY_STANDARD
 from rlcontroller.config import RewardConfig, load_experiment, load_safety_check
@@ -21,31 +21,23 @@ from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import MPCController
 from rlcontroller.control.policy import read_policy
 from rlcontroller.evaluation.evaluation import evaluate
-from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.plant import Plant
-
-REWARDS = REPOSITORY / "configs" / "rewards"
 
 
 def main() -> None:
-    standard = load_safety_check(SAFETY_STANDARD)
-    suites = {"selection (0.02-1.5 g)": generate_suite(in_band(standard.generator, 0.02, 1.5), 200, SELECTION_SEED)}
-    for offset, (band, (low, high)) in enumerate(BANDS_G.items()):
-        suites[band] = generate_suite(in_band(standard.generator, low, high), 100, BAND_SEED + offset)
-
+    suites = generated_suites(load_safety_check(SAFETY_STANDARD))
     supervised = Plant(load_experiment(DEFAULT_MODEL / "config.yaml", self_contained=True))  # faded supervisor
     default = read_policy(DEFAULT_MODEL, "best", supervised, "the default (learned MPC), faded supervisor")
     mpc = MPCController(supervised.design, 20, "MPC (N = 20), faded supervisor")
     unsupervised = Plant(supervised.experiment.model_copy(update={"supervisor": None}))
     references = [
         LQGController(
-            design_lqg_ground_model(unsupervised.design, reward=read_model(REWARDS / name, RewardConfig, "'terms'")),
+            design_lqg_ground_model(unsupervised.design, reward=read_model(path, RewardConfig, "'terms'")),
             unsupervised.design,
             f"LQG + ground model ({cost}), no supervisor",
         )
-        for cost, name in (("drift, shear, force", "drift_shear_force.yaml"),
-                           ("+ accelerations", "drift_shear_force_peak_acceleration.yaml"))
-    ]  # fmt: skip
+        for cost, path in COSTS.items()
+    ]
     rows = {}
     for suite, motions in suites.items():
         for plant, controllers in ((supervised, [default, mpc]), (unsupervised, references)):

@@ -26,7 +26,14 @@ import pandas as pd
 from pydantic import TypeAdapter
 
 from rlcontroller.assets import SAFETY_STANDARD
-from rlcontroller.config import GeneratorConfig, RewardConfig, SupervisorConfig, load_experiment, load_safety_check
+from rlcontroller.config import (
+    GeneratorConfig,
+    RewardConfig,
+    SafetyCheckConfig,
+    SupervisorConfig,
+    load_experiment,
+    load_safety_check,
+)
 from rlcontroller.config.base import read_model
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
@@ -74,12 +81,17 @@ def in_band(generator: GeneratorConfig, low_g: float, high_g: float) -> Generato
     return TypeAdapter(GeneratorConfig).validate_python(raw)
 
 
-def study(records: Path) -> pd.DataFrame:
-    standard = load_safety_check(SAFETY_STANDARD)
+def generated_suites(standard: SafetyCheckConfig) -> dict[str, list]:
+    """The selection suite (200 motions, 0.02-1.5 g) and each band's (100 motions) of the standard's generator."""
     suites = {"selection": generate_suite(in_band(standard.generator, 0.02, 1.5), 200, SELECTION_SEED)}
     for offset, (band, (low, high)) in enumerate(BANDS_G.items()):
         suites[band] = generate_suite(in_band(standard.generator, low, high), 100, BAND_SEED + offset)
-    suites["seven records"] = choose_motions(records)[0]
+    return suites
+
+
+def study(records: Path) -> pd.DataFrame:
+    standard = load_safety_check(SAFETY_STANDARD)
+    suites = generated_suites(standard) | {"seven records": choose_motions(records)[0]}
     experiment = load_experiment(EXPERIMENT)
     rows = []
     for cost, path in COSTS.items():

@@ -9,7 +9,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
-from rlcontroller.control.mpc import TOLERANCE, MPCController, SemiActiveMPC, mpc_problem, stroke_rows
+from rlcontroller.control.mpc import TOLERANCE, MPCController, SemiActiveMPC, mpc_design, stroke_rows
 from rlcontroller.physics.plant import Plant
 
 PLANT = Plant(Experiment())
@@ -73,7 +73,7 @@ def test_the_problem_is_built_from_the_riccati_solution_it_ends_with():
     cost = quadratic_cost(PLANT, PLANT.experiment.reward, step)
     _, riccati = lqr_gain(step, cost, PLANT.force_limits)
     action_gain = step.force_gain * PLANT.force_limits
-    problem = mpc_problem(PLANT, 1)
+    problem = mpc_design(PLANT, 1).problem()
     expected = 2 * (cost.action.T @ cost.action + action_gain.T @ riccati @ action_gain)
     np.testing.assert_allclose(problem.hessian, expected, rtol=1e-10)
 
