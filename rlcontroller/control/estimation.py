@@ -44,7 +44,7 @@ class KalmanFilter:
         return self.phi.shape[0]
 
     @cached_property
-    def _update_matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def update_matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Predict and correct folded into one affine map, (I - L C) applied once here instead of at
         every step: new = estimate @ A + held @ B + measured @ L' (+ previous ground * g)."""
         correction = np.eye(self.size) - self.gain @ self.sensor_c
@@ -59,7 +59,7 @@ class KalmanFilter:
         """`update` read straight from observations laid out by `layout`: new = estimate @ A +
         observation @ O (+ the previous observation's ground reading * g), the scales of the readings
         and of the ground folded in; O is zero but at the newest readings, ground reading and action."""
-        free, action, measured, ground_gain = self._update_matrices
+        free, action, measured, ground_gain = self.update_matrices
         observed = np.zeros((layout.size, self.size))
         n_readings = layout.readings.stop - layout.readings.start
         observed[layout.readings] = measured[:n_readings] * layout.reading_scale[:, None]
@@ -80,7 +80,7 @@ class KalmanFilter:
         `readings` (and the ground reading `ground` at the same time, m/s^2); `previous_ground` is the
         one of the step before. Start from a zero estimate, zero action and zero previous ground: the
         prediction is then zero and the first update is the correction alone."""
-        free, action, measured, ground_gain = self._update_matrices
+        free, action, measured, ground_gain = self.update_matrices
         if self.measures_ground:
             readings = np.concatenate([readings, np.asarray(ground, dtype=float)[..., None]], axis=-1)
         new = estimate @ free + held_action @ action + readings @ measured

@@ -57,7 +57,7 @@ def responses(plant: Plant, design: LQGDesign, frequency: np.ndarray) -> dict[st
     estimate_u), with the env's timing: action k held over [t_k, t_k+1], the readings at t_k feel action k-1."""
     step, kalman = plant.step_map(1), design.filter
     phi, force = step.phi, step.force_gain[:, 0] * plant.building.force_limits[0]
-    free, held, measured, _ = kalman._update_matrices  # new = old @ free + held action @ held + readings @ measured
+    free, held, measured, _ = kalman.update_matrices
     c, d = plant.sensors.c, plant.sensors.d[:, 0] * plant.building.force_limits[0]
     drift = plant.outputs("drift")[0]
     n_readings = c.shape[0]
