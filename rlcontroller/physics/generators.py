@@ -26,6 +26,12 @@ class GroundModel:
         """a_g = output @ [x_f, x_f']."""
         return np.array([-(self.frequency**2), -2.0 * self.damping * self.frequency])
 
+    def spectrum(self, frequencies: np.ndarray) -> np.ndarray:
+        """|a_g / w|^2 at `frequencies` (Hz): the filter's power gain, 1 at 0 Hz (white bedrock = 1)."""
+        s = 2j * np.pi * np.asarray(frequencies, dtype=float)
+        w, z = self.frequency, self.damping
+        return np.abs((w**2 + 2 * z * w * s) / (s**2 + 2 * z * w * s + w**2)) ** 2
+
     def state_scale(self, ground_scale: float) -> np.ndarray:
         """Typical sizes of x_f (m) and x_f' (m/s) for a ground acceleration of `ground_scale`."""
         return np.array([ground_scale / self.frequency**2, ground_scale / self.frequency])

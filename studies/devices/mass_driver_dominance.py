@@ -38,17 +38,13 @@ from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import LQGDesign, design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import batch_rollout
 
 FREQUENCIES = np.geomspace(0.05, 24.8, 400)  # Hz
 LAGUERRE_POLE, LAGUERRE_COUNT, POLYGON = 0.96, 40, 16
-
-
-def kanai_tajimi(frequency: np.ndarray, omega_g: float = 12.0, zeta_g: float = 0.6) -> np.ndarray:
-    """Kanai-Tajimi spectrum shape (white-noise bedrock = 1) at `frequency` (Hz)."""
-    w = 2 * np.pi * frequency
-    return (omega_g**4 + (2 * zeta_g * omega_g * w) ** 2) / ((omega_g**2 - w**2) ** 2 + (2 * zeta_g * omega_g * w) ** 2)
+MEDIUM_SOIL = GroundModel(frequency=12.0, damping=0.6)  # the weighting spectrum, Kanai-Tajimi
 
 
 def responses(plant: Plant, design: LQGDesign, frequency: np.ndarray) -> dict[str, np.ndarray]:
@@ -105,7 +101,7 @@ def feedforward_bound(r: dict[str, np.ndarray], frequency: np.ndarray, dt: float
             bound = sparse.coo_matrix((-np.ones(nf), (np.arange(nf), np.arange(nf) * ns + story)), shape=(nf, nf * ns))
             rows.append(sparse.hstack([sparse.coo_matrix(((turn * drift_u[:, story])[:, None] * basis).real), bound]))
             rhs.append(-(turn * drift_w[:, story]).real)
-    weight = kanai_tajimi(frequency) * np.gradient(frequency)
+    weight = MEDIUM_SOIL.spectrum(frequency) * np.gradient(frequency)
     cost = np.concatenate([np.zeros(nq), (weight[:, None] * reference).ravel()])
     limits = [(None, None)] * nq + [(0.0, value + 1e-7) for value in reference.ravel()]
     result = scipy.optimize.linprog(cost, sparse.vstack(rows).tocsr(), np.concatenate(rhs), bounds=limits)
@@ -123,7 +119,7 @@ def dominant_gain(r: dict[str, np.ndarray], frequency: np.ndarray, start: np.nda
     """A gain on the Kalman estimate: spectrum-weighted drift plus mu times the squared excess over the tuned
     mass plus `slack` of each story's peak (to that peak), mu raised from 1e2 to 1e6."""
     reference = np.abs(r["drift_w"])
-    peak, weight = reference.max(axis=0), kanai_tajimi(frequency) * np.gradient(frequency)
+    peak, weight = reference.max(axis=0), MEDIUM_SOIL.spectrum(frequency) * np.gradient(frequency)
 
     def objective(gain: np.ndarray, mu: float) -> float:
         drift = np.abs(closed_drift(r, gain))
@@ -140,7 +136,7 @@ def main() -> None:
     plant = Plant(load_experiment(CONFIGS / "experiments" / "five_story_amd.yaml"))
     design = design_lqg_ground_model(plant.design)
     r = responses(plant, design, FREQUENCIES)
-    weight = kanai_tajimi(FREQUENCIES) * np.gradient(FREQUENCIES)
+    weight = MEDIUM_SOIL.spectrum(FREQUENCIES) * np.gradient(FREQUENCIES)
     lqg = np.abs(closed_drift(r, design.feedback[0])) / np.abs(r["drift_w"])
 
     print("1. frequency responses against steady sines of rlc's plant (0.2 m/s^2, LQG + ground model):")

@@ -14,7 +14,7 @@ from rlcontroller.physics.excitation import (
     resample,
     scale_to_pga,
 )
-from rlcontroller.physics.generators import generate_suite, kanai_tajimi, noise_impulses
+from rlcontroller.physics.generators import GroundModel, generate_suite, kanai_tajimi, noise_impulses
 
 WEST2 = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\nACCELERATION TIME SERIES IN UNITS OF G\n"
 
@@ -223,3 +223,15 @@ def test_a_log_uniform_pga_spans_weak_to_strong_motions():
     assert 0.4 < below_half < 0.6
     with pytest.raises(ValueError, match="pga_log needs pga low > 0"):
         KanaiTajimiConfig(pga=(0.0, 1.0), pga_log=True)
+
+
+def test_ground_model_spectrum_is_its_filters_power_gain():
+    """The spectrum against the filter as the estimator uses it (states [x_f, x_f'], a_g = output @ state)."""
+    model = GroundModel(frequency=12.0, damping=0.6)
+    w, z = model.frequency, model.damping
+    a = np.array([[0.0, 1.0], [-(w**2), -2.0 * z * w]])
+    b = np.array([0.0, -1.0])  # x_f'' + 2 z w x_f' + w^2 x_f = -w
+    frequencies = np.array([0.0, 0.5, 1.0, 1.9, 5.0, 20.0])
+    gain = [model.output @ np.linalg.solve(2j * np.pi * f * np.eye(2) - a, b) for f in frequencies]
+    np.testing.assert_allclose(model.spectrum(frequencies), np.abs(gain) ** 2, rtol=1e-12)
+    assert model.spectrum(np.array([0.0]))[0] == pytest.approx(1.0)
