@@ -25,7 +25,7 @@ def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
     assert re.search(r"3,\d{3},\d{3}/3,500,0", output)  # the progress bar was drawn (simulated steps)
     assert "learned: validation J1 1.000 at step 0 -> 0." in output  # training changed the controller
     assert "tables and plots in runs" in output and "| RL |" in output
-    assert "safety check of RL:" in output and "verdict in runs" in output
+    assert "safety check of RL: PASSED" in output and "verdict in runs" in output
     (run,) = (tmp_path / "runs").iterdir()
     assert (run / "evaluation" / "summary.md").is_file() and (run / "best_check.yaml").is_file()
     metrics = pd.read_csv(run / "evaluation" / "metrics.csv")  # on every record shown: better than no control

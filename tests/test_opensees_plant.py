@@ -218,3 +218,29 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
     )
     with pytest.raises(ModelError, match=re.escape(message)):
         OpenSeesIntegrator(model, "build_model", 0.005, np.eye(1), np.ones(1)).reset()
+
+
+@pytest.mark.parametrize(
+    ("returned", "message"),
+    [
+        ("'floors': [[7]], 'direction': 1", "floors: floor 1 names node 7, which the model does not have"),
+        ("'floors': [[1]], 'direction': 9", "direction 9: expected a degree of freedom of the floor nodes, 1 to 1"),
+    ],
+)
+def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, message):
+    """What the model function says of its model is checked against the domain it built (OpenSees itself
+    would stop later with "OpenSeesError: See stderr output")."""
+    from rlcontroller.physics.opensees import build_model
+
+    model = tmp_path / "one_story.py"
+    model.write_text(
+        "def build_model(ops):\n"
+        "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
+        "    ops.node(0, 0.0); ops.fix(0, 1)\n"
+        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
+        "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
+        "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
+        f"    return {{{returned}, 'story_heights': [3.0], 'modal_damping': [0.02]}}\n"
+    )
+    with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
+        build_model(model, "build_model")

@@ -4,26 +4,32 @@ from __future__ import annotations
 
 from rlcontroller.config import Experiment
 
+SHOWN_MODES = 10  # rows of a mode table unless in full
+SHOWN_VALUES = 12  # entries of a long list unless in full
 
-def describe(experiment: Experiment) -> str:
+
+def describe(experiment: Experiment, full: bool = False) -> str:
     """The resolved config, natural periods and modal damping ratios (of the design model, and of the
-    simulated plant when there is a plant part), the actuator layout and the devices."""
+    simulated plant when there is a plant part), the actuator layout and the devices; matrices summarised
+    (shape, source, digest), long lists and mode tables shortened, unless `full`."""
     from rlcontroller.physics.plant import Plant
 
     plant = Plant(experiment)
-    lines = ["# resolved configuration", resolved_text(experiment)]
+    rows = None if full else SHOWN_MODES
+    lines = ["# resolved configuration", resolved_text(experiment, full)]
     floors_only = " (floors only, without the devices)" if experiment.devices else ""
     buildings = [(f"design model{floors_only}", plant.design.bare.building)]
     if plant.fe_model is None and experiment.plant is not None:
         buildings.append((f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building))
     for title, building in buildings:
-        lines += mode_lines(title, building.periods(), building.modal_damping_ratios())
+        lines += mode_lines(title, building.periods(), building.modal_damping_ratios(), rows=rows)
     if plant.fe_model is not None:
         from rlcontroller.physics.opensees import fe_modes
 
         design = plant.design.bare.building.periods()
         fe_periods, ratios = fe_modes(plant.fe_model.path, plant.fe_model.function, len(design))
-        lines += mode_lines(f"simulated plant (OpenSees model {plant.fe_model.path.name})", fe_periods, ratios, design)
+        title = f"simulated plant (OpenSees model {plant.fe_model.path.name})"
+        lines += mode_lines(title, fe_periods, ratios, design, rows)
     lines.append("\n# actuators")
     for index, actuator in enumerate(experiment.actuators):
         floors = f"floor {actuator.story}"
@@ -40,9 +46,9 @@ def describe(experiment: Experiment) -> str:
     return "\n".join(lines)
 
 
-def mode_lines(title: str, periods, ratios, design=None) -> list[str]:
+def mode_lines(title: str, periods, ratios, design=None, rows: int | None = None) -> list[str]:
     """A table of modes: period (s), frequency (Hz), damping ratio, and with `design` (its periods, s) the
-    design model's period error in each."""
+    design model's period error in each; the first `rows` modes and a line counting the others (all: None)."""
     error = "  design model's period error" if design is not None else ""
     lines = [
         f"# modes of the {title}",
@@ -53,6 +59,8 @@ def mode_lines(title: str, periods, ratios, design=None) -> list[str]:
         if design is not None:
             line += f"  {design[mode - 1] / period - 1.0:>+27.2%}"
         lines.append(line)
+    if rows is not None and len(lines) > rows + 2:
+        lines = lines[: rows + 2] + [f"   ... {len(lines) - rows - 2} more modes (rlc info --full lists them)"]
     return lines
 
 
@@ -82,17 +90,60 @@ def hardware_label(experiment: Experiment) -> str:
     return f"{experiment.building.name}{simulated} under {experiment.load_kind}, {'; '.join(parts)}"
 
 
-def resolved_text(experiment: Experiment) -> str:
-    """The resolved experiment as YAML, a building's matrices shown by their size and source."""
+def resolved_text(experiment: Experiment, full: bool = False) -> str:
+    """The resolved experiment as YAML. Unless `full`: a matrix as its shape, source and digest, a long list
+    as its first and last entries and its length (a building of 76 floors fits on a screen)."""
     import yaml
 
     raw = experiment.model_dump(mode="json")
-    building = raw["building"]
-    for key in ("mass_matrix", "stiffness_matrix", "damping_matrix"):
-        if building.get(key) is not None:
-            size = len(building[key])
-            building[key] = f"({size} x {size}, SI, from {building.get('source') or 'the config'})"
-    return yaml.safe_dump(raw, sort_keys=False)
+    if full:
+        return yaml.safe_dump(raw, sort_keys=False)
+    source = raw["building"].get("source") or "the config"
+
+    class Dumper(yaml.SafeDumper):
+        """Lists and mappings of numbers and names on one line (wrapped)."""
+
+    def flat(data) -> bool:
+        return not any(isinstance(item, dict) or (isinstance(item, list) and not flat(item)) for item in data)
+
+    def sequence(dumper, data):
+        return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flat(data))
+
+    def mapping(dumper, data):
+        short = not any(isinstance(item, str) and len(item) > 40 for item in data.values())  # a matrix: a line each
+        return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=flat(data.values()) and short)
+
+    Dumper.add_representer(list, sequence)
+    Dumper.add_representer(dict, mapping)
+    return yaml.dump(_summarised(raw, source), Dumper=Dumper, sort_keys=False, width=120)
+
+
+def _summarised(value, source: str):
+    """`value` with every matrix (a list of lists) and long list replaced by a line saying what it is, and
+    numbers to 6 significant digits."""
+    import hashlib
+
+    import numpy as np
+
+    if isinstance(value, dict):
+        return {key: _summarised(item, source) for key, item in value.items()}
+    if isinstance(value, float):
+        return float(f"{value:.6g}")
+    if not isinstance(value, list):
+        return value
+    if value and all(isinstance(row, list) for row in value):
+        try:
+            matrix = np.array(value, dtype=float)
+        except ValueError:  # rows of other lengths or not numbers: not a matrix
+            return [_summarised(row, source) for row in value]
+        digest = hashlib.sha256(matrix.tobytes()).hexdigest()[:12]
+        return f"({' x '.join(map(str, matrix.shape))} matrix, SI, from {source}, sha256 {digest})"
+    if len(value) > SHOWN_VALUES and all(isinstance(item, int | float) for item in value):
+        if len(set(value)) == 1:
+            return f"{len(value)} x {value[0]:.6g}"
+        head = ", ".join(f"{item:.6g}" for item in value[:3])
+        return f"[{head}, ..., {value[-1]:.6g}] ({len(value)} values)"
+    return [_summarised(item, source) for item in value]
 
 
 def device_lines(experiment: Experiment, building) -> list[str]:

@@ -52,6 +52,10 @@ def comparison(
 
         extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
+    made_for = (folder_experiment(run_dir) if run_dir is not None else experiment).load_kind
+    mismatch = load_mismatch(made_for, motions)
+    if mismatch is not None:
+        report.note(mismatch)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
     for controller in extra:
@@ -61,6 +65,18 @@ def comparison(
                 "action taken (LQR's clipped action where none was left)"
             )
     return plant, motions, evaluation
+
+
+def load_mismatch(made_for: str, motions: list) -> str | None:
+    """One line when the loads are not the kind the controllers were made for (`Experiment.load_kind`): the
+    evaluation still runs (a wind controller during an earthquake is a real question)."""
+    from rlcontroller.physics.excitation import FLOOR_FORCES
+
+    given = "wind" if all(motion.kind == FLOOR_FORCES for motion in motions) else "ground motion"
+    if given == made_for:
+        return None
+    loads = "floor forces (wind)" if given == "wind" else "ground motions"
+    return f"note: the controllers were made for {made_for}; these loads are {loads}: judged on loads not their own"
 
 
 def evaluate(
@@ -222,6 +238,9 @@ def compare_passive(
     check_new_folder(out)
     plant = Plant(experiment)
     motions, label = load_suite(records, scale_pga, plant, report.note)
+    mismatch = load_mismatch(experiment.load_kind, motions)
+    if mismatch is not None:
+        report.note(mismatch)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
     verdict = None

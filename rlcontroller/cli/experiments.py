@@ -15,12 +15,16 @@ from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, po
 @user_errors
 def info(
     config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
+    full: Annotated[
+        bool, typer.Option("--full", help="Every matrix entry, list value and mode (default: summarised).")
+    ] = False,
 ) -> None:
     """Print the resolved config, natural periods, modal damping ratios (of the design model, and of
-    the simulated plant when there is a plant part), actuator layout and devices."""
+    the simulated plant when there is a plant part), actuator layout and devices; matrices by shape,
+    source and digest unless --full."""
     from rlcontroller import api
 
-    typer.echo(api.describe(api.load(config)))
+    typer.echo(api.describe(api.load(config), full))
 
 
 @app.command(short_help="Train a controller on generated motions.")
@@ -83,11 +87,12 @@ def print_verdict(verdict, path: Path) -> None:
 def demo(records: RecordsOption = None, progress: ProgressOption = None) -> None:
     """The main job end to end: learn a controller from nothing, with no model of the building
     (configs/experiments/demo.yaml, about 30 s), evaluate it against LQG and the uncontrolled building, and
-    run the safety check on it."""
+    run the safety check on it (exit code 1 if it fails)."""
     from rlcontroller import api
 
     report = Printed(progress)
     trained = api.demo(records, report.bars, report)
     print_verdict(trained.verdict, trained.verdict_file)
-    if not trained.verdict.passed:
+    if not trained.verdict.passed:  # exit 1, as `rlc check` does: a script (or CI) sees it
         typer.echo("this run's controller failed the safety check: docs/safety_check.md says what that means")
+        raise typer.Exit(1)

@@ -12,6 +12,7 @@ import numpy as np
 
 from rlcontroller.config.base import ConfigError, display_path
 from rlcontroller.config.building import FORCE_UNITS, LENGTH_UNITS, MASS_UNITS
+from rlcontroller.untrusted import npz_headers, read_npz
 
 ARRAYS = ("M", "K", "C", "modal_damping")
 STATE_SPACE_ARRAYS = ("A", "B", "C", "D", "dt")
@@ -77,16 +78,18 @@ def read_state_space_part(raw: dict[str, Any], folder: Path, where: str) -> dict
 
 
 def _read_arrays(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The real arrays of an .npz file, each as float; anything else in it is refused in one line."""
+    """The real arrays of an .npz file, each as float, read as controller files are (`untrusted.npz_headers`:
+    headers checked and the size bounded before any data); anything else in it is refused in one line."""
     try:
-        with np.load(path, allow_pickle=False) as archive:
-            unknown = sorted(set(archive.files) - set(names))
-            raw = {key: np.asarray(archive[key]) for key in names if key in archive.files}
-    except (OSError, ValueError, zipfile.BadZipFile) as error:
+        headers = npz_headers(path)
+    except ValueError as error:
+        raise ConfigError(f"{display_path(path)}: {error}") from None
+    except (OSError, zipfile.BadZipFile) as error:
         raise ConfigError(f"{display_path(path)}: cannot read the matrices ({type(error).__name__})") from None
+    unknown = sorted(set(headers) - set(names))
     if unknown:
         raise ConfigError(f"{display_path(path)}: unknown arrays {unknown}, expected {', '.join(names)}")
-    for key, array in raw.items():
-        if not (np.issubdtype(array.dtype, np.integer) or np.issubdtype(array.dtype, np.floating)):
-            raise ConfigError(f"{display_path(path)}: array {key!r} holds {array.dtype}, expected real numbers")
-    return {key: array.astype(float) for key, array in raw.items()}
+    for key, (_, dtype) in headers.items():
+        if dtype.kind not in "fiu":
+            raise ConfigError(f"{display_path(path)}: array {key!r} holds {dtype}, expected real numbers")
+    return {key: array.astype(float) for key, array in read_npz(path).items()}

@@ -49,7 +49,8 @@ class SafetyCheckConfig(StrictModel):
     """The safety check's standard (`evaluation.safety`): a suite of `motions` generated motions drawn
     with its own `seed`, the drift below which a motion is insignificant (a ratio of the story
     height; `story_height` (m) where the building gives none), and the at-rest test: `rest_runs`
-    noise realisations of `rest_duration` (s) without ground motion. The reference a controller must
+    noise realisations of `rest_duration` (s) without ground motion. A significant motion fails when its peak
+    drift ratio (or mean J1) to the reference exceeds 1 + `tolerance`. The reference a controller must
     never be worse than is the building with its controller failed safe (`evaluation.safety.fail_safe`)."""
 
     motions: Annotated[int, Field(ge=1, le=100_000)] = 320
@@ -59,6 +60,7 @@ class SafetyCheckConfig(StrictModel):
     story_height: Annotated[float, Field(gt=0.0, le=1000.0)] = 3.0
     rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
     rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
+    tolerance: Annotated[float, Field(ge=0.0, le=0.05)] = 0.01
 
 
 def check_generator(standard: SafetyCheckConfig, experiment: Experiment) -> GeneratorConfig:

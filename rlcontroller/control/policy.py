@@ -57,6 +57,7 @@ LAWS = {  # a classical law: its name in tables
 PASSIVE_COMMANDS = {"passive-on": 1.0, "passive-off": -1.0}  # a passive law's held action
 MPC_ARRAYS = ("phi", "action_gain", "cost_state", "cost_action", "terminal", "strokes")  # MPCDesign's, as mpc_*
 MAX_HORIZON = 200  # control steps of a file's MPC (the experiment's kwargs.horizon range)
+MODEL_TOLERANCE = 1e-6  # an MPC file's model against its design model's, of the largest entry (any CPU's arithmetic)
 
 
 def gelu(x: np.ndarray) -> np.ndarray:
@@ -470,19 +471,30 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
         raise ValueError(f"training_steps {steps!r}: expected a whole number of steps, 0 or more")
     law = _classical_law(description, actor, normalizer, prior)
-    mpc = None if law != "mpc" else ObservedMPC(_mpc_design(description["mpc"], weights), prior, plant.layout)
+    mpc = None if law != "mpc" else ObservedMPC(_mpc_design(description["mpc"], weights, plant), prior, plant.layout)
     return PolicyController(
         actor, normalizer, prior, name, steps=steps,
         algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")), mpc=mpc,
     )  # fmt: skip
 
 
-def _mpc_design(section: dict, weights: dict[str, np.ndarray]) -> MPCDesign:
-    """An MPC law's design once its horizon is a whole number of steps within `MAX_HORIZON` and its terminal
-    weight symmetric and positive semi-definite (the QP convex; ValueError otherwise)."""
+def _mpc_design(section: dict, weights: dict[str, np.ndarray], plant: Plant) -> MPCDesign:
+    """An MPC law's design once its horizon is a whole number of steps within `MAX_HORIZON`, its model the
+    control-step map of the folder's design model (with its ground model) and its terminal weight symmetric and
+    positive semi-definite: a convex QP on the model it claims, so no forged matrix reaches the solver
+    (ValueError otherwise)."""
     horizon = section.get("horizon") if isinstance(section, dict) else None
     if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON:
         raise ValueError(f"mpc.horizon {horizon!r}: expected a whole number of control steps in [1, {MAX_HORIZON}]")
+    step = plant.design.ground_model_step()
+    model = {"mpc_phi": step.phi, "mpc_action_gain": step.force_gain * plant.force_limits}
+    for key, expected in model.items():
+        difference = np.max(np.abs(weights[key] - expected)) / max(float(np.max(np.abs(expected))), 1e-300)
+        if not difference <= MODEL_TOLERANCE:
+            raise ValueError(
+                f"{key}: not the control-step map of the folder's config.yaml design model "
+                f"(largest difference {difference:.3g} of its largest entry, at most {MODEL_TOLERANCE:g} accepted)"
+            )
     terminal = weights["mpc_terminal"]
     scale = max(1.0, float(np.max(np.abs(terminal))))
     if (
@@ -490,7 +502,12 @@ def _mpc_design(section: dict, weights: dict[str, np.ndarray]) -> MPCDesign:
         or np.min(np.linalg.eigvalsh(0.5 * (terminal + terminal.T))) < -1e-9 * scale
     ):
         raise ValueError("mpc_terminal: expected a symmetric positive semi-definite matrix")
-    return MPCDesign(**{key: weights[f"mpc_{key}"] for key in MPC_ARRAYS}, horizon=horizon)
+    design = MPCDesign(**{key: weights[f"mpc_{key}"] for key in MPC_ARRAYS}, horizon=horizon)
+    with np.errstate(over="ignore", invalid="ignore"):  # a forged cost's overflow is refused just below
+        problem = design.problem()
+    if not all(np.all(np.isfinite(array)) for array in (problem.hessian, problem.linear, problem.constraints)):
+        raise ValueError("mpc_cost_state, mpc_cost_action, mpc_terminal: their QP overflows (entries too large)")
+    return design
 
 
 def _classical_law(

@@ -92,8 +92,12 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     if layout.estimate.stop > layout.estimate.start:
         parts.append(_kalman(g, plant, held))
     observation = g.node("Concat", [*parts, actions], "observation", axis=1)
+    # the policy reads the observation as the env stores it (float32), as `PolicyController` does in Python
+    stored = g.node(
+        "Cast", [g.node("Cast", [observation], "observation_f32", to=FLOAT)], "stored_observation", to=DOUBLE
+    )
 
-    network_input = observation
+    network_input = stored
     normalizer = controller.normalizer
     if normalizer is not None:
         centred = g.node("Sub", [observation, g.constant("observation_mean", normalizer.mean)], "centred")
@@ -108,14 +112,14 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         x = g.node("Mul", [difference, g.constant("one_half", 0.5, np.float32)], "odd_action")
     action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, "policy_action")
     if controller.prior is not None:
-        estimate = g.columns(observation, layout.estimate.start, layout.estimate.stop, "prior_estimate")
+        estimate = g.columns(stored, layout.estimate.start, layout.estimate.stop, "prior_estimate")
         feedback = g.affine(estimate, controller.prior.feedback, "prior_feedback")
         feedforward = g.node("Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff")
         prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
     supervisor = experiment.supervisor
     if supervisor is not None:
-        action, peak = _supervised(g, plant, observation, action)
+        action, peak = _supervised(g, plant, stored, action)
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
@@ -161,13 +165,10 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     return model
 
 
-def _supervised(g: _Graph, plant: Plant, observation: str, action: str) -> tuple[str, str | None]:
+def _supervised(g: _Graph, plant: Plant, stored: str, action: str) -> tuple[str, str | None]:
     """The supervisor's action and the new peak ground reading (None without a trigger), computed as
-    `control.supervisor` does from the observation as the env stores it (float32)."""
+    `control.supervisor` does from the observation as the env stores it (`stored`: float32)."""
     layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_dofs
-    stored = g.node(
-        "Cast", [g.node("Cast", [observation], "observation_f32", to=FLOAT)], "stored_observation", to=DOUBLE
-    )
     if supervisor.dissipative:
         start = layout.estimate.start + n
         velocity = g.columns(stored, start, start + n, "velocity_estimate")
@@ -227,28 +228,29 @@ def _network(g: _Graph, actor, x: str, prefix: str) -> str:
 
 
 def _kalman(g: _Graph, plant: Plant, held: str) -> str:
-    """The scaled estimate after this step's readings (the env's own filter: Kalman or integration)."""
+    """The scaled estimate after this step's readings: the env's own filter (Kalman or integration), in the
+    folded form the env applies (`KalmanFilter.update_matrices`: prediction and correction in one affine map),
+    so that the graph and Python round alike."""
     layout, kalman = plant.layout, observation_filter(plant)
+    free, action_gain, measured_gain, ground_gain = kalman.update_matrices
     previous = g.columns("state", layout.estimate.start, layout.estimate.stop, "previous_scaled_estimate")
     estimate = g.node("Mul", [previous, g.constant("estimate_scale", layout.estimate_scale)], "previous_estimate")
-    predicted = g.node(
+    measured = g.node("Concat", ["readings", "ground"], "measured", axis=1) if kalman.measures_ground else "readings"
+    new = g.node(
         "Add",
-        [g.affine(estimate, kalman.phi, "free_response"), g.affine(held, kalman.action_gain, "action_response")],
+        [
+            g.node("MatMul", [estimate, g.constant("filter_free", free)], "free_response"),
+            g.node("MatMul", [held, g.constant("filter_action", action_gain)], "action_response"),
+        ],
         "predicted_free",
     )
+    new = g.node("Add", [new, g.node("MatMul", [measured, g.constant("filter_measured", measured_gain)], "correction")],
+                 "corrected")  # fmt: skip
     if kalman.known_ground:
         previous_ground = g.columns("state", layout.size, layout.size + 1, "previous_ground")
-        ground_response = g.affine(previous_ground, kalman.ground_gain[:, None], "ground_response")
-        predicted = g.node("Add", [predicted, ground_response], "predicted")
-    measured = g.node("Concat", ["readings", "ground"], "measured", axis=1) if kalman.measures_ground else "readings"
-    expected = g.node(
-        "Add",
-        [g.affine(predicted, kalman.sensor_c, "expected_state"), g.affine(held, kalman.sensor_d, "expected_action")],
-        "expected",
-    )
-    innovation = g.node("Sub", [measured, expected], "innovation")
-    corrected = g.node("Add", [predicted, g.affine(innovation, kalman.gain, "correction")], "estimate")
-    return g.node("Div", [corrected, "estimate_scale"], "scaled_estimate")
+        ground_response = g.affine(previous_ground, ground_gain[:, None], "ground_response")
+        new = g.node("Add", [new, ground_response], "estimate")
+    return g.node("Div", [new, "estimate_scale"], "scaled_estimate")
 
 
 def _activation(g: _Graph, name: str, x: str, output: str) -> str:
@@ -295,20 +297,69 @@ def export_onnx(folder: Path, model: str, out: Path) -> Path:
     digest = hashlib.sha256(weights.read_bytes()).hexdigest()
     graph = controller_graph(plant, controller, source=f"{folder.resolve().name}/{weights.name} (sha256 {digest})")
     onnx.checker.check_model(graph, full_check=True)
-    atomic_write(out, graph.SerializeToString())
+    serialized = graph.SerializeToString()
+    deviation, _ = graph_deviation(plant, controller, serialized)
+    if not deviation <= FAITHFUL:
+        raise ConfigError(
+            f"{folder}: its ONNX graph's forces differ from the Python controller's by {deviation:.3g} of their peak "
+            f"on a generated load (at most {FAITHFUL:g} accepted): this controller is not exported"
+        )
+    atomic_write(out, serialized)
     return out
+
+
+FAITHFUL = 1e-3  # an exported graph's largest force difference from Python's, of the peak force
+CHECKED_STEPS = 400  # control steps of the generated load the graph is checked on at export
+
+
+def graph_deviation(
+    plant: Plant, controller: PolicyController, graph: bytes, seed: int = 0, steps: int = CHECKED_STEPS
+) -> tuple[float, float]:
+    """The largest difference between the commands (N) of the serialised `graph` driving the building and those
+    of the Python controller driving it in the env (same load, same sensor noise), over the first `steps`
+    control steps of a load drawn from the experiment's own generator, as a fraction of the peak command (0
+    when the controller never acts), and that peak. The graph carries its own supervisor, so it drives the
+    building without the env's. Closed loop both: an LQG controller may be unstable on its own, so a graph fed
+    readings of a building it does not drive drifts from any copy of itself."""
+    from rlcontroller.learning.env import BuildingEnv
+    from rlcontroller.physics.loads import generate
+
+    load = generate(plant.experiment.excitation.generator, np.random.default_rng(seed), plant.building)
+    layout, exported = plant.layout, OnnxController(graph)
+
+    def graph_action(observation: np.ndarray) -> np.ndarray:
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        return exported.step(readings[None], ground)[0] / plant.force_limits
+
+    def commands(env: BuildingEnv, act) -> np.ndarray:
+        observation, info = env.reset(seed=seed, options={"motion": load})
+        issued = []
+        for _ in range(min(info["steps"], steps)):
+            observation, *_ = env.step(act(observation))
+            issued.append(env.command)
+        return np.array(issued)
+
+    controller.reset()
+    python = commands(BuildingEnv(plant), controller.act)
+    unsupervised = Plant(plant.experiment.model_copy(update={"supervisor": None}))
+    onnx_commands = commands(BuildingEnv(unsupervised), graph_action)
+    peak = float(np.max(np.abs(python)))
+    deviation = float(np.max(np.abs(onnx_commands - python)))
+    return (deviation / peak if peak > 0.0 else 0.0), peak
 
 
 class OnnxController:
     """An exported controller run by onnxruntime, one control step per call, for `batch` buildings."""
 
-    def __init__(self, path: Path, batch: int = 1, threads: int = 1) -> None:
+    def __init__(self, path: Path | bytes, batch: int = 1, threads: int = 1) -> None:
         import onnxruntime
 
         options = onnxruntime.SessionOptions()
         options.intra_op_num_threads = threads
         options.inter_op_num_threads = 1
-        self.session = onnxruntime.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+        model = path if isinstance(path, bytes) else str(path)
+        self.session = onnxruntime.InferenceSession(model, options, providers=["CPUExecutionProvider"])
         self.metadata = self.session.get_modelmeta().custom_metadata_map
         self.state = np.zeros((batch, int(self.metadata["state_size"])))
 

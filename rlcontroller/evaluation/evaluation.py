@@ -25,10 +25,10 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response, simulate
 from rlcontroller.physics.excitation import (
     Load,
-    MotionError,
     content_seed,
     on_control_grid,
 )
+from rlcontroller.physics.loads import check_floor_count
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -116,10 +116,7 @@ def evaluate(
     """Run the uncontrolled building, every controller and (optionally) the optimal reference;
     `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
     start = time.perf_counter()
-    for motion in motions:
-        if motion.floor_forces is not None and motion.floor_forces.shape[1] != plant.building.n_floors:
-            floors = motion.floor_forces.shape[1]
-            raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {plant.building.n_floors}")
+    check_floor_count(motions, plant.building)
     yielding = plant.yielding
     include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only

@@ -8,7 +8,9 @@ for a building controlled against wind `configs/checks/wind.yaml`, whose suite i
 
 1. **check suite** — on every one of its generated motions (own seed, never used in training or
    selection): the building's peak inter-story drift (max over stories and time) is no larger than
-   the reference's and the mean over stories of J1 (to the reference) is at most 1; on a motion whose
+   the reference's and the mean over stories of J1 (to the reference) is at most 1, each within the
+   standard's `tolerance` (1 %: sensor noise and another CPU's arithmetic move these ratios by about
+   0.1 %; the motions above 1 at all are counted beside, the strict count); on a motion whose
    reference peak drift ratio is below the insignificance bound, the controlled peak drift ratio
    stays below the bound instead. Over the significant motions the mean J1 and the mean J2 (peak
    absolute floor acceleration, to the reference's, mean over floors) are at most 1 as well: a
@@ -141,7 +143,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
     controllers = [controller] if reference is None else [controller, reference]
     evaluation = evaluate(plant, motions, controllers, "safety check suite", include_optimal=False)
     key = "uncontrolled" if reference is None else FAIL_SAFE
-    return judge_suite(evaluation, motions, controller.name, key, words, bounds)
+    return judge_suite(evaluation, motions, controller.name, key, words, bounds, standard.tolerance)
 
 
 def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
@@ -150,7 +152,8 @@ def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
     motions = check_suite(plant, standard)
     evaluation = evaluate(plant, motions, [], "safety check suite", include_optimal=False)
     bounds = drift_bounds(plant, standard)
-    verdict = judge_suite(evaluation, motions, PASSIVE, "uncontrolled", "the building without its devices", bounds)
+    words = "the building without its devices"
+    verdict = judge_suite(evaluation, motions, PASSIVE, "uncontrolled", words, bounds, standard.tolerance)
     first = 1.0 / plant.bare.building.periods()[0]
     share = {motion.name: energy_near(motion, first) for motion in motions}
     failing = {row["motion"] for row in verdict["failures"]}
@@ -178,10 +181,13 @@ def energy_near(motion: Load, frequency: float) -> float:
     return float(np.sum(spectrum[near]) / np.sum(spectrum))
 
 
-def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, words: str, bounds: np.ndarray) -> dict:
+def judge_suite(
+    evaluation, motions: list[Load], judged: str, reference: str, words: str, bounds: np.ndarray, tolerance: float
+) -> dict:
     """The check suite's criterion from an evaluation of its `motions`: the responses named `judged`
-    against those named `reference` (described by `words`)."""
-    failures, per_motion, worst, worst_j2 = [], {}, None, None
+    against those named `reference` (described by `words`); a significant motion fails when its ratio to the
+    reference exceeds 1 + `tolerance` (the motions above 1 are counted beside: the strict count)."""
+    failures, per_motion, worst, worst_j2, worst_ratio, strict = [], {}, None, None, None, 0
     for motion in motions:
         reference_run = evaluation.responses[reference, motion.name]
         controlled = evaluation.responses[judged, motion.name]
@@ -197,8 +203,11 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
             if worst_j2 is None or j2 > worst_j2["value"]:
                 worst_j2 = row | {"value": round(j2, 4)}
             score = float(np.max(peak) / np.max(reference_peak))
-            ok = score <= 1.0 + ROUNDING and j1 <= 1.0 + ROUNDING
             score, kind = max(score, j1), "peak drift ratio to the reference (or mean J1, the larger)"
+            ok = score <= 1.0 + tolerance
+            strict += score > 1.0 + ROUNDING
+            if worst_ratio is None or score > worst_ratio["value"]:
+                worst_ratio = row | {"value": round(score, 4)}
         row["value"] = round(score, 4)
         if not ok:
             failures.append(row)
@@ -208,10 +217,13 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
     mean_j1, mean_j2 = (float(v) for v in np.mean(list(per_motion.values()), axis=0)) if significant else (np.nan,) * 2
     passed = not failures and (not significant or (mean_j1 <= 1.0 + ROUNDING and mean_j2 <= 1.0 + ROUNDING))
     summary = (
-        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {words} "
-        f"({len(motions) - significant} insignificant); mean J1 {mean_j1:.3f}, mean J2 {mean_j2:.3f}; "
+        f"{len(motions) - len(failures)} of {len(motions)} motions no worse than {words} (within {tolerance:.0%}; "
+        f"{strict} worse at all, {len(motions) - significant} insignificant); "
+        f"mean J1 {mean_j1:.3f}, mean J2 {mean_j2:.3f}; "
         f"worst {worst['motion']} ({strength_text(worst)}): {worst['value']:.3f}"
     )
+    if worst_ratio is not None:
+        summary += f"; worst significant {worst_ratio['value']:.3f} ({worst_ratio['motion']})"
     if worst_j2 is not None:
         summary += f"; worst J2 {worst_j2['value']:.3f} ({worst_j2['motion']})"
     strokes = {name: peak_strokes(evaluation, name, motions) for name in (judged, reference)}
@@ -226,10 +238,13 @@ def judge_suite(evaluation, motions: list[Load], judged: str, reference: str, wo
         "mean_J1": round(mean_j1, 4),
         "mean_J2": round(mean_j2, 4),
         "worst": worst,
+        "worst_significant": worst_ratio,  # the largest ratio to the reference among the significant motions
         "worst_J2": worst_j2,
         "J1_J2_per_motion": per_motion,  # the significant motions
         "failures": failures,
         "failure_count": len(failures),
+        "tolerance": tolerance,
+        "strict_failure_count": strict,  # significant motions above the reference by more than rounding
     } | ({"peak_stroke_m": [round(float(value), 4) for value in strokes[judged]]} if strokes[judged].size else {})
 
 

@@ -83,6 +83,13 @@ def read_recording(path: Path) -> Recording:
         floor_numbers = tuple(int(column.removeprefix(ACCELERATION)) for column in floors)
     except ValueError:
         raise RecordingError(f"{path}:{header_line}: a floor is named by its number, e.g. {ACCELERATION}3") from None
+    for column in actuators:
+        story = column.removeprefix(FORCE)
+        if not story.isdigit() or not 1 <= int(story) <= max(floor_numbers):
+            raise RecordingError(
+                f"{path}:{header_line}: {column}: expected the number of a story the accelerations cover, 1 to "
+                f"{max(floor_numbers)} (the top floor recorded is {ACCELERATION}{max(floor_numbers)})"
+            )
     rows = []
     for number, line in numbered[1:]:
         cells = line.split(",")

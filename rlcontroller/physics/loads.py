@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
+from rlcontroller.errors import MotionError
 from rlcontroller.physics import generators
 from rlcontroller.physics.excitation import FLOOR_FORCES, Load
 from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
@@ -59,7 +60,16 @@ def load_suite(
     motions, label = choose_motions(records, scale_pga)
     if plant is not None and any(motion.kind == FLOOR_FORCES for motion in motions):
         refuse_floor_forces(plant, records)
+        check_floor_count(motions, plant.building)
     return motions, label
+
+
+def check_floor_count(motions: list[Load], building: Building) -> None:
+    """MotionError (one line) for floor loads on another number of floors than `building` has."""
+    for motion in motions:
+        if motion.floor_forces is not None and motion.floor_forces.shape[1] != building.n_floors:
+            floors = motion.floor_forces.shape[1]
+            raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {building.n_floors}")
 
 
 def refuse_floor_forces(plant: Plant, records: Path | None) -> None:

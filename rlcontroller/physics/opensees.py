@@ -166,7 +166,26 @@ def build_model(path: Path, function: str) -> FEDescription:
         raise
     except Exception as error:  # the user's code: whatever it raises is a fault of the model
         raise ModelError(f"{path}: {function}: {type(error).__name__}: {error}") from None
-    return FEDescription.of(built, f"{path}: {function}")
+    description = FEDescription.of(built, f"{path}: {function}")
+    check_in_domain(description, f"{path}: {function}")
+    return description
+
+
+def check_in_domain(description: FEDescription, where: str) -> None:
+    """ModelError (one line) unless every floor node is in the domain and `direction` is one of the degrees of
+    freedom of every one."""
+    ops = opensees()
+    nodes = set(ops.getNodeTags())
+    for floor, tags in enumerate(description.floors, start=1):
+        missing = [tag for tag in tags if tag not in nodes]
+        if missing:
+            raise ModelError(f"{where}: floors: floor {floor} names node {missing[0]}, which the model does not have")
+        freedoms = min(ops.getNDF(tag)[0] for tag in tags)
+        if not 1 <= description.direction <= freedoms:
+            raise ModelError(
+                f"{where}: direction {description.direction}: expected a degree of freedom of the floor nodes, "
+                f"1 to {freedoms}"
+            )
 
 
 def floor_masses(description: FEDescription) -> np.ndarray:

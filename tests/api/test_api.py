@@ -129,3 +129,52 @@ def test_the_api_is_what_the_commands_call():
         assert "rlcontroller.physics" not in text and "rlcontroller.learning" not in text, module
         assert "rlcontroller.evaluation.evaluation" not in text and "Plant(" not in text, module
     assert Path(api.__file__).parent.name == "api"
+
+
+@pytest.mark.slow
+def test_a_controller_judged_on_loads_not_its_own_is_told_so_first(tmp_path, monkeypatch):
+    """A wind experiment's controllers on ground-motion records (and a ground-motion experiment's on a wind
+    suite): one note before the evaluation, which still runs."""
+    monkeypatch.delenv("RLC_RECORDS", raising=False)
+    wind = REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml"
+    report = Recorded()
+    compared = api.compare_lqg(config=wind, out=tmp_path / "wind", report=report)
+    assert report.notes[1:] == [
+        "note: the controllers were made for wind; these loads are ground motions: judged on loads not their own"
+    ]  # after the one naming the synthetic suite
+    assert (compared.out / "metrics.csv").is_file()
+    report = Recorded()
+    api.compare_lqg(config=SMOKE, out=tmp_path / "smoke", report=report)
+    assert not any("not their own" in note for note in report.notes)
+
+
+@pytest.mark.parametrize(
+    "config",
+    [
+        REPOSITORY / "studies" / "identification" / "five_story_identified_design.yaml",  # a state-space building
+        REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml",
+        REPOSITORY / "configs" / "five_story.yaml",
+    ],
+)
+def test_rlc_info_fits_on_a_screen_and_full_gives_everything(config):
+    """Matrices by shape, source and digest, 76 story heights in one line, ten modes; --full: the resolved
+    configuration entry by entry (it reads back as the experiment) and every mode."""
+    import hashlib
+
+    import numpy as np
+    import yaml
+
+    experiment = api.load(config)
+    short = CliRunner().invoke(app, ["info", str(config)])
+    full = CliRunner().invoke(app, ["info", str(config), "--full"])
+    assert short.exit_code == full.exit_code == 0
+    assert len(short.stdout.splitlines()) <= 150 < len(full.stdout.splitlines())
+    building = experiment.building.model_dump(mode="json")
+    name = next((key for key in ("state_matrix", "stiffness_matrix") if building.get(key)), None)
+    if name is not None:  # given by matrices (the paper's building is given story by story)
+        matrix = np.array(building[name], dtype=float)
+        digest = hashlib.sha256(matrix.tobytes()).hexdigest()[:12]
+        assert f"{name}: ({matrix.shape[0]} x {matrix.shape[1]} matrix, SI, from " in short.output
+        assert f"sha256 {digest})" in short.output
+    resolved = full.stdout.split("\n\n# modes")[0].removeprefix("# resolved configuration\n")
+    assert yaml.safe_load(resolved) == experiment.model_dump(mode="json")

@@ -1,6 +1,9 @@
 """A state-space building part: read from an .npz as data, checked, and refused in one line naming the file
 and the field where it cannot be what the experiment asks of it."""
 
+import io
+import zipfile
+
 import numpy as np
 import pytest
 import scipy.signal
@@ -82,8 +85,9 @@ def test_a_model_that_cannot_be_the_building_is_one_line(tmp_path, arrays, part,
 @pytest.mark.parametrize(
     ("arrays", "expected"),
     [
-        (ARRAYS | {"A": np.array([object()] * 4)}, "cannot read the matrices"),  # a pickle: never unpickled
-        (ARRAYS | {"A": ARRAYS["A"] + 0j}, "array 'A' holds complex128, expected real numbers"),
+        (ARRAYS | {"A": np.array([object()] * 4)}, "A: dtype object, expected numbers"),  # never unpickled
+        (ARRAYS | {"A": ARRAYS["A"] + 0j}, "A: dtype complex128, expected numbers"),
+        (ARRAYS | {"A": ARRAYS["A"] > 0}, "array 'A' holds bool, expected real numbers"),
         ({key: ARRAYS[key] for key in "ABC"}, "no array 'D'"),
         (ARRAYS | {"E": ARRAYS["A"]}, "unknown arrays ['E']"),
     ],
@@ -94,6 +98,19 @@ def test_a_model_file_is_data_and_read_as_such(tmp_path, arrays, expected):
     with pytest.raises(ConfigError, match=None) as error:
         load_experiment(path)
     assert expected in str(error.value) and "model.npz" in str(error.value)
+
+
+def test_an_array_header_declaring_more_than_the_file_holds_is_refused_before_reading(tmp_path):
+    """A forged header (745 GiB declared, 16 bytes stored) is refused from the header, never allocated."""
+    path = write(tmp_path)
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (100000, 1000000)})
+    with zipfile.ZipFile(tmp_path / "model.npz", "a") as archive:
+        archive.writestr("dt.npy", header.getvalue() + bytes(16))
+    with pytest.raises(ConfigError) as error:
+        load_experiment(path)
+    expected = "model.npz: dt: its header declares (100000, 1000000) of float64, the file holds other bytes"
+    assert expected in str(error.value)
 
 
 def test_the_plant_may_be_another_building_than_the_design_model(tmp_path):

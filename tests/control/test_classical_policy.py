@@ -107,6 +107,10 @@ def test_at_rest_an_mpc_file_is_its_lqg(tmp_path):
         (lambda yaml, npz: yaml["mpc"].__setitem__("horizon", 100000), r"mpc.horizon 100000: expected a whole"),
         (lambda yaml, npz: yaml.__setitem__("law", "lqg_ground_model"), "mpc: a classical mpc law has an mpc sec"),
         (lambda yaml, npz: npz.__setitem__("mpc_strokes", np.zeros((9, 12))), "mpc: 1 cost rows|mpc: .* 9 stroke"),
+        # a model other than the folder's design model never reaches the QP solver (x 1e6: OSQP "non-convex")
+        (lambda yaml, npz: npz.__setitem__("mpc_phi", 1e6 * npz["mpc_phi"]), "mpc_phi: not the control-step map"),
+        (lambda yaml, npz: npz.__setitem__("mpc_action_gain", 1.001 * npz["mpc_action_gain"]), "mpc_action_gain: not"),
+        (lambda yaml, npz: npz.__setitem__("mpc_cost_state", 1e200 * npz["mpc_cost_state"]), "their QP overflows"),
     ],
 )
 def test_a_forged_mpc_file_is_refused_in_one_line(tmp_path, forge, message):

@@ -56,7 +56,7 @@ def test_the_lifted_lqr_costs_what_the_full_one_costs():
     full = solve_dare(phi, b, q, r, n)
     full_gain = np.linalg.solve(b.T @ full @ b + r, b.T @ full @ phi + n.T)
     full_again, _ = lqr(phi, b, q, r, n)
-    np.testing.assert_array_equal(full_again, full_gain)  # the full equation solves: the full design
+    np.testing.assert_allclose(full_again, full_gain, rtol=1e-10, atol=0.0)  # the full equation solves: the full design
     lifted_gain, _ = lqr_on_kept_modes(phi, b, q, r, n, modal_truncation(phi))
 
     def cost(gain):  # trace of the closed loop's cost-to-go from unit initial states

@@ -13,9 +13,9 @@ from conftest import NETWORK_POLICY, REPOSITORY
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
 from rlcontroller.cli import DEFAULT_MODEL
-from rlcontroller.config import Experiment, load_experiment
+from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.policy import read_policy
-from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx
+from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx, graph_deviation
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.policy import algorithm_class, policy_controller
 from rlcontroller.physics.excitation import Load
@@ -131,30 +131,26 @@ def test_the_default_exports_with_its_faded_supervisor(tmp_path):
 def test_the_shipped_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path, monkeypatch):
     """Named by its experiment from another folder, the 76-story building's shipped controller (LQG + wind
     model with loop transfer recovery) exports; under a generated wind load its graph gives the forces the
-    Python controller commands in the env."""
+    Python controller commands in the env, within 1e-3 of their peak (the check `export_onnx` makes itself,
+    here over a whole minute of wind and another seed). CI runs it under two BLAS kernels."""
     from rlcontroller import api
-    from rlcontroller.physics.loads import generate
 
     monkeypatch.chdir(tmp_path)
     folder = api.model_folder(REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml")
     assert folder.name == "seventy_six_story_atmd"
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
-    generator = plant.experiment.excitation.generator.model_copy(update={"duration": (60.0, 60.0)})
-    wind = generate(generator, np.random.default_rng(0), plant.building, "wind")
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
-    controller = read_policy(folder, "best", plant)
-    observation, info = env.reset(seed=0, options={"motion": wind})
-    python, onnx_forces = [], []
-    for _ in range(info["steps"]):
-        readings = observation[layout.readings].astype(float) * layout.reading_scale
-        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
-        onnx_forces.append(graph.step(readings[None], ground)[0])
-        observation, *_ = env.step(controller.act(observation))
-        python.append(env.command)
-    python, onnx_forces = np.array(python), np.array(onnx_forces)
-    assert np.abs(python).max() > 1e4  # the driver works (N)
-    np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=1e-3 * np.abs(python).max())
+    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), 1, 600)
+    assert peak > 1e4 and deviation <= 1e-3  # the driver works (N), and as in Python
+
+
+def test_an_export_that_would_not_act_as_in_python_is_refused_in_one_line(tmp_path, monkeypatch):
+    from rlcontroller.deployment import export
+
+    monkeypatch.setattr(export, "FAITHFUL", -1.0)  # every graph deviates by more
+    with pytest.raises(ConfigError, match=r"its ONNX graph's forces differ from the Python controller's by") as error:
+        export_onnx(DEFAULT_MODEL, "best", tmp_path / "controller.onnx")
+    assert "\n" not in str(error.value) and not (tmp_path / "controller.onnx").exists()
 
 
 @pytest.mark.slow
@@ -213,7 +209,9 @@ def test_policies_for_devices_export_too(tmp_path, name):
 
 def assert_same_forces_open_loop(plant, controller, path):
     """These random policies are bang-bang controllers; in a closed loop float32 rounding would be
-    amplified, so the Python controller drives the building and both read the same sensors."""
+    amplified, so the Python controller drives the building and both read the same sensors. Within 1e-3 of the
+    force limit (the export's own standard): weights multiplied by 3000 carry float32's rounding, which the
+    BLAS kernel orders differently (1.3e-4 of the limit with OPENBLAS_CORETYPE=Prescott)."""
     path.write_bytes(controller_graph(plant, controller).SerializeToString())
     env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(path)
     observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
@@ -221,7 +219,7 @@ def assert_same_forces_open_loop(plant, controller, path):
         action = controller.act(observation)
         readings = observation[layout.readings].astype(float) * layout.reading_scale
         force = exported.step(readings[None], np.array([[float(observation[layout.ground]) * layout.ground_scale]]))
-        assert np.all(np.abs(force[0] - action * plant.force_limits) <= 1e-4 * plant.force_limits)
+        assert np.all(np.abs(force[0] - action * plant.force_limits) <= 1e-3 * plant.force_limits)
         exported.state[0, layout.action] = action  # the held action is the one applied
         observation, *_ = env.step(action)
     assert np.abs(action).max() > 0.1

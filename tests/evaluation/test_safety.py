@@ -16,6 +16,7 @@ from rlcontroller.evaluation.safety import (
     VerdictState,
     closed_loop_matrix,
     energy_near,
+    judge_suite,
     judged_digests,
     passive_verdict,
     read_verdict,
@@ -45,6 +46,44 @@ def test_a_controller_that_never_acts_passes_the_motion_criteria():
     assert verdict.passed and set(verdict.criteria) == {"check suite", "at rest"}
     assert verdict.criteria["check suite"]["mean_J1"] == pytest.approx(1.0, abs=1e-9)
     assert verdict.criteria["at rest"]["peak_drift_over_bound"] == 0.0
+
+
+def judged_scaled(scales: tuple[float, ...]) -> dict:
+    """The check suite's criterion for responses whose drift is `scales` times the reference's, motion by motion
+    (floor accelerations equal), under a 1 % tolerance."""
+    from types import SimpleNamespace
+
+    motions = [Load(f"m{index}", 0.02, np.full(11, 1.0)) for index in range(len(scales))]
+    reference = SimpleNamespace(drift=np.full((11, 2), 0.01), absolute_acceleration=np.ones((11, 2)),
+                                stroke=np.zeros((11, 0)))  # fmt: skip
+    responses = {}
+    for motion, scale in zip(motions, scales, strict=True):
+        responses["fail-safe", motion.name] = reference
+        responses["judged", motion.name] = SimpleNamespace(
+            drift=scale * reference.drift, absolute_acceleration=reference.absolute_acceleration,
+            stroke=reference.stroke,
+        )  # fmt: skip
+    evaluation = SimpleNamespace(responses=responses)
+    return judge_suite(evaluation, motions, "judged", "fail-safe", "it", np.full(2, 6e-4), 0.01)
+
+
+@pytest.mark.parametrize(
+    ("scales", "failures", "strict", "passed"),
+    [
+        ((1.005, 0.5, 0.5), 0, 1, True),
+        ((1.005, 0.5, 1.02), 1, 2, False),
+        ((1.0, 1.0, 1.0), 0, 0, True),
+        ((1.005, 1.005), 0, 2, False),  # every motion within 1 %, but mean J1 above 1: no tolerance there
+    ],
+)
+def test_a_significant_motion_fails_only_beyond_the_tolerance_and_the_strict_count_is_kept(
+    scales, failures, strict, passed
+):
+    """1.005 of the reference passes under a 1 % tolerance but is counted as worse at all; 1.02 fails."""
+    verdict = judged_scaled(scales)
+    assert (verdict["failure_count"], verdict["strict_failure_count"], verdict["passed"]) == (failures, strict, passed)
+    assert verdict["tolerance"] == 0.01 and f"{strict} worse at all" in verdict["summary"]
+    assert verdict["mean_J1"] == pytest.approx(np.mean(scales), abs=1e-4)
 
 
 def test_without_control_the_spectral_radius_is_the_least_damped_modes_decay():
@@ -166,7 +205,7 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
 def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     """`rlc demo`'s experiment: every story actuated behind the ground trigger, a model-free linear policy
     learned from zero gains; training changes it (validation J1 from 1, no control, to below 0.35) and the
-    trained policy passes the whole standard check."""
+    trained policy passes the whole standard check, its worst significant motion at most 1.005 of no control."""
     from rlcontroller.config import load_experiment, load_scenarios
     from rlcontroller.control.policy import read_policy
     from rlcontroller.learning.training import train
@@ -179,6 +218,8 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     scenarios = load_scenarios(REPOSITORY / "configs" / "scenarios" / "standard.yaml", experiment)
     verdict = safety_check(plant, policy, load_safety_check(STANDARD), scenarios)
     assert verdict.passed, verdict.lines()
+    # robust, not lucky: its worst significant motion within half the tolerance (CI runs this under two kernels)
+    assert verdict.criteria["check suite"]["worst_significant"]["value"] <= 1.005, verdict.lines()
 
 
 @pytest.mark.slow
@@ -378,3 +419,39 @@ def test_under_a_wind_standard_the_failed_safe_building_is_its_own_reference():
     assert suite["mean_J2"] == pytest.approx(1.0, abs=1e-9) and suite["insignificant_motions"] < 3
     assert suite["worst"]["load"].startswith("wind ") and 25.0 <= float(suite["worst"]["load"].split()[1]) <= 40.0
     assert "pga_g" not in suite["worst"] and "peak_stroke_m" not in suite
+
+
+SHIPPED = sorted(path.name for path in DEFAULT_MODEL.parent.iterdir() if (path / "best_check.yaml").is_file())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kernel", ["as set up", "Prescott"])
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, name, kernel):
+    """`rlc check` on a copy of each shipped controller, in a process whose OpenBLAS takes the kernel the
+    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), gives the shipped verdict: the same pass, the same
+    failing and strictly-worse motions, the means and the worst significant ratio to within 1e-3."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    import yaml
+
+    folder = tmp_path / name
+    shutil.copytree(DEFAULT_MODEL.parent / name, folder)
+    shipped = yaml.safe_load((folder / "best_check.yaml").read_text())
+    (folder / "best_check.yaml").unlink()
+    environment = dict(os.environ)  # the machine's own choice of kernel, as set up (never unset here)
+    if kernel == "Prescott":
+        environment["OPENBLAS_CORETYPE"] = kernel
+    command = [sys.executable, "-m", "rlcontroller", "check", str(folder), "--no-progress"]
+    subprocess.run(command, env=environment, capture_output=True, text=True, timeout=1800)
+    verdict = yaml.safe_load((folder / "best_check.yaml").read_text())
+    assert verdict["passed"] == shipped["passed"] and verdict["judged"] == shipped["judged"]
+    suite, expected = verdict["criteria"]["check suite"], shipped["criteria"]["check suite"]
+    for key in ("failure_count", "strict_failure_count", "insignificant_motions"):
+        assert suite[key] == expected[key], key
+    for key in ("mean_J1", "mean_J2"):
+        assert suite[key] == pytest.approx(expected[key], abs=1e-3), key
+    assert suite["worst_significant"]["value"] == pytest.approx(expected["worst_significant"]["value"], abs=1e-3)

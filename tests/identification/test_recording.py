@@ -46,6 +46,12 @@ def test_the_recorded_forces_are_the_shaking_and_the_readings_carry_the_sensors_
         (lambda lines: lines[:3] + ["0.04,1,2"] + lines[4:], ":4: 3 values, expected 10"),
         (lambda lines: ["time,ground,force_1,acc_1"] + lines[1:], ":1: expected the columns time, ground"),
         (lambda lines: lines[:2], "expected a header row and samples"),
+        # floor 5's accelerometer missing, the force on story 5 still there: never a 4-floor model silently
+        (
+            lambda lines: [line.rsplit(",", 1)[0] for line in lines],
+            ":1: force_5: expected the number of a story the accelerations cover, 1 to 4",
+        ),
+        (lambda lines: [lines[0].replace("force_3", "force_x")] + lines[1:], ":1: force_x: expected the number"),
     ],
 )
 def test_a_damaged_recording_is_refused_in_one_line(recording, tmp_path, edit, expected):
