@@ -199,14 +199,10 @@ def test_learning_on_fe_model_takes_one_model_per_process(tmp_path):
     assert with_overrides(experiment, {"algorithm.n_envs": 4, "algorithm.vec_env": "subproc"}, "--set")
 
 
-@pytest.mark.parametrize(
-    ("given", "message"),
-    [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
-)
-def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
-    from rlcontroller.physics.opensees import OpenSeesIntegrator
-
-    model = tmp_path / "one_story.py"
+def one_story_model(folder: Path, returned: str) -> Path:
+    """A one-story OpenSees model file whose function returns `returned` (floors, direction and any solver
+    options) with a story height and damping."""
+    model = folder / "one_story.py"
     model.write_text(
         "def build_model(ops):\n"
         "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
@@ -214,8 +210,19 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
         "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
         "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
         "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
-        f"    return {{'floors': [[1]], 'direction': 1, 'story_heights': [3.0], 'modal_damping': [0.02], {given}}}\n"
+        f"    return {{{returned}, 'story_heights': [3.0], 'modal_damping': [0.02]}}\n"
     )
+    return model
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
+)
+def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
+    from rlcontroller.physics.opensees import OpenSeesIntegrator
+
+    model = one_story_model(tmp_path, f"'floors': [[1]], 'direction': 1, {given}")
     with pytest.raises(ModelError, match=re.escape(message)):
         OpenSeesIntegrator(model, "build_model", 0.005, np.eye(1), np.ones(1)).reset()
 
@@ -232,15 +239,6 @@ def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, 
     would stop later with "OpenSeesError: See stderr output")."""
     from rlcontroller.physics.opensees import build_model
 
-    model = tmp_path / "one_story.py"
-    model.write_text(
-        "def build_model(ops):\n"
-        "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
-        "    ops.node(0, 0.0); ops.fix(0, 1)\n"
-        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
-        "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
-        "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
-        f"    return {{{returned}, 'story_heights': [3.0], 'modal_damping': [0.02]}}\n"
-    )
+    model = one_story_model(tmp_path, returned)
     with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
         build_model(model, "build_model")

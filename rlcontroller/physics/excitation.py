@@ -313,6 +313,24 @@ def on_control_grid(load: Load, control_dt: float) -> LoadGrid:
     return LoadGrid(resampled.acceleration, resampled.floor_forces, substeps)
 
 
+SAME_BITS = 16  # a generated load's resolution: 2^-16 of the power of two above its peak
+
+
+def same_on_every_cpu(samples: np.ndarray) -> np.ndarray:
+    """Generated samples rounded to a multiple of 2^-SAME_BITS of the power of two above their peak (at most
+    3e-5 of the peak: far below any sensor's noise). A BLAS kernel changes the last bits of a generator's
+    float64 arithmetic from one CPU to another (by about 1e-13 of the peak for wind), and `content_seed` hashes
+    the samples, so a load's sensor noise would change with the CPU (a check motion's J1 moved by up to 0.2 that
+    way, float32 rounding still left 44 of 13.9 million wind samples different); rounded this coarsely they are
+    the same on every CPU but for about one sample in 10^8."""
+    samples = np.asarray(samples, dtype=np.float64)
+    peak = float(np.max(np.abs(samples), initial=0.0))
+    if peak == 0.0:
+        return samples.copy()
+    quantum = np.ldexp(1.0, np.frexp(peak)[1] - SAME_BITS)  # exact: a power of two
+    return np.round(samples / quantum) * quantum
+
+
 def content_seed(motion: Load, seed: int = 0) -> int:
     """A seed fixed by the motion's samples and time step and by `seed`, not by its name, file or
     position in a suite: the same record gets the same sensor noise wherever it is evaluated."""

@@ -4,12 +4,12 @@ them; and the Kanai-Tajimi ground model that LQG + ground model and the ground-m
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, MixtureConfig, NearFaultConfig, NoiseImpulsesConfig
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.excitation import Load, same_on_every_cpu
 
 
 @dataclass(frozen=True)
@@ -114,16 +114,18 @@ def near_fault(config: NearFaultConfig, rng: np.random.Generator, name: str = "n
 
 
 def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None = None) -> Load:
-    """One synthetic motion from the configured generator."""
+    """One synthetic motion from the configured generator (its samples the same on every CPU)."""
     if isinstance(config, MixtureConfig):
         weights = np.array([component.weight for component in config.components])
         chosen = config.components[int(rng.choice(len(weights), p=weights / weights.sum()))]
         return generate(chosen.generator, rng, name)
     if isinstance(config, KanaiTajimiConfig):
-        return kanai_tajimi(config, rng, name or "kanai_tajimi")
-    if isinstance(config, NearFaultConfig):
-        return near_fault(config, rng, name or "near_fault")
-    return noise_impulses(config, rng, name or "noise_impulses")
+        motion = kanai_tajimi(config, rng, name or "kanai_tajimi")
+    elif isinstance(config, NearFaultConfig):
+        motion = near_fault(config, rng, name or "near_fault")
+    else:
+        motion = noise_impulses(config, rng, name or "noise_impulses")
+    return replace(motion, acceleration=same_on_every_cpu(motion.acceleration))
 
 
 def generate_suite(config: GeneratorConfig, count: int, seed: int) -> list[Load]:

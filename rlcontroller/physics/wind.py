@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import WindGeneratorConfig, WindSuiteConfig
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.excitation import Load, same_on_every_cpu
 from rlcontroller.physics.structure import Building
 
 KARMAN = 0.4
@@ -127,8 +127,9 @@ def fluctuating_forces(
     field: WindField, duration: float, dt: float, rng: np.random.Generator, cutoff: float = 2.0
 ) -> np.ndarray:
     """The fluctuating along-wind force rho C_D A U u (N) on every loaded point at t = 0, dt, ...,
-    shape (samples, heights); the whole force is `mean_force` plus this."""
-    return force_per_speed(field) * turbulence(field, duration, dt, rng, cutoff)
+    shape (samples, heights), the same on every CPU (`excitation.same_on_every_cpu`); the whole force is
+    `mean_force` plus this."""
+    return same_on_every_cpu(force_per_speed(field) * turbulence(field, duration, dt, rng, cutoff))
 
 
 @dataclass(frozen=True)

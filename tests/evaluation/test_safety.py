@@ -429,8 +429,9 @@ SHIPPED = sorted(path.name for path in DEFAULT_MODEL.parent.iterdir() if (path /
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, name, kernel):
     """`rlc check` on a copy of each shipped controller, in a process whose OpenBLAS takes the kernel the
-    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), gives the shipped verdict: the same pass, the same
-    failing and strictly-worse motions, the means and the worst significant ratio to within 1e-3."""
+    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), gives the shipped verdict: the same
+    pass, the same failing and strictly-worse motions, the means and the worst significant ratio to within 1e-3
+    (the check's loads are the same on every CPU: `physics.excitation.same_on_every_cpu`)."""
     import os
     import shutil
     import subprocess

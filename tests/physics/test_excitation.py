@@ -3,7 +3,7 @@ import csv
 import numpy as np
 import pytest
 
-from rlcontroller.config import KanaiTajimiConfig, NoiseImpulsesConfig
+from rlcontroller.config import KanaiTajimiConfig, NearFaultConfig, NoiseImpulsesConfig
 from rlcontroller.physics.excitation import (
     STANDARD_GRAVITY,
     Load,
@@ -235,3 +235,32 @@ def test_ground_model_spectrum_is_its_filters_power_gain():
     gain = [model.output @ np.linalg.solve(2j * np.pi * f * np.eye(2) - a, b) for f in frequencies]
     np.testing.assert_allclose(model.spectrum(frequencies), np.abs(gain) ** 2, rtol=1e-12)
     assert model.spectrum(np.array([0.0]))[0] == pytest.approx(1.0)
+
+
+def test_generated_samples_are_the_same_when_the_arithmetic_differs_in_its_last_bits():
+    """Two CPUs' BLAS kernels give a generator's float64 samples that differ by about 1e-13 of the peak; after
+    `same_on_every_cpu` they are the same bits (so the same noise seed), within 2^-16 of the power of two above
+    the peak of the unrounded samples."""
+    from rlcontroller.physics.excitation import SAME_BITS, content_seed, same_on_every_cpu
+
+    samples = np.random.default_rng(3).normal(size=20_000) * 3.7
+    other = samples * (1.0 + 1e-13 * np.random.default_rng(4).uniform(-1.0, 1.0, samples.size))
+    assert np.any(samples != other)
+    rounded, rounded_other = same_on_every_cpu(samples), same_on_every_cpu(other)
+    np.testing.assert_array_equal(rounded, rounded_other)
+    above = 2.0 ** np.ceil(np.log2(np.max(np.abs(samples))))
+    assert np.max(np.abs(rounded - samples)) <= 0.5 * above * 2.0**-SAME_BITS
+    seeds = {content_seed(Load("a", 0.02, values)) for values in (rounded, rounded_other)}
+    assert len(seeds) == 1
+    np.testing.assert_array_equal(same_on_every_cpu(np.zeros(5)), np.zeros(5))
+
+
+def test_every_generator_gives_samples_the_same_on_every_cpu():
+    """A generated motion is already its own rounding (a fixed point of `same_on_every_cpu`)."""
+    from rlcontroller.config import Experiment
+    from rlcontroller.physics.excitation import same_on_every_cpu
+    from rlcontroller.physics.loads import generate
+
+    for generator in (Experiment().excitation.generator, KanaiTajimiConfig(), NearFaultConfig()):
+        motion = generate(generator, np.random.default_rng(0), None)
+        np.testing.assert_array_equal(same_on_every_cpu(motion.acceleration), motion.acceleration)
