@@ -1,5 +1,5 @@
-"""A piece of one command's work on the machine's other core: `in_background(call)` forks a child that
-runs `call` while the caller goes on, and `.result()` takes its value back through a pipe (pickled: our
+"""A piece of one command's work on the machine's other core: `in_background(function, *arguments)` forks a
+child that runs it while the caller goes on, and `.result()` takes its value back through a pipe (pickled: our
 own objects between our own processes, nothing read from a file). Forking shares everything already
 built (plant, motions) at no cost. Without fork or a second core, or in a daemonic process (a Dask
 worker), the call runs at once, here."""
@@ -10,6 +10,7 @@ import os
 import sys
 import traceback
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 
@@ -54,8 +55,9 @@ class Background:
         return value
 
 
-def in_background(call: Callable[[], Any]) -> Background:
-    return Background(call)
+def in_background(function: Callable[..., Any], *arguments: Any) -> Background:
+    """`function(*arguments)` on the other core (or here and now, `Background`)."""
+    return Background(partial(function, *arguments))
 
 
 def _run(call: Callable[[], Any], connection) -> None:

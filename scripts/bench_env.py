@@ -26,11 +26,10 @@ import rlcontroller
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import ConstantCommand
-from rlcontroller.physics.dynamics import simulate, step_map
+from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.structure import build
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 def steps_per_second(env: gym.Env, steps: int, seed: int = 0) -> float:
@@ -46,13 +45,12 @@ def steps_per_second(env: gym.Env, steps: int, seed: int = 0) -> float:
 
 def whole_record_rate(repeats: int = 5) -> float:
     experiment = Experiment()
-    building = build(experiment.building, experiment.actuators)
-    step = step_map(building, experiment.simulation)
+    sampled = Plant(experiment).sampled(1)
     motions = generate_suite(experiment.excitation.generator, repeats, seed=1)
     start = time.perf_counter()
     total = 0
     for motion in motions:
-        total += simulate(building, step, motion.acceleration).time.size - 1
+        total += sampled.simulate(on_control_grid(motion, experiment.simulation.control_dt)).time.size - 1
     return total / (time.perf_counter() - start)
 
 

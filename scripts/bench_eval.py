@@ -24,7 +24,7 @@ from rlcontroller.config import KanaiTajimiConfig, load_experiment, load_scenari
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.optimal import optimal_response
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness
 from rlcontroller.learning.env import BuildingEnv, rollout

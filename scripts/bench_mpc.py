@@ -21,7 +21,7 @@ from rlcontroller.config import load_experiment
 from rlcontroller.control.mpc import MPCController, MPCPlanner
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class TimedPlanner(MPCPlanner):

@@ -25,7 +25,7 @@ from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 EXAMPLES = (
     CONFIGS.parent / "studies" / "opensees" / "five_story_opensees.yaml",  # from a checkout

@@ -19,7 +19,7 @@ import yaml
 from rlcontroller.api.common import standard_scenarios
 from rlcontroller.config import load_experiment, load_scenarios
 from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness, summary
 from rlcontroller.evaluation.safety import Verdict

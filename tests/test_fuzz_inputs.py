@@ -227,7 +227,7 @@ def test_a_fuzzed_controller_file_is_read_or_refused_naming_it(tmp_path, folder,
     import shutil
 
     from rlcontroller.config import ConfigError, load_experiment
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.physics.plant import Plant
 
     copy_ = tmp_path / "model"
@@ -253,7 +253,7 @@ def test_a_truncated_controller_file_is_refused_naming_it(tmp_path, name, fracti
     from conftest import NETWORK_POLICY
 
     from rlcontroller.config import ConfigError, load_experiment
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.physics.plant import Plant
 
     copy_ = tmp_path / "model"
@@ -401,7 +401,7 @@ def test_a_controller_file_is_checked_before_its_data_is_read(tmp_path, case):
     from conftest import REPOSITORY
 
     from rlcontroller.config import ConfigError, load_experiment
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.physics.plant import Plant
 
     folder = tmp_path / "model"

@@ -14,10 +14,10 @@ from rlcontroller.errors import ModelError
 
 ops = pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
 
-from rlcontroller.evaluation.evaluation import uncontrolled_responses  # noqa: E402
 from rlcontroller.physics.opensees import NonConvergence, fe_modes, reduced_building  # noqa: E402
 from rlcontroller.physics.plant import Plant  # noqa: E402
 from rlcontroller.physics.records import load_records  # noqa: E402
+from rlcontroller.simulation.rollout import uncontrolled_responses  # noqa: E402
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 FIVE_STORY = CONFIGS.parent / "studies" / "opensees" / "five_story_opensees.yaml"
@@ -42,7 +42,7 @@ def test_five_story_model_agrees_with_rlc_on_the_seven_records(records):
 def test_actuator_forces_reach_the_model_as_rlc_applies_them(records):
     """A command held over a step pushes floor j by +f and floor j-1 by -f in both integrations."""
     from rlcontroller.control.controllers import ConstantCommand
-    from rlcontroller.simulation.batch import batch_rollout
+    from rlcontroller.simulation.rollout import batch_rollout
 
     fe = Plant(load_experiment(FIVE_STORY).model_copy(update={"supervisor": None}))  # the command as given
     motion = load_records(records)[0][3]  # sampled at the control step

@@ -37,7 +37,7 @@ def comparison(
 ):
     """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
     horizon of `mpc` control steps if given)."""
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
@@ -52,10 +52,6 @@ def comparison(
 
         extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    made_for = (folder_experiment(run_dir) if run_dir is not None else experiment).load_kind
-    mismatch = load_mismatch(made_for, motions)
-    if mismatch is not None:
-        report.note(mismatch)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
     for controller in extra:
@@ -65,18 +61,6 @@ def comparison(
                 "action taken (LQR's clipped action where none was left)"
             )
     return plant, motions, evaluation
-
-
-def load_mismatch(made_for: str, motions: list) -> str | None:
-    """One line when the loads are not the kind the controllers were made for (`Experiment.load_kind`): the
-    evaluation still runs (a wind controller during an earthquake is a real question)."""
-    from rlcontroller.physics.excitation import FLOOR_FORCES
-
-    given = "wind" if all(motion.kind == FLOOR_FORCES for motion in motions) else "ground motion"
-    if given == made_for:
-        return None
-    loads = "floor forces (wind)" if given == "wind" else "ground motions"
-    return f"note: the controllers were made for {made_for}; these loads are {loads}: judged on loads not their own"
 
 
 def evaluate(
@@ -238,9 +222,6 @@ def compare_passive(
     check_new_folder(out)
     plant = Plant(experiment)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    mismatch = load_mismatch(experiment.load_kind, motions)
-    if mismatch is not None:
-        report.note(mismatch)
     with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
         evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
     verdict = None
@@ -269,7 +250,7 @@ def robustness(
     """Every controller on every scenario's plant and every record: returns the mean-J1 table (scenario x
     controller), the suite's label, the scenarios run, the seconds taken and the folder written."""
     from rlcontroller.config import load_scenarios
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.robustness import robustness as run_robustness
     from rlcontroller.evaluation.robustness import summary
     from rlcontroller.evaluation.study_report import write_robustness

@@ -26,7 +26,7 @@ def check(
     own (another plant for the same design, e.g. an OpenSees model); its verdict goes to a new folder under
     results/, as it judges the policy on a plant its folder does not name."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.safety import judged_digests, safety_check, write_verdict
     from rlcontroller.physics.plant import Plant
 

@@ -52,12 +52,13 @@ def shipped_models() -> list[str]:
 
 
 def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
-    """A classical controller as a controller folder: `law` (a key of `control.policy.LAWS`: the
+    """A classical controller as a controller folder: `law` (a key of `control.classical.LAWS`: the
     experiment's LQG on its Kalman estimate, MPC on the same, or passive-on / passive-off dampers) designed for the
     experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
     an existing one). evaluate, check and export then treat it like a trained policy. Returns `out`."""
     from rlcontroller.config import load_experiment
-    from rlcontroller.control.policy import LAWS, PolicyController, write_policy
+    from rlcontroller.control.classical import LAWS, classical_policy
+    from rlcontroller.control.policy_file import write_policy
     from rlcontroller.files import atomic_write
     from rlcontroller.physics.plant import Plant
 
@@ -67,7 +68,7 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
         raise ConfigError(f"--law {law}: expected one of {', '.join(LAWS)}")
     experiment = load_experiment(config)
     plant = Plant(experiment)
-    controller = PolicyController.classical(plant, law)
+    controller = classical_policy(plant, law)
     out.mkdir(parents=True)
     atomic_write(out / "config.yaml", experiment.to_yaml())
     write_policy(controller, plant, out, "best")

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.linalg
 
 from rlcontroller.control.riccati import kalman_gain
-from rlcontroller.physics.dynamics import discrete_noise, wind_model_step, wind_model_system
+from rlcontroller.physics.dynamics import discrete_noise
 from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.wind import WindLoadModel
@@ -118,7 +118,7 @@ def design_kalman(plant: Plant, known_ground: bool = False, ground_std: float = 
     """Filter for the plant's sensors; `ground_std` (m/s^2) is the ground's process-noise level per
     step (halved when the ground is measured: only its change over the step is unknown). The
     sensors' noise_std is the measurement noise, floored at 1e-3 of each sensor's scale."""
-    step, building, sensors = plant.step_map(1), plant.building, plant.sensors
+    step, building, sensors = plant.sampled().step, plant.building, plant.sensors
     ground_gain = step.ground_gain.sum(axis=1)
     c, d = sensors.c, sensors.d
     measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
@@ -141,7 +141,7 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     """Filter of [z; x_f; x_f'] (the plant's Kanai-Tajimi ground model) from the sensors plus the
     measured ground acceleration; w is scaled so that the modelled a_g has a stationary std of
     `ground_std` (m/s^2). Exact discretisation whatever the simulation method."""
-    step, building, model = plant.ground_model_step(), plant.building, plant.ground_model
+    step, building, model = plant.sampled().ground_model, plant.building, plant.ground_model
     config = plant.experiment.sensors
     size = building.n_states
     noise_gain = step.ground_gain.sum(axis=1)
@@ -175,8 +175,8 @@ def design_kalman_wind_model(plant: Plant, model: WindLoadModel) -> KalmanFilter
     the sensors, which feel f directly where they read absolute accelerations; the process noise is
     the model's, discretised exactly (`dynamics.discrete_noise`)."""
     building, sensors = plant.building, plant.sensors
-    system = wind_model_system(building, model.time_constant)
-    step = wind_model_step(building, plant.control_dt, model.time_constant)
+    sampled = plant.sampled()
+    system, step = sampled.wind_system, sampled.wind_model
     size, floors = 2 * building.n_dofs, building.n_floors
     intensity = np.zeros_like(system.a)
     intensity[size:, size:] = 2.0 * model.covariance / model.time_constant  # stationary covariance: model's

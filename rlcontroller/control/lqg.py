@@ -21,7 +21,6 @@ from rlcontroller.control.estimation import (
     design_kalman_wind_model,
 )
 from rlcontroller.control.lqr import lqr_gain, preview_kernel, quadratic_cost
-from rlcontroller.physics.dynamics import wind_model_step
 from rlcontroller.physics.plant import Plant
 
 
@@ -48,7 +47,7 @@ def design_lqg(
     With `known_ground` the measured ground acceleration enters the filter and, through the
     optimal one-step feed-forward, the control law.
     """
-    building, step = plant.building, plant.step_map(1)
+    building, step = plant.building, plant.sampled().step
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman(plant, known_ground, ground_std)
@@ -65,7 +64,7 @@ def design_lqg_ground_model(plant: Plant, ground_std: float = 1.0, reward: Rewar
     ground reading; the LQR on the augmented state (the reward's cost, or `reward`'s) acts on the
     predicted ground.
     """
-    building, step = plant.building, plant.ground_model_step()
+    building, step = plant.building, plant.sampled().ground_model
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman_ground_model(plant, ground_std)
@@ -80,8 +79,7 @@ def design_lqg_wind_model(plant: Plant, reward: RewardConfig | None = None) -> L
     model = plant.wind
     if model is None:
         raise ValueError("LQG + wind model needs the experiment's excitation generator to be of kind wind")
-    building = plant.building
-    step = wind_model_step(building, plant.control_dt, model.time_constant)
+    building, step = plant.building, plant.sampled().wind_model
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step, floor_loads=True)
     feedback, _ = lqr_gain(step, cost, building.force_limits)
     kalman = design_kalman_wind_model(plant, model)

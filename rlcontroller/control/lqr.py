@@ -20,7 +20,7 @@ import numpy as np
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.cost import reward_matrices
 from rlcontroller.control.riccati import lqr
-from rlcontroller.physics.dynamics import StepMap, load_feedthrough
+from rlcontroller.physics.dynamics import StepMap
 from rlcontroller.physics.plant import Plant
 
 DELAYED_ACTION_WEIGHT = 1.0e-4  # sqrt of the vanishing direct weight of a delayed command
@@ -45,7 +45,7 @@ def quadratic_cost(plant: Plant, reward: RewardConfig, step: StepMap, floor_load
     c, d, factor, _ = reward_matrices(plant, terms)
     weighted_c, weighted_d = factor[:, None] * c, factor[:, None] * d
     if floor_loads:
-        loads = np.vstack([load_feedthrough(building, term.quantity) for term in terms])
+        loads = np.vstack([plant.load_outputs(term.quantity) for term in terms])
         weighted_c = np.hstack([weighted_c, factor[:, None] * loads])
     weighted_c = np.pad(weighted_c, ((0, 0), (0, step.phi.shape[0] - weighted_c.shape[1])))
     action_gain = step.force_gain * building.force_limits

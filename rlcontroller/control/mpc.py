@@ -32,7 +32,6 @@ from rlcontroller.config import RewardConfig
 from rlcontroller.control.controllers import ClippedOptimal, LQGController, LQGPrior
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
-from rlcontroller.physics.dynamics import output_matrices
 from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
 
@@ -86,7 +85,7 @@ def stroke_rows(plant: Plant, size: int) -> np.ndarray:
     limited = [index for index, device in enumerate(devices) if device.stroke_limit is not None]
     if not limited:
         return np.zeros((0, size))
-    c, _ = output_matrices(building, "stroke")
+    c = plant.outputs("stroke")[0][:, : building.n_states]  # on the building's own states
     limits = np.array([devices[index].stroke_limit for index in limited])
     rows = c[limited] / limits[:, None]
     return np.pad(rows, ((0, 0), (0, size - rows.shape[1])))
@@ -161,7 +160,7 @@ class MPCDesign:
 def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCDesign:
     """MPC on `plant`'s ground-model map with the experiment's cost (or `reward`'s), its terminal weight the
     stationary Riccati solution."""
-    step = plant.ground_model_step()
+    step = plant.sampled().ground_model
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
     _, riccati = lqr_gain(step, cost, plant.force_limits)
     action_gain = step.force_gain * plant.force_limits
@@ -344,7 +343,7 @@ class SemiActiveMPC(_Planned):
         dampers = [device for device in plant.experiment.devices if device.semi_active]
         self.first_damper = m - len(dampers)
         free, forced = _predictions(design.phi, design.action_gain, horizon)
-        c, _ = output_matrices(equivalent.building, "device_velocity")
+        c = equivalent.outputs("device_velocity")[0][:, : equivalent.building.n_states]
         velocity = np.kron(np.eye(horizon), np.pad(c[self.first_damper :], ((0, 0), (0, n - c.shape[1]))))
         self.velocity_free = velocity @ free[: horizon * n]  # v_0..v_(N-1), by step and damper
         self.velocity_forced = velocity @ forced[: horizon * n]

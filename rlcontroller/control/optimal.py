@@ -10,7 +10,7 @@ import numpy as np
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, quadratic_cost
-from rlcontroller.physics.dynamics import Response, response
+from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, on_control_grid
 from rlcontroller.physics.plant import Plant
 
@@ -37,7 +37,8 @@ def optimal_responses(
     results: list[Response | None] = [None] * len(motions)
     for substeps in sorted({grid.substeps for grid in grids}):
         members = [i for i, grid in enumerate(grids) if grid.substeps == substeps]
-        step = plant.step_map(substeps)
+        sampled = plant.sampled(substeps)
+        step = sampled.step
         cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
         feedback, _ = lqr_gain(step, cost, building.force_limits)
         action_gain = step.force_gain * building.force_limits
@@ -59,5 +60,5 @@ def optimal_responses(
             k = t.shape[0]
             held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])
             time = np.arange(k + 1) * step.control_dt
-            results[i] = response(building, states[: k + 1, row], held, time, grids[i].ground_at_steps)
+            results[i] = sampled.response(states[: k + 1, row], held, time, grids[i].ground_at_steps)
     return results

@@ -27,7 +27,8 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.estimation import observation_filter
-from rlcontroller.control.policy import PolicyController, policy_paths, read_policy
+from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 

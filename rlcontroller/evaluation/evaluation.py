@@ -18,17 +18,15 @@ import pandas as pd
 
 from rlcontroller.background import in_background
 from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, display_path
-from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
+from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.physics.dynamics import Response, simulate
+from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import (
     Load,
     content_seed,
-    on_control_grid,
 )
-from rlcontroller.physics.loads import check_floor_count
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -41,28 +39,13 @@ from rlcontroller.physics.metrics import (
     yielding_metrics,
 )
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
 OPTIMAL = "optimal (clairvoyant)"
 PASSIVE = "passive devices"  # the mass devices with no command: tuned masses as tuned, drivers as tuned masses
 DAMPER_LEVELS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # passive command levels of a damper sweep, of its range
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
-
-
-def uncontrolled_responses(plant: Plant, motions: list[Load]) -> list[Response]:
-    """`plant` with no command (`plant.bare` is the building without its devices): whole-record
-    simulations with the step map, or a batch through the non-linear step for yielding stories."""
-    if plant.integrator is not None:
-        return [
-            response for response, _ in batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
-        ]
-    responses = []
-    for motion in motions:
-        grid = on_control_grid(motion, plant.control_dt)
-        step = plant.structure_step_map(grid.substeps)
-        responses.append(simulate(plant.building, step, grid.ground, floor_forces=grid.floor_forces))
-    return responses
 
 
 def with_settling_tail(motion: Load) -> Load:
@@ -116,7 +99,6 @@ def evaluate(
     """Run the uncontrolled building, every controller and (optionally) the optimal reference;
     `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
     start = time.perf_counter()
-    check_floor_count(motions, plant.building)
     yielding = plant.yielding
     include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
@@ -126,7 +108,7 @@ def evaluate(
     passive = uncontrolled_responses(plant, simulated) if devices else []
     seeds = [content_seed(motion) for motion in motions]
     # the optimum on the other core while the controllers run here (`background`): the same numbers
-    optimum = in_background(lambda: optimal_responses(plant, simulated)) if include_optimal else None
+    optimum = in_background(optimal_responses, plant, simulated) if include_optimal else None
     controlled = batch_rollout(plant, simulated, controllers, seeds=seeds, on_motions=on_motions)
     optimal = optimum.result() if optimum is not None else []
     rows: list[dict] = []

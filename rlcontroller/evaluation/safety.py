@@ -46,7 +46,8 @@ from rlcontroller.files import atomic_write
 from rlcontroller.physics.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import BuildingBatch, batch_rollout
+from rlcontroller.simulation.batch import BuildingBatch
+from rlcontroller.simulation.rollout import batch_rollout
 
 ROUNDING = 1e-9  # a controller that never acts equals the uncontrolled building to this relative rounding
 FAIL_SAFE = "fail-safe"

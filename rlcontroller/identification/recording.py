@@ -24,7 +24,7 @@ from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.errors import RecordingError
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 ACCELERATION = "absolute_acceleration_"
 FORCE = "force_"

@@ -1,9 +1,9 @@
-"""A stable-baselines3 policy's deterministic actor as plain layers (`control.policy.Actor`).
+"""A stable-baselines3 policy's deterministic actor as plain layers (`control.networks.Actor`).
 
 stable-baselines3's MLP policies act deterministically through a chain of linear layers and
 activations: PPO/A2C's Gaussian mean (`mlp_extractor.policy_net`, then `action_net`), SAC's actor
 (`latent_pi` then `mu`, squashed by tanh) and TD3/DDPG's actor (`mu`, ending in tanh). `actor_of`
-reads those weights once, so that the saved controller is data (`control.policy`) and evaluation
+reads those weights once, so that the saved controller is data (`control.policy_file`) and evaluation
 runs in numpy, the same numbers as torch's forward up to float32 rounding.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.control.policy import ACTIVATIONS, Actor, Layer
+from rlcontroller.control.networks import ACTIVATIONS, Actor, Layer
 
 
 def actor_of(model) -> Actor | None:

@@ -98,10 +98,6 @@ class BuildingEnv(gym.Env):
         self._n_state = plant.n_state
         self._state_action = np.zeros(plant.n_state + self.building.n_actuators)  # [x | clipped action]
 
-    def step_map(self, substeps: int):
-        """The plant's control-step map for `substeps` ground samples per step."""
-        return self.plant.step_map(substeps)
-
     @property
     def state(self) -> np.ndarray:
         """Current building state z = [x; x'] (m, m/s), without actuator states."""
@@ -131,9 +127,10 @@ class BuildingEnv(gym.Env):
         """[x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ transition + forcing[k], u = action * limit; with
         the plant's own integrator x_{k+1} comes from it and the outputs are linear in x_{k+1} and u."""
         self._n_steps = grid.n_steps
-        self._forcing = self.plant.forcing(grid, self._outputs.c, self._outputs.load)
+        self.sampled = self.plant.sampled(grid.substeps)
+        self._forcing = self.sampled.forcing(grid, self._outputs.c, self._outputs.load)
         if self.plant.integrator is None:
-            self._transition = self._outputs.transition(self.step_map(grid.substeps), self.force_limits)
+            self._transition = self.sampled.transition(self._outputs.c, self._outputs.d)
             self._advance = self._advance_linear
         else:
             self._windows = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
@@ -237,4 +234,4 @@ def rollout(env: BuildingEnv, motion: Load, controller: Controller, seed: int = 
         states[k] = env.plant_state
         commands[k] = env.command
     time = np.arange(n_steps + 1) * env.control_dt
-    return env.plant.response(states, commands, time, env.ground_samples, env.floor_forces), total_reward
+    return env.sampled.response(states, commands, time, env.ground_samples, env.floor_forces), total_reward

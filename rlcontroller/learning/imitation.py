@@ -33,7 +33,7 @@ from rlcontroller.control.controllers import residual_action
 from rlcontroller.control.mpc import DEFAULT_HORIZON, mpc_controller
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.physics.loads import generate_suite
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class DAgger(BatchLearner):

@@ -1,5 +1,5 @@
 """stable-baselines3 models as controllers: the learner registry, the residual wrapper of training,
-and the conversion of a trained model into the policy data of `control.policy`.
+and the conversion of a trained model into the policy data of `control.policy_file`.
 
 A residual policy's action is added to its prior's (LQG's) action, both clipped to [-1, 1]:
 `control.controllers.residual_action` is that rule, used in training (the `ResidualAction`
@@ -18,7 +18,9 @@ import gymnasium as gym
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGPrior, residual_action
-from rlcontroller.control.policy import Normalizer, PolicyController, write_policy
+from rlcontroller.control.networks import Normalizer
+from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_file import write_policy
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.physics.plant import Plant
 

@@ -38,7 +38,7 @@ from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.loads import generate_suite
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class RandomSearch(BatchLearner):

@@ -12,7 +12,7 @@ A run folder holds:
                            lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
     best_model.zip         the best validation so far (algorithm.select_by); final_model.zip at the end
                            (stable-baselines3 files, for this run's own use: they unpickle)
-    best_policy.yaml/.npz  the same policies as data (`control.policy`): what evaluate, check and
+    best_policy.yaml/.npz  the same policies as data (`control.policy_file`): what evaluate, check and
     final_policy.yaml/.npz export read, never unpickling
     best_check.yaml        the safety check's verdict on the best policy (`rlc train`, `evaluation.safety`)
     learning_curve.png     written at the end; tensorboard/ with `rlc train --tensorboard`
@@ -36,7 +36,8 @@ from typing import Any
 import numpy as np
 
 from rlcontroller.config import Experiment, load_experiment
-from rlcontroller.control.policy import PolicyController, write_policy
+from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_file import write_policy
 from rlcontroller.files import atomic_savefig, atomic_write, check_new_folder
 from rlcontroller.physics.plant import Plant
 

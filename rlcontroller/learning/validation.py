@@ -18,7 +18,7 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class Validator:

@@ -161,7 +161,7 @@ def _train(run: SweepRun) -> str:
 
 
 def _evaluate(run: SweepRun, records: str | None) -> None:
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.files import new_folder

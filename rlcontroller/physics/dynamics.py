@@ -20,6 +20,7 @@ absolute acceleration sensor never sees a force that has not been applied yet.
 from __future__ import annotations
 
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -338,23 +339,33 @@ class Response:
         return getattr(self, name)
 
 
+RESPONSE_QUANTITIES = (*(q for q in QUANTITIES if q != "base_shear"), "stroke_velocity", "device_velocity")
+
+
 def response(
-    building: Building,
+    outputs: Callable[[str], tuple[np.ndarray, np.ndarray]],
+    load_outputs: Callable[[str], np.ndarray],
     states: np.ndarray,
     held_forces: np.ndarray,
     time: np.ndarray,
     ground: np.ndarray,
     floor_forces: np.ndarray | None = None,
+    hysteretic_stiffness: np.ndarray | None = None,
 ) -> Response:
-    """Outputs from states (K+1, 2n), the forces held just before each instant (K+1, m) and the floor
-    forces at each instant (K+1, floors), if any."""
+    """Every time history from states x (K+1, size), the forces (N) held just before each instant (K+1, m)
+    and the floor forces (N) at each instant (K+1, floors), if any, through `outputs(quantity)` = (C, D) on
+    x and `load_outputs(quantity)` (how floor forces enter it); with `hysteretic_stiffness` ((1 - a) k d_y per
+    story: yielding stories, x = [x; v; z]) also the story hysteretic forces (N)."""
     values = {}
-    for quantity in (*QUANTITIES, "stroke_velocity", "device_velocity"):
-        c, d = output_matrices(building, quantity)
+    for quantity in RESPONSE_QUANTITIES:
+        c, d = outputs(quantity)
         values[quantity] = states @ c.T + held_forces @ d.T
         if floor_forces is not None:
-            values[quantity] += floor_forces @ load_feedthrough(building, quantity).T
-    values["base_shear"] = values["base_shear"][:, 0]
+            values[quantity] += floor_forces @ load_outputs(quantity).T
+    c, d = outputs("base_shear")
+    values["base_shear"] = (states @ c.T + held_forces @ d.T)[:, 0]
+    if hysteretic_stiffness is not None:
+        values["hysteretic_force"] = states[:, 2 * hysteretic_stiffness.size :] * hysteretic_stiffness
     return Response(time=time, ground=ground, **values)
 
 
@@ -386,4 +397,8 @@ def simulate(
     samples = ground[:: step.substeps][: n_steps + 1]
     time = np.arange(n_steps + 1) * step.control_dt
     at_steps = None if floor_forces is None else floor_forces[:: step.substeps][: n_steps + 1]
-    return response(building, states, held, time, samples, at_steps)
+    return response(
+        lambda quantity: output_matrices(building, quantity),
+        lambda quantity: load_feedthrough(building, quantity),
+        states, held, time, samples, at_steps,
+    )  # fmt: skip

@@ -45,7 +45,9 @@ def load_suite(
     """The loads a `--records` value names and their label: a folder or file of ground-motion records
     (default $RLC_RECORDS, else the labelled synthetic suite, said through `echo`), or a wind suite
     (a YAML file, kind: wind) generated on `plant`'s floors. Loads the plant cannot take are refused in
-    one line (ConfigError); without a plant a wind suite is refused."""
+    one line (ConfigError, MotionError); without a plant a wind suite is refused. Loads of another kind than
+    the plant's experiment is made for (`Experiment.load_kind`) are said through `echo`: they are judged all
+    the same (a wind controller during an earthquake is a real question)."""
     records = Path(records) if records is not None else None
     if names_wind_suite(records):
         suite = load_wind_suite(records)
@@ -53,23 +55,31 @@ def load_suite(
             raise ConfigError(f"--records {records}: a wind suite is not taken by this command")
         if scale_pga is not None:
             raise ConfigError("--scale-pga: a wind suite has no ground acceleration to scale")
-        refuse_floor_forces(plant, records)
-        return wind_suite(suite, plant.building), suite_label(suite, str(records))
-    if records is None and not os.environ.get(RECORDS_VARIABLE) and echo is not None:
-        echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
-    motions, label = choose_motions(records, scale_pga)
-    if plant is not None and any(motion.kind == FLOOR_FORCES for motion in motions):
-        refuse_floor_forces(plant, records)
-        check_floor_count(motions, plant.building)
+        motions, label = wind_suite(suite, plant.building), suite_label(suite, str(records))
+    else:
+        if records is None and not os.environ.get(RECORDS_VARIABLE) and echo is not None:
+            echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
+        motions, label = choose_motions(records, scale_pga)
+    if plant is not None:
+        checked_for(plant, motions, records, echo)
     return motions, label
 
 
-def check_floor_count(motions: list[Load], building: Building) -> None:
-    """MotionError (one line) for floor loads on another number of floors than `building` has."""
-    for motion in motions:
-        if motion.floor_forces is not None and motion.floor_forces.shape[1] != building.n_floors:
-            floors = motion.floor_forces.shape[1]
+def checked_for(plant: Plant, motions: list[Load], records: Path | None, echo: Callable[[str], None] | None) -> None:
+    """Refuse, in one line, floor loads the plant cannot take or on another number of floors; say through
+    `echo` when the loads are not the kind its experiment is made for."""
+    floor_loads = [motion for motion in motions if motion.kind == FLOOR_FORCES]
+    if floor_loads:
+        refuse_floor_forces(plant, records)
+    for motion in floor_loads:
+        floors, building = motion.floor_forces.shape[1], plant.building
+        if floors != building.n_floors:
             raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {building.n_floors}")
+    made_for = plant.experiment.load_kind
+    given = "wind" if motions and len(floor_loads) == len(motions) else "ground motion"
+    if given != made_for and echo is not None:
+        loads = "floor forces (wind)" if given == "wind" else "ground motions"
+        echo(f"note: the controllers were made for {made_for}; these loads are {loads}: judged on loads not their own")
 
 
 def refuse_floor_forces(plant: Plant, records: Path | None) -> None:

@@ -37,25 +37,13 @@ from rlcontroller.config import (
     StateSpaceBuildingConfig,
     WindGeneratorConfig,
 )
-from rlcontroller.physics.dynamics import (
-    LoadMap,
-    Response,
-    StateSpace,
-    StepMap,
-    compose,
-    exact_substep,
-    ground_model_step,
-    load_feedthrough,
-    load_map,
-    output_matrices,
-    state_space,
-    step_map,
-)
-from rlcontroller.physics.excitation import FLOOR_FORCES, LoadGrid
+from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
+from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.opensees import OpenSeesIntegrator
+from rlcontroller.physics.sampled import SampledPlant
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.sensors import sensor_matrices
 from rlcontroller.physics.state_space import StateSpaceBuilding, from_state_space
@@ -147,7 +135,7 @@ class Plant:
             self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale, load_scale
         )
         self.ground_model = GroundModel()
-        self._maps: dict[tuple[str, int], StepMap] = {}  # (which map, sub-steps) -> map
+        self._sampled: dict[int, SampledPlant] = {}  # sub-steps -> this plant sampled
         self._design = self if self.config is None else None
         self._elastic: Plant | None = None
         self._bare = None if experiment.devices else self
@@ -263,84 +251,16 @@ class Plant:
         d[:, first:] = 0.0
         return full, d
 
-    def response(
-        self,
-        states: np.ndarray,
-        held_forces: np.ndarray,
-        time: np.ndarray,
-        ground: np.ndarray,
-        floor_forces: np.ndarray | None = None,
-    ) -> Response:
-        """Time histories from this plant's states x (K+1, n_state), the forces (N) held just before
-        each instant and the floor forces (N) at each instant, if any; for yielding plants also the
-        story hysteretic forces (1 - a) k d_y z (N)."""
-        values = {}
-        quantities = ("displacement", "velocity", "drift", "absolute_acceleration", "story_shear", "force", "stroke")
-        for quantity in (*quantities, "stroke_velocity", "device_velocity"):
-            c, d = self.outputs(quantity)
-            values[quantity] = states @ c.T + held_forces @ d.T
-            if floor_forces is not None:
-                values[quantity] += floor_forces @ load_feedthrough(self.building, quantity).T
-        c, d = self.outputs("base_shear")
-        values["base_shear"] = (states @ c.T + held_forces @ d.T)[:, 0]
-        if self.yielding is not None:
-            n = self.building.n_floors
-            values["hysteretic_force"] = states[:, 2 * n :] * self.yielding.hysteretic_stiffness
-        return Response(time=time, ground=ground, **values)
+    def load_outputs(self, quantity: Quantity) -> np.ndarray:
+        """How floor forces (N) enter `quantity` directly, (rows, floors) (`dynamics.load_feedthrough`)."""
+        return load_feedthrough(self.building, quantity)
 
-    def structure_step_map(self, substeps: int = 1) -> StepMap:
-        """The building's own control-step map on z (no actuator dynamics), for `substeps` ground
-        samples per step (cached)."""
-        if self.semi_active is not None:
-            raise ValueError("a building with semi-active dampers has no linear step map")
-        key = ("structure", substeps)
-        if key not in self._maps:
-            self._maps[key] = step_map(self.building, self.experiment.simulation, substeps)
-        return self._maps[key]
-
-    def step_map(self, substeps: int = 1) -> StepMap:
-        """The control-step map on x (with the actuator dynamics) for `substeps` ground samples per
-        step; the force gain is per newton of command (cached)."""
-        if not self.has_actuator_dynamics:
-            return self.structure_step_map(substeps)
-        key = ("actuators", substeps)
-        if key not in self._maps:
-            self._maps[key] = self._actuator_step_map(substeps)
-        return self._maps[key]
-
-    def _actuator_step_map(self, substeps: int) -> StepMap:
-        size, m = self.building.n_states, self.building.n_actuators
-        if self.time_constant > 0:  # [z; f] with tau f' = u - f, exact over each sub-step
-            system = state_space(self.building)
-            a = np.zeros((size + m, size + m))
-            a[:size, :size] = system.a
-            a[:size, size:] = system.b_force
-            a[size:, size:] = -np.eye(m) / self.time_constant
-            lagged = StateSpace(
-                a=a,
-                b_force=np.vstack([np.zeros((size, m)), np.eye(m) / self.time_constant]),
-                b_ground=np.concatenate([system.b_ground, np.zeros(m)]),
-            )
-            core = compose(exact_substep(lagged, self.control_dt / substeps), substeps, self.control_dt)
-        else:
-            core = self.structure_step_map(substeps)
-        d = self.delay_steps
-        if d == 0:
-            return core
-        size, inner = self.n_state, core.phi.shape[0]
-        phi = np.zeros((size, size))
-        phi[:inner, :inner] = core.phi
-        oldest = slice(inner + (d - 1) * m, inner + d * m)  # the command of d steps ago, applied now
-        phi[:inner, oldest] = core.force_gain
-        for j in range(1, d):  # the buffer shifts by one step
-            phi[inner + j * m : inner + (j + 1) * m, inner + (j - 1) * m : inner + j * m] = np.eye(m)
-        if self.time_constant == 0:
-            phi[-m:, oldest] = np.eye(m)  # the register keeps the force applied over this step
-        force_gain = np.zeros((size, m))
-        force_gain[inner : inner + m] = np.eye(m)
-        ground_gain = np.zeros((size, core.ground_gain.shape[1]))
-        ground_gain[:inner] = core.ground_gain
-        return StepMap(phi=phi, force_gain=force_gain, ground_gain=ground_gain, control_dt=self.control_dt)
+    def sampled(self, substeps: int = 1) -> SampledPlant:
+        """This plant sampled at its control step with `substeps` load samples per step: every discrete map
+        of it, built once (`physics.sampled`)."""
+        if substeps not in self._sampled:
+            self._sampled[substeps] = SampledPlant(self, substeps)
+        return self._sampled[substeps]
 
     def cannot_take(self, kind: str) -> str | None:
         """Why this plant cannot be loaded by a load of `kind` (`excitation.FLOOR_FORCES` or
@@ -350,38 +270,3 @@ class Plant:
         if kind == FLOOR_FORCES and isinstance(self.building, StateSpaceBuilding):
             return "a state-space model takes the ground acceleration only (it declares no floor-force inputs)"
         return None
-
-    def forcing(self, grid: LoadGrid, c: np.ndarray, load_rows: np.ndarray) -> np.ndarray:
-        """What the load adds to each control step beyond the plant's own transition: (n_steps, n_state +
-        outputs), its terms in the state x and in outputs y = c x + load_rows F (F the floor forces). A
-        plant with its own integrator takes the ground acceleration in its step: only floor forces are
-        terms here, and it refuses them (`cannot_take`)."""
-        n_steps = grid.n_steps
-        forcing = np.zeros((n_steps, self.n_state + c.shape[0]))
-        if self.integrator is None:
-            forcing[:, : self.n_state] = self.step_map(grid.substeps).ground_terms(grid.ground)
-        if grid.floor_forces is not None:  # load_map refuses them where the plant cannot take them
-            forcing[:, : self.n_state] += self.load_map(grid.substeps).terms(grid.floor_forces)
-            forcing[:, self.n_state :] = grid.floor_forces[grid.substeps :: grid.substeps][:n_steps] @ load_rows.T
-        forcing[:, self.n_state :] += forcing[:, : self.n_state] @ c.T
-        return forcing
-
-    def load_map(self, substeps: int = 1) -> LoadMap:
-        """Floor forces over a control step on this plant's state x (cached); linear plants only."""
-        refusal = self.cannot_take(FLOOR_FORCES)
-        if refusal is not None:
-            raise ValueError(refusal)
-        key = ("load", substeps)
-        if key not in self._maps:
-            gain = load_map(self.building, self.control_dt, substeps).gain
-            full = np.zeros((self.n_state, *gain.shape[1:]))
-            full[: gain.shape[0]] = gain  # actuator states do not feel the wind
-            self._maps[key] = LoadMap(gain=full)
-        return self._maps[key]
-
-    def ground_model_step(self) -> StepMap:
-        """Exact control-step map of the building and its Kanai-Tajimi ground model (cached)."""
-        key = ("ground_model", 1)
-        if key not in self._maps:
-            self._maps[key] = ground_model_step(self.building, self.control_dt, self.ground_model)
-        return self._maps[key]

@@ -4,12 +4,16 @@ controllers' designs read of a plant. `physics.plant.Plant` implements it for ev
 integrator, `physics.opensees`); a model from outside (an identified state-space model) implements the
 same and nothing else changes.
 
-Like do-mpc's `model`, one object serves the simulator, the estimator and the controllers:
+Like do-mpc's `model`, compiled once (`Model.setup()`), one object serves the simulator, the estimator and
+the controllers: `sampled(r)`, the plant sampled at its control step with r load samples per step
+(`physics.sampled.SampledPlant`), holds every discrete map of it, built once and kept:
 
-- the **simulator** steps the state x (`n_state`) of a control step as one linear map (`step_map`, with
-  `forcing` adding the load's terms) or, where the plant has its own `integrator`, through that; every
-  response is linear in x and the held command (`outputs`), which is what the sensors read and J1-J4 and
-  the device metrics are taken from (`response`);
+- the **simulator** steps the state x (`n_state`) of a control step as one linear map (`sampled(r).step`,
+  with `sampled(r).forcing` adding the load's terms) or, where the plant has its own `integrator`, through
+  that; every response is linear in x, the held command and the floor loads (`outputs`, `load_outputs`),
+  which is what the sensors read and J1-J4 and the device metrics are taken from (`sampled(r).response`);
+  the estimators and LQG, MPC and the learners' priors take the design model's `sampled().step`,
+  `.ground_model` or `.wind_model`;
 - the **loads** it takes: `cannot_take(kind)` says in one line why a load kind (`excitation.FLOOR_FORCES`,
   `GROUND_ACCELERATION`) is refused;
 - the **design model** (`design`) is a linear plant built from what an engineer knows — LQG, MPC, the
@@ -24,8 +28,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from rlcontroller.config import Experiment
-from rlcontroller.physics.dynamics import LoadMap, Response, StepMap
-from rlcontroller.physics.excitation import LoadGrid
+from rlcontroller.physics.sampled import SampledPlant
 from rlcontroller.physics.structure import Building
 
 
@@ -58,19 +61,8 @@ class SimulatedPlant(Protocol):
 
     def outputs(self, quantity: str) -> tuple[np.ndarray, np.ndarray]: ...
 
-    def step_map(self, substeps: int = 1) -> StepMap: ...
+    def load_outputs(self, quantity: str) -> np.ndarray: ...
 
-    def load_map(self, substeps: int = 1) -> LoadMap: ...
-
-    def forcing(self, grid: LoadGrid, c: np.ndarray, load_rows: np.ndarray) -> np.ndarray: ...
+    def sampled(self, substeps: int = 1) -> SampledPlant: ...
 
     def cannot_take(self, kind: str) -> str | None: ...
-
-    def response(
-        self,
-        states: np.ndarray,
-        held_forces: np.ndarray,
-        time: np.ndarray,
-        ground: np.ndarray,
-        floor_forces: np.ndarray | None = None,
-    ) -> Response: ...

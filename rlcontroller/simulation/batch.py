@@ -14,21 +14,15 @@ its outputs are not used.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from rlcontroller.control.controllers import Controller, LQGBank, LQGController
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
-from rlcontroller.physics.opensees import NonConvergence
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
-from rlcontroller.simulation.fanout import fanned_map
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
 
@@ -110,26 +104,36 @@ class BuildingBatch:
             else:
                 motion = generate(plant.experiment.excitation.generator, rng, plant.building)
         grid = on_control_grid(motion, self.control_dt) if grid is None else grid
+        rows = self.rows if plant is self.plant else step_outputs(plant)
+        sampled, base = plant.sampled(grid.substeps), plant is self.plant
+        # the load's forcing, kept for the members that start with the same load object on the base plant
+        # (every controller's lane does); the transition kept per sampling of the base plant
+        cached = self._ground_cache.get(id(motion))
+        if cached is not None and cached[0] is motion and cached[1] == grid.substeps:
+            load_forcing = cached[2]
+        else:
+            load_forcing = sampled.forcing(grid, rows.c, rows.load)
+            if reused and base:
+                self._ground_cache[id(motion)] = (motion, grid.substeps, load_forcing)  # its id stays its own
+        transition = None
+        if plant.integrator is None:
+            if not base:
+                transition = sampled.transition(rows.c, rows.d)
+            else:
+                if grid.substeps not in self._cache:
+                    self._cache[grid.substeps] = sampled.transition(rows.c, rows.d)
+                transition = self._cache[grid.substeps]
         n_steps = grid.n_steps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
         size = self._state_size
         forcing = self._forcing[member]
         forcing[:] = 0.0
-        rows = self.rows if plant is self.plant else step_outputs(plant)
-        load_forcing = self._load_forcing(motion, grid, plant, rows, reused and plant is self.plant)
         forcing[:n_steps, : plant.n_state] = load_forcing[:, : plant.n_state]
         forcing[:n_steps, size:] = load_forcing[:, plant.n_state :]
+        self._transitions[member] = transition
         if plant.integrator is None:
-            step = plant.step_map(grid.substeps)
-            if plant is not self.plant:
-                self._transitions[member] = rows.transition(step, plant.force_limits)
-            else:
-                if grid.substeps not in self._cache:
-                    self._cache[grid.substeps] = rows.transition(step, plant.force_limits)
-                self._transitions[member] = self._cache[grid.substeps]
             self._windows[member] = None
         else:
-            self._transitions[member] = None
             self._windows[member] = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
         self._stacked = None
         self.floor_forces[member] = grid.forces_at_steps
@@ -149,17 +153,6 @@ class BuildingBatch:
             self.estimates[member] = 0.0
             self.previous_ground[member] = 0.0
             self._update_estimates(readings[0][None], self.previous_action[member][None], [member])
-
-    def _load_forcing(self, motion: Load, grid: LoadGrid, plant: Plant, rows, keep: bool) -> np.ndarray:
-        """`plant.forcing` of the load; kept for the members that start with the same load object on the
-        base plant (every controller's lane does)."""
-        cached = self._ground_cache.get(id(motion))
-        if cached is not None and cached[0] is motion and cached[1] == grid.substeps:
-            return cached[2]
-        forcing = plant.forcing(grid, rows.c, rows.load)
-        if keep:
-            self._ground_cache[id(motion)] = (motion, grid.substeps, forcing)  # holds `motion`: its id stays its own
-        return forcing
 
     def _padded(self, inner: np.ndarray) -> np.ndarray:
         """A member's T zero-padded to the batch's state size."""
@@ -274,138 +267,3 @@ def episode_generator(seed: int) -> np.random.Generator:
     """The generator `BuildingEnv.reset(seed=seed)` draws an episode from (gymnasium's
     `seeding.np_random`: PCG64 on the seed's SeedSequence), made without importing gymnasium."""
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed)))
-
-
-ROWS_PER_BATCH = 400_000  # members x control steps simulated at once (bounds the memory to ~150 MB)
-
-
-def batch_rollout(
-    plant: Plant,
-    motions: list[Load],
-    controllers: list[Controller],
-    seeds: list[int] | None = None,
-    randomize: bool = False,
-    on_motions: Callable[[int], None] | None = None,
-) -> list[list[tuple[Response, float]]]:
-    """Run every controller on every motion (motion i with its noise, and with `randomize` its plant,
-    drawn from seeds[i], default i, the same for every controller): the (response, total reward) that
-    `rollout` gives on each motion in turn, computed in batches of motions of similar length, all
-    controllers stepping together; one list per controller. `on_motions(count)` is called as each
-    batch of `count` motions is done (a progress bar)."""
-    if not controllers:
-        return []
-    seeds = list(range(len(motions))) if seeds is None else list(seeds)
-    grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
-    if plant.fe_model is not None:
-        return _fanned_rollout(plant, list(zip(motions, grids, strict=True)), controllers, seeds, randomize, on_motions)
-    lengths = [grid.n_steps for grid in grids]  # control steps
-    order = sorted(range(len(motions)), key=lambda i: lengths[i])
-    results: list[list] = [[None] * len(motions) for _ in controllers]
-    while order:
-        chunk = [order.pop(0)]
-        while order and len(controllers) * (len(chunk) + 1) * lengths[order[0]] <= ROWS_PER_BATCH:
-            chunk.append(order.pop(0))
-        responses = _rollout_chunk(
-            plant, [(motions[i], grids[i]) for i in chunk], controllers, [seeds[i] for i in chunk], randomize
-        )
-        for c, runs in enumerate(responses):
-            for index, response in zip(chunk, runs, strict=True):
-                results[c][index] = response
-        if on_motions is not None:
-            on_motions(len(chunk))
-    return results
-
-
-def _fanned_rollout(
-    plant: Plant,
-    loads: list[tuple[Load, LoadGrid]],
-    controllers: list[Controller],
-    seeds: list[int],
-    randomize: bool,
-    on_motions: Callable[[int], None] | None,
-) -> list[list[tuple[Response, float]]]:
-    """`batch_rollout` on a plant that holds one model per process (an OpenSees model): each controller on
-    each load alone, fanned out over processes (`simulation.fanout`)."""
-    runs = [(c, i) for i in range(len(loads)) for c in range(len(controllers))]
-    results: list[list] = [[None] * len(loads) for _ in controllers]
-    left = [len(controllers)] * len(loads)
-    finished = fanned_map(_fanned_run, (plant, loads, controllers, seeds, randomize), runs)
-    for (c, i), result in zip(runs, finished, strict=True):
-        results[c][i] = result
-        left[i] -= 1
-        if on_motions is not None and left[i] == 0:
-            on_motions(1)
-    return results
-
-
-def _fanned_run(shared: tuple, run: tuple[int, int]) -> tuple[Response, float]:
-    plant, loads, controllers, seeds, randomize = shared
-    c, i = run
-    try:
-        return _rollout_chunk(plant, [loads[i]], [controllers[c]], [seeds[i]], randomize)[0][0]
-    except NonConvergence as error:
-        raise NonConvergence(f"{loads[i][0].name}, {controllers[c].name}: {error}") from None
-
-
-def _rollout_chunk(
-    plant: Plant, loads: list[tuple[Load, LoadGrid]], controllers: list[Controller], seeds: list[int], randomize: bool
-) -> list[list[tuple[Response, float]]]:
-    count = len(loads)
-    batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
-    for member in reversed(range(batch.size)):  # the longest motion first: the batch is sized once
-        motion = member % count
-        batch.start(member, episode_generator(seeds[motion]), *loads[motion])
-    n_steps = int(batch.steps.max())
-    states = np.zeros((n_steps + 1, batch.size, batch.plant_states().shape[1]))
-    commands = np.zeros((n_steps + 1, batch.size, batch.m))
-    for controller in controllers:
-        controller.reset()
-    lanes = [(controller, slice(c * count, (c + 1) * count)) for c, controller in enumerate(controllers)]
-    observations, actions = batch.observations, np.zeros((batch.size, batch.m))
-    acting = fused_lanes(lanes, count)
-    reward_rows = batch.rows.reward
-    outputs = np.zeros((n_steps + 1, batch.size, reward_rows.stop - reward_rows.start))  # their reward rows
-    for k in range(1, n_steps + 1):
-        for controller, lane in acting:
-            actions[lane] = controller.act(observations[lane])
-        outputs[k] = batch.advance(actions)[:, reward_rows]
-        states[k] = batch.plant_states()
-        commands[k] = batch.held_actions()
-    rewards = np.zeros((n_steps + 1, batch.size))
-    rewards[1:] = batch.rewards(outputs[1:], commands[1:], commands[:-1])
-    commands *= plant.force_limits
-    rewards[np.arange(n_steps + 1)[:, None] > batch.steps] = 0.0
-    totals = rewards.cumsum(axis=0)[-1]  # step by step, in order
-    responses: list[list[tuple[Response, float]]] = []
-    for _, lane in lanes:
-        runs = []
-        for member in range(lane.start, lane.stop):
-            member_plant, steps = batch.plants[member], batch.steps[member]
-            response = member_plant.response(
-                states[: steps + 1, member, : member_plant.n_state],
-                commands[: steps + 1, member],
-                np.arange(steps + 1) * plant.control_dt,
-                batch.ground_samples[member],
-                batch.floor_forces[member],
-            )
-            runs.append((response, float(totals[member])))
-        responses.append(runs)
-    return responses
-
-
-def fused_lanes(lanes: list[tuple[Controller, slice]], rows: int) -> list[tuple[Controller | LQGBank, slice]]:
-    """The lanes with each run of consecutive LQG controllers acting as one `LQGBank`."""
-    fused: list[tuple[Controller | LQGBank, slice]] = []
-    run: list[tuple[LQGController, slice]] = []
-    for controller, lane in [*lanes, (None, None)]:
-        if isinstance(controller, LQGController):
-            run.append((controller, lane))
-            continue
-        if len(run) > 1:
-            fused.append((LQGBank([c for c, _ in run], rows), slice(run[0][1].start, run[-1][1].stop)))
-        else:
-            fused += run
-        run = []
-        if controller is not None:
-            fused.append((controller, lane))
-    return fused

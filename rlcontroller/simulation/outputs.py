@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.control.cost import reward_matrices
-from rlcontroller.physics.dynamics import StepMap, load_feedthrough
 from rlcontroller.physics.plant import Plant
 
 
@@ -38,16 +37,6 @@ class StepOutputs:
     row_power: np.ndarray
     quadratic: bool  # every term squared
     change_factor: np.ndarray | None  # force limit * weight^(1/power) / scale per change row
-
-    def transition(self, step: StepMap, force_limits: np.ndarray) -> np.ndarray:
-        """T with [x_{k+1} | outputs_{k+1}] = [x_k | action_k] @ T + forcing[k]."""
-        force_gain = step.force_gain * force_limits
-        return np.vstack(
-            [
-                np.hstack([step.phi.T, step.phi.T @ self.c.T]),
-                np.hstack([force_gain.T, (self.c @ force_gain + self.d * force_limits).T]),
-            ]
-        )
 
     def reward_terms(self, weighted: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
         """Each reward term's value (positive: the reward is minus their sum), shape (..., terms), from
@@ -94,8 +83,8 @@ def step_outputs(plant: Plant) -> StepOutputs:
     ]
     loads = [sensors.load / sensors.scale[:, None], np.zeros((1, n))]
     for term, rows in zip(linear_terms, reward_slices, strict=True):
-        loads.append(load_feedthrough(plant.building, term.quantity) * reward_factor[rows, None])
-    loads += [load_feedthrough(plant.building, q) for q in ("drift", "absolute_acceleration", "base_shear")]
+        loads.append(plant.load_outputs(term.quantity) * reward_factor[rows, None])
+    loads += [plant.load_outputs(q) for q in ("drift", "absolute_acceleration", "base_shear")]
     loads.append(np.zeros((m, n)))
     p, r = sensors.c.shape[0], reward_c.shape[0]
     shear = p + 1 + r + 2 * n

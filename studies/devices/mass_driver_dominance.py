@@ -40,7 +40,7 @@ from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 FREQUENCIES = np.geomspace(0.05, 24.8, 400)  # Hz
 LAGUERRE_POLE, LAGUERRE_COUNT, POLYGON = 0.96, 40, 16
@@ -51,7 +51,7 @@ def responses(plant: Plant, design: LQGDesign, frequency: np.ndarray) -> dict[st
     """Open-loop frequency responses at `frequency` (Hz), per unit ground acceleration (w) and per unit action
     (u): the story drifts (drift_w, drift_u; m per m/s^2 and per action) and the Kalman estimate (estimate_w,
     estimate_u), with the env's timing: action k held over [t_k, t_k+1], the readings at t_k feel action k-1."""
-    step, kalman = plant.step_map(1), design.filter
+    step, kalman = plant.sampled(1).step, design.filter
     phi, force = step.phi, step.force_gain[:, 0] * plant.building.force_limits[0]
     free, held, measured, _ = kalman.update_matrices
     c, d = plant.sensors.c, plant.sensors.d[:, 0] * plant.building.force_limits[0]

@@ -10,7 +10,7 @@ from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 @dataclass

@@ -17,11 +17,11 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.evaluation.evaluation import compare, uncontrolled_responses, with_settling_tail
+from rlcontroller.evaluation.evaluation import compare, with_settling_tail
 from rlcontroller.physics.metrics import SETTLING_TAIL_S
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
 experiment = load_experiment(CONFIGS / "experiments" / "nine_story_frame.yaml")
 fe = Plant(experiment)

@@ -25,7 +25,7 @@ from rlcontroller.physics.excitation import MotionError
 from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 

@@ -19,7 +19,7 @@ from rlcontroller.config.base import read_model
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import MPCController
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.physics.plant import Plant
 

@@ -26,7 +26,7 @@ from rlcontroller.assets import CONFIGS  # noqa: E402
 from rlcontroller.config import load_experiment, load_wind_suite  # noqa: E402
 from rlcontroller.control.controllers import LQGController  # noqa: E402
 from rlcontroller.control.lqg import design_lqg_wind_model  # noqa: E402
-from rlcontroller.control.policy import read_policy  # noqa: E402
+from rlcontroller.control.policy_file import read_policy  # noqa: E402
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate  # noqa: E402
 from rlcontroller.evaluation.tables import markdown_table  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402

@@ -140,7 +140,7 @@ def test_integrated_accelerations_give_velocity_and_displacement_and_forget_a_bi
 def test_loop_transfer_recovery_keeps_lqg_stable_with_a_detuned_damper():
     """The 76-story active tuned mass damper's LQG + wind model goes unstable when the damper's frequency is
     10 % off its design; with sensors.input_noise (fictitious noise at the driver's input) it does not."""
-    from rlcontroller.control.policy import PolicyController
+    from rlcontroller.control.classical import classical_policy
     from rlcontroller.evaluation.safety import spectral_radius
 
     config = REPOSITORY / "studies" / "safety_check" / "seventy_six_story_atmd_stroke_weighted.yaml"
@@ -150,7 +150,7 @@ def test_loop_transfer_recovery_keeps_lqg_stable_with_a_detuned_damper():
     detuned = PlantConfig(devices=DeviceFactors(frequency=0.9))
     radii = {}
     for name, experiment in (("plain", plain), ("robust", robust)):
-        controller = PolicyController.classical(Plant(experiment), "lqg_wind_model")
+        controller = classical_policy(Plant(experiment), "lqg_wind_model")
         radii[name] = spectral_radius(Plant(experiment.model_copy(update={"plant": detuned})), controller)
         assert spectral_radius(Plant(experiment), controller) < 1.0  # both stable on the design model
     assert radii["plain"] > 1.0 > radii["robust"]

@@ -44,7 +44,7 @@ def test_closed_loop_is_stable(known_ground):
 def test_gain_matches_an_independent_riccati_solution():
     experiment = Experiment()
     env = BuildingEnv(experiment)
-    step = env.step_map(1)
+    step = env.plant.sampled(1).step
     cost = quadratic_cost(env.plant, experiment.reward, step)
     gain, _ = lqr_gain(step, cost, env.force_limits)
     a, b = step.phi, step.force_gain * env.force_limits
@@ -58,7 +58,7 @@ def test_the_lqr_cost_is_exactly_the_reward():
     env = BuildingEnv(experiment)
     motion = Load("m", 0.02, np.random.default_rng(0).normal(0, 2.0, 60))
     env.reset(seed=0, options={"motion": motion})
-    step = env.step_map(1)
+    step = env.plant.sampled(1).step
     cost = quadratic_cost(env.plant, experiment.reward, step)
     ground_terms = step.ground_terms(motion.acceleration)
     rng = np.random.default_rng(1)
@@ -262,7 +262,7 @@ def test_ground_model_lqg_wins_on_the_motions_it_models():
 def test_the_backward_feedforward_equals_the_kernel_sum(length):
     """sum_{j < length} W_j g_{k+j} from the explicit kernels, for a batch of two ground histories."""
     plant = Plant(Experiment())
-    step = plant.step_map(1)
+    step = plant.sampled(1).step
     cost = quadratic_cost(plant, plant.experiment.reward, step)
     terms = np.random.default_rng(4).standard_normal((2, 60, step.phi.shape[0])) * 1e-3
     kernels = preview_kernel(cost, step, plant.force_limits, length)

@@ -28,7 +28,7 @@ def test_the_riccati_solution_is_the_summed_cost_of_the_closed_loop_and_the_leas
         load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_every_story.yaml"),
     ):
         plant = Plant(experiment)
-        step, limits = plant.step_map(1), plant.force_limits
+        step, limits = plant.sampled(1).step, plant.force_limits
         cost = quadratic_cost(plant, experiment.reward, step)
         gain, riccati = lqr_gain(step, cost, limits)
         start = np.random.default_rng(4).standard_normal(step.phi.shape[0]) * 0.01

@@ -37,7 +37,7 @@ def test_with_loose_limits_the_first_move_is_lqrs(controller):
 def test_with_binding_limits_the_plan_keeps_them_and_costs_no_more_than_clipped_lqr(controller):
     """Large estimates: every planned action within [-1, 1] (to the solver's tolerance, before any clip), and
     the plan's cost (the QP's objective) at most that of clipped LQR rolled out over the same horizon."""
-    step = PLANT.ground_model_step()
+    step = PLANT.sampled().ground_model
     cost = quadratic_cost(PLANT, PLANT.experiment.reward, step)
     feedback, riccati = lqr_gain(step, cost, PLANT.force_limits)
     action_gain = step.force_gain * PLANT.force_limits
@@ -69,7 +69,7 @@ def test_a_step_the_solver_does_not_finish_falls_back_to_lqr_and_is_counted():
 
 def test_the_problem_is_built_from_the_riccati_solution_it_ends_with():
     """N = 1: the QP's Hessian is 2 (H_u' H_u + B' P B), the LQR curvature of the last step."""
-    step = PLANT.ground_model_step()
+    step = PLANT.sampled().ground_model
     cost = quadratic_cost(PLANT, PLANT.experiment.reward, step)
     _, riccati = lqr_gain(step, cost, PLANT.force_limits)
     action_gain = step.force_gain * PLANT.force_limits
@@ -94,7 +94,7 @@ AMD = Plant(load_experiment(CONFIGS / "experiments" / "five_story_amd.yaml"))
 
 def predicted_strokes(problem, plant, estimate, plan):
     """The plan's strokes / limits at z_1..z_N, through the design model's step map."""
-    step = plant.ground_model_step()
+    step = plant.sampled().ground_model
     rows = stroke_rows(plant, estimate.size)
     actions = plan[: problem.horizon * problem.actions].reshape(problem.horizon, problem.actions)
     state, strokes = estimate, []
@@ -116,7 +116,7 @@ def test_a_plan_keeps_the_stroke_limit_where_it_can_and_pays_for_what_it_cannot(
     controller = MPCController(design, 20)
     problem = controller.problem
     feedback = design_lqg_ground_model(design).feedback
-    step = design.ground_model_step()
+    step = design.sampled().ground_model
     rows = stroke_rows(design, feedback.shape[1])
     n_floors, n_dofs = design.building.n_floors, design.building.n_dofs
     estimate = np.zeros(feedback.shape[1])

@@ -115,7 +115,7 @@ def test_an_actuator_delay_stays_in_the_design():
 
     experiment = Experiment.model_validate({"plant": {"actuators": {"delay_steps": 1}}})
     plant = Plant(experiment).elastic
-    step = plant.step_map(1)
+    step = plant.sampled(1).step
     assert np.min(np.abs(np.linalg.eigvals(step.phi))) < 1e-12  # the buffer
     cost = quadratic_cost(plant, experiment.reward, step)
     gain, _ = lqr_gain(step, cost, plant.building.force_limits)

@@ -38,7 +38,7 @@ def test_the_discrete_process_noise_is_van_loans_integral():
 def velocity_error(plant: Plant, design, motion) -> float:
     """Relative RMS error of the filter's floor velocities, noise-free accelerometers, no control."""
     forces = on_control_grid(motion, plant.control_dt).floor_forces
-    response = simulate(plant.building, plant.structure_step_map(1), np.zeros(forces.shape[0]), floor_forces=forces)
+    response = simulate(plant.building, plant.sampled(1).structure, np.zeros(forces.shape[0]), floor_forces=forces)
     n = plant.building.n_dofs
     states = np.hstack([response.displacement, response.velocity])
     readings = states @ plant.sensors.c.T + forces @ plant.sensors.load.T

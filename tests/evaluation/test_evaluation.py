@@ -11,12 +11,12 @@ from rlcontroller.evaluation.evaluation import (
     lqg_sweep,
     mean_metric,
     preview_study,
-    uncontrolled_responses,
 )
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.excitation import on_control_grid, read_at2
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import SYNTHETIC_LABEL, load_records, synthetic_suite
+from rlcontroller.simulation.rollout import uncontrolled_responses
 
 
 def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
@@ -102,7 +102,7 @@ def test_a_tuned_mass_dampers_energy_balances(records):
     for motion in load_records(records)[0][:3]:
         grid = on_control_grid(motion, plant.control_dt)
         samples, substeps = grid.ground, grid.substeps
-        result = simulate(building, plant.step_map(substeps), samples)
+        result = simulate(building, plant.sampled(substeps).step, samples)
         dt = plant.control_dt
         ground_input = np.trapezoid(-result.ground * (result.velocity @ floors.floor_masses), dx=dt)
         mass_velocity = result.velocity[:, 4] + result.stroke_velocity[:, 0]
@@ -129,10 +129,10 @@ def test_with_mass_devices_uncontrolled_is_the_bare_building_and_passive_the_tun
     for motion in motions:
         grid = on_control_grid(motion, plant.control_dt)
         samples, substeps = grid.ground, grid.substeps
-        expected = simulate(bare.building, bare.step_map(substeps), samples)
+        expected = simulate(bare.building, bare.sampled(substeps).step, samples)
         drift = evaluation.responses["uncontrolled", motion.name].drift
         np.testing.assert_allclose(drift, expected.drift, rtol=0, atol=1e-12 * np.max(np.abs(expected.drift)))
-        passive = simulate(plant.building, plant.step_map(substeps), samples)
+        passive = simulate(plant.building, plant.sampled(substeps).step, samples)
         np.testing.assert_array_equal(evaluation.responses[PASSIVE, motion.name].stroke, passive.stroke)
     summary = evaluation.summary()
     assert summary.loc[PASSIVE, "J1"] < 0.9 and summary.loc[PASSIVE, "power_peak_W"] == 0.0

@@ -11,7 +11,8 @@ from rlcontroller.assets import DEFAULT_MODEL
 from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_experiment, load_safety_check
 from rlcontroller.control.controllers import Uncontrolled
-from rlcontroller.control.policy import Actor, Layer, PolicyController
+from rlcontroller.control.networks import Actor, Layer
+from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.safety import (
     VerdictState,
     closed_loop_matrix,
@@ -207,7 +208,7 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     learned from zero gains; training changes it (validation J1 from 1, no control, to below 0.35) and the
     trained policy passes the whole standard check, its worst significant motion at most 1.005 of no control."""
     from rlcontroller.config import load_experiment, load_scenarios
-    from rlcontroller.control.policy import read_policy
+    from rlcontroller.control.policy_file import read_policy
     from rlcontroller.learning.training import train
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "demo.yaml")

@@ -12,13 +12,13 @@ from rlcontroller.config import ConfigError, build_experiment, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import SemiActiveMPC
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.imitation import DAgger, imitation_loss
 from rlcontroller.learning.training import train
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 STUDY = REPOSITORY / "studies" / "mpc" / "five_story_every_story_dagger.yaml"
 

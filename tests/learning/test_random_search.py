@@ -9,13 +9,13 @@ from typer.testing import CliRunner
 from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import ConstantCommand
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.random_search import RandomSearch
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 MODEL_FREE = REPOSITORY / "studies" / "model_free" / "five_story_model_free_random_search.yaml"
 

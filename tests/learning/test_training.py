@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import PlantRandomization, load_experiment
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant

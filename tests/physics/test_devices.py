@@ -81,8 +81,8 @@ def test_a_vanishing_tuned_mass_leaves_the_building_as_it_was(records):
     bare = Plant(Experiment())
     tiny = Plant(experiment_with([{"type": "tuned_mass", "floor": 5, "mass_ratio": 1e-9}]))
     assert tiny.building.n_dofs == 6 and tiny.building.n_floors == 5
-    expected = simulate(bare.building, bare.step_map(substeps), samples)
-    got = simulate(tiny.building, tiny.step_map(substeps), samples)
+    expected = simulate(bare.building, bare.sampled(substeps).step, samples)
+    got = simulate(tiny.building, tiny.sampled(substeps).step, samples)
     for quantity in ("drift", "absolute_acceleration", "story_shear"):
         scale = np.max(np.abs(expected.quantity(quantity)))
         np.testing.assert_allclose(got.quantity(quantity), expected.quantity(quantity), atol=1e-6 * scale)
@@ -105,7 +105,7 @@ def test_mass_devices_match_an_independent_integration_of_their_equations(record
     samples = samples[: 400 * substeps + 1]  # the first 8 s
     steps = (samples.size - 1) // substeps
     forces = np.random.default_rng(3).uniform(-1.0, 1.0, (steps, 4)) * building.force_limits
-    result = simulate(building, plant.step_map(substeps), samples, forces)
+    result = simulate(building, plant.sampled(substeps).step, samples, forces)
 
     floors = np.asarray(Experiment().building.masses)
     story_k = np.asarray(Experiment().building.stiffnesses)

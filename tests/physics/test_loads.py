@@ -16,7 +16,7 @@ def test_a_constant_floor_load_settles_at_the_static_displacement():
     steps = 12_000  # 240 s: the first mode's 1 % damping decays by e^-10
     force = np.array([1e4, 2e4, -1e4, 3e4, 5e3])
     forces = np.tile(force, (steps + 1, 1))
-    result = simulate(building, plant.step_map(1), np.zeros(steps + 1), floor_forces=forces)
+    result = simulate(building, plant.sampled(1).step, np.zeros(steps + 1), floor_forces=forces)
     static = np.linalg.solve(building.stiffness, force)
     np.testing.assert_allclose(result.displacement[-1], static, rtol=1e-4)
     np.testing.assert_allclose(result.absolute_acceleration[-1], 0.0, atol=1e-4 * np.abs(force).max() / 1e4)
@@ -31,7 +31,7 @@ def test_random_floor_loads_match_solve_ivp_with_two_samples_per_step():
     rng = np.random.default_rng(4)
     dt, steps = 0.01, 300  # two load samples per 0.02 s control step
     forces = rng.normal(0.0, 2e4, size=(2 * steps + 1, 5))
-    result = simulate(building, plant.step_map(2), np.zeros(2 * steps + 1), floor_forces=forces)
+    result = simulate(building, plant.sampled(2).step, np.zeros(2 * steps + 1), floor_forces=forces)
     time = np.arange(2 * steps + 1) * dt
 
     def rates(t, s):
@@ -78,7 +78,7 @@ def test_a_batch_under_wind_gives_each_records_env_rollout():
     from rlcontroller.control.controllers import LQGController, Uncontrolled
     from rlcontroller.control.lqg import design_lqg
     from rlcontroller.learning.env import BuildingEnv, rollout
-    from rlcontroller.simulation.batch import batch_rollout
+    from rlcontroller.simulation.rollout import batch_rollout
 
     plant = Plant(Experiment())
     motions = [wind_record(plant, 60.0, seed) for seed in (1, 2)]
@@ -93,7 +93,7 @@ def test_a_batch_under_wind_gives_each_records_env_rollout():
                 expected = alone.quantity(quantity)
                 np.testing.assert_allclose(result.quantity(quantity), expected, atol=1e-9 * np.abs(expected).max())
     samples = motions[0]
-    open_loop = simulate(plant.building, plant.step_map(2), samples.acceleration, floor_forces=samples.floor_forces)
+    open_loop = simulate(plant.building, plant.sampled(2).step, samples.acceleration, floor_forces=samples.floor_forces)
     np.testing.assert_allclose(batched[0][0][0].drift, open_loop.drift, atol=1e-9 * np.abs(open_loop.drift).max())
     np.testing.assert_allclose(
         batched[0][0][0].absolute_acceleration, open_loop.absolute_acceleration, atol=1e-9 * 10.0
@@ -106,7 +106,7 @@ def test_the_floor_loads_need_a_linear_plant():
     raw = Experiment().model_dump()
     raw["plant"] = {"hysteresis": {"yield_drift": 0.01}}
     with pytest.raises(ValueError, match=r"floor loads \(wind\) on a building with yielding stories"):
-        Plant(Experiment.model_validate(raw)).load_map(1)
+        _ = Plant(Experiment.model_validate(raw)).sampled(1).load
 
 
 def test_a_measured_floor_force_record_loads_the_floors_in_si(tmp_path):

@@ -38,12 +38,15 @@ def test_sensor_rows_pick_the_configured_floors():
     np.testing.assert_array_equal(plant.sensors.noise_std, [1e-4, 1e-4] + [0.0] * 5)
 
 
-def test_step_maps_are_built_once_and_shared():
+def test_a_plant_is_sampled_once_per_substep_count_and_shared():
+    """`Plant.sampled(r)` is built once per r and every map of it once; the env steps with the plant's."""
     plant = Plant(Experiment())
-    assert plant.step_map(4) is plant.step_map(4) and plant.step_map(1) is not plant.step_map(4)
+    assert plant.sampled(4) is plant.sampled(4) and plant.sampled(1) is not plant.sampled(4)
+    assert plant.sampled(4).step is plant.sampled(4).step and plant.sampled(1).step is not plant.sampled(4).step
+    assert plant.sampled().ground_model is plant.sampled().ground_model
     env = BuildingEnv(plant)
-    assert env.plant is plant and env.step_map(4) is plant.step_map(4)
-    assert plant.ground_model_step() is plant.ground_model_step()
+    env.reset(seed=0, options={"motion": Load("quiet", 0.005, np.zeros(41))})  # four samples per control step
+    assert env.plant is plant and env.sampled is plant.sampled(4)
 
 
 def plant_with(**part) -> Plant:

@@ -18,7 +18,7 @@ from rlcontroller.physics.excitation import FLOOR_FORCES, GROUND_ACCELERATION, L
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.protocol import Integrator, SimulatedPlant
 from rlcontroller.physics.records import synthetic_suite
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class SolveIvpStep:

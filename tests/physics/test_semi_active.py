@@ -10,7 +10,7 @@ from rlcontroller.config import Experiment
 from rlcontroller.devices.mr_damper import mr_parameters
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation.rollout import batch_rollout
 
 
 class Commands:

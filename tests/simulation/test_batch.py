@@ -11,12 +11,12 @@ from conftest import NETWORK_POLICY, SAME_PHYSICS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.control.policy import read_policy
+from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
-from rlcontroller.simulation import batch as batch_module
-from rlcontroller.simulation.batch import batch_rollout
+from rlcontroller.simulation import rollout as rollout_module
+from rlcontroller.simulation.rollout import batch_rollout
 
 PLANTS = {
     "nominal": {},
@@ -88,7 +88,7 @@ def test_small_batches_give_the_same_responses_as_one(monkeypatch):
     motions = mixed_motions()
     controller = LQGController(design_lqg(plant), plant)
     whole = batch_rollout(plant, motions, [controller])[0]
-    monkeypatch.setattr(batch_module, "ROWS_PER_BATCH", 1)  # one motion per batch
+    monkeypatch.setattr(rollout_module, "ROWS_PER_BATCH", 1)  # one motion per batch
     for (one, _), (many, _) in zip(batch_rollout(plant, motions, [controller])[0], whole, strict=True):
         np.testing.assert_allclose(
             one.drift, many.drift, rtol=SAME_PHYSICS, atol=SAME_PHYSICS * np.abs(many.drift).max()

@@ -41,7 +41,7 @@ def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
     from rlcontroller.control.lqg import design_lqg_ground_model
     from rlcontroller.physics.plant import Plant
     from rlcontroller.physics.records import load_records
-    from rlcontroller.simulation.batch import batch_rollout
+    from rlcontroller.simulation.rollout import batch_rollout
 
     plant = Plant(load_experiment(FIVE_STORY_FE))
     motions = [replace(m, acceleration=m.acceleration[: int(5.0 / m.dt)]) for m in load_records(records)[0][:3]]
