@@ -19,8 +19,8 @@ from dataclasses import replace
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from rlcontroller import api
 from rlcontroller.assets import CONFIGS
-from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.physics.excitation import on_control_grid
 from rlcontroller.physics.loads import generate_suite
@@ -62,7 +62,7 @@ def main() -> None:
     cores = os.cpu_count() or 1
     print(f"# {platform.processor() or platform.machine()}, {cores} cores; motions of {args.seconds:g} s at 0.005 s")
     for path in EXAMPLES:
-        plant, name = Plant(load_experiment(path)), path.stem
+        plant, name = Plant(api.load(path)), path.stem
         suite = motions(plant, cores, args.seconds)
         alone = one_process(plant, suite[0])
         start = time.perf_counter()

@@ -44,8 +44,11 @@ QUIET = Report()
 
 
 def load(config: Path | None) -> Experiment:
-    """The experiment of `config`, or of the default model."""
-    return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config)
+    """The experiment of `config`, or of the default model; an OpenSees plant without a building of its own
+    gets its reduced model as its design model (`physics.opensees.reduced_building`: the file runs, named)."""
+    from rlcontroller.physics.opensees import reduced_building
+
+    return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config, reduce=reduced_building)
 
 
 def folder_experiment(folder: Path) -> Experiment:
@@ -86,7 +89,7 @@ def model_folder(run_dir: Path | None, report: Report = QUIET) -> Path:
 def _shipped_for_config(config: Path, report: Report) -> Path:
     from rlcontroller.api.describe import hardware_label
 
-    experiment = load_experiment(config)
+    experiment = load(config)
     folder = shipped_for(experiment)
     if folder is None:
         raise ConfigError(

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, model_folder, shipped_folders
+from rlcontroller.api.common import QUIET, Report, folder_experiment, load, model_folder, shipped_folders
 from rlcontroller.api.safety import unchecked_note, verdict_state
 from rlcontroller.assets import CONFIGS, DEFAULT_MODEL
 from rlcontroller.config import ConfigError
@@ -18,7 +18,6 @@ def shipped_models() -> list[str]:
     import yaml
 
     from rlcontroller.api.describe import hardware_label
-    from rlcontroller.config import load_experiment
 
     groups: dict[str, list[str]] = {}
     shipped = {folder: folder_experiment(folder) for folder in shipped_folders()}
@@ -38,7 +37,7 @@ def shipped_models() -> list[str]:
     unserved: dict[str, list[str]] = {}
     passive: list[str] = []
     for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
-        experiment = load_experiment(config)
+        experiment = load(config)
         if not experiment.command_labels():
             passive.append(config.stem)
         elif experiment.hardware() not in served:
@@ -56,7 +55,6 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
     experiment's LQG on its Kalman estimate, MPC on the same, or passive-on / passive-off dampers) designed for the
     experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
     an existing one). evaluate, check and export then treat it like a trained policy. Returns `out`."""
-    from rlcontroller.config import load_experiment
     from rlcontroller.control.classical import LAWS, classical_policy
     from rlcontroller.control.policy_file import write_policy
     from rlcontroller.files import atomic_write
@@ -66,7 +64,7 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
         raise ConfigError(f"--out {out}: exists; a controller folder is never overwritten (choose another --out)")
     if law not in LAWS:
         raise ConfigError(f"--law {law}: expected one of {', '.join(LAWS)}")
-    experiment = load_experiment(config)
+    experiment = load(config)
     plant = Plant(experiment)
     controller = classical_policy(plant, law)
     out.mkdir(parents=True)

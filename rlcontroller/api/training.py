@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment
+from rlcontroller.api.common import QUIET, Report, folder_experiment, load
 from rlcontroller.api.safety import check
 from rlcontroller.assets import DEMO_CONFIG
 from rlcontroller.config import ConfigError, Experiment, load_experiment, with_overrides
@@ -63,7 +63,7 @@ def train(
                 "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; configs/README.md "
                 "lists them) or --resume RUN"
             )
-        experiment = load_experiment(config)
+        experiment = load(config)
         overrides = {"algorithm.total_steps": total_steps, "seed": seed}
         given = {key: value for key, value in overrides.items() if value is not None}
         if given:
@@ -89,7 +89,7 @@ def _fe_experiment_of(run: Path, config: Path | None) -> Experiment | None:
             f"{kept}: learned on an OpenSees model, which a run folder never runs: name its experiment to "
             f"continue (rlc train EXPERIMENT --resume {run})"
         )
-    named = load_experiment(config)
+    named = load(config)
     fe_model = named.plant.opensees if named.plant is not None else None
     if fe_model is None or f" {fe_model.model} " not in lines[0]:
         raise ConfigError(f"{config}: does not name the OpenSees model {run} learned on ({lines[0].lstrip('# ')})")

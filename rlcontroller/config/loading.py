@@ -5,6 +5,7 @@ file and the key."""
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -40,10 +41,15 @@ def _relative(target: Path, folder: Path) -> str:
     return os.path.relpath(target.resolve(), folder.resolve())
 
 
-def load_experiment(path: str | Path, self_contained: bool = False) -> Experiment:
+Reduction = Callable[[Path, str], dict[str, Any]]  # an FE model file and its function -> its design building part
+
+
+def load_experiment(path: str | Path, self_contained: bool = False, reduce: Reduction | None = None) -> Experiment:
     """Load an experiment YAML and the part files it names; raise ConfigError on any problem. With
     `self_contained` (the config.yaml of a run or model folder) every file it names must lie in its
-    folder: a folder from someone else never makes us read a file elsewhere."""
+    folder: a folder from someone else never makes us read a file elsewhere. An experiment whose plant is
+    an OpenSees model and that gives no building of its own gets `reduce(model, function)` as its design
+    model (`physics.opensees.reduced_building`, passed in from above: `api.load` does)."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):
@@ -79,7 +85,7 @@ def load_experiment(path: str | Path, self_contained: bool = False) -> Experimen
         if part == "plant" and isinstance(raw.get(part), dict) and isinstance(raw[part].get("opensees"), dict):
             if self_contained:
                 raise ConfigError(f"{where}.opensees: {UNTRUSTED_MODEL}")
-            _resolve_fe_model(raw, folder, where)
+            _resolve_fe_model(raw, folder, where, reduce)
     return build_experiment(raw, origins, str(path))
 
 
@@ -120,9 +126,9 @@ UNTRUSTED_MODEL = (
 )
 
 
-def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str) -> None:
+def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str, reduce: Reduction | None) -> None:
     """The plant's model file made absolute; an experiment with no building of its own gets the FE
-    model's reduced one as its design model (the file runs: the user named this experiment)."""
+    model's reduced one as its design model (`reduce`: the file runs, the user named this experiment)."""
     fe = raw["plant"]["opensees"] = dict(raw["plant"]["opensees"])
     model = fe.get("model")
     if not isinstance(model, str) or not (folder / model).is_file():
@@ -132,9 +138,12 @@ def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str) -> None:
     fe["model"] = str((folder / model).resolve())
     if "building" in raw:
         return
-    from rlcontroller.physics.opensees import reduced_building  # runs the model: only here, when asked
-
-    raw["building"] = reduced_building(Path(fe["model"]), fe.get("function", "build_model"))
+    if reduce is None:
+        raise ConfigError(
+            f"{where}.opensees: no building: its design model is reduced from the model when the experiment is "
+            "loaded with a reduction (rlcontroller.api.load, or load_experiment(..., reduce=reduced_building))"
+        )
+    raw["building"] = reduce(Path(fe["model"]), fe.get("function", "build_model"))
 
 
 def build_experiment(

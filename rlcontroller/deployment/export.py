@@ -179,12 +179,13 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str) -> tuple[str,
         feeds = g.node(
             "Greater", [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)], "feeds_energy"
         )
-        blocked = g.constant("no_action", 0.0)
         if supervisor.fade_velocity > 0.0:  # scaled as the estimate is, like `control.supervisor`
             fade = supervisor.fade_velocity / layout.estimate_scale[n]
             speed = g.node("Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio")
             kept = g.clip(g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor")
             blocked = g.node("Mul", [action, kept], "faded_action")
+        else:
+            blocked = g.constant("no_action", 0.0)
         action = g.node("Where", [feeds, blocked, action], "dissipative_action")
     if supervisor.trigger is None:
         return action, None
@@ -316,37 +317,30 @@ CHECKED_STEPS = 400  # control steps of the generated load the graph is checked 
 def graph_deviation(
     plant: Plant, controller: PolicyController, graph: bytes, seed: int = 0, steps: int = CHECKED_STEPS
 ) -> tuple[float, float]:
-    """The largest difference between the commands (N) of the serialised `graph` driving the building and those
-    of the Python controller driving it in the env (same load, same sensor noise), over the first `steps`
-    control steps of a load drawn from the experiment's own generator, as a fraction of the peak command (0
-    when the controller never acts), and that peak. The graph carries its own supervisor, so it drives the
-    building without the env's. Closed loop both: an LQG controller may be unstable on its own, so a graph fed
-    readings of a building it does not drive drifts from any copy of itself."""
+    """The largest difference between the commands (N) of the serialised `graph` and those of the Python
+    controller, over the first `steps` control steps of a load drawn from the experiment's own generator, as a
+    fraction of the peak command (0 when the controller never acts), and that peak. The Python controller
+    drives the building in the env; the graph reads the same sensors and is told, after each step, the command
+    the building received (its held action, as a deployed controller's actuators would report it). Step by
+    step, not two closed loops side by side: an LQG controller may be unstable on its own, and a controller
+    that saturates may be chaotic in closed loop, so two faithful copies of it drift apart from the last bit."""
     from rlcontroller.learning.env import BuildingEnv
     from rlcontroller.physics.loads import generate
 
     load = generate(plant.experiment.excitation.generator, np.random.default_rng(seed), plant.building)
-    layout, exported = plant.layout, OnnxController(graph)
-
-    def graph_action(observation: np.ndarray) -> np.ndarray:
+    env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(graph)
+    controller.reset()
+    observation, info = env.reset(seed=seed, options={"motion": load})
+    python, onnx_commands = [], []
+    for _ in range(min(info["steps"], steps)):
         readings = observation[layout.readings].astype(float) * layout.reading_scale
         ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
-        return exported.step(readings[None], ground)[0] / plant.force_limits
-
-    def commands(env: BuildingEnv, act) -> np.ndarray:
-        observation, info = env.reset(seed=seed, options={"motion": load})
-        issued = []
-        for _ in range(min(info["steps"], steps)):
-            observation, *_ = env.step(act(observation))
-            issued.append(env.command)
-        return np.array(issued)
-
-    controller.reset()
-    python = commands(BuildingEnv(plant), controller.act)
-    unsupervised = Plant(plant.experiment.model_copy(update={"supervisor": None}))
-    onnx_commands = commands(BuildingEnv(unsupervised), graph_action)
+        onnx_commands.append(exported.step(readings[None], ground)[0])
+        observation, *_ = env.step(controller.act(observation))
+        python.append(env.command)
+        exported.state[0, layout.action] = env.command / plant.force_limits  # the held action, as applied
     peak = float(np.max(np.abs(python)))
-    deviation = float(np.max(np.abs(onnx_commands - python)))
+    deviation = float(np.max(np.abs(np.subtract(onnx_commands, python))))
     return (deviation / peak if peak > 0.0 else 0.0), peak
 
 

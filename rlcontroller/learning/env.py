@@ -46,6 +46,7 @@ from rlcontroller.control.supervisor import supervisor
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
+from rlcontroller.physics.opensees import reduced_building
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
@@ -66,7 +67,7 @@ class BuildingEnv(gym.Env):
         elif isinstance(config, Experiment):
             plant = Plant(config)
         else:
-            plant = Plant(Experiment() if config is None else load_experiment(config))
+            plant = Plant(Experiment() if config is None else load_experiment(config, reduce=reduced_building))
         experiment = self.experiment = plant.experiment
         self.motions = motions
         self.render_mode = render_mode

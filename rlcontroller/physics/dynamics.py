@@ -197,11 +197,6 @@ def wind_model_system(building: Building, time_constant: float) -> StateSpace:
     )
 
 
-def wind_model_step(building: Building, control_dt: float, time_constant: float) -> StepMap:
-    """Exact control-step map of `wind_model_system`."""
-    return compose(exact_substep(wind_model_system(building, time_constant), control_dt), 1, control_dt)
-
-
 def discrete_noise(a: np.ndarray, intensity: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """The covariance gained over one step (phi = e^(a dt)) by a stable x' = a x + w, w white of
     spectral intensity `intensity`: P - phi P phi', P the stationary covariance (a P + P a' +

@@ -1,11 +1,12 @@
 """The plant: what the simulator steps and the controllers are designed on, built once per experiment.
 
 From the experiment's building, actuators, sensors and simulation: the `Building` (M, K, C, Gamma,
-force limits), its control-step maps (cached per number of ground sub-steps), the sensor matrices
+force limits), the outputs on its whole state (`outputs`, `load_outputs`), the sensor matrices
 (readings = C x + D u, with their scales, noise and bias) and the observation layout
-(`physics.observation`). The env
-simulates a plant; LQG, the Kalman filters, the residual prior and the optimal reference are
-designed on one; none of them rebuilds it.
+(`physics.observation`). How it is stepped: `plant.sampled(r)`, the plant sampled at its control step with
+r load samples per step (`physics.sampled`: its step, load and design maps, forcing, transition, simulate,
+response; built once per r and kept). The env and the batch simulate a plant; LQG, the Kalman filters, MPC,
+the residual prior and the optimal reference are designed on one; none of them rebuilds it.
 
 Plant and design model: an experiment's building, actuators and sensors are the *design model*,
 what an engineer designs on. Its optional `plant` part says how the simulated building differs:

@@ -23,10 +23,11 @@ alone, from rest) and `response` (every time history, from states and held force
 from __future__ import annotations
 
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
+from rlcontroller.config import Experiment
 from rlcontroller.errors import MotionError
 from rlcontroller.physics.dynamics import (
     LoadMap,
@@ -36,22 +37,52 @@ from rlcontroller.physics.dynamics import (
     compose,
     exact_substep,
     ground_model_step,
+    load_feedthrough,
     load_map,
+    output_matrices,
     response,
     state_space,
     step_map,
     wind_model_system,
 )
 from rlcontroller.physics.excitation import FLOOR_FORCES, LoadGrid
+from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.structure import Building
+from rlcontroller.physics.wind import WindLoadModel
 
-if TYPE_CHECKING:
-    from rlcontroller.physics.plant import Plant
+
+class Sampleable(Protocol):
+    """What sampling reads of a plant (`physics.plant.Plant` is one): its building and experiment, control
+    step (s), state size, force limits (N), actuator lag (s) and delay (steps), whether it steps itself, its
+    design's ground and wind models, and its outputs on its full state."""
+
+    building: Building
+    experiment: Experiment
+    control_dt: float
+    n_state: int
+    force_limits: np.ndarray
+    time_constant: float
+    delay_steps: int
+    semi_active: object | None
+    integrator: object | None
+    yielding: object | None
+    ground_model: GroundModel
+    wind: WindLoadModel | None
+
+    @property
+    def has_actuator_dynamics(self) -> bool: ...
+
+    def outputs(self, quantity: str) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def load_outputs(self, quantity: str) -> np.ndarray: ...
+
+    def cannot_take(self, kind: str) -> str | None: ...
 
 class SampledPlant:
     """`plant` sampled at its control step with `substeps` load samples per step (module docstring); each
     map is built on first use and kept."""
 
-    def __init__(self, plant: Plant, substeps: int) -> None:
+    def __init__(self, plant: Sampleable, substeps: int) -> None:
         self.plant, self.substeps = plant, substeps
         self.control_dt, self.n_state = plant.control_dt, plant.n_state
 
@@ -150,22 +181,26 @@ class SampledPlant:
         return self.load.terms(grid.floor_forces)
 
     def simulate(self, grid: LoadGrid) -> Response:
-        """The building left alone under the load of `grid` (this sampling's), from rest: its own map on z,
-        the actuators' states at rest."""
-        step, size = self.structure, self.structure.phi.shape[0]
+        """The building left alone under the load of `grid` (this sampling's), from rest: its own map on its
+        own state z and its own outputs (the actuators, at rest, play no part); linear plants."""
+        step, building = self.structure, self.plant.building
         forcing = step.ground_terms(grid.ground)
         n_steps = forcing.shape[0]
         if grid.floor_forces is not None:
-            forcing = forcing + self.load_terms(grid)[:, :size]
-        states = np.zeros((n_steps + 1, self.n_state))
+            forcing = forcing + self.load_terms(grid)[:, : building.n_states]
+        states = np.zeros((n_steps + 1, building.n_states))
         phi_t = step.phi.T
         for k in range(n_steps):
-            states[k + 1, :size] = states[k, :size] @ phi_t + forcing[k]
-        held = np.zeros((n_steps + 1, self.plant.building.n_actuators))
+            states[k + 1] = states[k] @ phi_t + forcing[k]
+        held = np.zeros((n_steps + 1, building.n_actuators))
         time = np.arange(n_steps + 1) * self.control_dt
         ground = grid.ground[:: self.substeps][: n_steps + 1]
         floor_forces = None if grid.floor_forces is None else grid.floor_forces[:: self.substeps][: n_steps + 1]
-        return self.response(states, held, time, ground, floor_forces)
+        return response(
+            lambda quantity: output_matrices(building, quantity),
+            lambda quantity: load_feedthrough(building, quantity),
+            states, held, time, ground, floor_forces,
+        )  # fmt: skip
 
     def response(
         self,

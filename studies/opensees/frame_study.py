@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rlcontroller import api
 from rlcontroller.assets import CONFIGS
-from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import compare, with_settling_tail
@@ -23,7 +23,7 @@ from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
-experiment = load_experiment(CONFIGS / "experiments" / "nine_story_frame.yaml")
+experiment = api.load(CONFIGS / "experiments" / "nine_story_frame.yaml")
 fe = Plant(experiment)
 records = load_records(Path(sys.argv[1]))[0]
 summary = compare(fe.design, records, "seven records", None).summary()
