@@ -85,11 +85,11 @@ def prior_kind(plant: Plant) -> str:
     return "lqg_ground_model" if plant.experiment.sensors.ground_model else "lqg_ground"
 
 
-def mpc_from_file(section: dict, weights: dict[str, np.ndarray], plant: Plant) -> MPCDesign:
-    """An MPC law's design once its horizon is a whole number of steps within `MAX_HORIZON`, its model the
-    control-step map of the folder's design model (with its ground model) and its terminal weight symmetric and
-    positive semi-definite: a convex QP on the model it claims, so no forged matrix reaches the solver
-    (ValueError otherwise)."""
+def mpc_from_file(section: dict, weights: dict[str, np.ndarray], plant: Plant, prior: LQGPrior) -> ObservedMPC:
+    """A file's MPC law on the env's estimate (`prior` its fallback) once its horizon is a whole number of steps
+    within `MAX_HORIZON`, its model the control-step map of the folder's design model (with its ground model),
+    its terminal weight symmetric and positive semi-definite and its QP finite: a convex QP on the model it
+    claims, so no forged matrix reaches the solver (ValueError otherwise)."""
     horizon = section.get("horizon") if isinstance(section, dict) else None
     if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON:
         raise ValueError(f"mpc.horizon {horizon!r}: expected a whole number of control steps in [1, {MAX_HORIZON}]")
@@ -111,10 +111,11 @@ def mpc_from_file(section: dict, weights: dict[str, np.ndarray], plant: Plant) -
         raise ValueError("mpc_terminal: expected a symmetric positive semi-definite matrix")
     design = MPCDesign(**{key: weights[f"mpc_{key}"] for key in MPC_ARRAYS}, horizon=horizon)
     with np.errstate(over="ignore", invalid="ignore"):  # a forged cost's overflow is refused just below
-        problem = design.problem()
+        mpc = ObservedMPC(design, prior, plant.layout)  # its QP built here, once; OSQP set up on first use
+    problem = mpc.planner.problem
     if not all(np.all(np.isfinite(array)) for array in (problem.hessian, problem.linear, problem.constraints)):
         raise ValueError("mpc_cost_state, mpc_cost_action, mpc_terminal: their QP overflows (entries too large)")
-    return design
+    return mpc
 
 
 def classical_law(

@@ -37,7 +37,6 @@ import yaml
 from rlcontroller.config import ConfigError
 from rlcontroller.control.classical import LAWS, MPC_ARRAYS, classical_law, mpc_from_file, prior_kind
 from rlcontroller.control.controllers import LQGPrior
-from rlcontroller.control.mpc import ObservedMPC
 from rlcontroller.control.networks import ACTIVATIONS, Actor, Layer, Normalizer
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.files import atomic_write
@@ -299,7 +298,7 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
         raise ValueError(f"training_steps {steps!r}: expected a whole number of steps, 0 or more")
     law = classical_law(description, actor, normalizer, prior)
-    mpc = None if law != "mpc" else ObservedMPC(mpc_from_file(description["mpc"], weights, plant), prior, plant.layout)
+    mpc = None if law != "mpc" else mpc_from_file(description["mpc"], weights, plant, prior)
     return PolicyController(
         actor, normalizer, prior, name, steps=steps,
         algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")), mpc=mpc,

@@ -61,11 +61,11 @@ def load_suite(
             echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
         motions, label = choose_motions(records, scale_pga)
     if plant is not None:
-        checked_for(plant, motions, records, echo)
+        check_loads(plant, motions, records, echo)
     return motions, label
 
 
-def checked_for(plant: Plant, motions: list[Load], records: Path | None, echo: Callable[[str], None] | None) -> None:
+def check_loads(plant: Plant, motions: list[Load], records: Path | None, echo: Callable[[str], None] | None) -> None:
     """Refuse, in one line, floor loads the plant cannot take or on another number of floors; say through
     `echo` when the loads are not the kind its experiment is made for."""
     floor_loads = [motion for motion in motions if motion.kind == FLOOR_FORCES]

@@ -116,13 +116,12 @@ class BuildingBatch:
             if reused and base:
                 self._ground_cache[id(motion)] = (motion, grid.substeps, load_forcing)  # its id stays its own
         transition = None
-        if plant.integrator is None:
-            if not base:
-                transition = sampled.transition(rows.c, rows.d)
-            else:
-                if grid.substeps not in self._cache:
-                    self._cache[grid.substeps] = sampled.transition(rows.c, rows.d)
-                transition = self._cache[grid.substeps]
+        if plant.integrator is None and not base:
+            transition = sampled.transition(rows.c, rows.d)
+        elif plant.integrator is None:
+            if grid.substeps not in self._cache:
+                self._cache[grid.substeps] = sampled.transition(rows.c, rows.d)
+            transition = self._cache[grid.substeps]
         n_steps = grid.n_steps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
         size = self._state_size
