@@ -81,6 +81,7 @@ from rlcontroller.config.building import (  # noqa: F401
 )
 from rlcontroller.config.checks import check_algorithm, check_plant  # noqa: F401
 from rlcontroller.config.control import (  # noqa: F401
+    AssuranceConfig,
     RewardConfig,
     RewardTerm,
     SupervisorConfig,

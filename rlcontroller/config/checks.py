@@ -28,6 +28,9 @@ def check_cross_references(experiment: Experiment) -> None:
     if supervisor is not None and supervisor.dissipative and not experiment.sensors.state_estimate:
         where = location(*experiment.origin("supervisor"), "dissipative")
         raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
+    if supervisor is not None and supervisor.assurance is not None and not experiment.sensors.state_estimate:
+        where = location(*experiment.origin("supervisor"), "assurance")
+        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the fail-safe twin is the Kalman estimate's)")
     if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
         raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
     if experiment.sensors.ground_model and experiment.excitation.generator.kind == "wind":

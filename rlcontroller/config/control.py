@@ -58,6 +58,21 @@ class RewardConfig(StrictModel):
         return self
 
 
+class AssuranceConfig(StrictModel):
+    """Runtime assurance (`control.assurance`): the fail-safe twin and the switching rule's levels, on the
+    risk = the controlled building's largest story envelope over the twin's (or its running peak)."""
+
+    release: Annotated[float, Field(gt=0.0, le=2.0)] = 1.0  # hand the devices back above this risk
+    engage: Annotated[float, Field(gt=0.0, le=2.0)] = 0.9  # hand control back below this risk
+    floor: Annotated[float, Field(ge=0.0, le=0.05)] = 1.0e-5  # drift ratio: the smallest reference peak counted
+
+    @model_validator(mode="after")
+    def _hysteresis(self) -> AssuranceConfig:
+        if self.engage > self.release:
+            raise ValueError(f"engage {self.engage} above release {self.release}: expected engage <= release")
+        return self
+
+
 class SupervisorConfig(StrictModel):
     """The control system's supervisory layer: what stands between every controller's action and
     the actuators (`control.supervisor`). The same for every controller of the experiment."""
@@ -67,6 +82,7 @@ class SupervisorConfig(StrictModel):
     # m/s: with `dissipative`, a force that would feed its story is faded out as the estimated stroke velocity
     # grows to this (passing near a velocity reversal: no force step); 0: blocked at once (the hard clip)
     fade_velocity: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
+    assurance: AssuranceConfig | None = None  # runtime assurance against the fail-safe twin (control/assurance.py)
 
     @model_validator(mode="after")
     def _fade_needs_dissipative(self) -> SupervisorConfig:

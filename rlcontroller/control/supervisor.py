@@ -16,6 +16,8 @@ experiment alike (LQG, learned, uncontrolled), so comparisons stay fair:
   max(0, 1 - |Γ_jᵀ v| / v_f) instead, so it passes near a velocity reversal and fades out as the
   story moves faster the wrong way. The hard rule switches the force off at every reversal, and a
   force step is a floor-acceleration step (docs/safety_check.md, the supervisor study).
+- **assurance**: runtime assurance against the fail-safe twin (`control.assurance`), last: it sees the
+  action the actuators would receive and may hand the devices back to their fail-safe action.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.config import SupervisorConfig
+from rlcontroller.control.assurance import RuntimeAssurance
 from rlcontroller.physics.plant import Plant
 
 
@@ -42,9 +45,12 @@ class Supervisor:
             self.actuator_matrix = plant.building.actuator_matrix  # Γ: v @ Γ is each actuator's stroke velocity
             self.fade = config.fade_velocity / layout.estimate_scale[n]  # in the estimate's scaled units
         self.peak_ground = np.zeros(size)
+        self.assurance = None if config.assurance is None else RuntimeAssurance(config.assurance, plant, size)
 
     def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
         self.peak_ground[members] = 0.0
+        if self.assurance is not None:
+            self.assurance.reset(members)
 
     def gain(self, observations: np.ndarray) -> np.ndarray:
         """The trigger's gain per building, (size,), after taking in the newest ground readings."""
@@ -64,6 +70,8 @@ class Supervisor:
                 actions[feeding] = 0.0
         if self.trigger is not None:
             actions *= self.gain(observations)[:, None]
+        if self.assurance is not None:
+            self.assurance(observations, actions)
 
 
 def supervisor(plant: Plant, size: int) -> Supervisor | None:

@@ -5,7 +5,7 @@ do in Python: scale the readings and push them into the sensor history, update t
 (designed on the design model, when the observation has one), normalise the observation (if the
 run did), run the policy's network, add the LQG prior's action (residual policies), clip, apply
 the experiment's supervisor if it has one (`control.supervisor`: trigger level, dissipative forces
-only), and multiply by the force limits.
+only, runtime assurance against the fail-safe twin), and multiply by the force limits.
 
 Inputs (float64, one row per building):
     readings (N, p): the configured sensors, SI units (m/s^2 for accelerations), in config order;
@@ -13,7 +13,8 @@ Inputs (float64, one row per building):
     state (N, S): the controller's own state, zeros before the motion starts.
 Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
 The state is the observation of this step (history, scaled estimate, last action), the last
-ground reading and, with a supervisor's trigger, the largest ground reading so far (m/s^2). Call
+ground reading, with a supervisor's trigger the largest ground reading so far (m/s^2), and with runtime
+assurance the twin's difference state, its running story peaks and whether the devices are handed back. Call
 once per control step (`control_dt_s` in the metadata), at the instant the readings are taken;
 apply the force until the next call.
 """
@@ -29,6 +30,7 @@ from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
+from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 
@@ -119,17 +121,20 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
     supervisor = experiment.supervisor
+    trigger = supervisor is not None and supervisor.trigger is not None
+    assurance = []
     if supervisor is not None:
         action, peak = _supervised(g, plant, stored, action)
+        if supervisor.assurance is not None:
+            action, assurance = assured(g, plant, stored, action, size + 1 + trigger)
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
     if layout.actions.stop > layout.action.stop:  # older actions shift by one
         kept.append(g.columns(observation, layout.action.start, layout.actions.stop - m, "older_actions"))
-    trigger = supervisor is not None and supervisor.trigger is not None
-    g.node("Concat", [*kept, "ground", *([peak] if trigger else [])], "next_state", axis=1)
+    g.node("Concat", [*kept, "ground", *([peak] if trigger else []), *assurance], "next_state", axis=1)
 
-    state_size = size + 1 + trigger
+    state_size = size + 1 + trigger + assurance_state_size(plant)
     graph = helper.make_graph(
         g.nodes,
         "rlcontroller",
@@ -211,6 +216,10 @@ def _supervisor_text(supervisor) -> str:
     parts = []
     if supervisor.trigger is not None:
         parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak ground reading")
+    if supervisor.assurance is not None:
+        assurance = supervisor.assurance
+        parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, "
+                     f"engage {assurance.engage:g})")  # fmt: skip
     if supervisor.dissipative and supervisor.fade_velocity > 0.0:
         parts.append(f"forces feeding energy in faded out by {supervisor.fade_velocity:g} m/s of stroke velocity")
     elif supervisor.dissipative:
@@ -329,6 +338,7 @@ def graph_deviation(
 
     load = generate(plant.experiment.excitation.generator, np.random.default_rng(seed), plant.building)
     env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(graph)
+    assurance = assurance_state_size(plant)
     controller.reset()
     observation, info = env.reset(seed=seed, options={"motion": load})
     python, onnx_commands = [], []
@@ -339,6 +349,8 @@ def graph_deviation(
         observation, *_ = env.step(controller.act(observation))
         python.append(env.command)
         exported.state[0, layout.action] = env.command / plant.force_limits  # the held action, as applied
+        if assurance:  # and the twin's difference it drove (a last-bit flip of the switch is not a fault)
+            exported.state[0, -assurance:] = assurance_values(env.supervisor)
     peak = float(np.max(np.abs(python)))
     deviation = float(np.max(np.abs(np.subtract(onnx_commands, python))))
     return (deviation / peak if peak > 0.0 else 0.0), peak

@@ -127,6 +127,34 @@ def test_the_default_exports_with_its_faded_supervisor(tmp_path):
     )
 
 
+def test_runtime_assurance_exports_with_its_twin(tmp_path):
+    """Behind runtime assurance the graph carries the fail-safe twin and the switch: fed the readings the
+    supervised env gave the Python controller, it gives that step's force, through hand-overs both ways."""
+    supervisor = {"trigger": [0.1, 0.3], "dissipative": True, "fade_velocity": 0.1, "assurance": {"engage": 0.95}}
+    folder = with_supervisor(tmp_path, supervisor)
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
+    controller = read_policy(folder, "best", plant)
+    python, onnx_forces, engaged = [], [], []
+    for seed, motion in enumerate(synthetic_suite(count=2)):
+        observation, info = env.reset(seed=seed, options={"motion": motion})
+        controller.reset()
+        graph.reset()
+        for _ in range(info["steps"]):
+            readings = observation[layout.readings].astype(float) * layout.reading_scale
+            ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+            onnx_forces.append(graph.step(readings[None], ground)[0])
+            observation, *_ = env.step(controller.act(observation))
+            python.append(env.command)
+            engaged.append(env.supervisor.assurance.engaged[0])
+    python, onnx_forces = np.array(python), np.array(onnx_forces)
+    assert 0.02 < 1.0 - np.mean(engaged) < 0.98  # the switch handed the devices back and forth
+    np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
+    metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
+    assert "runtime assurance against the fail-safe twin (release 1, engage 0.95)" in metadata["supervisor"]
+
+
 @pytest.mark.slow
 def test_the_shipped_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path, monkeypatch):
     """Named by its experiment from another folder, the 76-story building's shipped controller (LQG + wind
