@@ -88,6 +88,10 @@ CONFIG_CASES = {
         "excitation: {generator: {kind: noise_impulses, duration: [0.01, 0.02]}}\n",
         "excitation.generator.duration: 0.01 s is shorter than one control step",
     ),
+    "near_fault_shorter_than_a_step": (  # a near-fault generator lasts as its background (was an internal error)
+        "excitation: {generator: {kind: near_fault, background: {duration: [0.01, 0.02]}}}\n",
+        "excitation.generator.background.duration: 0.01 s is shorter than one control step",
+    ),
     "n_envs_1e6": ("algorithm: {n_envs: 1000000}\n", "algorithm.n_envs: Input should be less than or equal to 256"),
     "net_arch_empty": ("algorithm: {policy: {net_arch: []}}\n", "algorithm.policy.net_arch: List should have at least"),
     "log_std_nan": ("algorithm: {policy: {log_std_init: .nan}}\n", "algorithm.policy.log_std_init: Input should be"),

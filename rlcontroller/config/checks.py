@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from rlcontroller.config.base import ConfigError, format_location, location
 from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.experiment import Experiment
-from rlcontroller.config.learning import LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
+from rlcontroller.config.learning import CHOICE_KWARGS, LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
 from rlcontroller.config.plant import RANDOMIZED_FIELDS, PlantConfig, randomized_plant
 from rlcontroller.config.state_space import StateSpaceBuildingConfig
 
@@ -202,9 +202,17 @@ def _check_time_steps(experiment: Experiment) -> None:
                 f"{where}: {control_dt:g} s is not a whole multiple of the {source.kind} generator's "
                 f"dt = {source.dt:g} s; choose control_dt = r * dt"
             )
-        if source.duration[0] < control_dt:
+        duration, field = (
+            (source.duration, "duration")
+            if source.kind != "near_fault"
+            else (
+                source.background.duration,
+                "background.duration",  # a near-fault motion lasts as its background
+            )
+        )
+        if duration[0] < control_dt:
             raise ConfigError(
-                f"{location(file, prefix, 'generator.duration')}: {source.duration[0]:g} s is shorter than one "
+                f"{location(file, prefix, 'generator.' + field)}: {duration[0]:g} s is shorter than one "
                 f"control step ({control_dt:g} s)"
             )
 
@@ -314,6 +322,8 @@ def check_algorithm(experiment: Experiment) -> None:
             low, high, integer = NUMERIC_KWARGS[key]
             kind = "an integer" if integer else "a number"
             raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
+        if key in CHOICE_KWARGS and value not in CHOICE_KWARGS[key]:
+            raise ConfigError(f"{where}: expected one of {', '.join(CHOICE_KWARGS[key])}, got {value!r}")
 
 
 def _check_random_search(experiment: Experiment) -> None:

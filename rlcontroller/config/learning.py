@@ -71,7 +71,9 @@ class AlgorithmConfig(StrictModel):
     `eval_every` count environment steps; `best_model` is the validation with the highest reward, or
     with `select_by: J1` the lowest mean J1 (every validation motion counts alike, weak or strong,
     where the reward is dominated by the strongest), with `J1+J2` the lowest mean J1 + mean J2 (drift
-    and floor acceleration weighed alike, as the safety check gates both). `search` is `rlc tune`'s
+    and floor acceleration weighed alike, as the safety check gates both), with `standard` the fewest
+    motions worse than the building failed safe (the safety check's own measure), then the lowest J1 + J2.
+    `search` is `rlc tune`'s
     search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
     `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
@@ -88,7 +90,7 @@ class AlgorithmConfig(StrictModel):
     torch_threads: Annotated[int, Field(ge=1, le=256)] = 1
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
-    select_by: Literal["reward", "J1", "J1+J2"] = "reward"
+    select_by: Literal["reward", "J1", "J1+J2", "standard"] = "reward"
     search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 
@@ -134,7 +136,7 @@ LEARNER_KWARGS = {
     | {"stats_window_size"},
     "TD3": _OFF_POLICY | {"policy_delay", "target_policy_noise", "target_noise_clip", "stats_window_size"},
     "DDPG": _OFF_POLICY,
-    "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std", "initial_bias"},
+    "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std", "initial_bias", "objective"},
     "DAgger": _COMMON | {"horizon", "n_motions", "epochs", "batch_size", "max_samples"},
 }
 RESERVED_KWARGS = {
@@ -147,6 +149,7 @@ RESERVED_KWARGS = {
     "verbose",
     "_init_setup_model",
 }
+CHOICE_KWARGS = {"objective": ("return", "standard")}  # RandomSearch: what f is (its module docstring)
 # (low, high, integer) for the learners' common numeric keyword arguments.
 NUMERIC_KWARGS = {
     "gamma": (0.0, 1.0, False),

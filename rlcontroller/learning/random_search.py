@@ -14,6 +14,12 @@ relative change, since a strong motion's return is 10^4 times a weak one's and w
 difference on unpaired motions. That pairing is why this learner exists: sb3-contrib's ARS evaluates
 each candidate on the environment's next episodes, so + and - never see the same motion.
 
+With `objective: standard` f aims at the safety check instead of the reward: the building failed safe
+runs on the same motions, noise and plants, and f is the mean over the motions of the candidate's J1
+against it (mean over stories of each story's peak drift ratio) plus `STANDARD_PENALTY` times how far the
+check's own measure (`metrics.ratio_to_reference`) exceeds 1: every motion made worse than failing safe
+is priced, as the check fails it.
+
 The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) with a linear actor
 (`actor_arch: []`; its action layer is W, bias 0; no critic is trained), or for an affine policy
 stable-baselines3's own `ActorCriticPolicy` (its action layer is W, b), so saving, loading,
@@ -36,9 +42,13 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from rlcontroller.control.controllers import LinearFeedback
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
+from rlcontroller.learning.validation import fail_safe_controller
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.metrics import peak, ratio_to_reference
 from rlcontroller.simulation.rollout import batch_rollout
+
+STANDARD_PENALTY = 10.0  # per unit of the check's ratio above 1 (objective: standard)
 
 
 class RandomSearch(BatchLearner):
@@ -52,6 +62,8 @@ class RandomSearch(BatchLearner):
     learning_rate : step size of W's update, as in the module docstring's formula.
     initial_bias : b at the start, every action's (an affine policy only): 1 starts dampers at full
         voltage (passive-on).
+    objective : "return" (the reward) or "standard" (J1 against the building failed safe, every motion
+        made worse priced: module docstring).
     """
 
     policy_aliases = {"MlpPolicy": ActorCriticPolicy}  # affine; the odd policy is passed as its class
@@ -65,6 +77,7 @@ class RandomSearch(BatchLearner):
         delta_std: float = 0.02,
         learning_rate: float = 0.01,
         initial_bias: float = 0.0,
+        objective: str = "return",
         policy_kwargs: dict[str, Any] | None = None,
         tensorboard_log: str | None = None,
         seed: int | None = None,
@@ -77,6 +90,9 @@ class RandomSearch(BatchLearner):
         self.n_motions = n_motions
         self.delta_std = delta_std
         self.initial_bias = initial_bias
+        if objective not in ("return", "standard"):
+            raise ValueError(f"objective {objective!r}: expected return or standard")
+        self.objective = objective
         if _init_setup_model:
             self._setup_model()
 
@@ -111,8 +127,14 @@ class RandomSearch(BatchLearner):
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
         controllers = [LinearFeedback(w, prior=self.prior, bias=b) for w, b in map(self._split, candidates)]
-        runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
-        f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
+        if self.objective == "standard":
+            *runs, reference = batch_rollout(
+                self.plant, motions, [*controllers, fail_safe_controller(self.plant)], seeds, randomize=True
+            )
+            f = np.array([standard_cost(lane, reference) for lane in runs])
+        else:
+            runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
+            f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
         episodes = [{"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane]
         self.ep_info_buffer.extend(episodes)
         return f[: len(deltas)], f[len(deltas) :], sum(episode["l"] for episode in episodes)
@@ -131,3 +153,14 @@ class RandomSearch(BatchLearner):
         self._set_actor()
         self._n_updates += 1
         return steps
+
+
+def standard_cost(lane: list, reference: list) -> float:
+    """`objective: standard`'s f of one candidate: over its (response, return) runs and the building failed
+    safe's on the same motions, the mean of J1 against the reference plus the priced excess of the check's
+    measure over 1."""
+    costs = []
+    for (response, _), (failed_safe, _) in zip(lane, reference, strict=True):
+        j1 = float(np.mean(peak(response.drift) / peak(failed_safe.drift)))
+        costs.append(j1 + STANDARD_PENALTY * max(ratio_to_reference(response, failed_safe) - 1.0, 0.0))
+    return float(np.mean(costs))

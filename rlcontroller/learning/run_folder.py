@@ -7,7 +7,7 @@ A run folder holds:
                            state.json (steps, wall time, best validation); written to a
                            temporary folder and renamed, so the newest complete one is always valid
     learning_curve.csv     steps, wall_time_s, episode_reward, eval_reward, eval_peak_drift_m,
-                           eval_J1, eval_J2 (validation on held-out generated motions), and the
+                           eval_J1, eval_J2, eval_worse (validation on held-out generated motions), the
                            references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2,
                            lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
     best_model.zip         the best validation so far (algorithm.select_by); final_model.zip at the end
@@ -49,6 +49,7 @@ CURVE_COLUMNS = (
     "eval_peak_drift_m",
     "eval_J1",
     "eval_J2",
+    "eval_worse",
     "lqg_J1",
     "lqg_J2",
     "lqg_ground_J1",

@@ -4,6 +4,9 @@ The deterministic policy runs on `excitation.validation_motions` motions of the 
 (`excitation.validation_generator`, else the training generator) drawn with
 `excitation.validation_seed`; J1/J2 are taken against the uncontrolled building on the same motions,
 and the three LQGs, designed on the design model as deployed, are run once on them as references.
+`eval_worse` is the share of the motions on which the policy is worse than the building failed safe (the
+safety check's measure, `metrics.ratio_to_reference`, above 1 + the standard's default tolerance): what
+`select_by: standard` minimises first.
 With `plant_randomization`, motion i runs on the plant drawn with seed i, the same draw for every
 controller and every validation.
 """
@@ -12,11 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled
+from rlcontroller.config import SafetyCheckConfig
+from rlcontroller.control.controllers import ConstantCommand, LQGController, LQGPrior, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.loads import generate_suite
-from rlcontroller.physics.metrics import j_metrics, peak
+from rlcontroller.physics.metrics import j_metrics, peak, ratio_to_reference
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 
@@ -34,6 +38,7 @@ class Validator:
         bare = plant.bare  # without its mass devices
         uncontrolled = batch_rollout(bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True)
         self.uncontrolled = [response for response, _ in uncontrolled[0]]
+        self.fail_safe = [response for response, _ in self._rollouts(fail_safe_controller(plant))]
         self.reference = {}
         model = plant.design
         designs = {
@@ -57,9 +62,10 @@ class Validator:
         return batch_rollout(self.plant, self.motions, [controller], randomize=True)[0]
 
     def run(self, controller) -> dict[str, float]:
-        rewards, peaks, j1, j2 = [], [], [], []
+        rewards, peaks, j1, j2, worse = [], [], [], [], []
         for index, (result, reward) in enumerate(self._rollouts(controller)):
             metrics = j_metrics(result, self.uncontrolled[index])
+            worse.append(ratio_to_reference(result, self.fail_safe[index]) > 1.0 + WORSE_TOLERANCE)
             rewards.append(reward)
             peaks.append(float(np.max(peak(result.drift))))
             j1.append(float(np.mean(metrics["J1"])))
@@ -69,4 +75,14 @@ class Validator:
             "eval_peak_drift_m": float(np.mean(peaks)),
             "eval_J1": float(np.mean(j1)),
             "eval_J2": float(np.mean(j2)),
+            "eval_worse": float(np.mean(worse)),
         }
+
+
+WORSE_TOLERANCE = SafetyCheckConfig.model_fields["tolerance"].default  # the standard's, configs/checks/standard.yaml
+
+
+def fail_safe_controller(plant: Plant) -> ConstantCommand:
+    """Every command at its device's fail-safe action (actuators off): the safety check's reference."""
+    actions = plant.experiment.fail_safe_actions()
+    return ConstantCommand(actions, len(actions), "fail-safe")

@@ -42,6 +42,15 @@ def peak(history: np.ndarray) -> np.ndarray:
     return np.max(np.abs(history), axis=0)
 
 
+def ratio_to_reference(controlled: Response, reference: Response) -> float:
+    """The safety check's measure of one motion: the peak drift (over stories and time) against the
+    reference's, or the mean over stories of each story's peak drift against the reference's (J1 against
+    the reference), the larger. Above 1: worse than the reference on this motion."""
+    controlled_peak, reference_peak = peak(controlled.drift), peak(reference.drift)
+    overall = float(np.max(controlled_peak) / np.max(reference_peak))
+    return max(overall, float(np.mean(controlled_peak / reference_peak)))
+
+
 def energy(history: np.ndarray, dt: float) -> np.ndarray:
     """Rectangle-rule integral of x^2 dt over samples 1..K (the samples of each held step)."""
     return np.sum(history[1:] ** 2, axis=0) * dt

@@ -11,8 +11,9 @@ from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
-from rlcontroller.learning.random_search import RandomSearch
+from rlcontroller.learning.random_search import STANDARD_PENALTY, RandomSearch, standard_cost
 from rlcontroller.learning.training import train
+from rlcontroller.learning.validation import fail_safe_controller
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.rollout import batch_rollout
@@ -70,6 +71,28 @@ def test_an_iteration_steps_downhill_on_its_own_motions():
     model.weights = np.zeros_like(model.weights)
     before = paired_log_costs(zero, *seen[0])[0][0]
     assert after < before
+
+
+def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe():
+    """f of a candidate that never acts is exactly 1 (J1 of the building failed safe against itself, nothing
+    priced); a candidate that pushes the building is priced by the check's own measure."""
+    model = new_model(tiny(residual_lqg=False, kwargs={"objective": "standard"}))
+    motions, seeds = synthetic_suite(count=2), [11, 12]
+    plus, minus, _ = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)
+    assert plus[0] == minus[0] == 1.0
+    pushing = np.zeros((1, *model.weights.shape))
+    pushing[0, :, 0] = 5.0  # every actuator driven by the first reading: energy in
+    plus, minus, _ = model.paired_log_costs(pushing, motions, seeds)
+    runs = batch_rollout(model.plant, motions, [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
+                         seeds, randomize=True)  # fmt: skip
+    assert plus[0] == pytest.approx(standard_cost(runs[0], runs[1]), rel=1e-12)
+    assert max(plus[0], minus[0]) > 1.0 + STANDARD_PENALTY * 0.01  # priced beyond its J1
+
+
+def model_controller(model, weights):
+    from rlcontroller.control.controllers import LinearFeedback
+
+    return LinearFeedback(weights, prior=model.prior, bias=None)
 
 
 def saved_policy(run, model):
@@ -171,6 +194,7 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
         ("{kwargs: {initial_bias: 2}}", "algorithm.kwargs.initial_bias: expected a number in [-1.0, 1.0]"),
         ("{kwargs: {initial_bias: 0.5}}", "initial_bias 0.5 needs an affine policy (policy.odd: false)"),
         ("{kwargs: {batch_size: 64}}", "algorithm.kwargs.batch_size: not a keyword argument of RandomSearch"),
+        ("{kwargs: {objective: check}}", "algorithm.kwargs.objective: expected one of return, standard, got 'check'"),
     ],
 )
 def test_bad_random_search_settings_exit_2_naming_the_key(tmp_path, algorithm, expected):

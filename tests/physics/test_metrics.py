@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.metrics import energy, j_metrics, peak
+from rlcontroller.physics.metrics import energy, j_metrics, peak, ratio_to_reference
 
 
 def response(scale: float, force: float, steps: int = 4) -> Response:
@@ -65,3 +65,12 @@ def test_wind_metrics_are_rms_about_the_mean_and_peaks_in_milli_g():
     np.testing.assert_allclose(metrics["peak_acceleration_top_mg"], [2.75 / 9.80665 * 1e3], rtol=1e-6)
     np.testing.assert_allclose(metrics["rms_top_displacement"], [0.5], rtol=1e-3)
     np.testing.assert_allclose(metrics["peak_acceleration_mg"], [5.5 / 9.80665 * 1e3, 2.75 / 9.80665 * 1e3], rtol=1e-6)
+
+
+def test_the_ratio_to_the_reference_is_the_larger_of_the_peak_ratio_and_the_mean_story_ratio():
+    reference = response(1.0, 0.0)  # story peaks 2 and 4
+    assert ratio_to_reference(reference, reference) == 1.0
+    assert ratio_to_reference(response(1.5, 0.0), reference) == pytest.approx(1.5)
+    lopsided = response(1.0, 0.0)
+    lopsided.drift[:, 0] *= 1.8  # story 1 peaks at 3.6, below story 2's reference 4: the overall peak holds
+    assert ratio_to_reference(lopsided, reference) == pytest.approx((1.8 + 1.0) / 2)  # the mean J1 catches it
