@@ -236,6 +236,12 @@ class ClippedOptimal:
         return self.switch(-(self.estimate @ self.design.feedback.T) * self.capacity, measured)
 
 
+def fail_safe_controller(plant: Plant) -> ConstantCommand:
+    """Every command at its device's fail-safe action (actuators off): the safety check's reference."""
+    actions = plant.experiment.fail_safe_actions()
+    return ConstantCommand(actions, len(actions), "fail-safe")
+
+
 def _force_rows(plant: Plant) -> np.ndarray:
     """The reading row of each commanded device's force; a clear error when one is not measured."""
     rows: dict[int, int] = {}

@@ -39,7 +39,7 @@ import numpy as np
 import yaml
 
 from rlcontroller.config import SafetyCheckConfig, Scenario, check_generator
-from rlcontroller.control.controllers import ConstantCommand, Controller
+from rlcontroller.control.controllers import Controller, fail_safe_controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.files import atomic_write
@@ -99,8 +99,9 @@ def fail_safe(plant: Plant) -> tuple[Controller | None, str]:
         parts.append("dampers at their minimum command")
     if experiment.actuators:
         parts.append("actuators off")
-    actions = np.array(experiment.fail_safe_actions())
-    return ConstantCommand(actions, actions.size, FAIL_SAFE), f"the devices failed safe ({', '.join(parts)})"
+    controller = fail_safe_controller(plant)
+    controller.name = FAIL_SAFE
+    return controller, f"the devices failed safe ({', '.join(parts)})"
 
 
 def peak_acceleration(response) -> np.ndarray:

@@ -39,10 +39,9 @@ import numpy as np
 import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
-from rlcontroller.control.controllers import LinearFeedback
+from rlcontroller.control.controllers import LinearFeedback, fail_safe_controller
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
-from rlcontroller.learning.validation import fail_safe_controller
 from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import peak, ratio_to_reference

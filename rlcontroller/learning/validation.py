@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.config import SafetyCheckConfig
-from rlcontroller.control.controllers import ConstantCommand, LQGController, LQGPrior, Uncontrolled
+from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled, fail_safe_controller
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.loads import generate_suite
@@ -80,9 +80,3 @@ class Validator:
 
 
 WORSE_TOLERANCE = SafetyCheckConfig.model_fields["tolerance"].default  # the standard's, configs/checks/standard.yaml
-
-
-def fail_safe_controller(plant: Plant) -> ConstantCommand:
-    """Every command at its device's fail-safe action (actuators off): the safety check's reference."""
-    actions = plant.experiment.fail_safe_actions()
-    return ConstantCommand(actions, len(actions), "fail-safe")

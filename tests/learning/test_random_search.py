@@ -8,12 +8,11 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.config import load_experiment
-from rlcontroller.control.controllers import ConstantCommand
+from rlcontroller.control.controllers import ConstantCommand, fail_safe_controller
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.random_search import STANDARD_PENALTY, RandomSearch, standard_cost
 from rlcontroller.learning.training import train
-from rlcontroller.learning.validation import fail_safe_controller
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.rollout import batch_rollout

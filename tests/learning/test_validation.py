@@ -4,10 +4,10 @@ import numpy as np
 from conftest import REPOSITORY
 
 from rlcontroller.config import PlantConfig, load_experiment
-from rlcontroller.control.controllers import LQGController
+from rlcontroller.control.controllers import LQGController, fail_safe_controller
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.learning.training import selection_score
-from rlcontroller.learning.validation import Validator, fail_safe_controller
+from rlcontroller.learning.validation import Validator
 from rlcontroller.physics.plant import Plant
 
 
