@@ -82,6 +82,7 @@ from rlcontroller.config.building import (  # noqa: F401
 from rlcontroller.config.checks import check_algorithm, check_plant  # noqa: F401
 from rlcontroller.config.control import (  # noqa: F401
     AssuranceConfig,
+    FallbackConfig,
     RewardConfig,
     RewardTerm,
     SupervisorConfig,

@@ -25,7 +25,9 @@ def check_cross_references(experiment: Experiment) -> None:
             f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
         )
     supervisor = experiment.supervisor
-    if supervisor is not None and supervisor.dissipative and not experiment.sensors.state_estimate:
+    if supervisor is not None and supervisor.measured:
+        _check_measured_velocity(experiment)
+    if supervisor is not None and supervisor.dissipative is True and not experiment.sensors.state_estimate:
         where = location(*experiment.origin("supervisor"), "dissipative")
         raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
     if supervisor is not None and supervisor.assurance is not None and not experiment.sensors.state_estimate:
@@ -144,7 +146,7 @@ def _check_state_space(building: StateSpaceBuildingConfig, experiment: Experimen
                 f"{location(file, prefix, 'outputs')} does not declare (it has {', '.join(sorted(declared))})"
             )
     physical = experiment.sensors.state_estimate or (
-        experiment.supervisor is not None and experiment.supervisor.dissipative
+        experiment.supervisor is not None and experiment.supervisor.dissipative is True
     )
     if physical and building.state != "physical":
         raise ConfigError(
@@ -287,6 +289,36 @@ def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: s
             raise ConfigError(f"{where}: yielding stories with actuator dynamics are not supported yet; use one")
     if plant.actuators.time_constant > 0 and experiment.simulation.method != "exact":
         raise ConfigError(f"{location(file, prefix, 'actuators.time_constant')}: an actuator lag needs method: exact")
+
+
+def _check_measured_velocity(experiment: Experiment) -> None:
+    """What the measured stroke velocities (`control.fallback`) and the fallback ask of the experiment."""
+    file, prefix = experiment.origin("supervisor")
+    supervisor, sensors = experiment.supervisor, experiment.sensors
+    first = sensors.measurements[0] if sensors.measurements else None
+    if first is None or first.quantity != "absolute_acceleration" or first.floors is not None:
+        where = location(*experiment.origin("sensors"), "measurements")
+        raise ConfigError(
+            f"{where}: the supervisor's measured stroke velocities integrate the floors' accelerations: expected "
+            "the first measurement absolute_acceleration on every floor (floors left out)"
+        )
+    if experiment.devices:
+        raise ConfigError(
+            f"{location(file, prefix, 'fallback' if supervisor.fallback else 'dissipative')}: measured stroke "
+            "velocities are inter-story actuators' (floor accelerations do not measure a device's own stroke)"
+        )
+    fallback = supervisor.fallback
+    if fallback is None:
+        return
+    if not sensors.state_estimate:
+        raise ConfigError(f"{location(file, prefix, 'fallback')}: needs sensors.state_estimate: true (the drift it"
+                          " hands over at is the Kalman estimate's)")  # fmt: skip
+    actuators = len(experiment.actuators)
+    if len(fallback.damping) != actuators:
+        raise ConfigError(
+            f"{location(file, prefix, 'fallback.damping')}: {len(fallback.damping)} values, expected one per "
+            f"actuator ({actuators}), in N s/m"
+        )
 
 
 def check_algorithm(experiment: Experiment) -> None:

@@ -6,6 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import (
     Field,
+    field_validator,
     model_validator,
 )
 
@@ -73,16 +74,40 @@ class AssuranceConfig(StrictModel):
         return self
 
 
+class FallbackConfig(StrictModel):
+    """Past the design model's range (`control.fallback`): once any story's estimated drift passes `drift`,
+    every actuator acts for good as a viscous damper on its measured stroke velocity."""
+
+    drift: Annotated[float, Field(gt=0.0, le=1.0)]  # m: any story's estimated drift that hands over
+    damping: list[Annotated[float, Field(ge=0.0, le=1.0e9)]] = Field(min_length=1)  # N s/m, one per actuator
+    deadband: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0  # m/s: stroke velocity the dampers ignore (noise)
+
+
 class SupervisorConfig(StrictModel):
     """The control system's supervisory layer: what stands between every controller's action and
     the actuators (`control.supervisor`). The same for every controller of the experiment."""
 
     trigger: AccelerationRange | None = None  # m/s^2: [off below, full authority from], on the peak ground reading
-    dissipative: bool = False  # pass only forces that take energy out of the building (estimated velocities)
+    # pass only forces that take energy out of the building: true judges by the Kalman estimate's velocities,
+    # measured by each stroke's velocity integrated from the floor accelerations (no model: control/fallback.py)
+    dissipative: bool | Literal["measured"] = False
     # m/s: with `dissipative`, a force that would feed its story is faded out as the estimated stroke velocity
     # grows to this (passing near a velocity reversal: no force step); 0: blocked at once (the hard clip)
     fade_velocity: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
+    fallback: FallbackConfig | None = None  # measured dampers past the design model's range (control/fallback.py)
     assurance: AssuranceConfig | None = None  # runtime assurance against the fail-safe twin (control/assurance.py)
+
+    @field_validator("dissipative", mode="before")
+    @classmethod
+    def _dissipative_kind(cls, value: object) -> object:
+        if value not in (True, False, "measured") or isinstance(value, int | float) and not isinstance(value, bool):
+            raise ValueError(f"{value!r}: expected true, false or measured")
+        return value
+
+    @property
+    def measured(self) -> bool:
+        """Whether a stage reads the stroke velocities measured from the floor accelerations."""
+        return self.dissipative == "measured" or self.fallback is not None
 
     @model_validator(mode="after")
     def _fade_needs_dissipative(self) -> SupervisorConfig:

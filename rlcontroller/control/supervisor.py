@@ -16,6 +16,10 @@ experiment alike (LQG, learned, uncontrolled), so comparisons stay fair:
   max(0, 1 - |Γ_jᵀ v| / v_f) instead, so it passes near a velocity reversal and fades out as the
   story moves faster the wrong way. The hard rule switches the force off at every reversal, and a
   force step is a floor-acceleration step (docs/safety_check.md, the supervisor study).
+- **dissipative: measured**: the same rule on each stroke's velocity integrated from the floor
+  accelerations (`control.fallback`: no model, so it holds where the building yields).
+- **fallback**: once any story's estimated drift passes a level, every actuator acts for good as a
+  viscous damper on its measured stroke velocity (`control.fallback`).
 - **assurance**: runtime assurance against the fail-safe twin (`control.assurance`), last: it sees the
   action the actuators would receive and may hand the devices back to their fail-safe action.
 """
@@ -26,6 +30,7 @@ import numpy as np
 
 from rlcontroller.config import SupervisorConfig
 from rlcontroller.control.assurance import RuntimeAssurance
+from rlcontroller.control.fallback import DamperFallback, MeasuredStrokeVelocity
 from rlcontroller.physics.plant import Plant
 
 
@@ -39,16 +44,23 @@ class Supervisor:
         self.trigger = config.trigger
         self.ground, self.ground_scale = layout.ground, layout.ground_scale
         self.velocity = None
-        if config.dissipative:
+        self.dissipative = config.dissipative
+        self.fade = config.fade_velocity  # m/s (measured) or in the estimate's scaled units
+        if config.dissipative is True:
             start = layout.estimate.start + n  # the estimate is [x; v (; ground filter)], scaled
             self.velocity = slice(start, start + n)
             self.actuator_matrix = plant.building.actuator_matrix  # Γ: v @ Γ is each actuator's stroke velocity
-            self.fade = config.fade_velocity / layout.estimate_scale[n]  # in the estimate's scaled units
+            self.fade = config.fade_velocity / layout.estimate_scale[n]
+        self.measured = MeasuredStrokeVelocity(plant, size) if config.measured else None
+        self.fallback = None if config.fallback is None else DamperFallback(config.fallback, plant, size)
         self.peak_ground = np.zeros(size)
         self.assurance = None if config.assurance is None else RuntimeAssurance(config.assurance, plant, size)
 
     def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
         self.peak_ground[members] = 0.0
+        for stage in (self.measured, self.fallback):
+            if stage is not None:
+                stage.reset(members)
         if self.assurance is not None:
             self.assurance.reset(members)
 
@@ -61,13 +73,19 @@ class Supervisor:
         return np.minimum(np.maximum((self.peak_ground - start) / (full - start), 0.0), 1.0)
 
     def __call__(self, observations: np.ndarray, actions: np.ndarray) -> None:
-        if self.velocity is not None:
-            stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled (one scale for all)
+        measured = None if self.measured is None else self.measured.update(observations)
+        if self.dissipative:
+            if self.velocity is not None:
+                stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled (one scale for all)
+            else:
+                stroke_velocity = measured
             feeding = actions * stroke_velocity > 0.0
             if self.fade > 0.0:
                 actions[feeding] *= np.maximum(1.0 - np.abs(stroke_velocity[feeding]) / self.fade, 0.0)
             else:
                 actions[feeding] = 0.0
+        if self.fallback is not None:
+            self.fallback(observations, measured, actions)
         if self.trigger is not None:
             actions *= self.gain(observations)[:, None]
         if self.assurance is not None:

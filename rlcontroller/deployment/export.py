@@ -13,7 +13,8 @@ Inputs (float64, one row per building):
     state (N, S): the controller's own state, zeros before the motion starts.
 Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
 The state is the observation of this step (history, scaled estimate, last action), the last
-ground reading, with a supervisor's trigger the largest ground reading so far (m/s^2), and with runtime
+ground reading, with a supervisor's trigger the largest ground reading so far (m/s^2), with measured
+velocities each stroke's (m/s) and whether the fallback took over, and with runtime
 assurance the twin's difference state, its running story peaks and whether the devices are handed back. Call
 once per control step (`control_dt_s` in the metadata), at the instant the readings are taken;
 apply the force until the next call.
@@ -31,6 +32,7 @@ from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured
+from rlcontroller.deployment.fallback_graph import fallback_state_size, fallen_back, measured_velocity
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 
@@ -122,19 +124,19 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
     supervisor = experiment.supervisor
     trigger = supervisor is not None and supervisor.trigger is not None
-    assurance = []
+    measured, assurance = [], []
     if supervisor is not None:
-        action, peak = _supervised(g, plant, stored, action)
+        action, peak, measured = _supervised(g, plant, stored, action, size + 1 + trigger)
         if supervisor.assurance is not None:
-            action, assurance = assured(g, plant, stored, action, size + 1 + trigger)
+            action, assurance = assured(g, plant, stored, action, size + 1 + trigger + fallback_state_size(plant))
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
     if layout.actions.stop > layout.action.stop:  # older actions shift by one
         kept.append(g.columns(observation, layout.action.start, layout.actions.stop - m, "older_actions"))
-    g.node("Concat", [*kept, "ground", *([peak] if trigger else []), *assurance], "next_state", axis=1)
+    g.node("Concat", [*kept, "ground", *([peak] if trigger else []), *measured, *assurance], "next_state", axis=1)
 
-    state_size = size + 1 + trigger + assurance_state_size(plant)
+    state_size = size + 1 + trigger + fallback_state_size(plant) + assurance_state_size(plant)
     graph = helper.make_graph(
         g.nodes,
         "rlcontroller",
@@ -171,29 +173,38 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     return model
 
 
-def _supervised(g: _Graph, plant: Plant, stored: str, action: str) -> tuple[str, str | None]:
-    """The supervisor's action and the new peak ground reading (None without a trigger), computed as
+def _supervised(g: _Graph, plant: Plant, stored: str, action: str, start: int) -> tuple[str, str | None, list[str]]:
+    """The supervisor's action, the new peak ground reading (None without a trigger) and the next state's
+    measured stroke velocities and fallback latch (state columns from `start` on), computed as
     `control.supervisor` does from the observation as the env stores it (`stored`: float32)."""
     layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_dofs
-    if supervisor.dissipative:
-        start = layout.estimate.start + n
-        velocity = g.columns(stored, start, start + n, "velocity_estimate")
+    measured = measured_velocity(g, plant, stored, start) if supervisor.measured else None
+    if supervisor.dissipative == "measured":
+        stroke = measured
+    elif supervisor.dissipative:
+        velocity = g.columns(stored, layout.estimate.start + n, layout.estimate.start + 2 * n, "velocity_estimate")
         stroke = g.node(
             "MatMul", [velocity, g.constant("actuator_matrix", plant.building.actuator_matrix)], "stroke_velocity"
         )
+    if supervisor.dissipative:
         feeds = g.node(
             "Greater", [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)], "feeds_energy"
         )
-        if supervisor.fade_velocity > 0.0:  # scaled as the estimate is, like `control.supervisor`
-            fade = supervisor.fade_velocity / layout.estimate_scale[n]
+        if supervisor.fade_velocity > 0.0:  # m/s measured, scaled as the estimate is, like `control.supervisor`
+            fade = supervisor.fade_velocity / (1.0 if measured is stroke else layout.estimate_scale[n])
             speed = g.node("Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio")
             kept = g.clip(g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor")
             blocked = g.node("Mul", [action, kept], "faded_action")
         else:
             blocked = g.constant("no_action", 0.0)
         action = g.node("Where", [feeds, blocked, action], "dissipative_action")
+    kept = [] if measured is None else [measured]
+    if supervisor.fallback is not None:
+        m = plant.building.n_actuators
+        action, latched = fallen_back(g, plant, stored, action, measured, start + m)
+        kept.append(latched)
     if supervisor.trigger is None:
-        return action, None
+        return action, None, kept
     reading = g.columns(stored, layout.ground, layout.ground + 1, "stored_ground")
     ground = g.node("Abs", [g.node("Mul", [reading, "ground_scale"], "ground_reading")], "ground_magnitude")
     previous_peak = g.columns("state", layout.size + 1, layout.size + 2, "previous_peak_ground")
@@ -207,7 +218,7 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str) -> tuple[str,
         rise = g.node("Sub", [peak, g.constant("trigger_start", start)], "above_start")
         ramp = g.node("Div", [rise, g.constant("trigger_span", full - start)], "ramp")
         gain = g.clip(ramp, 0.0, 1.0, "gain")
-    return g.node("Mul", [action, gain], "supervised_action"), peak
+    return g.node("Mul", [action, gain], "supervised_action"), peak, kept
 
 
 def _supervisor_text(supervisor) -> str:
@@ -220,10 +231,15 @@ def _supervisor_text(supervisor) -> str:
         assurance = supervisor.assurance
         parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, "
                      f"engage {assurance.engage:g})")  # fmt: skip
+    velocity = "measured " if supervisor.dissipative == "measured" else ""
     if supervisor.dissipative and supervisor.fade_velocity > 0.0:
-        parts.append(f"forces feeding energy in faded out by {supervisor.fade_velocity:g} m/s of stroke velocity")
+        fade = supervisor.fade_velocity
+        parts.append(f"forces feeding energy in faded out by {fade:g} m/s of {velocity}stroke velocity")
     elif supervisor.dissipative:
-        parts.append("dissipative forces only")
+        parts.append("dissipative forces only" + (" (measured stroke velocity)" if velocity else ""))
+    if supervisor.fallback is not None:
+        parts.append(f"past {supervisor.fallback.drift:g} m of estimated story drift, dampers on measured stroke "
+                     f"velocity ({', '.join(f'{c:g}' for c in supervisor.fallback.damping)} N s/m)")  # fmt: skip
     return "; ".join(parts) or "none"
 
 

@@ -126,13 +126,12 @@ class RandomSearch(BatchLearner):
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
         controllers = [LinearFeedback(w, prior=self.prior, bias=b) for w, b in map(self._split, candidates)]
-        if self.objective == "standard":
-            *runs, reference = batch_rollout(
-                self.plant, motions, [*controllers, fail_safe_controller(self.plant)], seeds, randomize=True
-            )
-            f = np.array([standard_cost(lane, reference) for lane in runs])
+        runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
+        if self.objective == "standard":  # the reference with the control system failed safe: no supervisor
+            failed_safe = self.plant.failed_safe
+            reference = batch_rollout(failed_safe, motions, [fail_safe_controller(failed_safe)], seeds, randomize=True)
+            f = np.array([standard_cost(lane, reference[0]) for lane in runs])
         else:
-            runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
             f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
         episodes = [{"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane]
         self.ep_info_buffer.extend(episodes)

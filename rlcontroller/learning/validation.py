@@ -38,7 +38,8 @@ class Validator:
         bare = plant.bare  # without its mass devices
         uncontrolled = batch_rollout(bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True)
         self.uncontrolled = [response for response, _ in uncontrolled[0]]
-        self.fail_safe = [response for response, _ in self._rollouts(fail_safe_controller(plant))]
+        failed_safe = batch_rollout(plant.failed_safe, self.motions, [fail_safe_controller(plant)], randomize=True)
+        self.fail_safe = [response for response, _ in failed_safe[0]]
         self.reference = {}
         model = plant.design
         designs = {

@@ -139,7 +139,8 @@ class Plant:
         self._sampled: dict[int, SampledPlant] = {}  # sub-steps -> this plant sampled
         self._design = self if self.config is None else None
         self._elastic: Plant | None = None
-        self._bare = None if experiment.devices else self
+        self._bare = None if experiment.devices or experiment.supervisor is not None else self
+        self._failed_safe = self if experiment.supervisor is None else None
 
     @property
     def design(self) -> Plant:
@@ -164,6 +165,14 @@ class Plant:
                 update["actuators"] = [ActuatorConfig(story=1)]
             self._bare = Plant(experiment.model_copy(update=update))
         return self._bare
+
+    @property
+    def failed_safe(self) -> Plant:
+        """This plant with its control system failed safe: the devices stay, the supervisor is gone (its
+        fallback would act on its own). The safety check's reference runs here."""
+        if self._failed_safe is None:
+            self._failed_safe = Plant(self.experiment.model_copy(update={"supervisor": None}))
+        return self._failed_safe
 
     @property
     def active_equivalent(self) -> Plant:

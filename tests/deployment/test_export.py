@@ -155,6 +155,33 @@ def test_runtime_assurance_exports_with_its_twin(tmp_path):
     assert "runtime assurance against the fail-safe twin (release 1, engage 0.95)" in metadata["supervisor"]
 
 
+def test_the_dampers_fallback_exports_with_its_measured_velocities(tmp_path):
+    """Behind the measured dissipative rule and the dampers' fallback the graph integrates the stroke
+    velocities and latches as the env's supervisor does: fed the same readings, the same force each step,
+    before and after the hand-over."""
+    fallback = {"drift": 0.01, "damping": [3.0e5, 3.0e5, 1.5e5, 1.0e5, 0.5e5], "deadband": 0.01}
+    folder = with_supervisor(tmp_path, {"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1,
+                                        "fallback": fallback})  # fmt: skip
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
+    controller = read_policy(folder, "best", plant)
+    observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
+    python, onnx_forces, latched = [], [], []
+    for _ in range(info["steps"]):
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        onnx_forces.append(graph.step(readings[None], ground)[0])
+        observation, *_ = env.step(controller.act(observation))
+        python.append(env.command)
+        latched.append(env.supervisor.fallback.latched[0])
+    python, onnx_forces = np.array(python), np.array(onnx_forces)
+    assert 0.05 < np.mean(latched) < 0.95  # both the controller and the dampers acted
+    np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
+    metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
+    assert "past 0.01 m of estimated story drift, dampers on measured stroke velocity" in metadata["supervisor"]
+
+
 @pytest.mark.slow
 def test_the_shipped_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path, monkeypatch):
     """Named by its experiment from another folder, the 76-story building's shipped controller (LQG + wind
