@@ -173,12 +173,12 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     return model
 
 
-def _supervised(g: _Graph, plant: Plant, stored: str, action: str, start: int) -> tuple[str, str | None, list[str]]:
+def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) -> tuple[str, str | None, list[str]]:
     """The supervisor's action, the new peak ground reading (None without a trigger) and the next state's
-    measured stroke velocities and fallback latch (state columns from `start` on), computed as
+    measured stroke velocities and fallback latch (state columns from `column` on), computed as
     `control.supervisor` does from the observation as the env stores it (`stored`: float32)."""
     layout, supervisor, n = plant.layout, plant.experiment.supervisor, plant.building.n_dofs
-    measured = measured_velocity(g, plant, stored, start) if supervisor.measured else None
+    measured = measured_velocity(g, plant, stored, column) if supervisor.measured else None
     if supervisor.dissipative == "measured":
         stroke = measured
     elif supervisor.dissipative:
@@ -201,7 +201,7 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, start: int) -
     kept = [] if measured is None else [measured]
     if supervisor.fallback is not None:
         m = plant.building.n_actuators
-        action, latched = fallen_back(g, plant, stored, action, measured, start + m)
+        action, latched = fallen_back(g, plant, stored, action, measured, column + m)
         kept.append(latched)
     if supervisor.trigger is None:
         return action, None, kept
