@@ -93,3 +93,18 @@ def run_at_a_terminal(arguments: list[str], cwd: Path, timeout_s: float = 300.0)
     os.close(primary)
     code = process.wait(timeout=30)
     return code, ANSI.sub("", b"".join(chunks).decode(errors="replace"))
+
+
+def assert_env_and_batch_agree(plant, motions, make_controller, seed: int = 3) -> None:
+    """Each motion run alone in the env and all together in the batch give the same drifts (a supervisor's
+    state kept per building, reset per motion). `make_controller(plant)` makes a fresh controller."""
+    import numpy as np
+
+    from rlcontroller.learning.env import BuildingEnv, rollout
+    from rlcontroller.simulation.rollout import batch_rollout
+
+    batched = batch_rollout(plant, motions, [make_controller(plant)], seeds=[seed] * len(motions))[0]
+    env = BuildingEnv(plant)
+    for motion, (response, _) in zip(motions, batched, strict=True):
+        single, _ = rollout(env, motion, make_controller(plant), seed=seed)
+        np.testing.assert_allclose(response.drift, single.drift, rtol=1e-7, atol=1e-12)

@@ -5,6 +5,7 @@ and batch apply it alike; a bad assurance section is one line."""
 
 import numpy as np
 import pytest
+from conftest import assert_env_and_batch_agree
 
 from rlcontroller.config import ConfigError, Experiment, build_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
@@ -12,7 +13,6 @@ from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import synthetic_suite
-from rlcontroller.simulation.rollout import batch_rollout
 
 EVERY_STORY = [{"story": story, "force_limit": 1.0e5} for story in range(1, 6)]
 SENSORS = {"state_estimate": True, "ground_model": True}
@@ -93,13 +93,7 @@ def test_the_switch_holds_a_destabilising_controller_near_the_building_failed_sa
 
 
 def test_env_and_batch_apply_the_switch_alike():
-    plant = Plant(experiment())
-    motions = synthetic_suite(count=2)
-    batched = batch_rollout(plant, motions, [Flipped(plant)], seeds=[3, 3])[0]
-    env = BuildingEnv(plant)
-    for motion, (response, _) in zip(motions, batched, strict=True):
-        single, _ = rollout(env, motion, Flipped(plant), seed=3)
-        np.testing.assert_allclose(response.drift, single.drift, rtol=1e-7, atol=1e-12)
+    assert_env_and_batch_agree(Plant(experiment()), synthetic_suite(count=2), Flipped)
 
 
 @pytest.mark.parametrize(

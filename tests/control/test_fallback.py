@@ -4,6 +4,7 @@ batch apply it alike; a bad fallback section is one line."""
 
 import numpy as np
 import pytest
+from conftest import assert_env_and_batch_agree
 
 from rlcontroller.config import ConfigError, Experiment, build_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
@@ -104,12 +105,7 @@ def test_a_measured_dissipative_rule_passes_only_forces_opposing_the_measured_st
 def test_env_and_batch_apply_the_fallback_alike():
     plant = Plant(experiment({"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1,
                               "fallback": FALLBACK}))  # fmt: skip
-    motions = [strong(motion) for motion in synthetic_suite(count=2)]
-    batched = batch_rollout(plant, motions, [lqg(plant)], seeds=[3, 3])[0]
-    env = BuildingEnv(plant)
-    for motion, (response, _) in zip(motions, batched, strict=True):
-        single, _ = rollout(env, motion, lqg(plant), seed=3)
-        np.testing.assert_allclose(response.drift, single.drift, rtol=1e-7, atol=1e-12)
+    assert_env_and_batch_agree(plant, [strong(motion) for motion in synthetic_suite(count=2)], lqg)
 
 
 @pytest.mark.parametrize(

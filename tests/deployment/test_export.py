@@ -127,17 +127,11 @@ def test_the_default_exports_with_its_faded_supervisor(tmp_path):
     )
 
 
-def test_runtime_assurance_exports_with_its_twin(tmp_path):
-    """Behind runtime assurance the graph carries the fail-safe twin and the switch: fed the readings the
-    supervised env gave the Python controller, it gives that step's force, through hand-overs both ways."""
-    supervisor = {"trigger": [0.1, 0.3], "dissipative": True, "fade_velocity": 0.1, "assurance": {"engage": 0.95}}
-    folder = with_supervisor(tmp_path, supervisor)
-    plant = Plant(load_experiment(folder / "config.yaml"))
-    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+def lockstep(plant: Plant, path, controller, motions, watch) -> tuple[np.ndarray, np.ndarray, list]:
+    """The supervised env's forces, the graph's fed the same readings, and `watch(env)` after each step."""
     env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
-    controller = read_policy(folder, "best", plant)
-    python, onnx_forces, engaged = [], [], []
-    for seed, motion in enumerate(synthetic_suite(count=2)):
+    python, onnx_forces, watched = [], [], []
+    for seed, motion in enumerate(motions):
         observation, info = env.reset(seed=seed, options={"motion": motion})
         controller.reset()
         graph.reset()
@@ -147,8 +141,21 @@ def test_runtime_assurance_exports_with_its_twin(tmp_path):
             onnx_forces.append(graph.step(readings[None], ground)[0])
             observation, *_ = env.step(controller.act(observation))
             python.append(env.command)
-            engaged.append(env.supervisor.assurance.engaged[0])
-    python, onnx_forces = np.array(python), np.array(onnx_forces)
+            watched.append(watch(env))
+    return np.array(python), np.array(onnx_forces), watched
+
+
+def test_runtime_assurance_exports_with_its_twin(tmp_path):
+    """Behind runtime assurance the graph carries the fail-safe twin and the switch: fed the readings the
+    supervised env gave the Python controller, it gives that step's force, through hand-overs both ways."""
+    supervisor = {"trigger": [0.1, 0.3], "dissipative": True, "fade_velocity": 0.1, "assurance": {"engage": 0.95}}
+    folder = with_supervisor(tmp_path, supervisor)
+    plant = Plant(load_experiment(folder / "config.yaml"))
+    path = export_onnx(folder, "best", tmp_path / "controller.onnx")
+    controller = read_policy(folder, "best", plant)
+    python, onnx_forces, engaged = lockstep(
+        plant, path, controller, synthetic_suite(count=2), lambda env: env.supervisor.assurance.engaged[0]
+    )
     assert 0.02 < 1.0 - np.mean(engaged) < 0.98  # the switch handed the devices back and forth
     np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
@@ -164,18 +171,10 @@ def test_the_dampers_fallback_exports_with_its_measured_velocities(tmp_path):
                                         "fallback": fallback})  # fmt: skip
     plant = Plant(load_experiment(folder / "config.yaml"))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    env, layout, graph = BuildingEnv(plant), plant.layout, OnnxController(path)
     controller = read_policy(folder, "best", plant)
-    observation, info = env.reset(seed=0, options={"motion": synthetic_suite(count=1)[0]})
-    python, onnx_forces, latched = [], [], []
-    for _ in range(info["steps"]):
-        readings = observation[layout.readings].astype(float) * layout.reading_scale
-        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
-        onnx_forces.append(graph.step(readings[None], ground)[0])
-        observation, *_ = env.step(controller.act(observation))
-        python.append(env.command)
-        latched.append(env.supervisor.fallback.latched[0])
-    python, onnx_forces = np.array(python), np.array(onnx_forces)
+    python, onnx_forces, latched = lockstep(
+        plant, path, controller, synthetic_suite(count=1), lambda env: env.supervisor.fallback.latched[0]
+    )
     assert 0.05 < np.mean(latched) < 0.95  # both the controller and the dampers acted
     np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
