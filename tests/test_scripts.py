@@ -208,3 +208,13 @@ def test_the_mass_driver_grid_trades_stroke_for_drift_and_detuning_hurts_the_nom
     assert nominal["J1 x1"] < heavy["J1 x1"] < passive["J1 x1"] < 1.0
     assert nominal["J1 x0.85"] > heavy["J1 x0.85"]  # the nominal design's fragility on a softer driver
     assert nominal["worst J1"] == nominal["J1 x0.85"] and heavy["mean J1"] < nominal["mean J1"]
+
+
+def test_the_fallback_search_refuses_to_tune_on_the_check_suite():
+    """The check suite is the judge: the search of the yielding building's fallback tunes on another seed."""
+    import subprocess
+    import sys
+
+    script = script_path("search_fallback")
+    done = subprocess.run([sys.executable, str(script), "--suite-seed", "31337"], capture_output=True, text=True)
+    assert done.returncode == 2 and "--suite-seed 31337 is the check suite: tune on another seed" in done.stderr
