@@ -206,6 +206,7 @@ def judge_suite(
             if worst_j2 is None or j2 > worst_j2["value"]:
                 worst_j2 = row | {"value": round(j2, 4)}
             score = ratio_to_reference(controlled, reference_run)
+            row["reference_peak_drift_m"] = round(float(np.max(reference_peak)), 4)  # beside the story height
             kind = "peak drift ratio to the reference (or mean J1, the larger)"
             ok = score <= 1.0 + tolerance
             strict += score > 1.0 + ROUNDING

@@ -85,6 +85,8 @@ def test_a_significant_motion_fails_only_beyond_the_tolerance_and_the_strict_cou
     assert (verdict["failure_count"], verdict["strict_failure_count"], verdict["passed"]) == (failures, strict, passed)
     assert verdict["tolerance"] == 0.01 and f"{strict} worse at all" in verdict["summary"]
     assert verdict["mean_J1"] == pytest.approx(np.mean(scales), abs=1e-4)
+    for row in verdict["failures"]:  # how far the reference drifted, to tell a building from a collapsed one
+        assert row["reference_peak_drift_m"] == 0.01
 
 
 def test_without_control_the_spectral_radius_is_the_least_damped_modes_decay():
