@@ -84,13 +84,22 @@ def supervision(experiment) -> str:
     if supervisor.trigger is not None:
         start, full = supervisor.trigger
         parts.append(f"off until the ground reading reaches {start:g} m/s^2, full authority from {full:g} m/s^2")
+    measured = supervisor.dissipative == "measured"
+    velocity = "measured stroke velocity (integrated floor accelerations)" if measured else "stroke velocity"
     if supervisor.dissipative and supervisor.fade_velocity > 0.0:
         parts.append(
-            "a force that would feed energy into its story is faded out as its stroke velocity grows to "
+            f"a force that would feed energy into its story is faded out as its {velocity} grows to "
             f"{supervisor.fade_velocity:g} m/s"
         )
     elif supervisor.dissipative:
         parts.append("only forces that take energy out of the building pass")
+    if supervisor.fallback is not None:
+        fallback = supervisor.fallback
+        damping = ", ".join(f"{value / 1e3:g}" for value in fallback.damping)
+        parts.append(
+            f"once any story's estimated drift passes {fallback.drift:g} m, every actuator acts for good as a viscous "
+            f"damper on its measured stroke velocity ({damping} kN s/m, deadband {fallback.deadband:g} m/s)"
+        )
     return "; ".join(parts)
 
 

@@ -1,5 +1,6 @@
-"""Search the yielding building's fallback (configs/supervisors/yielding.yaml): the dampers' damping per story and
-the hand-over drift, for the fewest motions worse than no control, then the least mean J1 and J2.
+"""Search the yielding building's fallback: the dampers' damping per story and the hand-over drift, for the fewest
+motions worse than no control, then the least mean J1 and J2. Its best (1 failing motion on suite 777, 3 on 778)
+lost to stiffness-proportional dampers (configs/supervisors/yielding.yaml: none on either; docs/assurance.md).
 
 Judged as the safety check judges (`suite_criterion`: the check's standard and criterion) but on a suite of the
 check's family drawn with another seed (777 by default), never the check suite's 31337: the check stays the
