@@ -51,7 +51,7 @@ class RuntimeAssurance:
         self.scale = plant.layout.estimate_scale
         self.estimate = plant.layout.estimate
         heights = building.story_heights if building.story_heights is not None else np.ones(floors)
-        drift = (np.eye(n) - np.eye(n, k=-1))[:floors] / heights[:, None]
+        drift = building.drift_matrix() / heights[:, None]
         self.drift_t = np.zeros((kalman.size, floors))
         self.drift_t[:n] = drift.T
         self.velocity_t = np.zeros((kalman.size, floors))

@@ -57,9 +57,9 @@ class DamperFallback:
     whose estimated story drift passes the threshold and gives their actuators the dampers' actions."""
 
     def __init__(self, config: FallbackConfig, plant: Plant, size: int) -> None:
-        layout, n, floors = plant.layout, plant.building.n_dofs, plant.building.n_floors
+        layout, n = plant.layout, plant.building.n_dofs
         self.displacements = slice(layout.estimate.start, layout.estimate.start + n)
-        drift = (np.eye(n) - np.eye(n, k=-1))[:floors]  # story drift = x_j - x_(j-1) (m)
+        drift = plant.building.drift_matrix()  # story drift (m) from the displacements
         self.drift_t = (drift * layout.estimate_scale[:n]).T  # from the estimate's scaled displacements
         self.threshold = config.drift
         self.gain = np.asarray(config.damping) / plant.force_limits  # action per m/s of stroke velocity

@@ -263,7 +263,7 @@ def output_matrices(building: Building, quantity: str) -> tuple[np.ndarray, np.n
         return building.outputs(quantity)
     n, floors, m = building.n_dofs, building.n_floors, building.n_actuators
     zero_state, zero_force = np.zeros((floors, n)), np.zeros((floors, m))
-    drift_matrix = (np.eye(n) - np.eye(n, k=-1))[:floors]
+    drift_matrix = building.drift_matrix()
     # V_i = sum of m_j a_j over the degrees of freedom on floor i and above (devices on their floor)
     shear_sum = (building.dof_floors[None, :] >= np.arange(1, floors + 1)[:, None]).astype(float)
     if quantity == "displacement":

@@ -70,6 +70,11 @@ class Building:
         """The floor (1-based) of each degree of freedom: its own, or the one a device sits on."""
         return np.array([*range(1, self.n_floors + 1), *(device.floor for device in self.devices)])
 
+    def drift_matrix(self) -> np.ndarray:
+        """D (floors x dofs) with story drift = D x: x_j - x_(j-1), the ground's x_0 = 0."""
+        n = self.n_dofs
+        return (np.eye(n) - np.eye(n, k=-1))[: self.n_floors]
+
     def stroke_matrix(self) -> np.ndarray:
         """S (devices x dofs) with stroke = S x: each device's displacement relative to its floor."""
         matrix = np.zeros((len(self.devices), self.n_dofs))
