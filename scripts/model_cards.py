@@ -69,6 +69,8 @@ def observation(folder: Path) -> str:
         parts.append(
             "a Kalman estimate of the building's state" + (" and ground filter" if sensors.ground_model else "")
         )
+    if sensors.twin:
+        parts.append("the fail-safe twin's estimate and each story's running peak drift under it")
     if sensors.integration_cutoff:
         parts.append(f"the readings' model-free integrals (cut-off {sensors.integration_cutoff:g} Hz)")
     if sensors.action_history:

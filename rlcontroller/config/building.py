@@ -219,6 +219,11 @@ class SensorConfig(StrictModel):
     frequency, as structural health monitoring does (`control.estimation.integration_filter`),
     and those are added instead, divided by `velocity_scale` and `displacement_scale`.
 
+    With `twin` (needs `state_estimate`) the observation also holds the fail-safe twin
+    (`control.twin`): the Kalman estimate of the building failed safe on the same motion, scaled as the
+    estimate is, and each story's running peak drift under it so far (m, divided by `displacement_scale`):
+    what each story would do with the devices failed safe, for a learner to aim below.
+
     `input_noise` robustifies every Kalman filter designed for the experiment (the observation's and
     LQG's): fictitious process noise at the actuators' inputs, of this standard deviation per step as a
     fraction of each force limit (loop transfer recovery, Doyle and Stein 1979, IEEE TAC 24(4)). The
@@ -236,6 +241,7 @@ class SensorConfig(StrictModel):
     ground_noise_std: NoiseStd = 0.05
     state_estimate: bool = False
     ground_model: bool = False
+    twin: bool = False
     integration_cutoff: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
     input_noise: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
     displacement_scale: Scale = 0.02

@@ -20,28 +20,30 @@ from rlcontroller.config.state_space import StateSpaceBuildingConfig
 
 def check_cross_references(experiment: Experiment) -> None:
     check_algorithm(experiment)
-    if experiment.algorithm.residual_lqg and not experiment.sensors.state_estimate:
-        raise ConfigError(
-            f"{location(*experiment.origin('algorithm'), 'residual_lqg')}: needs sensors.state_estimate: true"
-        )
-    supervisor = experiment.supervisor
+    supervisor, sensors = experiment.supervisor, experiment.sensors
     if supervisor is not None and supervisor.measured:
         _check_measured_velocity(experiment)
-    if supervisor is not None and supervisor.dissipative is True and not experiment.sensors.state_estimate:
-        where = location(*experiment.origin("supervisor"), "dissipative")
-        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the velocities it judges by)")
-    if supervisor is not None and supervisor.assurance is not None and not experiment.sensors.state_estimate:
-        where = location(*experiment.origin("supervisor"), "assurance")
-        raise ConfigError(f"{where}: needs sensors.state_estimate: true (the fail-safe twin is the Kalman estimate's)")
-    if experiment.sensors.ground_model and not experiment.sensors.state_estimate:
-        raise ConfigError(f"{location(*experiment.origin('sensors'), 'ground_model')}: needs state_estimate: true")
-    if experiment.sensors.ground_model and experiment.excitation.generator.kind == "wind":
+    assured = supervisor is not None and supervisor.assurance is not None
+    twin = "the fail-safe twin is the Kalman estimate's"
+    estimate_users = [  # (part, field, asked, what the estimate is to it)
+        ("algorithm", "residual_lqg", experiment.algorithm.residual_lqg, "the prior's feedback"),
+        ("supervisor", "dissipative", supervisor is not None and supervisor.dissipative is True, "its velocities"),
+        ("supervisor", "assurance", assured, twin),
+        ("sensors", "ground_model", sensors.ground_model, "its states join the estimate"),
+        ("sensors", "twin", sensors.twin, twin),
+    ]
+    for part, key, asked, why in estimate_users:
+        if asked and not sensors.state_estimate:
+            raise ConfigError(f"{location(*experiment.origin(part), key)}: needs sensors.state_estimate: true ({why})")
+        if asked and why == twin and experiment.has_dampers:
+            raise ConfigError(f"{location(*experiment.origin(part), key)}: not with semi-active dampers (a command "
+                              "is not a force: the twin cannot take its response out)")  # fmt: skip
+    if sensors.ground_model and experiment.excitation.generator.kind == "wind":
         where = location(*experiment.origin("sensors"), "ground_model")
         raise ConfigError(f"{where}: under wind the estimate models the floor forces, not the ground; set it false")
-    cutoff = experiment.sensors.integration_cutoff
-    if cutoff is not None:
+    if (cutoff := sensors.integration_cutoff) is not None:
         where = location(*experiment.origin("sensors"), "integration_cutoff")
-        if experiment.sensors.state_estimate:
+        if sensors.state_estimate:
             raise ConfigError(f"{where}: the observation holds either integrated readings or state_estimate, not both")
         nyquist = 0.5 / experiment.simulation.control_dt
         if cutoff >= 0.5 * nyquist:
@@ -66,11 +68,9 @@ def check_cross_references(experiment: Experiment) -> None:
     file, prefix = experiment.origin("actuators")
     if not experiment.actuators and not experiment.devices:
         raise ConfigError(f"{location(file, prefix, '')}: no actuators and no devices: expected at least one")
-    for index, actuator in enumerate(experiment.actuators):
-        if actuator.story > n_floors:
-            raise ConfigError(
-                f"{file}: {prefix}[{index}].story: story {actuator.story} does not exist, expected 1..{n_floors}"
-            )
+    for index, story in enumerate(actuator.story for actuator in experiment.actuators):
+        if story > n_floors:
+            raise ConfigError(f"{file}: {prefix}[{index}].story: story {story} does not exist, expected 1..{n_floors}")
     _check_devices(experiment)
     file, prefix = experiment.origin("sensors")
     masses = sum(d.type in ("tuned_mass", "active_mass") for d in experiment.devices)
@@ -395,6 +395,5 @@ def _check_dagger(experiment: Experiment) -> None:
 
 
 def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:
-    if isinstance(value, bool) or not isinstance(value, int | float) or (integer and not isinstance(value, int)):
-        return False
-    return low <= value <= high
+    wrong_type = isinstance(value, bool) or not isinstance(value, int if integer else int | float)
+    return not wrong_type and low <= value <= high

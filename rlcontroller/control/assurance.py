@@ -2,12 +2,8 @@
 that hands the devices back to their fail-safe action when the controlled building is about to do worse
 than the twin.
 
-**The twin.** On a linear design model the controlled building is the building failed safe plus its
-response to the forces the controller applied (superposition). The controller knows those forces, so it
-knows that response exactly: x_u' = Φ x_u + Γ a, from x_u = 0 (Φ, Γ: the observation filter's model at
-the control step, Γ per unit action). The twin's estimate is then the observation's Kalman estimate
-minus x_u, which is exactly the Kalman filter of the fail-safe building from the readings it would give:
-a filter, not an open-loop simulation of the ground readings, so it carries no drift of its own.
+**The twin** (`control.twin`): the observation's Kalman estimate less the controller's own response x_u
+to the forces it applied, the Kalman filter of the building failed safe.
 
 **The switching rule**, per building and step, on story drift ratios δ = drift / height:
 
@@ -23,8 +19,8 @@ a filter, not an open-loop simulation of the ground readings, so it carries no d
   LQR gain on the experiment's cost): the building rejoins the reference's own trajectory rather than
   ringing on in another state than the reference's.
 
-The applied action (after the previous supervisor stages) drives x_u, so the twin sees exactly what the
-actuators received.
+The applied action (after the previous supervisor stages and this one) drives x_u, so the twin sees exactly
+what the actuators received.
 """
 
 from __future__ import annotations
@@ -32,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.config import AssuranceConfig
-from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
+from rlcontroller.control.twin import FailSafeTwin
 from rlcontroller.physics.plant import Plant
 
 
@@ -44,22 +40,19 @@ class RuntimeAssurance:
 
     def __init__(self, config: AssuranceConfig, plant: Plant, size: int) -> None:
         design, building = plant.design, plant.building
-        kalman = observation_filter(design)  # the observation's own (`sensors.state_estimate`: config checks)
-        n, floors = building.n_dofs, building.n_floors
-        self.phi_t = kalman.phi.T
-        self.gamma_t = kalman.action_gain.T
+        self.twin_model = twin = FailSafeTwin(plant, size)
+        n, floors, states = building.n_dofs, building.n_floors, twin.phi_t.shape[0]
         self.scale = plant.layout.estimate_scale
         self.estimate = plant.layout.estimate
         heights = building.story_heights if building.story_heights is not None else np.ones(floors)
         drift = building.drift_matrix() / heights[:, None]
-        self.drift_t = np.zeros((kalman.size, floors))
+        self.drift_t = np.zeros((states, floors))
         self.drift_t[:n] = drift.T
-        self.velocity_t = np.zeros((kalman.size, floors))
+        self.velocity_t = np.zeros((states, floors))
         self.velocity_t[n : 2 * n] = drift.T / (2.0 * np.pi / design.building.periods()[0])
-        self.feedback_t = self._recovery_gain(design, kalman.size).T
+        self.feedback_t = self._recovery_gain(design, states).T
         self.release, self.engage = config.release, config.engage
         self.floor = config.floor  # drift ratio below which a running peak counts as this
-        self.difference = np.zeros((size, kalman.size))
         self.peak = np.zeros((size, floors))
         self.engaged = np.ones(size, dtype=bool)
 
@@ -73,14 +66,14 @@ class RuntimeAssurance:
         return padded
 
     def reset(self, members: int | slice | np.ndarray = slice(None)) -> None:
-        self.difference[members] = 0.0
+        self.twin_model.reset(members)
         self.peak[members] = 0.0
         self.engaged[members] = True
 
     def twin(self, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(controlled, twin) estimates (size, E) in SI units."""
         controlled = observations[:, self.estimate].astype(float) * self.scale
-        return controlled, controlled - self.difference
+        return controlled, controlled - self.twin_model.difference
 
     def risk(self, controlled: np.ndarray, twin: np.ndarray) -> np.ndarray:
         """The largest over stories of the controlled envelope over the twin's envelope or running peak."""
@@ -98,5 +91,5 @@ class RuntimeAssurance:
         self.engaged = np.where(self.engaged, risk <= self.release, risk < self.engage)
         recovering = ~self.engaged
         if recovering.any():
-            actions[recovering] = np.clip(-self.difference[recovering] @ self.feedback_t, -1.0, 1.0)
-        self.difference = self.difference @ self.phi_t + actions @ self.gamma_t
+            actions[recovering] = np.clip(-self.twin_model.difference[recovering] @ self.feedback_t, -1.0, 1.0)
+        self.twin_model.advance(actions)

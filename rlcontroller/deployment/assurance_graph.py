@@ -23,7 +23,8 @@ def assured(g, plant: Plant, stored: str, action: str, start: int) -> tuple[str,
     """The action the actuators receive after runtime assurance, and the next state's assurance values;
     the previous ones are the graph's input `state` from column `start` on. `g` is export's graph writer."""
     rule = RuntimeAssurance(plant.experiment.supervisor.assurance, plant, 1)
-    size, floors = rule.phi_t.shape[0], rule.peak.shape[1]
+    model = rule.twin_model
+    size, floors = model.phi_t.shape[0], rule.peak.shape[1]
     difference = g.columns("state", start, start + size, "previous_difference")
     previous_peak = g.columns("state", start + size, start + size + floors, "previous_twin_peak")
     was_released = g.node(  # stored as released (1), so that the zero state is engaged, as at a Python reset
@@ -61,8 +62,8 @@ def assured(g, plant: Plant, stored: str, action: str, start: int) -> tuple[str,
     new_difference = g.node(
         "Add",
         [
-            g.node("MatMul", [difference, g.constant("difference_map", rule.phi_t)], "difference_free"),
-            g.node("MatMul", [action, g.constant("difference_input", rule.gamma_t)], "difference_forced"),
+            g.node("MatMul", [difference, g.constant("difference_map", model.phi_t)], "difference_free"),
+            g.node("MatMul", [action, g.constant("difference_input", model.gamma_t)], "difference_forced"),
         ],
         "difference",
     )
@@ -73,4 +74,4 @@ def assured(g, plant: Plant, stored: str, action: str, start: int) -> tuple[str,
 def assurance_values(supervisor) -> np.ndarray:
     """The Python supervisor's assurance state of its first building, as the graph's state holds it."""
     rule = supervisor.assurance
-    return np.concatenate([rule.difference[0], rule.peak[0], [float(not rule.engaged[0])]])
+    return np.concatenate([rule.twin_model.difference[0], rule.peak[0], [float(not rule.engaged[0])]])

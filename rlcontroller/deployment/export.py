@@ -12,7 +12,7 @@ Inputs (float64, one row per building):
     ground (N, 1): the measured ground acceleration (m/s^2);
     state (N, S): the controller's own state, zeros before the motion starts.
 Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
-The state is the observation of this step (history, scaled estimate, last action), the last
+The state is the observation of this step (history, scaled estimate, the twin's block, last action), the last
 ground reading, with a supervisor's trigger the largest ground reading so far (m/s^2), with measured
 velocities each stroke's (m/s) and whether the fallback took over, and with runtime
 assurance the twin's difference state, its running story peaks and whether the devices are handed back. Call
@@ -33,6 +33,7 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured
 from rlcontroller.deployment.fallback_graph import fallback_state_size, fallen_back, measured_velocity
+from rlcontroller.deployment.twin_graph import twin_block
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 
@@ -96,6 +97,8 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     parts = [g.node("Concat", blocks, "history", axis=1) if len(blocks) > 1 else blocks[0]]
     if layout.estimate.stop > layout.estimate.start:
         parts.append(_kalman(g, plant, held))
+    if layout.twin.stop > layout.twin.start:
+        parts.append(twin_block(g, plant, held, parts[-1]))
     observation = g.node("Concat", [*parts, actions], "observation", axis=1)
     # the policy reads the observation as the env stores it (float32), as `PolicyController` does in Python
     stored = g.node(

@@ -333,8 +333,7 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
     basis = np.vstack([np.eye(size), -np.eye(size)]) * step
     batch.plant_states()[:] = basis[:, :n_x]
     batch.observations[:] = basis[:, n_x:]
-    if batch.kalman is not None:
-        batch.estimates[:] = batch.observations[:, plant.layout.estimate] * plant.layout.estimate_scale
+    batch.read_back_estimates()
     controller.reset()
     observations, _, _ = batch.step(controller.act(batch.observations.copy()))
     after = np.hstack([batch.plant_states(), observations])

@@ -7,7 +7,8 @@ ground acceleration divided by `ground_scale`, and the last action has m values 
 With `sensors.state_estimate` a Kalman estimate of [x; x'] from those same readings (scaled)
 comes before the last action, followed, with `sensors.ground_model`, by the two estimated states
 of a Kanai-Tajimi ground filter; with `sensors.integration_cutoff` the model-free integrated
-readings (`control.estimation.integration_filter`) sit there instead. Before the motion starts
+readings (`control.estimation.integration_filter`) sit there instead. With `sensors.twin` the fail-safe
+twin's estimate and running story peaks follow the estimate (`control.twin`). Before the motion starts
 the history is zero.
 
 Action: one value per actuator in [-1, 1], clipped, passed through the experiment's supervisor if
@@ -43,6 +44,7 @@ from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
+from rlcontroller.control.twin import FailSafeTwin
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
@@ -83,6 +85,7 @@ class BuildingEnv(gym.Env):
         if self.kalman is not None:
             self._filter_matrices = self.kalman.on_observations(self.layout)
         self.supervisor = supervisor(plant, 1)
+        self.twin = FailSafeTwin(plant, 1) if experiment.sensors.twin else None
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(layout.size,), dtype=np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(m,), dtype=np.float32)
         self._observation = np.zeros(layout.size, dtype=np.float32)
@@ -171,6 +174,8 @@ class BuildingEnv(gym.Env):
         if self.supervisor is not None:
             self.supervisor.reset()
         self.layout.start(self._observation[None], readings[:1])
+        if self.twin is not None:
+            self.twin.reset()
         if self.kalman is not None:
             self._estimate = np.zeros(self.kalman.size)
             self._previous_ground = 0.0
@@ -184,6 +189,8 @@ class BuildingEnv(gym.Env):
         )
         self._previous_ground = readings[-1]
         self._observation[self.layout.estimate] = self.layout.scaled_estimate(self._estimate)
+        if self.twin is not None:
+            self._observation[self.layout.twin] = self.layout.scaled_twin(*self.twin.observe(self._estimate[None]))[0]
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         k = self._k
@@ -196,6 +203,8 @@ class BuildingEnv(gym.Env):
         np.maximum(clipped, -1.0, out=clipped)
         if self.supervisor is not None:
             self.supervisor(self._observation[None], clipped[None])
+        if self.twin is not None:
+            self.twin.advance(clipped[None])
         new = self._advance(k, clipped)
         state_action[:n_state] = new[:n_state]
         outputs = new[n_state:]

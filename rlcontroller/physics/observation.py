@@ -9,12 +9,15 @@ configured readings, H = `sensors.history`, m actuators and A = `sensors.action_
 | k (p + 1) ... k (p + 1) + p - 1 | step t - k's readings, with noise and bias | each sensor's `scale` |
 | k (p + 1) + p | step t - k's ground acceleration reading, with noise (m/s^2) | `ground_scale` |
 | H (p + 1) ... H (p + 1) + E - 1 | the estimate (below) | `displacement_scale`, `velocity_scale` |
-| H (p + 1) + E + j m ... + m - 1 | the action applied j steps ago (after the supervisor), in [-1, 1] | 1 |
+| then T = E + n, with `twin` | the fail-safe twin's estimate, then each story's running peak drift (m) | as above |
+| then j m ... + m - 1 | the action applied j steps ago (after the supervisor), in [-1, 1] | 1 |
 
 The estimate: with `state_estimate`, the Kalman estimate of [x (n floors, m); v (n, m/s)], then with
 `ground_model` the ground filter's 2 states, or in an experiment trained under wind the wind model's
 fluctuating floor forces (N, scaled by their design std) (E = 2n, 2n + 2 or 2n + floors); with `integration_cutoff`, per
-channel (p + 1): leaky velocity, displacement, velocity (E = 3 (p + 1)); else none (E = 0).
+channel (p + 1): leaky velocity, displacement, velocity (E = 3 (p + 1)); else none (E = 0). The twin
+(`control.twin`, T = E + n) makes the observation the controller's whole state still: the difference it
+subtracts is the estimate less the twin's estimate.
 
 Before the motion starts the history and the actions are zero. `layout.readings` and
 `layout.ground` index the newest block, `layout.estimate` the estimate, `layout.action` the newest
@@ -40,11 +43,13 @@ class ObservationLayout:
     readings: slice
     ground: int
     estimate: slice  # empty without `sensors.state_estimate` or `sensors.integration_cutoff`
+    twin: slice  # the twin's estimate, then its running story peaks; empty without `sensors.twin`
     action: slice  # the newest action
     actions: slice  # the last `sensors.action_history` actions, newest first
     reading_scale: np.ndarray
     ground_scale: float
     estimate_scale: np.ndarray
+    twin_scale: np.ndarray
     size: int
 
     @property
@@ -71,6 +76,10 @@ class ObservationLayout:
         """The filter's estimates (..., E) in SI units as they sit in the observation."""
         return estimates / self.estimate_scale
 
+    def scaled_twin(self, twin: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+        """The twin's estimates (..., E) and running story peaks (..., n), SI units, as they sit in the observation."""
+        return np.concatenate([twin, peaks], axis=-1) / self.twin_scale
+
 
 def observation_layout(
     building: Building,
@@ -95,16 +104,22 @@ def observation_layout(
             estimate_scale = np.append(estimate_scale, GroundModel().state_scale(sensors.ground_scale))
         elif load_scale is not None:
             estimate_scale = np.append(estimate_scale, load_scale)
+    twin_scale = np.zeros(0)
+    if sensors.twin:
+        twin_scale = np.append(estimate_scale, [sensors.displacement_scale] * building.n_floors)
     estimate_start = sensors.history * (n_readings + 1)
-    action_start = estimate_start + estimate_scale.size
+    twin_start = estimate_start + estimate_scale.size
+    action_start = twin_start + twin_scale.size
     return ObservationLayout(
         readings=slice(0, n_readings),
         ground=n_readings,
-        estimate=slice(estimate_start, action_start),
+        estimate=slice(estimate_start, twin_start),
+        twin=slice(twin_start, action_start),
         action=slice(action_start, action_start + building.n_actuators),
         actions=slice(action_start, action_start + sensors.action_history * building.n_actuators),
         reading_scale=reading_scale,
         ground_scale=sensors.ground_scale,
         estimate_scale=estimate_scale,
+        twin_scale=twin_scale,
         size=action_start + sensors.action_history * building.n_actuators,
     )

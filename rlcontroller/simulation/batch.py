@@ -19,6 +19,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
+from rlcontroller.control.twin import FailSafeTwin
 from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.loads import generate
 from rlcontroller.physics.plant import Plant
@@ -50,6 +51,7 @@ class BuildingBatch:
         self.m = plant.building.n_actuators
         self.kalman = observation_filter(plant)
         self.supervisor = supervisor(plant, size)
+        self.twin = FailSafeTwin(plant, size) if experiment.sensors.twin else None
         if self.kalman is not None:
             self._filter_matrices = self.kalman.on_observations(layout)
             self.estimates = np.zeros((size, self.kalman.size))
@@ -147,6 +149,8 @@ class BuildingBatch:
         self.previous_action[member] = 0.0
         if self.supervisor is not None:
             self.supervisor.reset(member)
+        if self.twin is not None:
+            self.twin.reset(member)
         self.layout.start(self.observations[member : member + 1], readings[:1])
         if self.kalman is not None:
             self.estimates[member] = 0.0
@@ -173,6 +177,18 @@ class BuildingBatch:
         self.estimates[members] = estimates
         self.previous_ground[members] = readings[:, -1]
         self.observations[members, self.layout.estimate] = self.layout.scaled_estimate(estimates)
+        if self.twin is not None:
+            twin = self.layout.scaled_twin(*self.twin.observe(estimates, members))
+            self.observations[members, self.layout.twin] = twin
+
+    def read_back_estimates(self) -> None:
+        """The filter's estimates and the twin's state as the observations hold them (after a caller wrote
+        the observations: they are the controllers' whole state)."""
+        if self.kalman is not None:
+            self.estimates[:] = self.observations[:, self.layout.estimate] * self.layout.estimate_scale
+        if self.twin is not None:
+            twin = self.observations[:, self.layout.twin] * self.layout.twin_scale
+            self.twin.restore(self.estimates, *np.split(twin, [self.estimates.shape[1]], axis=1))
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Apply `actions` (N, m), clipped to [-1, 1]; returns the new observations (N, obs) float32 (a
@@ -196,6 +212,8 @@ class BuildingBatch:
         np.asarray(actions).clip(-1.0, 1.0, out=clipped)
         if self.supervisor is not None:
             self.supervisor(self.observations, clipped)
+        if self.twin is not None:
+            self.twin.advance(clipped)
         forcing = self._forcing[self._members, np.minimum(self.k, self._forcing.shape[1] - 1)]
         new = self._advance(clipped) + forcing
         states[:, :size] = new[:, :size]

@@ -163,7 +163,7 @@ def test_residual_needs_the_state_estimate():
 
     with pytest.raises(ConfigError, match="residual_lqg: needs sensors.state_estimate"):
         build_experiment({"algorithm": {"residual_lqg": True}})
-    with pytest.raises(ConfigError, match="ground_model: needs state_estimate"):
+    with pytest.raises(ConfigError, match="ground_model: needs sensors.state_estimate"):
         build_experiment({"sensors": {"ground_model": True}})
 
 

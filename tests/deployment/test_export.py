@@ -244,6 +244,41 @@ def test_a_model_free_policy_on_integrated_readings_exports_too(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_policy_that_sees_the_fail_safe_twin_exports_with_it(tmp_path):
+    """The graph builds the twin's block of the observation (`sensors.twin`) as the env does: fed the same
+    readings and the applied actions, its state holds the env's twin estimate and running peaks each step
+    (within float32 storage), and the policy reading them gives the same forces."""
+    import torch
+
+    from rlcontroller.learning.algorithms import build_model, make_vec_env
+
+    sensors = {"state_estimate": True, "ground_model": True, "twin": True}
+    experiment = Experiment.model_validate({"sensors": sensors, "algorithm": {"name": "PPO"}})
+    plant = Plant(experiment)
+    model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
+    with torch.no_grad():
+        model.policy.action_net.weight.mul_(30.0)
+    controller, layout = policy_controller(model, None), plant.layout
+    path = tmp_path / "twin.onnx"
+    assert_same_forces_open_loop(plant, controller, path)
+    env, exported = BuildingEnv(plant), OnnxController(path)
+    observation, info = env.reset(seed=1, options={"motion": synthetic_suite(count=1)[0]})
+    graph_twin, env_twin = [], []
+    for _ in range(info["steps"]):
+        readings = observation[layout.readings].astype(float) * layout.reading_scale
+        exported.step(readings[None], np.array([[float(observation[layout.ground]) * layout.ground_scale]]))
+        graph_twin.append(exported.state[0, layout.twin].copy())
+        env_twin.append(observation[layout.twin].astype(float))
+        action = controller.act(observation)
+        exported.state[0, layout.action] = action  # the held action is the one applied
+        observation, *_ = env.step(action)
+    graph_twin, env_twin = np.array(graph_twin), np.array(env_twin)
+    assert np.abs(env_twin).max() > 0.1
+    scale = np.abs(env_twin).max(axis=0)
+    np.testing.assert_array_less(np.abs(graph_twin - env_twin).max(axis=0), 1e-5 * scale + 1e-9)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["five_story_amd", "five_story_mr"])
 def test_policies_for_devices_export_too(tmp_path, name):
     """An active mass driver's force (N) and MR dampers' commands in [-1, 1] come out of the graph as
