@@ -14,7 +14,10 @@ its strongest motions, docs/assurance.md). Two supervisor stages read velocities
   still right at first yield: the building was elastic until then), every actuator acts for good as a
   viscous damper, force = -damping x (measured stroke velocity less a `deadband` of sensor noise). A damper
   on measured velocity takes energy out whatever the building's stiffness has become; graded from the
-  lower stories up, it keeps the drift from collecting in the stories it leaves soft.
+  lower stories up, it keeps the drift from collecting in the stories it leaves soft. The velocity is
+  clipped where the first damper reaches its actuator's force limit, so past it every damper holds a force
+  in the same proportion as below (stiffness-proportional dampers stay proportional to the stories'
+  strengths instead of all pushing at equal limits, which moves drift into the weakest story).
 """
 
 from __future__ import annotations
@@ -63,6 +66,8 @@ class DamperFallback:
         self.drift_t = (drift * layout.estimate_scale[:n]).T  # from the estimate's scaled displacements
         self.threshold = config.drift
         self.gain = np.asarray(config.damping) / plant.force_limits  # action per m/s of stroke velocity
+        strongest = float(self.gain.max())
+        self.saturation = 1.0 / strongest if strongest > 0.0 else np.inf  # m/s: the first damper's limit reached
         self.deadband = config.deadband
         self.latched = np.zeros(size, dtype=bool)
 
@@ -70,9 +75,9 @@ class DamperFallback:
         self.latched[members] = False
 
     def damper_actions(self, velocity: np.ndarray) -> np.ndarray:
-        """The dampers' actions (clipped to the force limits) for stroke velocities (..., m) in m/s."""
-        beyond = np.sign(velocity) * np.maximum(np.abs(velocity) - self.deadband, 0.0)
-        return np.clip(-self.gain * beyond, -1.0, 1.0)
+        """The dampers' actions for stroke velocities (..., m) in m/s, their velocity clipped at `saturation`."""
+        beyond = np.sign(velocity) * np.clip(np.abs(velocity) - self.deadband, 0.0, self.saturation)
+        return -self.gain * beyond
 
     def __call__(self, observations: np.ndarray, velocity: np.ndarray, actions: np.ndarray) -> None:
         drift = observations[:, self.displacements] @ self.drift_t

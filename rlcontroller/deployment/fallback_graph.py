@@ -3,6 +3,8 @@ Python supervisor does from the observation as the env stores it (float32)."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from rlcontroller.control.fallback import DamperFallback, MeasuredStrokeVelocity
 from rlcontroller.physics.plant import Plant
 
@@ -52,9 +54,10 @@ def fallen_back(g, plant: Plant, stored: str, action: str, velocity: str, start:
     latched = g.node("Or", [was, beyond_level], "fallen_back")
     speed = g.node("Sub", [g.node("Abs", [velocity], "stroke_speed_measured"), g.constant("deadband", rule.deadband)],
                    "speed_beyond_deadband")  # fmt: skip
-    beyond = g.node("Mul", [g.node("Sign", [velocity], "stroke_direction"), g.node("Relu", [speed], "speed_kept")],
-                    "damped_velocity")  # fmt: skip
-    dampers = g.clip(g.node("Mul", [beyond, g.constant("damper_gain", -rule.gain)], "damper_raw"), -1.0, 1.0,
-                     "damper_action")  # fmt: skip
+    # one Clip, not Relu then Clip: onnxruntime's Relu-Clip fusion refuses double bounds
+    kept = g.clip(speed, 0.0, rule.saturation, "speed_kept") if np.isfinite(rule.saturation) else g.node(
+        "Relu", [speed], "speed_kept")  # fmt: skip
+    beyond = g.node("Mul", [g.node("Sign", [velocity], "stroke_direction"), kept], "damped_velocity")
+    dampers = g.node("Mul", [beyond, g.constant("damper_gain", -rule.gain)], "damper_action")
     action = g.node("Where", [latched, dampers, action], "fallback_action")
     return action, g.node("Cast", [latched], "fallback_value", to=11)  # double

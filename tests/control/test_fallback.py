@@ -79,8 +79,10 @@ def test_the_fallback_hands_over_for_good_at_its_drift_and_then_acts_as_dampers(
     assert 0 < first < len(drift) - 100 and not latched[first - 1] and latched[first:].all()
     assert (np.abs(drift[first:]).max(axis=1) < 0.02).any()  # it stays handed over when the drift falls back
     np.testing.assert_allclose(applied[:first], wanted[:first], atol=1e-7)  # float32 observation
-    beyond = np.sign(measured) * np.maximum(np.abs(measured) - 0.01, 0.0)
-    dampers = np.clip(-np.array(DAMPING) / 1.0e5 * beyond, -1.0, 1.0)
+    saturation = 1.0e5 / max(DAMPING)  # m/s: where the strongest damper reaches its actuator's limit
+    assert (np.abs(measured[first:]) - 0.01 > saturation).any()  # so that the dampers saturate, in proportion
+    beyond = np.sign(measured) * np.clip(np.abs(measured) - 0.01, 0.0, saturation)
+    dampers = -np.array(DAMPING) / 1.0e5 * beyond
     np.testing.assert_allclose(applied[first:], dampers[first:], atol=1e-6)
     power = np.sum(applied[first:] * 1.0e5 * true[first:], axis=0)  # W summed over steps, per actuator
     assert np.all(power < 0.0), power  # the dampers take energy out of every story
