@@ -46,6 +46,20 @@ ABOUT = {
         "studies/mpc/five_story_every_story_dagger.yaml",
         "42 min (stopped at 579 k steps, the best at 105 k)",
     ),
+    "five_story_yielding": (
+        "The five-story building with an actuator on every story (100 kN each) on stories that yield (Bouc-Wen, "
+        "3 cm yield drift, 10 % post-yield stiffness), controlled by LQG + ground model designed on the elastic "
+        "design model (classical, no training) behind the yielding building's supervisor "
+        "(configs/supervisors/yielding.yaml): a trigger at 0.2-0.6 m/s^2, the dissipative rule on stroke "
+        "velocities integrated from the floors' accelerations (no model), and past 2 cm of estimated story "
+        "drift a hand-over for good to stiffness-proportional viscous dampers (0.05 s x the story stiffness) on "
+        "those measured velocities, saturating in proportion. Every number was chosen on generated suites other "
+        "than the check's (docs/assurance.md, 'A building that yields'). It passes the check by a narrow margin: "
+        "its worst significant motion (1.20 g, whose building failed safe drifts 16 % of its story height, a "
+        "collapse the Bouc-Wen stories cannot model) is 0.99 % worse than the reference, within the 1 % tolerance.",
+        "configs/experiments/five_story_yielding.yaml",
+        "",
+    ),
     "seventy_six_story_atmd": (
         "The 76-story wind benchmark building with its active tuned mass damper on floor 75 (500 t, 500 kN), "
         "controlled by LQG + wind model with the damper's stroke weighted 10 times the benchmark experiment's and "

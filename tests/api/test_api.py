@@ -115,7 +115,9 @@ def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_de
     assert api.model_folder(experiments / "five_story_every_story_robust.yaml", report) == DEFAULT_MODEL
     assert report.notes[0].endswith(f"using {DEFAULT_MODEL}, the shipped controller for its paper five-story under "
                                     "ground motion, actuators on stories 1, 2, 3, 4, 5")  # fmt: skip
-    for name in ("five_story_wind", "five_story_yielding", "paper_sac", "five_story_mr"):  # load, plant, layout, device
+    yielding = load_experiment(experiments / "five_story_yielding.yaml")  # the plant tells it from the default
+    assert shipped_for(yielding) == DEFAULT_MODEL.parent / "five_story_yielding"
+    for name in ("five_story_wind", "paper_sac", "five_story_mr"):  # load, layout, device
         assert shipped_for(load_experiment(experiments / f"{name}.yaml")) is None, name
     with pytest.raises(ConfigError, match=r"five_story_mr.yaml: no shipped controller for its paper five-story under "
                        r"ground motion, mr_damper on stories 1, 3, 5 \(rlc models\): train one"):  # fmt: skip
