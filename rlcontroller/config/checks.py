@@ -359,13 +359,10 @@ def check_algorithm(experiment: Experiment) -> None:
 
 
 def _check_random_search(experiment: Experiment) -> None:
-    """RandomSearch learns a linear actor (odd, or affine with `odd: false`; a residual with
+    """RandomSearch learns an actor (linear or a network; odd, or affine with `odd: false`; a residual with
     `residual_lqg`) on the batched env's plant."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
-    if algorithm.policy.actor_arch != []:
-        where = location(file, prefix, "policy.actor_arch")
-        raise ConfigError(f"{where}: RandomSearch trains a linear actor; expected []")
     refused = {
         "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
         "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),

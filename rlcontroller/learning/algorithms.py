@@ -69,8 +69,8 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
 
     algorithm = experiment.algorithm
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
-    if algorithm.name == "RandomSearch":
-        net_arch = {"pi": [], "vf": []}  # no critic is trained
+    if algorithm.name == "RandomSearch":  # no critic is trained; without actor_arch a linear actor
+        net_arch = {"pi": list(algorithm.policy.actor_arch or []), "vf": []}
     elif algorithm.name == "DAgger":
         net_arch = {"pi": list(algorithm.policy.actor_arch or algorithm.policy.net_arch), "vf": []}
     elif algorithm.policy.actor_arch is not None:

@@ -23,7 +23,10 @@ is priced, as the check fails it.
 The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) with a linear actor
 (`actor_arch: []`; its action layer is W, bias 0; no critic is trained), or for an affine policy
 stable-baselines3's own `ActorCriticPolicy` (its action layer is W, b), so saving, loading,
-evaluation, validation and ONNX export are those of any run. `num_timesteps` counts the control
+evaluation, validation and ONNX export are those of any run. With hidden layers (`actor_arch: [64, 64]`)
+the searched parameters are every weight and bias of the actor's network, one vector (the hidden layers
+start at stable-baselines3's initialisation, the action layer at zero: the search starts at no action, or
+at the prior), and each candidate runs as the numpy network a saved policy is. `num_timesteps` counts the control
 steps simulated. The learner runs on the plant of its training env (a `BatchedVecEnv`), whose
 generator and randomisation it uses; every field needed to resume exactly (W, the search's random
 generator) is saved with the model.
@@ -39,7 +42,10 @@ import numpy as np
 import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
-from rlcontroller.control.controllers import LinearFeedback, fail_safe_controller
+from rlcontroller.control.controllers import Controller, LinearFeedback, fail_safe_controller
+from rlcontroller.control.networks import Actor, Layer
+from rlcontroller.control.policy import PolicyController
+from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
 from rlcontroller.physics.excitation import Load
@@ -97,23 +103,57 @@ class RandomSearch(BatchLearner):
 
     def _setup_model(self) -> None:
         self._setup_policy_and_plant()
-        if self.policy.mlp_extractor.policy_net:
-            raise ValueError("RandomSearch trains a linear actor: set policy.actor_arch: []")
         self.affine = not isinstance(self.policy, OddActorCriticPolicy)
+        self.network = bool(self.policy.mlp_extractor.policy_net)  # hidden layers: search every parameter
+        if self.initial_bias != 0.0 and (self.network or not self.affine):
+            what = "a linear actor (policy.actor_arch: [])" if self.network else "an affine policy (policy.odd: false)"
+            raise ValueError(f"initial_bias {self.initial_bias} needs {what}")
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
-            rows, columns = self.policy.action_net.weight.shape
-            if self.initial_bias != 0.0 and not self.affine:
-                raise ValueError(f"initial_bias {self.initial_bias} needs an affine policy (policy.odd: false)")
-            self.weights = np.zeros((rows, columns + self.affine))  # [W | b] when affine
-            self.weights[:, columns:] = self.initial_bias
+            if self.network:
+                with torch.no_grad():
+                    self.policy.action_net.weight.zero_()
+                    self.policy.action_net.bias.zero_()
+                self.weights = np.concatenate([p.detach().cpu().numpy().ravel() for p in self._parameters()])
+                self.weights = self.weights.astype(float)
+            else:
+                rows, columns = self.policy.action_net.weight.shape
+                self.weights = np.zeros((rows, columns + self.affine))  # [W | b] when affine
+                self.weights[:, columns:] = self.initial_bias
             self.search_rng = np.random.default_rng(self.seed)
         self._set_actor()
+        self._network = actor_of(self) if self.network else None  # the layers' shapes and activations
+
+    def _parameters(self) -> list[torch.Tensor]:
+        """The actor network's weights and biases, layer by layer (the order of the searched vector)."""
+        linears = [*self.policy.mlp_extractor.policy_net, self.policy.action_net]
+        return [p for module in linears if isinstance(module, torch.nn.Linear) for p in (module.weight, module.bias)]
 
     def _set_actor(self) -> None:
         with torch.no_grad():
+            if self.network:
+                start = 0
+                for parameter in self._parameters():
+                    values = self.weights[start : start + parameter.numel()].reshape(parameter.shape)
+                    parameter.copy_(torch.as_tensor(values, dtype=torch.float32))
+                    start += parameter.numel()
+                return
             weights, bias = self._split(self.weights)
             self.policy.action_net.weight.copy_(torch.as_tensor(weights, dtype=torch.float32))
             self.policy.action_net.bias.copy_(torch.as_tensor(0.0 if bias is None else bias, dtype=torch.float32))
+
+    def candidate(self, parameters: np.ndarray) -> Controller:
+        """The controller of one candidate's parameters, as its saved policy would act."""
+        if not self.network:
+            weights, bias = self._split(parameters)
+            return LinearFeedback(weights, prior=self.prior, bias=bias)
+        layers, start = [], 0
+        for layer in self._network.layers:
+            weight = parameters[start : start + layer.weight.size].reshape(layer.weight.shape)
+            bias = parameters[start + weight.size : start + weight.size + layer.bias.size]
+            layers.append(Layer(weight.astype(np.float32), bias.astype(np.float32), layer.activation))
+            start += weight.size + bias.size
+        actor = Actor(tuple(layers), squash=False, odd=self._network.odd)
+        return PolicyController(actor, None, self.prior, "candidate")
 
     def _split(self, parameters: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """W and b (None for an odd policy) of a candidate's parameters."""
@@ -125,7 +165,7 @@ class RandomSearch(BatchLearner):
         """f(W + d_k) and f(W - d_k) for every direction d_k, all on the same motions, noise seeds
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
-        controllers = [LinearFeedback(w, prior=self.prior, bias=b) for w, b in map(self._split, candidates)]
+        controllers = [self.candidate(parameters) for parameters in candidates]
         runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
         if self.objective == "standard":  # the reference with the control system failed safe: no supervisor
             failed_safe = self.plant.failed_safe

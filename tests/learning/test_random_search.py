@@ -161,6 +161,31 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
 
 
 @pytest.mark.slow
+def test_a_network_search_starts_at_its_prior_and_its_saved_policy_acts_as_its_candidates(tmp_path):
+    """With hidden layers every weight and bias is searched: the action layer starts at zero (the prior acts
+    alone), and the saved policy (numpy, as exported) acts as the candidate the search ran."""
+    robust = REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"
+    network = {"actor_arch": [16, 16], "odd": True}
+    experiment = tiny(robust, name="RandomSearch", policy=network, normalize_rewards=False)
+    experiment = experiment.model_validate(experiment.model_dump() | {"plant_randomization": None})
+    model = new_model(experiment)
+    observations = np.random.default_rng(2).standard_normal((6, model.plant.layout.size)).astype(np.float32)
+    at_start = model.candidate(model.weights)
+    np.testing.assert_allclose(at_start.act(observations), np.clip(at_start.prior(observations), -1.0, 1.0), atol=1e-6)
+    hidden = model.weights.size - model.plant.building.n_actuators * 17  # all but the action layer's W and b
+    assert hidden == 16 * model.plant.layout.size + 16 + 16 * 16 + 16
+
+    train(
+        experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),
+        run_dir=tmp_path / "run",
+    )
+    searched = RandomSearch.load(tmp_path / "run" / "final_model.zip", device="cpu")
+    assert np.any(searched.weights[hidden:] != 0.0)  # the action layer moved off zero
+    expected = model.candidate(searched.weights).act(observations)  # a loaded model has no plant, so no prior
+    np.testing.assert_allclose(saved_policy(tmp_path / "run", "final").act(observations), expected, atol=1e-5)
+
+
+@pytest.mark.slow
 def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
     experiment = tiny(total_steps=24000)
     whole = train(experiment, run_dir=tmp_path / "whole")
@@ -185,7 +210,8 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("algorithm", "expected"),
     [
-        ("{policy: {actor_arch: [16], odd: true}}", "algorithm.policy.actor_arch: RandomSearch trains a linear actor"),
+        ("{policy: {actor_arch: [16], odd: false}, kwargs: {initial_bias: 0.5}}",
+         "initial_bias 0.5 needs a linear actor (policy.actor_arch: [])"),
         ("{normalize_rewards: true}", "algorithm.normalize_rewards: not for RandomSearch"),
         ("{vec_env: dummy}", "algorithm.vec_env: not for RandomSearch"),
         ("{kwargs: {delta_std: 0}}", "algorithm.kwargs.delta_std: expected a number in"),
