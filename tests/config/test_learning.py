@@ -32,8 +32,8 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(name):
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
         ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
         (
-            {"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}},
-            "algorithm.policy.actor_arch: RandomSearch",
+            {"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}, "vec_env": "dummy"},
+            "algorithm.vec_env: not for RandomSearch",
         ),
     ],
 )
