@@ -218,3 +218,21 @@ def test_the_fallback_search_refuses_to_tune_on_the_check_suite():
     script = script_path("search_fallback")
     done = subprocess.run([sys.executable, str(script), "--suite-seed", "31337"], capture_output=True, text=True)
     assert done.returncode == 2 and "--suite-seed 31337 is the check suite: tune on another seed" in done.stderr
+
+
+def test_the_strong_suites_draw_every_motion_strong_and_never_the_check_suite_s_seed(capsys, monkeypatch):
+    from rlcontroller.config import load_experiment, load_safety_check
+    from rlcontroller.evaluation.safety import check_suite
+    from rlcontroller.physics.plant import Plant
+
+    module = load_script("strong_suites")
+    plant = Plant(load_experiment(module.EXPERIMENT))
+    check = load_safety_check(SCRIPTS.parent / "configs" / "checks" / "standard.yaml")
+    motions = check_suite(plant, module.strong_suite(check, 779, 24, 4.9, 14.71))
+    pgas = np.array([motion.pga for motion in motions])
+    assert len(motions) == 24 and pgas.min() >= 4.9 - 1e-9 and pgas.max() <= 14.71 + 1e-9
+    assert pgas.max() > 2.0 * pgas.min()  # drawn over the range, not one level
+    monkeypatch.setattr("sys.argv", ["strong_suites.py", "--seeds", str(check.seed)])
+    with pytest.raises(SystemExit):
+        module.main()
+    assert "the check suite's" in capsys.readouterr().err

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 
 from rlcontroller.api.common import safety_standard
-from rlcontroller.config import load_experiment
+from rlcontroller.config import SafetyCheckConfig, load_experiment
 from rlcontroller.config.scenarios import load_safety_check
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
@@ -22,6 +22,15 @@ from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 EXPERIMENT = REPOSITORY / "configs" / "experiments" / "five_story_yielding.yaml"
+
+
+def strong_suite(check: SafetyCheckConfig, seed: int, motions: int, low: float, high: float) -> SafetyCheckConfig:
+    """The check's standard with its motions drawn from its own generator family, every PGA log-uniform in
+    [low, high] (m/s^2), `motions` of them with `seed`."""
+    generator = check.generator.model_dump()
+    for component in generator["components"]:
+        component["generator"]["pga"] = [low, high]
+    return type(check).model_validate(check.model_dump() | {"generator": generator, "seed": seed, "motions": motions})
 
 
 def main() -> None:
@@ -40,14 +49,11 @@ def main() -> None:
     )
     plant = Plant(base.model_copy(update={"supervisor": base.supervisor.model_copy(update={"fallback": fallback})}))
     check = load_safety_check(safety_standard(base))
-    generator = check.generator.model_dump()
-    for component in generator["components"]:
-        component["generator"]["pga"] = [arguments.pga_low, arguments.pga_high]
     controller = classical_policy(plant, "lqg_ground_model")
     for seed in arguments.seeds:
-        suite = type(check).model_validate(
-            check.model_dump() | {"generator": generator, "seed": seed, "motions": arguments.motions}
-        )
+        if seed == check.seed:
+            parser.error(f"seed {seed} is the check suite's: pick another")
+        suite = strong_suite(check, seed, arguments.motions, arguments.pga_low, arguments.pga_high)
         verdict = suite_criterion(plant, controller, suite, drift_bounds(plant, suite))
         print(f"seed {seed}: {verdict['summary']}")
         for failure in verdict["failures"]:
