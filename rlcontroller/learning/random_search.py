@@ -113,8 +113,8 @@ class RandomSearch(BatchLearner):
                 with torch.no_grad():
                     self.policy.action_net.weight.zero_()
                     self.policy.action_net.bias.zero_()
-                self.weights = np.concatenate([p.detach().cpu().numpy().ravel() for p in self._parameters()])
-                self.weights = self.weights.astype(float)
+                values = [p.detach().cpu().numpy().ravel() for p in self._parameters()]
+                self.weights = np.concatenate(values, dtype=float)
             else:
                 rows, columns = self.policy.action_net.weight.shape
                 self.weights = np.zeros((rows, columns + self.affine))  # [W | b] when affine
