@@ -35,7 +35,7 @@ def check_cross_references(experiment: Experiment) -> None:
     for part, key, asked, why in estimate_users:
         if asked and not sensors.state_estimate:
             raise ConfigError(f"{location(*experiment.origin(part), key)}: needs sensors.state_estimate: true ({why})")
-        if asked and why == twin and experiment.has_dampers:
+        if asked and key in ("assurance", "twin") and experiment.has_dampers:
             raise ConfigError(f"{location(*experiment.origin(part), key)}: not with semi-active dampers (a command "
                               "is not a force: the twin cannot take its response out)")  # fmt: skip
     if sensors.ground_model and experiment.excitation.generator.kind == "wind":
