@@ -45,11 +45,9 @@ class RuntimeAssurance:
         self.scale = plant.layout.estimate_scale
         self.estimate = plant.layout.estimate
         heights = building.story_heights if building.story_heights is not None else np.ones(floors)
-        drift = building.drift_matrix() / heights[:, None]
-        self.drift_t = np.zeros((states, floors))
-        self.drift_t[:n] = drift.T
+        self.drift_t = twin.drift_t / heights  # story drift ratios from an estimate
         self.velocity_t = np.zeros((states, floors))
-        self.velocity_t[n : 2 * n] = drift.T / (2.0 * np.pi / design.building.periods()[0])
+        self.velocity_t[n : 2 * n] = self.drift_t[:n] / (2.0 * np.pi / design.building.periods()[0])
         self.feedback_t = self._recovery_gain(design, states).T
         self.release, self.engage = config.release, config.engage
         self.floor = config.floor  # drift ratio below which a running peak counts as this

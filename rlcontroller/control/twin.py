@@ -23,8 +23,8 @@ from rlcontroller.physics.plant import Plant
 
 
 class FailSafeTwin:
-    """The twin of `size` buildings of one plant: `reset(members)` at each start, `advance(actions, members)`
-    once the actuators' actions (k, m) in [-1, 1] are known, `observe(estimates, members)` once the
+    """The twin of `size` buildings of one plant: `reset(members)` at each start, `advance(actions)` once
+    every building's actuator actions (size, m) in [-1, 1] are known, `observe(estimates, members)` once the
     observation's Kalman estimates (k, E, SI units) of the next step are."""
 
     def __init__(self, plant: Plant, size: int) -> None:
@@ -41,9 +41,9 @@ class FailSafeTwin:
         self.difference[members] = 0.0
         self.peak[members] = 0.0
 
-    def advance(self, actions: np.ndarray, members: int | slice | np.ndarray = slice(None)) -> None:
+    def advance(self, actions: np.ndarray) -> None:
         """x_u over the step on which the actuators hold `actions`."""
-        self.difference[members] = self.difference[members] @ self.phi_t + actions @ self.gamma_t
+        self.difference = self.difference @ self.phi_t + actions @ self.gamma_t
 
     def observe(
         self, estimates: np.ndarray, members: int | slice | np.ndarray = slice(None)
