@@ -509,12 +509,10 @@ def test_wind_training_loads_on_a_yielding_plant_are_refused(tmp_path):
     assert "excitation.generator: wind loads with yielding stories or dampers are not modelled" in line
 
 
-def test_a_ground_model_estimate_under_wind_is_refused(tmp_path):
-    (tmp_path / "bad.yaml").write_text(
-        "excitation: {generator: {kind: wind}}\nsensors: {state_estimate: true, ground_model: true}\n"
-    )
+def test_a_ground_model_without_the_state_estimate_under_wind_is_refused(tmp_path):
+    (tmp_path / "bad.yaml").write_text("excitation: {generator: {kind: wind}}\nsensors: {ground_model: true}\n")
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
-    assert "ground_model: under wind the estimate models the floor forces, not the ground" in line
+    assert "ground_model: needs sensors.state_estimate: true (its states join the estimate)" in line
 
 
 @pytest.mark.parametrize("name", ["../elsewhere.csv", "../../etc/passwd", "/etc/passwd", "sub/../../up.csv"])

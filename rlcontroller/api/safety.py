@@ -37,12 +37,14 @@ def check(
     standard = standard or own
     checking = load_safety_check(standard)
     loads = "wind loads" if checking.generator.kind == "wind" else "motions"
+    if (also := checking.also) is not None:
+        also = f", {also.motions} generated {'wind loads' if also.generator.kind == 'wind' else 'ground motions'}"
     report.line(
         f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated {loads}, "
-        f"{checking.rest_runs} runs at rest, closed-loop stability..."
+        f"{checking.rest_runs} runs at rest{also or ''}, closed-loop stability..."
     )
     named = load_scenarios(scenarios or default_scenarios(experiment), experiment)
-    with report.progress("safety check", 3) as advance:
+    with report.progress("safety check", 3 + (checking.also is not None)) as advance:
         try:
             verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
         except ConfigError as error:  # the standard asks for what this building has not

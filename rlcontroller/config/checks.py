@@ -38,9 +38,6 @@ def check_cross_references(experiment: Experiment) -> None:
         if asked and key in ("assurance", "twin") and experiment.has_dampers:
             raise ConfigError(f"{location(*experiment.origin(part), key)}: not with semi-active dampers (a command "
                               "is not a force: the twin cannot take its response out)")  # fmt: skip
-    if sensors.ground_model and experiment.excitation.generator.kind == "wind":
-        where = location(*experiment.origin("sensors"), "ground_model")
-        raise ConfigError(f"{where}: under wind the estimate models the floor forces, not the ground; set it false")
     if (cutoff := sensors.integration_cutoff) is not None:
         where = location(*experiment.origin("sensors"), "integration_cutoff")
         if sensors.state_estimate:

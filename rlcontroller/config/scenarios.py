@@ -5,12 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-from pydantic import (
-    AfterValidator,
-    Field,
-)
+from pydantic import AfterValidator, Field, ValidationError
 
-from rlcontroller.config.base import Seed, StrictModel, first_repeat, read_model
+from rlcontroller.config.base import ConfigError, Seed, StrictModel, first_error, first_repeat, read_model, read_yaml
 from rlcontroller.config.checks import check_plant
 from rlcontroller.config.excitation import GeneratorConfig, WindGeneratorConfig
 from rlcontroller.config.experiment import Experiment
@@ -61,6 +58,7 @@ class SafetyCheckConfig(StrictModel):
     rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
     rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
     tolerance: Annotated[float, Field(ge=0.0, le=0.05)] = 0.01
+    also: SafetyCheckConfig | None = None  # in YAML a file beside this one, whose check suite must pass too
 
 
 def check_generator(standard: SafetyCheckConfig, experiment: Experiment) -> GeneratorConfig:
@@ -74,5 +72,23 @@ def check_generator(standard: SafetyCheckConfig, experiment: Experiment) -> Gene
 
 
 def load_safety_check(path: str | Path) -> SafetyCheckConfig:
-    """The safety check's standard from a YAML file."""
-    return read_model(path, SafetyCheckConfig, "'generator'")
+    """The safety check's standard from a YAML file; its `also`, the name of another standard's file beside it
+    (one that names no other), is read as that standard."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict) or "also" not in raw:
+        return read_model(path, SafetyCheckConfig, "'generator'")
+    also = raw["also"]
+    other = path.parent / also if isinstance(also, str) else None
+    if other is None or not other.is_file() or "also" in _mapping(read_yaml(other)):
+        raise ConfigError(f"{path}: also: expected the file name of a standard beside it that names no other, "
+                          f"got {also!r}")  # fmt: skip
+    other = read_model(other, SafetyCheckConfig, "'generator'")
+    try:
+        return SafetyCheckConfig.model_validate(raw | {"also": other})
+    except ValidationError as error:
+        raise first_error(error, str(path), "", SafetyCheckConfig) from None
+
+
+def _mapping(raw: object) -> dict:
+    return raw if isinstance(raw, dict) else {}

@@ -6,7 +6,8 @@ step that ended at t_k (absolute accelerations). The ground acceleration is eith
 or, with `known_ground`, a measured input whose change over a step is the process noise, or
 (`design_kalman_ground_model`) the output of a Kanai-Tajimi filter (the plant's `ground_model`)
 whose two states join the estimate and whose output is measured. Under wind
-(`design_kalman_wind_model`) the fluctuating floor forces join the estimate instead. Everything is in action units
+(`design_kalman_wind_model`) the fluctuating floor forces join the estimate instead (and the ground model
+too, with `sensors.ground_model`). Everything is in action units
 a = u / force_limit at the control step.
 """
 
@@ -170,29 +171,39 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     )
 
 
-def design_kalman_wind_model(plant: Plant, model: WindLoadModel) -> KalmanFilter:
-    """Filter of [z; f] (the fluctuating floor forces of `model`, a first-order process each) from
-    the sensors, which feel f directly where they read absolute accelerations; the process noise is
-    the model's, discretised exactly (`dynamics.discrete_noise`)."""
-    building, sensors = plant.building, plant.sensors
+def design_kalman_wind_model(plant: Plant, model: WindLoadModel, ground_std: float = 1.0) -> KalmanFilter:
+    """Filter of [z; f] (the fluctuating floor forces of `model`, a first-order process each) from the sensors,
+    which feel f directly where they read absolute accelerations; with `sensors.ground_model`, of [z; f; x_g;
+    x_g'] from the sensors and the ground reading, the Kanai-Tajimi filter's white noise scaled so that its
+    ground acceleration has a stationary std of `ground_std` (m/s^2), as in `design_kalman_ground_model`. The
+    process noise is discretised exactly (`dynamics.discrete_noise`)."""
+    building, sensors, config = plant.building, plant.sensors, plant.experiment.sensors
     sampled = plant.sampled()
     system, step = sampled.wind_system, sampled.wind_model
     size, floors = 2 * building.n_dofs, building.n_floors
     intensity = np.zeros_like(system.a)
-    intensity[size:, size:] = 2.0 * model.covariance / model.time_constant  # stationary covariance: model's
-    action_gain = step.force_gain * building.force_limits
-    process = discrete_noise(system.a, intensity, step.phi) + 1e-12 * np.eye(size + floors)
-    process += input_noise(plant, action_gain)
+    intensity[size : size + floors, size : size + floors] = 2.0 * model.covariance / model.time_constant
     sensor_c = np.hstack([sensors.c, sensors.load])
-    measurement = np.diag(np.maximum(sensors.noise_std, 1e-3 * sensors.scale) ** 2)
+    noise = np.maximum(sensors.noise_std, 1e-3 * sensors.scale)
+    if config.ground_model:
+        ground = plant.ground_model.output
+        unit = scipy.linalg.solve_continuous_lyapunov(system.a[-2:, -2:], -np.diag([0.0, 1.0]))
+        intensity[-1, -1] = ground_std**2 / float(ground @ unit @ ground)
+        sensor_c = np.vstack([np.pad(sensor_c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size + floors), ground])])
+        noise = np.append(noise, max(config.ground_noise_std, 1e-3 * config.ground_scale))
+    action_gain = step.force_gain * building.force_limits
+    process = discrete_noise(system.a, intensity, step.phi) + 1e-12 * np.eye(step.phi.shape[0])
+    process += input_noise(plant, action_gain)
+    sensor_d = np.pad(sensors.d * building.force_limits, ((0, sensor_c.shape[0] - sensors.d.shape[0]), (0, 0)))
     return KalmanFilter(
         phi=step.phi,
         action_gain=action_gain,
-        ground_gain=np.zeros(size + floors),
+        ground_gain=np.zeros(step.phi.shape[0]),
         sensor_c=sensor_c,
-        sensor_d=sensors.d * building.force_limits,
-        gain=kalman_gain(step.phi, sensor_c, process, measurement),
+        sensor_d=sensor_d,
+        gain=kalman_gain(step.phi, sensor_c, process, np.diag(noise**2)),
         known_ground=False,
+        measures_ground=config.ground_model,
     )
 
 
@@ -229,7 +240,8 @@ def integration_filter(cutoff: float, control_dt: float, channels: int, n_actuat
 def observation_filter(plant: Plant) -> KalmanFilter | None:
     """The filter of the observation's own estimate: with `sensors.state_estimate` the Kalman filter
     designed on the design model as every controller is (the wind-model filter in an experiment
-    trained under wind, the ground-model filter with `sensors.ground_model`, else the one with the
+    trained under wind, with the ground model too if `sensors.ground_model`; the ground-model filter with
+    `sensors.ground_model`, else the one with the
     measured ground as a known input); with
     `sensors.integration_cutoff` the model-free `integration_filter`; else None."""
     sensors = plant.experiment.sensors

@@ -7,7 +7,9 @@ experiment alike (LQG, learned, uncontrolled), so comparisons stay fair:
 
 - **trigger** [start, full] (m/s²): the action is scaled by a gain that is 0 while the largest
   ground reading so far (noise included) is below `start`, rises linearly, and is 1 from `full` on.
-  Sensor noise alone (0.05 m/s² per reading) then never drives the building.
+  Sensor noise alone (0.05 m/s² per reading) then never drives the building. In an experiment trained
+  under wind, which the ground reading does not see, the largest of the floors' absolute accelerations
+  instead (`trigger_readings`): what wind and earthquakes both move.
 - **dissipative**: an actuator's force passes only when it takes energy out of the building,
   u_j (Γ_jᵀ v) ≤ 0 with Γ the actuator matrix and v the filter's estimate of the floor velocities
   (relative to the ground); otherwise that actuator's action is 0. For an inter-story actuator this
@@ -42,7 +44,7 @@ class Supervisor:
     def __init__(self, config: SupervisorConfig, plant: Plant, size: int) -> None:
         layout, n = plant.layout, plant.building.n_dofs
         self.trigger = config.trigger
-        self.ground, self.ground_scale = layout.ground, layout.ground_scale
+        self.trigger_indices, self.trigger_scales = trigger_readings(plant)
         self.velocity = None
         self.dissipative = config.dissipative
         self.fade = config.fade_velocity  # m/s (measured) or in the estimate's scaled units
@@ -65,8 +67,9 @@ class Supervisor:
             self.assurance.reset(members)
 
     def gain(self, observations: np.ndarray) -> np.ndarray:
-        """The trigger's gain per building, (size,), after taking in the newest ground readings."""
-        np.maximum(self.peak_ground, np.abs(observations[:, self.ground] * self.ground_scale), out=self.peak_ground)
+        """The trigger's gain per building, (size,), after taking in the newest readings it watches."""
+        newest = np.max(np.abs(observations[:, self.trigger_indices] * self.trigger_scales), axis=1)
+        np.maximum(self.peak_ground, newest, out=self.peak_ground)
         start, full = self.trigger
         if full == start:
             return (self.peak_ground >= full).astype(float)
@@ -90,6 +93,23 @@ class Supervisor:
             actions *= self.gain(observations)[:, None]
         if self.assurance is not None:
             self.assurance(observations, actions)
+
+
+def trigger_readings(plant: Plant) -> tuple[np.ndarray, np.ndarray]:
+    """Where in an observation the trigger reads (the newest block) and those readings' scales (m/s^2): the
+    ground reading, or in an experiment trained under wind every floor absolute acceleration read."""
+    layout = plant.layout
+    if plant.wind is None:
+        return np.array([layout.ground]), np.array([layout.ground_scale])
+    indices, scales, start = [], [], 0
+    for measurement in plant.experiment.sensors.measurements:
+        floors = measurement.floors
+        rows = plant.outputs(measurement.quantity)[0].shape[0] if floors is None else len(floors)
+        if measurement.quantity == "absolute_acceleration":
+            indices.extend(range(start, start + rows))
+            scales.extend([measurement.scale] * rows)
+        start += rows
+    return np.array(indices), np.array(scales)
 
 
 def supervisor(plant: Plant, size: int) -> Supervisor | None:

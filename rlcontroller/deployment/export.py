@@ -13,11 +13,10 @@ Inputs (float64, one row per building):
     state (N, S): the controller's own state, zeros before the motion starts.
 Outputs: force (N, m) in N, one per actuator (config order); next_state (N, S), the next call's state.
 The state is the observation of this step (history, scaled estimate, the twin's block, last action), the last
-ground reading, with a supervisor's trigger the largest ground reading so far (m/s^2), with measured
-velocities each stroke's (m/s) and whether the fallback took over, and with runtime
-assurance the twin's difference state, its running story peaks and whether the devices are handed back. Call
-once per control step (`control_dt_s` in the metadata), at the instant the readings are taken;
-apply the force until the next call.
+ground reading, with a supervisor's trigger the largest reading it watches so far (m/s^2), with measured
+velocities each stroke's (m/s) and whether the fallback took over, and with runtime assurance the twin's
+difference state, its running story peaks and whether the devices are handed back. Call once per control step
+(`control_dt_s` in the metadata), at the instant the readings are taken; apply the force until the next call.
 """
 
 from __future__ import annotations
@@ -31,6 +30,7 @@ from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
+from rlcontroller.control.supervisor import trigger_readings
 from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured
 from rlcontroller.deployment.fallback_graph import fallback_state_size, fallen_back, measured_velocity
 from rlcontroller.deployment.twin_graph import twin_block
@@ -169,7 +169,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
             else ""
         ),
         "state_size": str(state_size),
-        "supervisor": _supervisor_text(supervisor),
+        "supervisor": _supervisor_text(plant),
         "source": source,
     }
     helper.set_model_props(model, metadata)
@@ -208,15 +208,17 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
         kept.append(latched)
     if supervisor.trigger is None:
         return action, None, kept
-    reading = g.columns(stored, layout.ground, layout.ground + 1, "stored_ground")
-    ground = g.node("Abs", [g.node("Mul", [reading, "ground_scale"], "ground_reading")], "ground_magnitude")
+    indices, scales = trigger_readings(plant)
+    readings = g.node("Gather", [stored, g.constant("trigger_indices", indices, np.int64)], "trigger_stored", axis=1)
+    magnitude = g.node("Abs", [g.node("Mul", [readings, g.constant("trigger_scales", scales)], "trigger_readings")],
+                       "trigger_magnitude")  # fmt: skip
+    ground = g.node("ReduceMax", [magnitude], "ground_magnitude", axes=[1], keepdims=1)
     previous_peak = g.columns("state", layout.size + 1, layout.size + 2, "previous_peak_ground")
     peak = g.node("Max", [previous_peak, ground], "peak_ground")
     start, full = supervisor.trigger
     if full == start:
-        gain = g.node(
-            "Cast", [g.node("GreaterOrEqual", [peak, g.constant("trigger_full", full)], "on")], "gain", to=DOUBLE
-        )
+        on = g.node("GreaterOrEqual", [peak, g.constant("trigger_full", full)], "on")
+        gain = g.node("Cast", [on], "gain", to=DOUBLE)
     else:
         rise = g.node("Sub", [peak, g.constant("trigger_start", start)], "above_start")
         ramp = g.node("Div", [rise, g.constant("trigger_span", full - start)], "ramp")
@@ -224,19 +226,19 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
     return g.node("Mul", [action, gain], "supervised_action"), peak, kept
 
 
-def _supervisor_text(supervisor) -> str:
+def _supervisor_text(plant: Plant) -> str:
+    supervisor = plant.experiment.supervisor
     if supervisor is None:
         return "none"
     parts = []
     if supervisor.trigger is not None:
-        parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak ground reading")
-    if supervisor.assurance is not None:
-        assurance = supervisor.assurance
+        watched = "floor acceleration readings" if plant.wind is not None else "ground reading"
+        parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak {watched}")
+    if (assurance := supervisor.assurance) is not None:
         parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, "
                      f"engage {assurance.engage:g})")  # fmt: skip
     velocity = "measured " if supervisor.dissipative == "measured" else ""
-    if supervisor.dissipative and supervisor.fade_velocity > 0.0:
-        fade = supervisor.fade_velocity
+    if supervisor.dissipative and (fade := supervisor.fade_velocity) > 0.0:
         parts.append(f"forces feeding energy in faded out by {fade:g} m/s of {velocity}stroke velocity")
     elif supervisor.dissipative:
         parts.append("dissipative forces only" + (" (measured stroke velocity)" if velocity else ""))

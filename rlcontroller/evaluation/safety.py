@@ -4,7 +4,8 @@ The reference is the building as it stands when its controller fails safe (`fail
 devices, the building with no control; with devices, each at its fail-safe action (tuned masses as
 tuned, mass drivers switched off: the tuned masses they are, dampers at their minimum command:
 passive-off). Three criteria (the standard, `configs/checks/standard.yaml`, fixes the suite and the bounds;
-for a building controlled against wind `configs/checks/wind.yaml`, whose suite is generated wind):
+for a building controlled against wind `configs/checks/wind.yaml`, whose suite is generated wind and which
+`also` judges on standard.yaml's suite, a fourth: a building controlled against wind will also shake):
 
 1. **check suite** — on every one of its generated motions (own seed, never used in training or
    selection): the building's peak inter-story drift (max over stories and time) is no larger than
@@ -123,6 +124,9 @@ def safety_check(
         "check suite": lambda: suite_criterion(plant, controller, standard, bounds),
         "at rest": lambda: rest_criterion(plant, controller, standard, bounds),
     }
+    if (also := standard.also) is not None:
+        name = "wind suite" if also.generator.kind == "wind" else "ground-motion suite"
+        judges[name] = lambda: suite_criterion(plant, controller, also, drift_bounds(plant, also))
     if isinstance(controller, PolicyController):
         judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios)
     criteria = {}
@@ -232,7 +236,8 @@ def judge_suite(
         summary += f"; worst J2 {worst_j2['value']:.3f} ({worst_j2['motion']})"
     strokes = {name: peak_strokes(evaluation, name, motions) for name in (judged, reference)}
     if strokes[judged].size:
-        summary += f"; peak stroke {_metres(strokes[judged])} ({_metres(strokes[reference])} for the reference)"
+        metres = [", ".join(f"{value:.2f}" for value in strokes[name]) + " m" for name in (judged, reference)]
+        summary += f"; peak stroke {metres[0]} ({metres[1]} for the reference)"
     return {
         "passed": passed,
         "summary": summary,
@@ -256,10 +261,6 @@ def peak_strokes(evaluation, name: str, motions: list[Load]) -> np.ndarray:
     """Each mass device's largest stroke (m) over the motions, under the controller `name`."""
     peaks = [np.max(np.abs(evaluation.responses[name, motion.name].stroke), axis=0) for motion in motions]
     return np.max(peaks, axis=0)
-
-
-def _metres(values: np.ndarray) -> str:
-    return ", ".join(f"{value:.2f}" for value in values) + " m"
 
 
 def strength(motion: Load) -> dict:
@@ -351,11 +352,11 @@ def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
 
 def judged_digests(folder: Path, model: str, standard: SafetyCheckConfig) -> dict[str, str]:
     """sha256 of what a verdict judges: the policy's files, the experiment it runs in (the run's
-    config.yaml) and the standard (its resolved settings, so a comment does not count)."""
+    config.yaml) and the standard (its resolved settings, so a comment does not count; `also` when it has one)."""
     names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
     digests = {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
-    settings = json.dumps(standard.model_dump(mode="json"), sort_keys=True).encode()
-    digests["standard"] = hashlib.sha256(settings).hexdigest()
+    settings = standard.model_dump(mode="json", exclude={"also"} if standard.also is None else None)
+    digests["standard"] = hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()
     return digests
 
 

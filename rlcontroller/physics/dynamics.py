@@ -48,14 +48,9 @@ def state_space(building: Building | StateSpaceBuilding) -> StateSpace:
     if isinstance(building, StateSpaceBuilding):
         return StateSpace(a=building.a, b_force=building.b_force, b_ground=building.b_ground)
     n = building.n_dofs
-    mass_inverse = np.linalg.inv(building.mass)
-    a = np.block(
-        [
-            [np.zeros((n, n)), np.eye(n)],
-            [-mass_inverse @ building.stiffness, -mass_inverse @ building.damping],
-        ]
-    )
-    b_force = np.vstack([np.zeros((n, building.n_actuators)), mass_inverse @ building.actuator_matrix])
+    inverse = np.linalg.inv(building.mass)
+    a = np.block([[np.zeros((n, n)), np.eye(n)], [-inverse @ building.stiffness, -inverse @ building.damping]])
+    b_force = np.vstack([np.zeros((n, building.n_actuators)), inverse @ building.actuator_matrix])
     b_ground = np.concatenate([np.zeros(n), -np.ones(n)])
     return StateSpace(a=a, b_force=b_force, b_ground=b_ground)
 
@@ -183,18 +178,21 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
-def wind_model_system(building: Building, time_constant: float) -> StateSpace:
-    """The continuous system of the state [z; f]: the building and a first-order model of the
-    fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.wind.load_model`), driven
-    by the actuator forces (w enters through `discrete_noise`)."""
+def wind_model_system(building: Building, time_constant: float, ground: GroundModel | None = None) -> StateSpace:
+    """The continuous system of [z; f] (with `ground`, [z; f; x_g; x_g']): the building, a first-order model of
+    the fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.wind.load_model`), and the ground
+    filter shaking its base, driven by the actuator forces (the noises enter through `discrete_noise`)."""
     system = state_space(building)
     size, floors = system.a.shape[0], building.n_floors
     inputs = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
-    return StateSpace(
-        a=np.block([[system.a, inputs], [np.zeros((floors, size)), -np.eye(floors) / time_constant]]),
-        b_force=np.vstack([system.b_force, np.zeros((floors, building.n_actuators))]),
-        b_ground=np.zeros(size + floors),
-    )
+    a = np.block([[system.a, inputs], [np.zeros((floors, size)), -np.eye(floors) / time_constant]])
+    if ground is not None:
+        shaking = np.zeros((size + floors, 2))
+        shaking[:size] = np.outer(system.b_ground, ground.output)
+        a = np.block([[a, shaking], [np.zeros((2, size + floors)), np.array([[0.0, 1.0], ground.output])]])
+    extra = a.shape[0] - size
+    b_force = np.vstack([system.b_force, np.zeros((extra, building.n_actuators))])
+    return StateSpace(a=a, b_force=b_force, b_ground=np.zeros(size + extra))
 
 
 def discrete_noise(a: np.ndarray, intensity: np.ndarray, phi: np.ndarray) -> np.ndarray:

@@ -12,12 +12,12 @@ configured readings, H = `sensors.history`, m actuators and A = `sensors.action_
 | then T = E + n, with `twin` | the fail-safe twin's estimate, then each story's running peak drift (m) | as above |
 | then j m ... + m - 1 | the action applied j steps ago (after the supervisor), in [-1, 1] | 1 |
 
-The estimate: with `state_estimate`, the Kalman estimate of [x (n floors, m); v (n, m/s)], then with
-`ground_model` the ground filter's 2 states, or in an experiment trained under wind the wind model's
-fluctuating floor forces (N, scaled by their design std) (E = 2n, 2n + 2 or 2n + floors); with `integration_cutoff`, per
-channel (p + 1): leaky velocity, displacement, velocity (E = 3 (p + 1)); else none (E = 0). The twin
-(`control.twin`, T = E + n) makes the observation the controller's whole state still: the difference it
-subtracts is the estimate less the twin's estimate.
+The estimate: with `state_estimate`, the Kalman estimate of [x (n floors, m); v (n, m/s)], then in an
+experiment trained under wind the wind model's fluctuating floor forces (N, scaled by their design std), then
+with `ground_model` the ground filter's 2 states (E = 2n, 2n + 2, 2n + floors or 2n + floors + 2); with
+`integration_cutoff`, per channel (p + 1): leaky velocity, displacement, velocity (E = 3 (p + 1)); else none
+(E = 0). The twin (`control.twin`, T = E + n) makes the observation the controller's whole state still: the
+difference it subtracts is the estimate less the twin's estimate.
 
 Before the motion starts the history and the actions are zero. `layout.readings` and
 `layout.ground` index the newest block, `layout.estimate` the estimate, `layout.action` the newest
@@ -90,7 +90,7 @@ def observation_layout(
 ) -> ObservationLayout:
     """The layout of the table above for `building`, `sensors` and its n_readings readings; with
     `load_scale` (N, one per floor: an experiment trained under wind) the state estimate also holds
-    the fluctuating floor forces of the wind model."""
+    the fluctuating floor forces of the wind model (before the ground model's states, if both)."""
     estimate_scale = np.zeros(0)
     if sensors.integration_cutoff is not None:  # leaky velocity, displacement, velocity per channel
         channels = n_readings + 1
@@ -100,10 +100,10 @@ def observation_layout(
     if sensors.state_estimate:
         n = building.n_dofs
         estimate_scale = np.array([sensors.displacement_scale] * n + [sensors.velocity_scale] * n)
+        if load_scale is not None:
+            estimate_scale = np.append(estimate_scale, load_scale)
         if sensors.ground_model:
             estimate_scale = np.append(estimate_scale, GroundModel().state_scale(sensors.ground_scale))
-        elif load_scale is not None:
-            estimate_scale = np.append(estimate_scale, load_scale)
     twin_scale = np.zeros(0)
     if sensors.twin:
         twin_scale = np.append(estimate_scale, [sensors.displacement_scale] * building.n_floors)

@@ -11,8 +11,8 @@ discretises it:
 - `structure`: the same on the building's own z = [x; v], without actuator dynamics: the building left alone;
 - `load`: floor forces (N), linear between their samples, over a step on x (plants that take them);
 - `ground_model`, and `wind_model` with its continuous `wind_system`: the building with its Kanai-Tajimi
-  ground filter or its first-order model of the wind's floor forces, over one control step (the designs of
-  LQG, the Kalman filters and MPC);
+  ground filter or its first-order model of the wind's floor forces (and the ground filter, with
+  `sensors.ground_model`), over one control step (the designs of LQG, the Kalman filters and MPC);
 
 and from these what a whole load does: `forcing` (its terms in every step), `simulate` (the building left
 alone, from rest) and `response` (every time history, from states and held forces, on the plant's outputs
@@ -135,10 +135,13 @@ class SampledPlant:
 
     @cached_property
     def wind_system(self) -> StateSpace:
-        """The continuous system of the building and its design wind's floor forces (`plant.wind`)."""
-        if self.plant.wind is None:
+        """The continuous system of the building and its design wind's floor forces (`plant.wind`), and with
+        `sensors.ground_model` its Kanai-Tajimi ground model too: a building under wind will also shake."""
+        plant = self.plant
+        if plant.wind is None:
             raise ValueError("a wind model needs the experiment's excitation generator to be of kind wind")
-        return wind_model_system(self.plant.building, self.plant.wind.time_constant)
+        ground = plant.ground_model if plant.experiment.sensors.ground_model else None
+        return wind_model_system(plant.building, plant.wind.time_constant, ground)
 
     @cached_property
     def wind_model(self) -> StepMap:

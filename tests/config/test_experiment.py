@@ -1,3 +1,4 @@
+import re
 from pathlib import Path
 
 import numpy as np
@@ -60,11 +61,12 @@ def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(p
         return
     stories = [a.story for a in experiment.actuators]
     assert experiment.building == Experiment().building and stories in ([1, 3, 5], [1, 2, 3, 4, 5], [])
-    wind = experiment.excitation.generator.kind == "wind"  # the standard supervisor's ground trigger stays off
-    if stories == [1, 2, 3, 4, 5] and not wind:  # actuators on every story stand behind a supervisor (the check)
+    if stories == [1, 2, 3, 4, 5]:  # actuators on every story stand behind a supervisor (the check)
         assert experiment.supervisor is not None
+    if experiment.excitation.generator.kind == "wind":  # whose trigger watches the floors (wind.yaml's)
+        assert experiment.supervisor.trigger == (0.3, 1.0) and experiment.sensors.ground_model
     if experiment.supervisor is not None:
-        assert stories and not wind
+        assert stories
     assert bool(experiment.devices) == (stories == [])  # the device experiments have no inter-story actuators
     assert experiment.to_yaml() == load(path).to_yaml()  # loading is deterministic
 
@@ -181,3 +183,21 @@ def test_an_experiment_trains_on_the_check_suite_s_family_near_fault_pulses_incl
     excitation = {"generator": standard.generator.model_dump(), "validation_motions": 4}
     experiment = build_experiment({"excitation": excitation})
     assert [source.kind for source in experiment.excitation.sources()].count("near_fault") >= 1
+
+
+def test_the_wind_standard_also_judges_the_ground_motion_suite_and_a_bad_also_is_one_line(tmp_path):
+    """wind.yaml names standard.yaml beside it; a name that is not a file beside it, or a standard that names
+    another itself (which could loop), is a one-line error naming the file and the field."""
+    from rlcontroller.config import load_safety_check
+
+    checks = REPOSITORY / "configs" / "checks"
+    wind = load_safety_check(checks / "wind.yaml")
+    assert wind.also == load_safety_check(checks / "standard.yaml") and wind.also.also is None
+    assert wind.generator.kind == "wind" and wind.also.motions == 320
+    text = (checks / "wind.yaml").read_text()
+    (tmp_path / "standard.yaml").write_text(text.replace("also: standard.yaml", "also: wind.yaml"))
+    for also, expected in [("missing.yaml", "'missing.yaml'"), ("standard.yaml", "'standard.yaml'"), ("[1]", "[1]")]:
+        (tmp_path / "wind.yaml").write_text(text.replace("also: standard.yaml", f"also: {also}"))
+        message = rf"wind.yaml: also: expected the file name of a standard beside it.*{re.escape(expected)}"
+        with pytest.raises(ConfigError, match=message):
+            load_safety_check(tmp_path / "wind.yaml")

@@ -65,6 +65,31 @@ def test_the_applied_action_is_the_controller_s_gated_by_dissipation_and_scaled_
     assert 0.1 < feeds_energy.mean() < 0.9 and gain[-1] == 1.0 and gain[0] == 0.0
 
 
+def test_under_wind_the_trigger_also_watches_the_floors():
+    """The ground reading does not see wind: in an experiment trained under wind the trigger's gain follows
+    the largest of the floor accelerations instead, so the controller acts in wind (the ground reading alone
+    stays at sensor noise) and, behind the experiment's trigger, stays off at rest."""
+    from rlcontroller.assets import CONFIGS
+    from rlcontroller.config import load_experiment
+    from rlcontroller.control.lqg import design_lqg_wind_model
+    from rlcontroller.physics.loads import generate_suite
+
+    wind = load_experiment(CONFIGS / "experiments" / "five_story_wind.yaml")
+    low = wind.supervisor.model_copy(update={"trigger": (0.1, 0.3)})
+    env = BuildingEnv(wind.model_copy(update={"supervisor": low}))
+    layout, controller = env.layout, LQGController(design_lqg_wind_model(env.plant.design), env.plant, "LQG + wind")
+    gust = generate_suite(wind.excitation.generator, 1, 2, env.plant.building)[0]
+    seen, wanted, applied = run(env, controller, gust)
+    floors, ground = seen[:, layout.readings] * layout.reading_scale, seen[:, layout.ground] * layout.ground_scale
+    gain = np.clip((np.maximum.accumulate(np.abs(floors).max(axis=1)) - 0.1) / 0.2, 0.0, 1.0)
+    np.testing.assert_allclose(applied, np.clip(wanted, -1, 1) * gain[:, None], rtol=1e-6, atol=1e-7)
+    ground_alone = np.clip((np.maximum.accumulate(np.abs(ground)) - 0.1) / 0.2, 0.0, 1.0)
+    assert gain[-1] == 1.0 and ground_alone[-1] < 0.75  # on sensor noise (0.05 m/s^2) the ground gives a part
+    own = BuildingEnv(wind)  # its own trigger, 0.3-1.0 m/s^2: six standard deviations of the noise
+    _, _, applied = run(own, controller, Load("at rest", 0.02, np.zeros(3001), synthetic=True))
+    assert np.all(applied == 0.0)
+
+
 def test_dissipative_forces_take_energy_out_of_the_building():
     """The rule judges by the filter's estimate; on the true story velocities the power the
     actuators put into the building is still negative overall and far below the unsupervised one's."""
