@@ -133,7 +133,7 @@ def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str, reduce: Red
     model = fe.get("model")
     if not isinstance(model, str) or not (folder / model).is_file():
         raise ConfigError(
-            f"{where}.opensees.model: expected the path of a Python file (relative to {folder}), got {model!r}"
+            f"{where}.opensees.model: expected the path of a Python or Tcl file (relative to {folder}), got {model!r}"
         )
     fe["model"] = str((folder / model).resolve())
     if "building" in raw:

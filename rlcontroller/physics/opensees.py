@@ -1,21 +1,15 @@
 """An OpenSees finite-element model as the plant, and the reduced model controllers are designed on.
 
-A model file is Python (code, not data: `docs/opensees.md`, "The trust boundary"): it defines a function
-(default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
-(nodes, masses, elements, damping) and returns a `FEDescription` mapping:
-
-- `floors`: per floor from the first up, the nodes of its level (the first is its control node: where the
-  actuators push and the sensors read; the masses of all are the floor's mass);
-- `direction`: the degree of freedom of the lateral direction (1 = x);
-- `story_heights`: m, per story;
-- `modal_damping` (ratios per mode, the last repeated) or `rayleigh` ([a0, a1], C = a0 M + a1 K): the
-  damping the file gave the model, for the reduced model to match;
-- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the constraint
-  handler, the linear solver, the convergence test and the solution algorithm of the time steps (default
-  `["Transformation"]`, `["UmfPack"]`, `["NormDispIncr", 1e-10, 30]` and `["Newton"]`: any model; a model
-  whose only multi-point constraints are `equalDOF` may take `["Plain"]`, one whose tangent is symmetric
-  `["SparseSYM"]`, and a test on the unbalanced force (N) converges in fewer iterations than one on the
-  displacement increment: docs/opensees.md, "Speed").
+A model file is code (not data: `docs/opensees.md`, "The trust boundary"), Python or Tcl. A Python file defines
+a function (default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
+(nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe_description`: floors,
+direction, story heights, damping, units, solver options). A Tcl file (`.tcl`, a published model run
+unmodified) is sourced, from its own folder, in OpenSees' own Tcl interpreter (the `opensees` package, STAIRlab's
+xara build, whose `opensees.openseespy` module drives the same domain), and what `rlc` needs of it is in the YAML
+file beside it of the same name. The solver options default to `["Transformation"]`, `["UmfPack"]`,
+`["NormDispIncr", 1e-10, 30]` and `["Newton"]`: any model (a model whose only multi-point constraints are
+`equalDOF` may take `["Plain"]`, one whose tangent is symmetric `["SparseSYM"]`; docs/opensees.md, "Speed").
+Everything `rlc` passes in or reads out is converted between SI and the model's units.
 
 `rlc` owns the time loop (`OpenSeesIntegrator`): each control step the ground acceleration enters as a
 uniform excitation (its samples over the step, linear between them), the actuator forces as nodal loads
@@ -39,18 +33,19 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from rlcontroller.errors import ConfigError, ModelError
+from rlcontroller.physics.fe_description import FEDescription
 
 MISSING = (
     'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '
     "LAPACK: apt-get install libblas3 liblapack3)"
 )
-FALLBACKS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
+MISSING_TCL = 'a Tcl model needs OpenSees\' Tcl interpreter, the opensees package: pip install -e ".[opensees]"'
 HALVINGS = 4  # after the algorithms, a step is retried in halves, down to 1/16
 GROUND_SERIES, GROUND_PATTERN, FORCE_SERIES, FORCE_PATTERN = 101, 101, 102, 102
 
@@ -60,18 +55,54 @@ class NonConvergence(ModelError):
 
 
 def opensees():
-    """The `openseespy.opensees` module, or one line saying what to install."""
+    """The OpenSees module of the model last built in this process (`build_model`): `openseespy.opensees`,
+    or for a Tcl model the `opensees` package's module of the same commands; one line saying what to install."""
+    if _TCL:
+        return _TCL[0]
+    _one_library("opensees.tcl", "a Tcl model")
     try:
         import openseespy.opensees as ops
     except ImportError as error:  # also "libblas.so.3: cannot open shared object file"
         raise ConfigError(f"{MISSING} ({error})") from None
-    if not _QUIET_EXIT:
-        atexit.register(_quiet_exit)
-        _QUIET_EXIT.append(True)
+    _quiet_at_exit()
     return ops
 
 
+def _use(tcl: bool) -> None:
+    """The models built from now on in this process are Tcl (OpenSees' own interpreter) or Python ones."""
+    _TCL.clear()
+    if tcl:
+        _one_library("openseespylinux", "an OpenSeesPy (Python) model")
+        try:
+            import opensees.openseespy as ops
+        except ImportError as error:
+            raise ConfigError(f"{MISSING_TCL} ({error})") from None
+        _TCL.append(ops)
+        _quiet_at_exit()
+
+
+def _error(ops) -> type[BaseException]:
+    """What the module raises for a command OpenSees refuses (openseespy's OpenSeesError; the Tcl build's own)."""
+    error = getattr(ops, "OpenSeesError", None)
+    return error if isinstance(error, type) and issubclass(error, BaseException) else Exception
+
+
+def _one_library(other: str, what: str) -> None:
+    """ConfigError (one line) when this process already loaded the other OpenSees library (`other` in its
+    modules): the two builds abort a process that steps both."""
+    if other in sys.modules:
+        raise ConfigError(f"this process already ran {what}: OpenSeesPy and OpenSees' Tcl build cannot share a "
+                          "process; run Python and Tcl models in processes of their own")  # fmt: skip
+
+
+def _quiet_at_exit() -> None:
+    if not _QUIET_EXIT:
+        atexit.register(_quiet_exit)
+        _QUIET_EXIT.append(True)
+
+
 _QUIET_EXIT: list[bool] = []
+_TCL: list = []
 
 
 def _quiet_exit() -> None:
@@ -80,65 +111,6 @@ def _quiet_exit() -> None:
     sys.stderr.flush()
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 2)
-
-
-@dataclass(frozen=True)
-class FEDescription:
-    """What `rlc` needs of a model built in the OpenSees domain (see the module's docstring)."""
-
-    floors: tuple[tuple[int, ...], ...]
-    direction: int
-    story_heights: tuple[float, ...]
-    modal_damping: tuple[float, ...] | None = None
-    rayleigh: tuple[float, float] | None = None
-    constraints: tuple[str | float, ...] = ("Transformation",)
-    system: tuple[str | float, ...] = ("UmfPack",)
-    test: tuple[str | float, ...] = ("NormDispIncr", 1e-10, 30)
-    algorithm: tuple[str | float, ...] = FALLBACKS[0]
-
-    @property
-    def algorithms(self) -> tuple[tuple[str | float, ...], ...]:
-        """The model's algorithm, then the fallbacks for a step it does not converge."""
-        return (self.algorithm, *(fallback for fallback in FALLBACKS if fallback != self.algorithm))
-
-    @property
-    def control_nodes(self) -> list[int]:
-        return [nodes[0] for nodes in self.floors]
-
-    @classmethod
-    def of(cls, raw: object, where: str) -> FEDescription:
-        if not isinstance(raw, dict):
-            raise ModelError(f"{where}: expected the model function to return a mapping, got {type(raw).__name__}")
-        missing = sorted({"floors", "direction", "story_heights"} - set(raw))
-        if missing:
-            raise ModelError(f"{where}: the model function's mapping lacks {', '.join(missing)}")
-        floors = tuple(tuple(int(n) for n in ([f] if isinstance(f, int) else f)) for f in raw["floors"])
-        heights = tuple(float(h) for h in raw["story_heights"])
-        if not floors or any(not nodes for nodes in floors) or len(heights) != len(floors):
-            raise ModelError(f"{where}: expected one list of nodes and one story height per floor")
-        if (raw.get("modal_damping") is None) == (raw.get("rayleigh") is None):
-            raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has)")
-        modal = raw.get("modal_damping")
-        rayleigh = raw.get("rayleigh")
-        solver = ("constraints", "system", "test", "algorithm")
-        options = {key: _arguments(raw[key], f"{where}: {key}") for key in solver if key in raw}
-        return cls(
-            floors=floors,
-            direction=int(raw["direction"]),
-            story_heights=heights,
-            modal_damping=None if modal is None else tuple(float(r) for r in modal),
-            rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
-            **options,
-        )
-
-
-def _arguments(raw: object, where: str) -> tuple[str | float, ...]:
-    """An OpenSees command's arguments: a name, then names or numbers."""
-    if not isinstance(raw, list | tuple) or not raw or not isinstance(raw[0], str):
-        raise ModelError(f"{where}: expected OpenSees' arguments, a list starting with a name, got {raw!r}")
-    if not all(isinstance(a, str | int | float) and not isinstance(a, bool) for a in raw):
-        raise ModelError(f"{where}: expected names and numbers, got {raw!r}")
-    return tuple(raw)
 
 
 def model_function(path: Path, function: str) -> Callable:
@@ -157,7 +129,11 @@ def model_function(path: Path, function: str) -> Callable:
 
 
 def build_model(path: Path, function: str) -> FEDescription:
-    """Wipe the OpenSees domain and build the model of `path` in it."""
+    """Wipe the OpenSees domain and build the model of `path` in it (a Tcl file: sourced from its folder, its
+    description read beside it)."""
+    _use(path.suffix == ".tcl")
+    if path.suffix == ".tcl":
+        return _build_tcl_model(path)
     ops = opensees()
     ops.wipe()
     try:
@@ -171,6 +147,36 @@ def build_model(path: Path, function: str) -> FEDescription:
     return description
 
 
+def _build_tcl_model(path: Path) -> FEDescription:
+    from rlcontroller.config.base import read_yaml
+
+    sidecar = path.with_suffix(".yaml")
+    if not sidecar.is_file():
+        raise ModelError(f"{path}: a Tcl model needs {sidecar.name} beside it (its floors, direction, story heights, "
+                         "damping and units: docs/opensees.md)")  # fmt: skip
+    description = FEDescription.of(read_yaml(sidecar), str(sidecar))
+    ops, folder = opensees(), os.getcwd()
+    ops.wipe()
+    try:
+        os.chdir(path.parent)  # a published model sources its neighbours by relative names
+        with _quiet():
+            ops.eval(f"source {{{path.name}}}")
+    except Exception as error:  # the model's own Tcl: whatever it raises is a fault of the model
+        message = " ".join(str(error).split())
+        raise ModelError(f"{path}: Tcl error: {message}") from None
+    finally:
+        os.chdir(folder)
+    check_in_domain(description, str(sidecar))
+    if description.rayleigh_modes is not None:  # what the model's own analysis script would give it
+        (i, zeta_i), (j, zeta_j) = description.rayleigh_modes
+        w_i, w_j = 2.0 * np.pi / periods(j)[[i - 1, j - 1]]
+        a1 = 2.0 * (zeta_j * w_j - zeta_i * w_i) / (w_j**2 - w_i**2)  # zeta = a0 / (2 w) + a1 w / 2 at both
+        a0 = 2.0 * zeta_i * w_i - a1 * w_i**2
+        ops.rayleigh(a0, 0.0, a1, 0.0)
+        description = replace(description, rayleigh=(float(a0), float(a1)))
+    return description
+
+
 def check_in_domain(description: FEDescription, where: str) -> None:
     """ModelError (one line) unless every floor node is in the domain and `direction` is one of the degrees of
     freedom of every one."""
@@ -180,7 +186,7 @@ def check_in_domain(description: FEDescription, where: str) -> None:
         missing = [tag for tag in tags if tag not in nodes]
         if missing:
             raise ModelError(f"{where}: floors: floor {floor} names node {missing[0]}, which the model does not have")
-        freedoms = min(ops.getNDF(tag)[0] for tag in tags)
+        freedoms = min(int(np.atleast_1d(ops.getNDF(tag))[0]) for tag in tags)
         if not 1 <= description.direction <= freedoms:
             raise ModelError(
                 f"{where}: direction {description.direction}: expected a degree of freedom of the floor nodes, "
@@ -191,7 +197,8 @@ def check_in_domain(description: FEDescription, where: str) -> None:
 def floor_masses(description: FEDescription) -> np.ndarray:
     """Each floor's mass in the lateral direction (kg): the sum over its nodes."""
     ops = opensees()
-    return np.array([sum(ops.nodeMass(n, description.direction) for n in nodes) for nodes in description.floors])
+    masses = [sum(ops.nodeMass(n, description.direction) for n in nodes) for nodes in description.floors]
+    return np.array(masses) * description.mass
 
 
 def periods(count: int) -> np.ndarray:
@@ -201,22 +208,26 @@ def periods(count: int) -> np.ndarray:
     with _quiet():
         try:
             eigenvalues = ops.eigen(count)
-        except ops.OpenSeesError:  # ARPACK wants more equations than modes: a model of as many as asked
+        except _error(ops):  # ARPACK wants more equations than modes: a model of as many as asked
             eigenvalues = ops.eigen("-fullGenLapack", count)
     return 2.0 * np.pi / np.sqrt(np.asarray(eigenvalues, dtype=float))
 
 
 @contextmanager
 def _quiet() -> Iterator[None]:
-    """OpenSees' own messages (on the standard error) silenced: a failed first try that has a fallback."""
+    """OpenSees' own messages (on the standard error, or the output in the Tcl build) silenced: a failed first
+    try that has a fallback."""
+    sys.stdout.flush()
     sys.stderr.flush()
-    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    saved, devnull = [os.dup(1), os.dup(2)], os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
     os.dup2(devnull, 2)
     try:
         yield
     finally:
-        os.dup2(saved, 2)
-        os.close(saved)
+        for stream, kept in zip((1, 2), saved, strict=True):
+            os.dup2(kept, stream)
+            os.close(kept)
         os.close(devnull)
 
 
@@ -226,7 +237,7 @@ def condensed_stiffness(description: FEDescription) -> np.ndarray:
     model's gravity state (its P-Delta included)."""
     ops = opensees()
     nodes, dof = description.control_nodes, description.direction
-    ndf = len(ops.nodeDisp(nodes[0]))
+    ndf = np.atleast_1d(ops.nodeDisp(nodes[0])).size
     at_rest = np.array([ops.nodeDisp(n, dof) for n in nodes])  # under the model's gravity loads
     flexibility = np.zeros((len(nodes), len(nodes)))
     ops.timeSeries("Linear", FORCE_SERIES)
@@ -241,8 +252,7 @@ def condensed_stiffness(description: FEDescription) -> np.ndarray:
         ops.wipeAnalysis()
         ops.reset()  # back to the unloaded model: the next analysis takes the held gravity loads again
         ops.setTime(0.0)
-    ops.remove("timeSeries", FORCE_SERIES)
-    stiffness = np.linalg.inv(flexibility)
+    stiffness = np.linalg.inv(flexibility) * description.force / description.length  # N/m
     return 0.5 * (stiffness + stiffness.T)
 
 
@@ -291,7 +301,7 @@ def reduced_building(path: Path, function: str) -> dict:
         "mass_matrix": np.diag(masses).tolist(),
         "stiffness_matrix": stiffness.tolist(),
         "modal_damping": ratios,
-        "story_heights": list(description.story_heights),
+        "story_heights": [height * description.length for height in description.story_heights],
     }
 
 
@@ -314,20 +324,21 @@ class OpenSeesIntegrator:
         return self.__dict__ | {"_last": None, "description": None}
 
     def reset(self) -> None:
-        ops = opensees()
         self.description = build_model(self.path, self.function)
+        ops = opensees()  # the module of the model just built
         ops.timeSeries("Constant", FORCE_SERIES)
+        self.series = GROUND_SERIES  # the ground's series of the last step (each its own: the Tcl build removes none)
         ops.numberer("RCM")
         for command in ("constraints", "system", "test", "algorithm"):
             arguments = getattr(self.description, command)
             try:
                 with _quiet():
                     getattr(ops, command)(*arguments)
-            except ops.OpenSeesError:
+            except _error(ops):
                 raise ModelError(f"{self.path}: {command} {list(arguments)}: OpenSees does not take it") from None
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
-        self.ndf = len(ops.nodeDisp(self.description.control_nodes[0]))
+        self.ndf = np.atleast_1d(ops.nodeDisp(self.description.control_nodes[0])).size
 
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state after one control step with the forces `action` * force limits (N) held and `ground`
@@ -340,16 +351,16 @@ class OpenSeesIntegrator:
         ops, description = opensees(), self.description
         time = ops.getTime()
         ops.remove("loadPattern", GROUND_PATTERN)
-        ops.remove("timeSeries", GROUND_SERIES)
-        values = np.asarray(ground, dtype=float)
+        self.series += 1000
+        values = np.asarray(ground, dtype=float) / description.length  # in the model's units
         # the last sample held beyond the step: the analysis' time may pass its end by a rounding
         interval = control_dt / (values.size - 1)
-        ops.timeSeries("Path", GROUND_SERIES, "-dt", interval, "-values", *values, "-startTime", time, "-useLast")
-        ops.pattern("UniformExcitation", GROUND_PATTERN, description.direction, "-accel", GROUND_SERIES)
+        ops.timeSeries("Path", self.series, "-dt", interval, "-values", *values, "-startTime", time, "-useLast")
+        ops.pattern("UniformExcitation", GROUND_PATTERN, description.direction, "-accel", self.series)
         ops.remove("loadPattern", FORCE_PATTERN)
         ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
         nodes = description.control_nodes
-        floor_forces = self.placement @ (np.asarray(action) * self.force_limits)  # N, per floor
+        floor_forces = self.placement @ (np.asarray(action) * self.force_limits) / description.force  # per floor
         for node, force in zip(nodes, floor_forces, strict=True):
             if force != 0.0:
                 ops.load(node, *[float(force) if d == description.direction else 0.0 for d in range(1, self.ndf + 1)])
@@ -359,9 +370,9 @@ class OpenSeesIntegrator:
             _advance(ops, control_dt / steps, description.algorithms, HALVINGS)
         dof = description.direction
         state = np.array(
-            [ops.nodeDisp(n, dof) for n in nodes]
-            + [ops.nodeVel(n, dof) for n in nodes]
-            + [ops.nodeAccel(n, dof) + float(ground[-1]) for n in nodes]
+            [ops.nodeDisp(n, dof) * description.length for n in nodes]
+            + [ops.nodeVel(n, dof) * description.length for n in nodes]
+            + [ops.nodeAccel(n, dof) * description.length + float(ground[-1]) for n in nodes]
         )
         self._last = state
         return state

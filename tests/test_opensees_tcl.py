@@ -1,0 +1,125 @@
+"""A Tcl OpenSees model as the plant (`physics.opensees`, OpenSees' own Tcl interpreter from the `opensees`
+package): the five-story building written in Tcl in kip and foot units reduces to the paper's building in SI and
+moves as rlc's exact integration of it; what a Tcl model lacks or gets wrong is one line naming the file.
+
+OpenSeesPy and OpenSees' Tcl build abort a process that steps both, so every Tcl model here runs in a process of
+its own (as `rlc` itself runs one model per process), and this module's own process loads neither."""
+
+import json
+import shutil
+import subprocess
+import sys
+from importlib.util import find_spec
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rlcontroller.config import Experiment
+
+pytestmark = pytest.mark.skipif(find_spec("opensees") is None, reason="a Tcl model needs the opensees extra")
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+TCL_MODEL = REPOSITORY / "configs" / "opensees" / "five_story_shear_kip_ft.tcl"
+TCL_EXPERIMENT = REPOSITORY / "studies" / "opensees" / "five_story_tcl.yaml"
+
+
+def in_own_process(code: str) -> dict:
+    """`code` run in a fresh interpreter; what it prints last, read as JSON."""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=REPOSITORY)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
+    """Masses (kip s^2/ft -> kg), the condensed stiffness (kip/ft -> N/m), story heights (ft -> m) and the
+    damping matched mode by mode (1 % in mode 1, 5 % in mode 5): the paper's building, from a Tcl file sourced
+    unmodified."""
+    reduced = in_own_process(
+        "import json; from pathlib import Path; from rlcontroller.physics.opensees import reduced_building; "
+        f"print(json.dumps(reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')))"
+    )
+    paper = Experiment().building  # configs/buildings/five_story.yaml
+    k, n = np.asarray(paper.stiffnesses), 5
+    drift = np.eye(n) - np.eye(n, k=-1)
+    np.testing.assert_allclose(np.diag(reduced["mass_matrix"]), paper.masses, rtol=1e-12)
+    np.testing.assert_allclose(reduced["stiffness_matrix"], drift.T @ np.diag(k) @ drift, rtol=1e-9, atol=1e-3)
+    assert reduced["modal_damping"][0] == pytest.approx(0.01, rel=1e-9)
+    assert reduced["modal_damping"][4] == pytest.approx(0.05, rel=1e-9)
+    np.testing.assert_allclose(reduced["story_heights"], [3.0] * 5, rtol=1e-9)
+
+
+@pytest.mark.slow
+def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(records):
+    """The ground (m/s^2 -> ft/s^2), the actuators' forces (N -> kip) and the floors' response (ft -> m): under a
+    record and held pushes, the Tcl plant's drifts and absolute accelerations are those of rlc's exact integration
+    of the paper's building (a wrong unit or sign is tens of per cent)."""
+    errors = in_own_process(
+        "import json, numpy as np\n"
+        "from rlcontroller import api\n"
+        "from rlcontroller.control.controllers import ConstantCommand\n"
+        "from rlcontroller.physics.plant import Plant\n"
+        "from rlcontroller.physics.records import load_records\n"
+        "from rlcontroller.simulation.rollout import batch_rollout\n"
+        f"plant = Plant(api.load({str(TCL_EXPERIMENT)!r}).model_copy(update={{'supervisor': None}}))\n"
+        f"motion = load_records({str(records)!r})[0][3]\n"
+        "push = ConstantCommand(np.array([0.5, -0.3, 0.2, 0.0, 1.0]), 5, 'push')\n"
+        "((fe, _),) = batch_rollout(plant, [motion], [push])[0]\n"
+        "((exact, _),) = batch_rollout(plant.design, [motion], [push])[0]\n"
+        "peak = lambda run, q: np.abs(getattr(run, q)).max(axis=0)\n"
+        "rms = lambda a, b: np.sqrt(np.mean((a - b) ** 2) / np.mean(b**2))\n"
+        "print(json.dumps({q: [float(np.max(np.abs(peak(fe, q) / peak(exact, q) - 1.0))),\n"
+        "                      float(rms(getattr(fe, q), getattr(exact, q))), float(peak(exact, q).max())]\n"
+        "                  for q in ('drift', 'absolute_acceleration')}))"
+    )
+    for quantity, (peak_error, rms_error, peak) in errors.items():
+        assert peak > (1e-2 if quantity == "drift" else 1.0), quantity  # it moves (m, m/s^2)
+        assert peak_error <= 1e-3, quantity  # peaks as the Python model's (test_opensees_plant.py)
+        assert rms_error <= (2e-3 if quantity == "drift" else 5e-3), quantity  # Newmark's period error, 2.5 ms
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (None, "five_story_shear_kip_ft.tcl: a Tcl model needs five_story_shear_kip_ft.yaml beside it"),
+        ("units: {length: furlong, force: kip}", "units: expected length in m, cm, mm, ft, in and force in"),
+        ("floors: [[1], [2], [3], [4], [9]]", "floors: floor 5 names node 9, which the model does not have"),
+        ("tcl: node 1 oops", 'Tcl error: expected'),
+    ],
+)
+def test_what_a_tcl_model_lacks_or_gets_wrong_is_one_line_naming_the_file(tmp_path, change, message):
+    shutil.copy(TCL_MODEL, tmp_path)
+    sidecar = TCL_MODEL.with_suffix(".yaml").read_text()
+    if change is not None and change.startswith("tcl: "):
+        (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + change[5:] + "\n")
+    elif change is not None:
+        key = change.split(":")[0]
+        sidecar = "\n".join(change if line.startswith(f"{key}:") else line for line in sidecar.splitlines())
+    if change is not None:
+        (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
+    experiment = tmp_path / "five_story_tcl.yaml"
+    experiment.write_text(
+        TCL_EXPERIMENT.read_text()
+        .replace("../../configs/opensees/five_story_shear_kip_ft.tcl", str(tmp_path / TCL_MODEL.name))
+        .replace("../../configs/", f"{REPOSITORY}/configs/")
+    )
+    done = subprocess.run([sys.executable, "-m", "rlcontroller", "info", str(experiment)], capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode != 0 and len(lines) == 1 and message in lines[0], done.stderr
+    assert str(tmp_path / TCL_MODEL.name.replace(".tcl", "")) in lines[0]
+    if change == "tcl: node 1 oops":
+        line = len(TCL_MODEL.read_text().splitlines()) + 1
+        assert f'"node 1 oops" (file "five_story_shear_kip_ft.tcl" line {line})' in lines[0]
+
+
+def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
+    """The two OpenSees builds abort a process that steps both: the second is refused before it loads."""
+    outcome = in_own_process(
+        "import json; from pathlib import Path; from rlcontroller.errors import ConfigError\n"
+        "from rlcontroller.physics.opensees import reduced_building\n"
+        f"reduced_building(Path({str(REPOSITORY / 'configs' / 'opensees' / 'five_story_shear.py')!r}), 'build_model')\n"
+        f"try: reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')\n"
+        "except ConfigError as error: print(json.dumps({'error': str(error)}))"
+    )
+    assert outcome["error"].startswith("this process already ran an OpenSeesPy (Python) model: OpenSeesPy and")
