@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rlcontroller.config.base import read_yaml
 from rlcontroller.errors import ConfigError, ModelError
 from rlcontroller.physics.fe_description import FEDescription
 
@@ -148,8 +149,6 @@ def build_model(path: Path, function: str) -> FEDescription:
 
 
 def _build_tcl_model(path: Path) -> FEDescription:
-    from rlcontroller.config.base import read_yaml
-
     sidecar = path.with_suffix(".yaml")
     if not sidecar.is_file():
         raise ModelError(f"{path}: a Tcl model needs {sidecar.name} beside it (its floors, direction, story heights, "
