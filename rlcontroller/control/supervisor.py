@@ -97,10 +97,12 @@ class Supervisor:
 
 def trigger_readings(plant: Plant) -> tuple[np.ndarray, np.ndarray]:
     """Where in an observation the trigger reads (the newest block) and those readings' scales (m/s^2): the
-    ground reading, or in an experiment trained under wind every floor absolute acceleration read."""
+    ground reading, or in an experiment trained under wind every floor absolute acceleration read (the ground
+    reading still where it reads none)."""
     layout = plant.layout
+    ground = np.array([layout.ground]), np.array([layout.ground_scale])
     if plant.wind is None:
-        return np.array([layout.ground]), np.array([layout.ground_scale])
+        return ground
     indices, scales, start = [], [], 0
     for measurement in plant.experiment.sensors.measurements:
         floors = measurement.floors
@@ -109,7 +111,7 @@ def trigger_readings(plant: Plant) -> tuple[np.ndarray, np.ndarray]:
             indices.extend(range(start, start + rows))
             scales.extend([measurement.scale] * rows)
         start += rows
-    return np.array(indices), np.array(scales)
+    return (np.array(indices), np.array(scales)) if indices else ground
 
 
 def supervisor(plant: Plant, size: int) -> Supervisor | None:

@@ -85,6 +85,12 @@ def test_under_wind_the_trigger_also_watches_the_floors():
     np.testing.assert_allclose(applied, np.clip(wanted, -1, 1) * gain[:, None], rtol=1e-6, atol=1e-7)
     ground_alone = np.clip((np.maximum.accumulate(np.abs(ground)) - 0.1) / 0.2, 0.0, 1.0)
     assert gain[-1] == 1.0 and ground_alone[-1] < 0.75  # on sensor noise (0.05 m/s^2) the ground gives a part
+    from rlcontroller.control.supervisor import trigger_readings
+
+    drift = wind.sensors.measurements[0].model_copy(update={"quantity": "drift", "scale": 0.01})
+    drifts = wind.sensors.model_copy(update={"measurements": [drift]})
+    blind = Plant(wind.model_copy(update={"sensors": drifts}))  # no floor acceleration read: the ground still
+    assert [list(part) for part in trigger_readings(blind)] == [[blind.layout.ground], [blind.layout.ground_scale]]
     own = BuildingEnv(wind)  # its own trigger, 0.3-1.0 m/s^2: six standard deviations of the noise
     _, _, applied = run(own, controller, Load("at rest", 0.02, np.zeros(3001), synthetic=True))
     assert np.all(applied == 0.0)
