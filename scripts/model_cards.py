@@ -20,6 +20,7 @@ from rlcontroller.api.common import standard_scenarios
 from rlcontroller.config import load_experiment, load_scenarios
 from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
 from rlcontroller.control.policy_file import read_policy
+from rlcontroller.control.supervisor import trigger_readings
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness, summary
 from rlcontroller.evaluation.safety import Verdict
@@ -92,15 +93,15 @@ def observation(folder: Path) -> str:
     return "; ".join(parts)
 
 
-def supervision(experiment) -> str:
-    supervisor = experiment.supervisor
+def supervision(plant: Plant) -> str:
+    supervisor = plant.experiment.supervisor
     if supervisor is None:
         return "none (actions go to the actuators as they are)"
     parts = []
     if supervisor.trigger is not None:
         start, full = supervisor.trigger
-        under_wind = experiment.excitation.generator.kind == "wind"
-        watched = "largest floor acceleration reading" if under_wind else "ground reading"
+        floors = list(trigger_readings(plant)[0]) != [plant.layout.ground]  # what the trigger reads, as it reads it
+        watched = "largest floor acceleration reading" if floors else "ground reading"
         parts.append(f"off until the {watched} reaches {start:g} m/s^2, full authority from {full:g} m/s^2")
     measured = supervisor.dissipative == "measured"
     velocity = "measured stroke velocity (integrated floor accelerations)" if measured else "stroke velocity"
@@ -142,7 +143,7 @@ def card(folder: Path, records: Path) -> str:
         about,
         "",
         f"- **Observation**: {observation(folder)}.",
-        f"- **Supervisor**: {supervision(experiment)}.",
+        f"- **Supervisor**: {supervision(plant)}.",
         (
             f"- **Design** (`rlc design {config}`): {policy.designed}."
             if policy.law

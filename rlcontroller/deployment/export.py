@@ -227,16 +227,16 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
 
 
 def _supervisor_text(plant: Plant) -> str:
-    supervisor = plant.experiment.supervisor
-    if supervisor is None:
+    if (supervisor := plant.experiment.supervisor) is None:
         return "none"
     parts = []
     if supervisor.trigger is not None:
-        watched = "floor acceleration readings" if plant.wind is not None else "ground reading"
+        floors = list(trigger_readings(plant)[0]) != [plant.layout.ground]  # what the trigger reads, as it reads it
+        watched = "floor acceleration readings" if floors else "ground reading"
         parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak {watched}")
     if (assurance := supervisor.assurance) is not None:
-        parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, "
-                     f"engage {assurance.engage:g})")  # fmt: skip
+        parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, engage "
+                     f"{assurance.engage:g})")  # fmt: skip
     velocity = "measured " if supervisor.dissipative == "measured" else ""
     if supervisor.dissipative and (fade := supervisor.fade_velocity) > 0.0:
         parts.append(f"forces feeding energy in faded out by {fade:g} m/s of {velocity}stroke velocity")

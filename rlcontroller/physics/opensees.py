@@ -158,6 +158,8 @@ def _build_tcl_model(path: Path) -> FEDescription:
     ops.wipe()
     try:
         os.chdir(path.parent)  # a published model sources its neighbours by relative names
+        # code, like a Python model file: it runs only for an experiment the user named (a run or model folder
+        # that names a model file is refused at loading, `config.loading.UNTRUSTED_MODEL`)
         with _quiet():
             ops.eval(f"source {{{path.name}}}")
     except Exception as error:  # the model's own Tcl: whatever it raises is a fault of the model
