@@ -274,6 +274,14 @@ def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
             "plant_randomization: {device_frequency: {low: 0.9, high: 1.1}}\n",
             "plant_randomization.device_frequency: the experiment has no tuned or active mass to detune",
         ),
+        (
+            "plant_randomization: {yield_drift: {low: 0.8, high: 1.25}}\n",
+            "plant_randomization.yield_drift: the plant has no yielding stories (plant.hysteresis)",
+        ),
+        (
+            "plant: {hysteresis: {yield_drift: 0.01, exponent: [2, 2]}}\n",
+            "plant.hysteresis.exponent: 2 values, expected 1 or 5",
+        ),
     ],
 )
 def test_bad_plant_and_randomisation_parts(tmp_path, text, expected):

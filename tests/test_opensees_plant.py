@@ -246,3 +246,27 @@ def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, 
     model = one_story_model(tmp_path, returned)
     with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
         build_model(model, "build_model")
+
+
+@pytest.mark.slow
+def test_the_frame_reports_ductility_and_residual_drift_where_it_yields():
+    """`evaluate` on the FE frame: per story the ductility demand (peak drift over the pushover's yield
+    drift) and the residual drift after the settling tail. A weak motion leaves every story elastic and no
+    residual drift beyond the free vibration the tail leaves (under 10 % of the peak at 2 % damping); a
+    strong one yields stories (ductility above 1.5) and leaves them leaning (above 0.1 % of a story)."""
+    from rlcontroller.evaluation.evaluation import evaluate
+    from rlcontroller.physics.excitation import Load
+
+    plant = Plant(api.load(CONFIGS / "experiments" / "nine_story_frame.yaml"))
+    time = np.arange(0.0, 8.0, 0.01)
+    pulse = np.sin(2 * np.pi * time / 2.2) * np.exp(-(((time - 3.0) / 1.5) ** 2))  # near the first period
+    motions = [Load("weak", 0.01, 0.15 * pulse), Load("strong", 0.01, 9.0 * pulse)]
+    result = evaluate(plant, motions, [], "FE", include_optimal=False)
+    frame = result.metrics.set_index(["record", "metric", "index"])["value"]
+    weak, strong = frame.loc["weak"], frame.loc["strong"]
+    height = np.array([5.49] + [3.96] * 8)
+    weak_peak = np.max(np.abs(result.responses["uncontrolled", "weak"].drift), axis=0)
+    assert weak.loc["ductility"].max() < 0.5 and np.all(weak.loc["residual_drift_m"] < 0.1 * weak_peak)
+    assert strong.loc["ductility"].max() > 1.5 and np.max(strong.loc["residual_drift_m"] / height) > 1e-3
+    peak_drift = np.max(np.abs(result.responses["uncontrolled", "strong"].drift), axis=0)
+    np.testing.assert_allclose(strong.loc["ductility"], peak_drift / plant.yield_drift, rtol=1e-12)

@@ -5,7 +5,7 @@ with a one-line message. docs/architecture.md has an example per command."""
 
 from rlcontroller.api.common import QUIET, Report, load, model_folder
 from rlcontroller.api.describe import describe
-from rlcontroller.api.identification import identify, simulate_test
+from rlcontroller.api.identification import identify, reduce, simulate_test
 from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
 from rlcontroller.api.multirun import aggregate, sweep, tune
 from rlcontroller.api.safety import check, unchecked_note, verdict_lines, verdict_state
@@ -30,6 +30,7 @@ __all__ = [
     "identify",
     "load",
     "model_folder",
+    "reduce",
     "robustness",
     "shipped_models",
     "simulate_test",

@@ -167,3 +167,85 @@ def identification_report(identified, recordings: list[Path], band: float) -> st
             "",
         ]
     )
+
+
+def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8, report: Report = QUIET) -> Path:
+    """The nonlinear reduced model of the FE plant of the experiment `config`: its design model's stories
+    made Bouc-Wen springs calibrated to the FE model's own responses on `fit_motions` generated strong
+    motions, judged on `test_motions` others (`identification.hysteretic`). Written to the new folder `out`:
+    config.yaml (the experiment with the reduced model as its plant: rlc train, evaluate and check take it),
+    accuracy.csv (per story, the median errors of peak and residual drift, nonlinear and linear reduced
+    model) and calibration.md. Returns `out`."""
+    from rlcontroller.identification.hysteretic import calibrate, nonlinear_reduced_experiment
+    from rlcontroller.physics.plant import Plant
+
+    check_new_folder(out, "reduced model")
+    if not (1 <= fit_motions <= 200 and 1 <= test_motions <= 200):
+        raise ConfigError(f"--fit {fit_motions}, --test {test_motions}: expected 1..200 motions each")
+    experiment = load(config)
+    if experiment.plant is None or experiment.plant.opensees is None:
+        raise ConfigError(f"{config}: plant.opensees: expected an FE plant to calibrate a nonlinear reduced model from")
+    plant = Plant(experiment)
+    calibration = calibrate(plant, fit_motions, test_motions, on_progress=report.line)
+    reduced = nonlinear_reduced_experiment(plant, calibration.hysteresis)
+    header = (
+        f"# The nonlinear reduced model of {experiment.plant.opensees.model}, calibrated by rlc reduce "
+        f"({fit_motions} motions fitted, {test_motions} judged): calibration.md\n"
+    )
+    with new_folder(out, "reduced model") as staging:
+        atomic_write(staging / "config.yaml", header + reduced.to_yaml())
+        atomic_write(staging / "accuracy.csv", calibration.accuracy.to_csv(float_format="%.6g"))
+        atomic_write(staging / "calibration.md", calibration_report(config, calibration, fit_motions, test_motions))
+    for line in accuracy_lines(calibration.accuracy):
+        report.line(line)
+    report.line(f"wrote {out}: config.yaml (the experiment on the reduced model), accuracy.csv, calibration.md")
+    return out
+
+
+def accuracy_lines(table) -> list[str]:
+    """The accuracy table as aligned lines: per story the median errors (%), nonlinear and linear."""
+    lines = ["story  peak drift error % (nonlinear / linear)  residual drift error % (nonlinear / linear)"]
+    for story, row in table.iterrows():
+        lines.append(
+            f"{story:>5}  {100 * row['peak_drift_error_nonlinear']:>14.1f} / "
+            f"{100 * row['peak_drift_error_linear']:<10.1f}  {100 * row['residual_drift_error_nonlinear']:>18.1f} / "
+            f"{100 * row['residual_drift_error_linear']:.1f}"
+        )
+    return lines
+
+
+def calibration_report(config: Path, calibration, fit_motions: int, test_motions: int) -> str:
+    """calibration.md: what was fitted to what, the parameters per story and the accuracy on other motions."""
+    from rlcontroller.identification.hysteretic import FIT_SEED, TEST_SEED
+
+    hysteresis, pushed = calibration.hysteresis, calibration.pushover
+    rows = "\n".join(
+        f"| {i + 1} | {pushed.yield_drift[i] * 1e3:.1f} | {pushed.post_yield_ratio[i]:.3f} | "
+        f"{hysteresis.yield_drift[i] * 1e3:.1f} | {hysteresis.post_yield_ratio[i]:.3f} | "
+        f"{hysteresis.exponent[i]:.2f} | {hysteresis.beta[i]:.3f} |"
+        for i in range(len(hysteresis.yield_drift))
+    )
+    table = calibration.accuracy
+    errors = "\n".join(
+        f"| {story} | {100 * r['peak_drift_error_nonlinear']:.1f} | {100 * r['peak_drift_error_linear']:.1f} | "
+        f"{100 * r['residual_drift_error_nonlinear']:.1f} | {100 * r['residual_drift_error_linear']:.1f} | "
+        f"{1e3 * r['fe_peak_drift_m']:.1f} | {1e3 * r['fe_residual_drift_m']:.1f} |"
+        for story, r in table.iterrows()
+    )
+    return f"""# Nonlinear reduced model of {config}
+
+Bouc-Wen story springs on the FE model's condensed stiffness (`physics.hysteresis`), started from the FE
+model's first-mode pushover (`physics.pushover`) and fitted by least squares to its story drift histories and
+residual drifts on {fit_motions} generated Kanai-Tajimi motions of
+0.3-1.2 g (seed {FIT_SEED}; cost {calibration.fit_cost:.4g} after {calibration.evaluations} evaluations), judged
+on {test_motions} others (seed {TEST_SEED}). Errors are medians over the judged motions of |model - FE| / FE (the
+residual's against 1 % of the FE peak drift where the FE residual is smaller).
+
+| story | pushover: yield drift (mm) | post-yield ratio | fit: yield drift (mm) | post-yield ratio | exponent | beta |
+|---|---|---|---|---|---|---|
+{rows}
+
+| story | peak drift error (%) | linear's | residual drift error (%) | linear's | FE peak (mm) | FE residual (mm) |
+|---|---|---|---|---|---|---|
+{errors}
+"""

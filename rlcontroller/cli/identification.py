@@ -1,4 +1,5 @@
-"""Commands for a building known from measurements: `rlc simulate-test` and `rlc identify`."""
+"""Commands for a building known from measurements or from its FE model: `rlc simulate-test`, `rlc identify`
+and `rlc reduce`."""
 
 from __future__ import annotations
 
@@ -61,3 +62,20 @@ def identify(
     from rlcontroller import api
 
     api.identify(recordings, out, modes, band, parsed_list(masses, "--masses"), Printed())
+
+
+@app.command(short_help="A nonlinear reduced model of an FE plant, calibrated from it.")
+@user_errors
+def reduce(
+    config: Annotated[Path, typer.Argument(help="Experiment YAML with an FE plant (plant.opensees; its model runs).")],
+    out: Annotated[Path, typer.Option(help="New folder for config.yaml, accuracy.csv and calibration.md.")],
+    fit: Annotated[int, typer.Option(help="Generated strong motions the FE model runs to fit.")] = 8,
+    test: Annotated[int, typer.Option(help="Other motions the fit is judged on.")] = 8,
+) -> None:
+    """Run the FE model on generated motions strong enough to yield it, fit Bouc-Wen story springs on its
+    condensed stiffness to its drift histories, and print per story how well the fit holds on other motions
+    beside the linear reduced model. config.yaml is the experiment with the nonlinear reduced model as its
+    plant: train on it in seconds where the FE model takes hours (docs/opensees.md)."""
+    from rlcontroller import api
+
+    api.reduce(config, out, fit, test, Printed())

@@ -241,6 +241,8 @@ def _check_randomization(experiment: Experiment) -> None:
             continue
         if key == "device_frequency" and all(device.semi_active for device in experiment.devices):
             raise ConfigError(f"{location(file, prefix, key)}: the experiment has no tuned or active mass to detune")
+        if key == "yield_drift" and (base is None or base.hysteresis is None):
+            raise ConfigError(f"{location(file, prefix, key)}: the plant has no yielding stories (plant.hysteresis)")
         ends = bounds if isinstance(bounds, tuple) else (bounds.low, bounds.high)
         for end in ends:
             try:
@@ -252,11 +254,11 @@ def _check_randomization(experiment: Experiment) -> None:
 
 def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: str) -> None:
     """Per-story lists and floor numbers of a plant part must fit the building; a building given by
-    matrices takes scalar factors only, no damage and no yielding stories."""
+    matrices takes scalar factors only and no damage (its stories yield as `physics.hysteresis` reads them)."""
     n_floors = experiment.building.n_floors
     if isinstance(experiment.building, MatrixBuildingConfig):
         per_story = [key for key in ("stiffness", "mass") if isinstance(getattr(plant, key), list)]
-        per_story += ["damage"] * bool(plant.damage) + ["hysteresis"] * (plant.hysteresis is not None)
+        per_story += ["damage"] * bool(plant.damage)
         if per_story:
             where = location(file, prefix, per_story[0])
             raise ConfigError(f"{where}: a building given by matrices takes scalar factors only (no stories)")
@@ -277,10 +279,11 @@ def check_plant(plant: PlantConfig, experiment: Experiment, file: str, prefix: s
         where = location(file, prefix, "hysteresis")
         raise ConfigError(f"{where}: yielding stories with mass devices are not modelled; drop one of them")
     if plant.hysteresis is not None:
-        drift = plant.hysteresis.yield_drift
-        if isinstance(drift, list) and len(drift) != n_floors:
-            where = location(file, prefix, "hysteresis.yield_drift")
-            raise ConfigError(f"{where}: {len(drift)} values, expected 1 or {n_floors}")
+        for key in plant.hysteresis.PER_STORY:
+            values = getattr(plant.hysteresis, key)
+            if isinstance(values, list) and len(values) != n_floors:
+                where = location(file, prefix, f"hysteresis.{key}")
+                raise ConfigError(f"{where}: {len(values)} values, expected 1 or {n_floors}")
         if plant.actuators.time_constant > 0 or plant.actuators.delay_steps > 0:
             where = location(file, prefix, "hysteresis")
             raise ConfigError(f"{where}: yielding stories with actuator dynamics are not supported yet; use one")

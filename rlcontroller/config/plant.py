@@ -3,8 +3,9 @@ sensor faults, yielding) and how training randomises it."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
+import numpy as np
 from pydantic import (
     AfterValidator,
     Field,
@@ -55,23 +56,30 @@ class SensorFaultConfig(StrictModel):
 
 
 class HysteresisConfig(StrictModel):
-    """Yielding stories (Bouc-Wen): story force F = a k d + (1 - a) k d_y z with
+    """Yielding stories (Bouc-Wen, `physics.hysteresis`): story spring force F = a k d + (1 - a) k d_y z with
     z' = (d'/d_y) [1 - |z|^n (beta sgn(d' z) + gamma)], beta + gamma = 1 (|z| -> 1 at yield).
-    `yield_drift` d_y (m, scalar or per story), `post_yield_ratio` a (1: linear), `exponent` n
-    (sharper yielding for larger n); `substeps` RK4 steps per ground-sample interval."""
+    `yield_drift` d_y (m), `post_yield_ratio` a (1: linear), `exponent` n (sharper yielding for larger n),
+    `beta` and `gamma` the loop's shape: each a scalar or one value per story. `substeps` RK4 steps per
+    ground-sample interval."""
 
     model: Literal["bouc_wen"] = "bouc_wen"
     yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
-    post_yield_ratio: float = Field(0.1, ge=0.0, le=1.0)
-    exponent: float = Field(2.0, ge=1.0, le=20.0)
-    beta: float = Field(0.5, ge=0.0, le=1.0)
-    gamma: float = Field(0.5, ge=-1.0, le=1.0)
+    post_yield_ratio: Annotated[float, Field(ge=0.0, le=1.0)] | list[Annotated[float, Field(ge=0.0, le=1.0)]] = 0.1
+    exponent: Annotated[float, Field(ge=1.0, le=20.0)] | list[Annotated[float, Field(ge=1.0, le=20.0)]] = 2.0
+    beta: Annotated[float, Field(ge=0.0, le=1.0)] | list[Annotated[float, Field(ge=0.0, le=1.0)]] = 0.5
+    gamma: Annotated[float, Field(ge=-1.0, le=1.0)] | list[Annotated[float, Field(ge=-1.0, le=1.0)]] = 0.5
     substeps: int = Field(4, ge=1, le=100)
+
+    PER_STORY: ClassVar[tuple[str, ...]] = ("yield_drift", "post_yield_ratio", "exponent", "beta", "gamma")
 
     @model_validator(mode="after")
     def _yields_at_one(self) -> HysteresisConfig:
-        if abs(self.beta + self.gamma - 1.0) > 1e-9:
-            raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {self.beta + self.gamma:g}")
+        lengths = {len(v) for key in self.PER_STORY if isinstance(v := getattr(self, key), list)}
+        if len(lengths) > 1:
+            raise ValueError(f"the per-story lists must be of one length, got {sorted(lengths)}")
+        total = np.asarray(self.beta, dtype=float) + np.asarray(self.gamma, dtype=float)
+        if np.max(np.abs(total - 1.0)) > 1e-9:
+            raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {np.round(total, 12).tolist()}")
         return self
 
 
@@ -162,6 +170,7 @@ class PlantRandomization(StrictModel):
     delay_steps: IntRange | None = None
     noise_factor: RandomRange | None = None
     device_frequency: RandomRange | None = None  # every mass device's frequency factor (detuning)
+    yield_drift: RandomRange | None = None  # a factor on every yielding story's yield drift (plant.hysteresis)
 
 
 RANDOMIZED_FIELDS = {
@@ -172,16 +181,22 @@ RANDOMIZED_FIELDS = {
     "delay_steps": "actuators.delay_steps",
     "noise_factor": "sensors.noise_factor",
     "device_frequency": "devices.frequency",
+    "yield_drift": "hysteresis.yield_drift",  # a factor on the plant's own
 }
+FACTORS_ON_THE_PLANT = ("yield_drift",)  # drawn as factors on the base plant's values, not the values
 
 
 def randomized_plant(base: PlantConfig | None, values: dict[str, float]) -> PlantConfig:
-    """`base` (or the design model's empty plant part) with the drawn `values` put in."""
+    """`base` (or the design model's empty plant part) with the drawn `values` put in (those of
+    FACTORS_ON_THE_PLANT multiply the base's)."""
     plant = (base or PlantConfig()).model_dump()
     for key, value in values.items():
         *path, leaf = RANDOMIZED_FIELDS[key].split(".")
         target = plant
         for step in path:
             target = target[step]
-        target[leaf] = value
+        if key in FACTORS_ON_THE_PLANT:
+            target[leaf] = (np.asarray(target[leaf], dtype=float) * value).tolist()
+        else:
+            target[leaf] = value
     return PlantConfig.model_validate(plant)

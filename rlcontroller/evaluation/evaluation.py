@@ -35,10 +35,13 @@ from rlcontroller.physics.metrics import (
     YIELDING_METRICS,
     device_metrics,
     j_metrics,
+    peak,
+    residual_drift,
     wind_metrics,
     yielding_metrics,
 )
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation import kept
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
 OPTIMAL = "optimal (clairvoyant)"
@@ -95,15 +98,20 @@ def evaluate(
     label: str,
     include_optimal: bool = True,
     on_motions: Callable[[int], None] | None = None,
+    settle: bool = True,
 ) -> Evaluation:
     """Run the uncontrolled building, every controller and (optionally) the optimal reference;
-    `on_motions(count)` is called as each batch of `count` motions is done (a progress bar)."""
+    `on_motions(count)` is called as each batch of `count` motions is done (a progress bar). A yielding or
+    FE plant reports each story's ductility demand (peak drift over `Plant.yield_drift`) and, if `settle`,
+    its residual drift after SETTLING_TAIL_S of rest appended to every motion."""
     start = time.perf_counter()
     yielding = plant.yielding
     include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
     include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
-    simulated = motions if yielding is None else [with_settling_tail(motion) for motion in motions]
-    bare = uncontrolled_responses(plant.bare, simulated)
+    settle = settle and (yielding is not None or plant.fe_model is not None)
+    yield_drift = plant.yield_drift if settle else None
+    simulated = [with_settling_tail(motion) for motion in motions] if settle else motions
+    bare = kept.uncontrolled(plant.bare, simulated)  # an FE model's kept between commands (`simulation.kept`)
     devices = plant.building.devices
     passive = uncontrolled_responses(plant, simulated) if devices else []
     seeds = [content_seed(motion) for motion in motions]
@@ -121,8 +129,10 @@ def evaluate(
         for name, result in results:
             responses[name, motion.name] = result
             metrics = j_metrics(result, bare[number])
-            if yielding is not None:
-                metrics |= yielding_metrics(result, yielding.yield_drift)
+            if settle and yielding is not None:
+                metrics |= yielding_metrics(result, yield_drift)
+            elif settle:  # an FE plant: no hysteretic force to integrate
+                metrics |= {"ductility": peak(result.drift) / yield_drift} | residual_drift(result)
             if motion.floor_forces is not None:
                 metrics |= wind_metrics(result, bare[number])
             if (devices or plant.building.dampers) and name != "uncontrolled":

@@ -1,17 +1,26 @@
 """Yielding stories: the Bouc-Wen model and its integrator over one control step.
 
-Story i (drift d_i = x_i - x_{i-1}) resists with F_i = a k_i d_i + (1 - a) k_i d_y,i z_i, where
+Each story has a spring that yields: its stiffness k_i is the story's as a first-mode pushover sees it,
+story shear over story drift under the forces M phi_1 (for a shear building, its story stiffness). What
+the stiffness matrix K holds beyond these springs, K - D' diag(k) D, stays linear: nothing for a shear
+building, the frame action of a condensed FE model (it carries no load in the first mode's shape; for
+the nine-story frame it is positive semi-definite, so no post-yield ratio makes it unstable, where
+reading the coupling of adjacent floors as the story springs, as Patsialis & Taflanidis 2020 do, leaves
+it indefinite below a = 0.65). A building whose yielded stiffness K - D' diag((1 - a) k) D would not be
+positive semi-definite is refused. Story i's spring (drift d_i = x_i - x_{i-1}) resists with
+F_i = a_i k_i d_i + (1 - a_i) k_i d_y,i z_i, where
 
-    z_i' = (d_i' / d_y,i) [1 - |z_i|^n (beta sgn(d_i' z_i) + gamma)],   beta + gamma = 1,
+    z_i' = (d_i' / d_y,i) [1 - |z_i|^n_i (beta_i sgn(d_i' z_i) + gamma_i)],   beta_i + gamma_i = 1,
 
 so |z| -> 1 once the story yields. With the drift matrix D (d = D x) the floors obey
 
-    M v' = -C v - D' F + Gamma u - M 1 a_g,   x' = v,
+    M v' = -C v - K_e x - D' h z + Gamma u - M 1 a_g,   x' = v,
 
-on the state s = [x; v; z] (m, m/s, -). The force u is held over the control step and the ground
-acceleration is linear between its samples, as in the linear plant; classical RK4 with `substeps`
-steps per ground-sample interval, compiled with numba in `integrators.py` (`scripts/bench_env.py`
-measures it against the same code run by the interpreter). a = 1 is the linear shear building.
+K_e = K - D' diag((1 - a) k) D (the springs that stay linear), h = (1 - a) k d_y, on the state
+s = [x; v; z] (m, m/s, -). The force u is held over the control step and the ground acceleration is
+linear between its samples, as in the linear plant; classical RK4 with `substeps` steps per
+ground-sample interval, compiled with numba in `integrators.py` (`scripts/bench_env.py` measures it
+against the same code run by the interpreter). a = 1 is the linear building.
 """
 
 from __future__ import annotations
@@ -24,6 +33,27 @@ from rlcontroller.config import HysteresisConfig
 from rlcontroller.physics.structure import Building
 
 
+def story_springs(mass: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """Each story's stiffness (N/m) as a first-mode pushover sees it: story shear over story drift under
+    the floor forces M phi_1, from the floors' mass and stiffness matrices (n, n)."""
+    import scipy.linalg
+
+    _, shapes = scipy.linalg.eigh(stiffness, mass, subset_by_index=[0, 0])
+    forces = mass @ shapes[:, 0]
+    drift = drift_matrix(len(forces)) @ np.linalg.solve(stiffness, forces)
+    return np.cumsum(forces[::-1])[::-1] / drift
+
+
+def drift_matrix(n: int) -> np.ndarray:
+    """D with d = D x: story drifts (floor minus the floor below) from floor displacements."""
+    return np.eye(n) - np.eye(n, k=-1)
+
+
+def per_story(value: float | list[float], n: int) -> np.ndarray:
+    """A scalar or a list of one value per story, as an array of n."""
+    return np.broadcast_to(np.asarray(value, dtype=float), n).copy()
+
+
 @dataclass(frozen=True)
 class BoucWen:
     """Bouc-Wen stories of a building: everything the integrator needs, as arrays (SI)."""
@@ -31,29 +61,40 @@ class BoucWen:
     floor_gain: np.ndarray  # Gamma times the force limits (n, m): actions to floor forces (N)
     mass_inverse: np.ndarray  # (n,) 1/m_i
     damping: np.ndarray  # C (n, n)
-    linear_stiffness: np.ndarray  # a k_i (n,)
-    hysteretic_stiffness: np.ndarray  # (1 - a) k_i d_y,i (n,): the story force at z = 1 beyond a k d
+    linear_stiffness: np.ndarray  # K_e (n, n): the springs that stay linear, a k d of the stories' among them
+    hysteretic_stiffness: np.ndarray  # (1 - a) k d_y (n,): the story force at z = 1 beyond a k d
     yield_drift: np.ndarray  # d_y,i (n,)
-    exponent: float
-    beta: float
-    gamma: float
+    exponent: np.ndarray  # n_i (n,)
+    beta: np.ndarray  # (n,)
+    gamma: np.ndarray  # (n,)
     substeps: int
 
     @classmethod
-    def of(cls, building: Building, config: HysteresisConfig, story_stiffness: np.ndarray) -> BoucWen:
+    def of(cls, building: Building, config: HysteresisConfig) -> BoucWen:
         n = building.n_floors
-        yield_drift = np.broadcast_to(np.asarray(config.yield_drift, dtype=float), n).copy()
-        alpha = config.post_yield_ratio
+        stiffness = building.stiffness[:n, :n]
+        springs = story_springs(building.mass[:n, :n], stiffness)
+        yield_drift = per_story(config.yield_drift, n)
+        yielding = (1.0 - per_story(config.post_yield_ratio, n)) * springs
+        drift = drift_matrix(n)
+        linear = stiffness - drift.T @ np.diag(yielding) @ drift
+        lowest, highest = np.linalg.eigvalsh(linear)[[0, -1]]
+        if lowest < -1e-9 * highest:
+            raise ValueError(
+                f"hysteresis: with these post-yield ratios the yielded building's stiffness is not positive "
+                f"semi-definite (lowest eigenvalue {lowest:.3g} N/m): its stories' springs hold more than its "
+                "stiffness matrix; raise post_yield_ratio"
+            )
         return cls(
             floor_gain=building.actuator_matrix * building.force_limits,
             mass_inverse=1.0 / np.diag(building.mass),
             damping=building.damping,
-            linear_stiffness=alpha * story_stiffness,
-            hysteretic_stiffness=(1.0 - alpha) * story_stiffness * yield_drift,
+            linear_stiffness=linear,
+            hysteretic_stiffness=yielding * yield_drift,
             yield_drift=yield_drift,
-            exponent=config.exponent,
-            beta=config.beta,
-            gamma=config.gamma,
+            exponent=per_story(config.exponent, n),
+            beta=per_story(config.beta, n),
+            gamma=per_story(config.gamma, n),
             substeps=config.substeps,
         )
 
@@ -77,3 +118,15 @@ class BoucWen:
             self.beta,
             self.gamma,
         )
+
+    def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
+        """The uncontrolled states [x; v; z] at every control step (K + 1, 3n) from rest under `ground`
+        (m/s^2, K * per_step + 1 samples, `per_step` per control step of `control_dt` s)."""
+        from rlcontroller.physics.integrators import bouc_wen_history
+
+        n = self.mass_inverse.size
+        return bouc_wen_history(
+            np.zeros(3 * n), np.zeros(n), ground, per_step, control_dt, self.substeps, self.mass_inverse, self.damping,
+            self.linear_stiffness, self.hysteretic_stiffness, self.yield_drift, self.exponent, self.beta, self.gamma,
+        )  # fmt: skip
+

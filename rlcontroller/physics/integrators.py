@@ -24,18 +24,18 @@ def _derivative(
 ):
     n = mass_inverse.size
     rate = np.empty(3 * n)
-    story_force = np.empty(n)
+    spring_force = np.empty(n)  # the yielding springs' hysteretic parts, (1 - a) k d_y z
     for i in range(n):
-        below_x = state[i - 1] if i > 0 else 0.0
         below_v = state[n + i - 1] if i > 0 else 0.0
-        drift, drift_rate = state[i] - below_x, state[n + i] - below_v
-        story_force[i] = linear[i] * drift + hysteretic[i] * state[2 * n + i]
-        rate[2 * n + i] = z_rate(state[2 * n + i], drift_rate, yield_drift[i], exponent, beta, gamma)
+        drift_rate = state[n + i] - below_v
+        spring_force[i] = hysteretic[i] * state[2 * n + i]
+        rate[2 * n + i] = z_rate(state[2 * n + i], drift_rate, yield_drift[i], exponent[i], beta[i], gamma[i])
     for i in range(n):
-        restoring = story_force[i] - (story_force[i + 1] if i + 1 < n else 0.0)  # D' F
+        restoring = spring_force[i] - (spring_force[i + 1] if i + 1 < n else 0.0)  # D' h z
         damping_force = 0.0
         for j in range(n):
             damping_force += damping[i, j] * state[n + j]
+            restoring += linear[i, j] * state[j]  # K_e x
         rate[i] = state[n + i]
         rate[n + i] = mass_inverse[i] * (floor_force[i] - damping_force - restoring) - ground
     return rate
@@ -61,6 +61,24 @@ def bouc_wen_step(
             k4 = _derivative(s + h * k3, floor_force, a0 + h * slope, *args)
             s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     return s
+
+
+@numba.njit(cache=True)
+def bouc_wen_history(
+    state, floor_force, ground, per_step, control_dt, substeps, mass_inverse, damping, linear, hysteretic, yield_drift,
+    exponent, beta, gamma,
+):  # fmt: skip
+    """The states at every control step (K + 1, size) under `ground` (K * per_step + 1 samples), the floor
+    forces held throughout: a whole record in one call (calibration's many runs)."""
+    steps = (ground.size - 1) // per_step
+    states = np.empty((steps + 1, state.size))
+    states[0] = state
+    for k in range(steps):
+        states[k + 1] = bouc_wen_step(
+            states[k], floor_force, ground[k * per_step : (k + 1) * per_step + 1], control_dt, substeps, mass_inverse,
+            damping, linear, hysteretic, yield_drift, exponent, beta, gamma,
+        )  # fmt: skip
+    return states
 
 
 @numba.njit(cache=True)

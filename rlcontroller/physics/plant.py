@@ -41,7 +41,7 @@ from rlcontroller.config import (
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.generators import GroundModel
-from rlcontroller.physics.hysteresis import BoucWen
+from rlcontroller.physics.hysteresis import BoucWen, drift_matrix
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.opensees import OpenSeesIntegrator
 from rlcontroller.physics.sampled import SampledPlant
@@ -106,8 +106,8 @@ class Plant:
             self.building = with_dampers(self.building, dampers)
         hysteresis = self.config.hysteresis if self.config is not None else None
         self.yielding = None
-        if hysteresis is not None:  # a shear building's (checked at loading)
-            self.yielding = BoucWen.of(self.building, hysteresis, np.asarray(building.stiffnesses, dtype=float))
+        if hysteresis is not None:
+            self.yielding = BoucWen.of(self.building, hysteresis)
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
         fe = self.config.opensees if self.config is not None else None
         self.fe_model = None
@@ -141,6 +141,7 @@ class Plant:
         self._elastic: Plant | None = None
         self._bare = None if experiment.devices or experiment.supervisor is not None else self
         self._failed_safe = self if experiment.supervisor is None else None
+        self._pushover = None  # an FE plant's, once asked for its yield drifts
 
     @property
     def design(self) -> Plant:
@@ -198,6 +199,20 @@ class Plant:
         return self._elastic
 
     @property
+    def yield_drift(self) -> np.ndarray | None:
+        """Each story's yield drift (m): a yielding plant's d_y; an FE plant's from its model's first-mode
+        pushover (`physics.pushover`, run here once, when first asked); None for a linear plant."""
+        if self.yielding is not None:
+            return self.yielding.yield_drift
+        if self.fe_model is None:
+            return None
+        if self._pushover is None:
+            from rlcontroller.physics.pushover import pushover
+
+            self._pushover = pushover(self.fe_model.path, self.fe_model.function)
+        return self._pushover.yield_drift
+
+    @property
     def has_actuator_dynamics(self) -> bool:
         return self.time_constant > 0 or self.delay_steps > 0
 
@@ -234,12 +249,10 @@ class Plant:
         return np.hstack([c, np.zeros((c.shape[0], n))]), d
 
     def _yielding_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
-        """Outputs on [x; v; z]: the restoring force is D' (a k d + (1 - a) k d_y z)."""
+        """Outputs on [x; v; z]: the restoring force is K_e x + D' h z (`physics.hysteresis`)."""
         n, yielding = self.building.n_floors, self.yielding
-        drift = np.eye(n) - np.eye(n, k=-1)
-        linear = drift.T @ np.diag(yielding.linear_stiffness) @ drift
-        hysteretic = drift.T @ np.diag(yielding.hysteretic_stiffness)
-        c, d = output_matrices(replace(self.building, stiffness=linear), quantity)
+        hysteretic = drift_matrix(n).T @ np.diag(yielding.hysteretic_stiffness)
+        c, d = output_matrices(replace(self.building, stiffness=yielding.linear_stiffness), quantity)
         z_columns = np.zeros((c.shape[0], n))
         if quantity == "absolute_acceleration":
             z_columns = -np.linalg.inv(self.building.mass) @ hysteretic

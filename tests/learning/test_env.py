@@ -322,3 +322,25 @@ def test_a_randomised_device_frequency_detunes_the_driver_per_episode():
         assert env.plant.building.devices[0].stiffness == pytest.approx(tuned * factor**2, rel=1e-12)
         factors.append(factor)
     assert 0.85 <= min(factors) < 0.9 and 1.1 < max(factors) <= 1.15
+
+
+def test_randomised_yield_drifts_are_the_plants_own_times_one_drawn_factor():
+    """A yield-drift range is a factor on the plant's own per-story yield drifts, drawn per episode."""
+    from rlcontroller.config import build_experiment
+
+    own = [0.01, 0.012, 0.014, 0.012, 0.01]
+    experiment = build_experiment(
+        {
+            "plant": {"hysteresis": {"yield_drift": own}},
+            "plant_randomization": {"yield_drift": {"low": 0.8, "high": 1.25, "log": True}},
+        }
+    )
+    env = BuildingEnv(experiment, randomize=True)
+    motion = synthetic_suite(count=1)[0]
+    factors = []
+    for seed in range(30):
+        env.reset(seed=seed, options={"motion": motion})
+        drawn = np.asarray(env.plant.yielding.yield_drift) / own
+        assert np.ptp(drawn) < 1e-12  # one factor on every story
+        factors.append(drawn[0])
+    assert 0.8 <= min(factors) < 0.9 and 1.15 < max(factors) <= 1.25

@@ -29,7 +29,7 @@ def run(model: BoucWen, steps: int, force: np.ndarray | None = None) -> np.ndarr
 
 
 def bouc_wen(**settings) -> BoucWen:
-    return BoucWen.of(BUILDING, HysteresisConfig(**settings), STIFFNESS)
+    return BoucWen.of(BUILDING, HysteresisConfig(**settings))
 
 
 def test_post_yield_ratio_one_is_the_linear_exact_map():
@@ -79,12 +79,12 @@ def test_a_quasi_static_cycle_draws_the_textbook_loop():
     assert abs(np.trapezoid(elastic[last], drift[last])) < 1e-6 * area  # a linear story dissipates nothing
 
 
-def derivative(time, state, model: BoucWen):
-    """The same equations in plain numpy, for scipy's Radau."""
+def derivative(time, state, model: BoucWen, alpha: float):
+    """The shear building's equations, story by story in plain numpy, for scipy's Radau."""
     x, v, z = state[:5], state[5:10], state[10:]
     drift = np.diff(np.concatenate([[0.0], x]))
     rate = np.diff(np.concatenate([[0.0], v]))
-    force = model.linear_stiffness * drift + model.hysteretic_stiffness * z
+    force = alpha * STIFFNESS * drift + model.hysteretic_stiffness * z
     restoring = force - np.append(force[1:], 0.0)
     ground = np.interp(time, MOTION.time, MOTION.acceleration)
     acceleration = model.mass_inverse * (-model.damping @ v - restoring) - ground
@@ -100,7 +100,7 @@ def test_a_record_response_matches_scipy_radau():
     times = 0.02 * np.arange(1, steps + 1)
     solution = scipy.integrate.solve_ivp(
         derivative, (0.0, times[-1]), np.zeros(15), method="Radau", t_eval=times, rtol=1e-10, atol=1e-12,
-        args=(model,), max_step=0.005,
+        args=(model, 0.1), max_step=0.005,
     )  # fmt: skip
     reference = np.diff(np.vstack([np.zeros(steps), solution.y[:5]]), axis=0).T
     assert np.abs(reference).max() / 0.005 > 2  # it yields: ductility above 2
@@ -143,3 +143,66 @@ def test_a_yielding_plant_reports_ductility_residual_drift_and_hysteretic_energy
     assert "optimal (clairvoyant)" not in result.controllers  # no linear optimum for a yielding plant
     bare = result.responses["uncontrolled", MOTION.name]
     assert bare.time[-1] == pytest.approx(MOTION.duration + 20.0, abs=0.03)  # the settling tail
+
+
+@pytest.mark.slow
+def test_a_matrix_building_yields_in_its_story_springs_and_keeps_the_rest_linear():
+    """A stiffness matrix that is not a shear building's (floors 1 and 3, 2 and 4 coupled, as a frame's
+    columns couple floors): each story's spring is story shear over drift under first-mode forces, and yields with its
+    own parameters; the rest of K stays linear (and carries nothing in the first mode's shape). Assembled
+    story by story here, the first mode by numpy's eig, and solved with scipy's Radau: the plant agrees."""
+    from rlcontroller.config import MatrixBuildingConfig
+
+    stiffness = BUILDING.stiffness.copy()
+    stiffness[np.ix_([0, 2], [0, 2])] += 2.0e7 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    stiffness[np.ix_([1, 3], [1, 3])] += 1.0e7 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    matrices = MatrixBuildingConfig(
+        mass_matrix=BUILDING.mass.tolist(), stiffness_matrix=stiffness.tolist(),
+        damping_matrix=BUILDING.damping.tolist(), story_heights=[3.0] * 5,
+    )  # fmt: skip
+    settings = {"yield_drift": [0.004, 0.005, 0.006, 0.005, 0.004], "post_yield_ratio": [0.1, 0.2, 0.05, 0.3, 0.1]}
+    settings |= {"exponent": [2.0, 3.0, 1.5, 2.0, 4.0], "beta": [0.5, 0.3, 0.7, 0.5, 0.9]}
+    settings["gamma"] = [1.0 - b for b in settings["beta"]]
+    model = Plant(Experiment(building=matrices, plant={"hysteresis": settings | {"substeps": 8}})).yielding
+    values, vectors = np.linalg.eig(np.linalg.solve(BUILDING.mass, stiffness))
+    first = np.real(vectors[:, np.argmin(np.real(values))])
+    forces = BUILDING.mass @ first
+    displacement = np.linalg.solve(stiffness, forces)
+    k = np.cumsum(forces[::-1])[::-1] / np.diff(np.concatenate([[0.0], displacement]))
+    drift_of = np.eye(5) - np.eye(5, k=-1)
+    remainder = stiffness - drift_of.T @ np.diag(k) @ drift_of
+    assert np.abs(remainder).max() > 1e6 and np.linalg.eigvalsh(remainder).min() > -1e-6 * np.abs(remainder).max()
+    a, d_y = np.array(settings["post_yield_ratio"]), np.array(settings["yield_drift"])
+    n_exp, beta = np.array(settings["exponent"]), np.array(settings["beta"])
+
+    def springs(time, state):
+        x, v, z = state[:5], state[5:10], state[10:]
+        drift, rate = np.diff(np.concatenate([[0.0], x])), np.diff(np.concatenate([[0.0], v]))
+        story = a * k * drift + (1 - a) * k * d_y * z
+        force = remainder @ x + story - np.append(story[1:], 0.0)
+        ground = np.interp(time, MOTION.time, MOTION.acceleration)
+        acceleration = (-BUILDING.damping @ v - force) / np.diag(BUILDING.mass) - ground
+        z_dot = rate / d_y * (1 - np.abs(z) ** n_exp * (beta * np.sign(rate * z) + 1 - beta))
+        return np.concatenate([v, acceleration, z_dot])
+
+    steps = 300
+    state, drifts = np.zeros(15), []
+    for step in range(steps):
+        state = model.step(state, np.zeros(3), MOTION.acceleration[step : step + 2], 0.02)
+        drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
+    times = 0.02 * np.arange(1, steps + 1)
+    solution = scipy.integrate.solve_ivp(
+        springs, (0.0, times[-1]), np.zeros(15), method="Radau", t_eval=times, rtol=1e-10, atol=1e-12, max_step=0.005
+    )
+    reference = np.diff(np.vstack([np.zeros(steps), solution.y[:5]]), axis=0).T
+    assert np.max(np.abs(reference) / d_y) > 2  # it yields
+    np.testing.assert_allclose(np.array(drifts), reference, atol=1e-4 * np.abs(reference).max())
+    history = model.history(MOTION.acceleration[: steps + 1], 1, 0.02)  # a whole record in one call: the same
+    np.testing.assert_allclose(np.diff(history[1:, :5], axis=1, prepend=0.0), np.array(drifts), rtol=0, atol=1e-12)
+
+
+def test_story_springs_of_a_shear_building_are_its_story_stiffnesses():
+    from rlcontroller.physics.hysteresis import story_springs
+
+    springs = story_springs(BUILDING.mass, BUILDING.stiffness)
+    np.testing.assert_allclose(springs, EXPERIMENT.building.stiffnesses, rtol=1e-10)

@@ -1,0 +1,97 @@
+"""The uncontrolled responses of an FE plant, computed once and kept between commands.
+
+Every controller is judged against the building uncontrolled on the same motions (J1-J4, the safety check's
+fail-safe reference of a building without devices or supervisor): on an FE model those runs are half of
+`rlc check`'s work and never depend on the controller. They are kept in one file per FE model and suite,
+named by the sha256 of everything they depend on: the model's folder (every .py, .tcl and .yaml file in it:
+a model sources its neighbours), the function that builds it, the analysis and control steps, every
+motion's samples, and rlc's version. A change to any of them names another file; a file that does not read
+back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
+~/.cache/rlcontroller; deleting it costs only the runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import os
+import zipfile
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+
+from rlcontroller.files import atomic_write
+from rlcontroller.physics.dynamics import Response
+from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.rollout import uncontrolled_responses
+
+MODEL_SUFFIXES = (".py", ".tcl", ".yaml")
+
+
+def cache_folder() -> Path:
+    """Where kept responses live (module docstring)."""
+    if os.environ.get("RLC_CACHE"):
+        return Path(os.environ["RLC_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "rlcontroller"
+
+
+def reference_key(plant: Plant, motions: list[Load]) -> str:
+    """The sha256 of everything the uncontrolled responses of the FE plant `plant` on `motions` depend on."""
+    from rlcontroller import __version__
+
+    fe = plant.fe_model
+    digest = hashlib.sha256(f"rlc {__version__}; {fe.function}; {fe.analysis_dt!r}; {plant.control_dt!r}".encode())
+    folder = Path(fe.path).parent
+    for path in sorted(p for p in folder.iterdir() if p.suffix in MODEL_SUFFIXES and p.is_file()):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    for motion in motions:
+        digest.update(f"{motion.name}; {motion.dt!r}".encode())
+        digest.update(np.ascontiguousarray(motion.acceleration, dtype=float).tobytes())
+        if motion.floor_forces is not None:
+            digest.update(np.ascontiguousarray(motion.floor_forces, dtype=float).tobytes())
+    return digest.hexdigest()
+
+
+def uncontrolled(plant: Plant, motions: list[Load]) -> list[Response]:
+    """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring)."""
+    if plant.fe_model is None:
+        return uncontrolled_responses(plant, motions)
+    path = cache_folder() / f"uncontrolled-{reference_key(plant, motions)}.npz"
+    kept = _read(path, len(motions))
+    if kept is not None:
+        return kept
+    responses = uncontrolled_responses(plant, motions)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, _packed(responses))
+    return responses
+
+
+def _packed(responses: list[Response]) -> bytes:
+    arrays = {
+        f"{i}/{field.name}": getattr(response, field.name)
+        for i, response in enumerate(responses)
+        for field in fields(Response)
+        if getattr(response, field.name) is not None
+    }
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def _read(path: Path, count: int) -> list[Response] | None:
+    """The responses kept at `path`, or None if there are none or they do not read back whole."""
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {name: data[name] for name in data.files}
+        parts: list[dict] = [{} for _ in range(count)]
+        for name, array in arrays.items():
+            index, field = name.split("/", 1)
+            parts[int(index)][field] = array
+        return [Response(**part) for part in parts]
+    except (OSError, ValueError, TypeError, IndexError, KeyError, zipfile.BadZipFile):
+        return None

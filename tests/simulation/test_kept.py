@@ -1,0 +1,58 @@
+"""Kept uncontrolled responses of an FE plant: the same numbers read back, a new file when the model's folder
+or the suite changes, recomputed when the file is damaged; other plants keep nothing."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+
+from rlcontroller import api  # noqa: E402
+from rlcontroller.physics.excitation import Load  # noqa: E402
+from rlcontroller.physics.plant import Plant  # noqa: E402
+from rlcontroller.simulation import kept  # noqa: E402
+
+pytestmark = pytest.mark.slow
+
+
+def short_motions() -> list[Load]:
+    time = np.arange(0.0, 2.0, 0.01)
+    return [Load(f"m{i}", 0.01, a * np.sin(2 * np.pi * f * time)) for i, (a, f) in enumerate([(1.0, 1.5), (2.0, 0.8)])]
+
+
+def test_kept_responses_read_back_and_follow_the_model_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    folder = tmp_path / "model"
+    shutil.copytree(Path("configs/opensees"), folder)
+    shutil.copy(Path("studies/opensees/five_story_opensees.yaml"), tmp_path / "experiment.yaml")
+    text = (tmp_path / "experiment.yaml").read_text().replace("../../configs/opensees/", "model/")
+    text = text.replace("../../configs/", f"{Path('configs').resolve()}/")
+    (tmp_path / "experiment.yaml").write_text(text)
+    plant = Plant(api.load(tmp_path / "experiment.yaml")).bare
+    motions = short_motions()
+    first = kept.uncontrolled(plant, motions)
+    files = list((tmp_path / "cache").iterdir())
+    assert len(files) == 1
+    again = kept.uncontrolled(plant, motions)  # read back: the same arrays
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_array_equal(a.drift, b.drift)
+        np.testing.assert_array_equal(a.absolute_acceleration, b.absolute_acceleration)
+    (folder / "notes.yaml").write_text("# a neighbour the model may source\n")
+    kept.uncontrolled(plant, motions)
+    assert len(list((tmp_path / "cache").iterdir())) == 2  # another key
+    kept.uncontrolled(plant, motions[:1])
+    assert len(list((tmp_path / "cache").iterdir())) == 3
+    newest = max((tmp_path / "cache").iterdir(), key=lambda p: p.stat().st_mtime_ns)
+    newest.write_bytes(b"not a zip")
+    damaged = kept.uncontrolled(plant, motions[:1])  # computed again
+    np.testing.assert_array_equal(damaged[0].drift, first[0].drift)
+
+
+def test_a_plant_of_rlc_own_keeps_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    from rlcontroller.config import Experiment
+
+    kept.uncontrolled(Plant(Experiment()), short_motions())
+    assert not (tmp_path / "cache").exists()
