@@ -124,7 +124,7 @@ def test_a_long_command_shows_its_progress_at_a_terminal_and_nothing_when_captur
 def test_top_level_help_cuts_nothing_and_says_where_to_start():
     result = CliRunner().invoke(app, ["--help"], terminal_width=80)
     commands = result.output.split("Commands:")[1].strip().splitlines()
-    assert result.exit_code == 0 and "…" not in result.output and len(commands) == 16
+    assert result.exit_code == 0 and "…" not in result.output and len(commands) == 17
     assert not any(line.endswith("...") for line in commands) and "Start with 'rlc demo'" in result.output
 
 

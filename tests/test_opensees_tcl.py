@@ -49,6 +49,20 @@ def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
     np.testing.assert_allclose(reduced["story_heights"], [3.0] * 5, rtol=1e-9)
 
 
+def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
+    """The first-mode pushover through the Tcl interpreter, in kip and foot: the story stiffnesses are the
+    paper's (N/m), shear over drift stays there to the end (a linear model), so no story yields."""
+    pushed = in_own_process(
+        "import json; from pathlib import Path; from rlcontroller.physics.pushover import pushover; "
+        f"p = pushover(Path({str(TCL_MODEL)!r}), 'build_model'); "
+        "print(json.dumps({'k': p.stiffness.tolist(), 'yielded': p.yielded.tolist(), "
+        "'secant': (p.shear[-1] / p.drift[-1]).tolist()}))"
+    )
+    np.testing.assert_allclose(pushed["k"], Experiment().building.stiffnesses, rtol=1e-9)
+    np.testing.assert_allclose(pushed["secant"], Experiment().building.stiffnesses, rtol=1e-6)
+    assert not any(pushed["yielded"])
+
+
 @pytest.mark.slow
 def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(records):
     """The ground (m/s^2 -> ft/s^2), the actuators' forces (N -> kip) and the floors' response (ft -> m): under a

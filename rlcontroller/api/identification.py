@@ -11,7 +11,7 @@ import yaml
 
 from rlcontroller.api.common import QUIET, Report, load
 from rlcontroller.bounds import MAX_MASS
-from rlcontroller.config import ConfigError
+from rlcontroller.config import ConfigError, display_path
 from rlcontroller.files import atomic_write, check_new_folder, new_folder
 
 
@@ -188,8 +188,11 @@ def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8,
     plant = Plant(experiment)
     calibration = calibrate(plant, fit_motions, test_motions, on_progress=report.line)
     reduced = nonlinear_reduced_experiment(plant, calibration.hysteresis)
+    model = display_path(Path(experiment.plant.opensees.model))
+    building = reduced.building.model_copy(update={"source": model})  # the matrices' file, as the user sees it
+    reduced = reduced.model_copy(update={"building": building})
     header = (
-        f"# The nonlinear reduced model of {experiment.plant.opensees.model}, calibrated by rlc reduce "
+        f"# The nonlinear reduced model of {model}, calibrated by rlc reduce "
         f"({fit_motions} motions fitted, {test_motions} judged): calibration.md\n"
     )
     with new_folder(out, "reduced model") as staging:

@@ -18,10 +18,9 @@ for a building controlled against wind `configs/checks/wind.yaml`, whose suite i
    controller that trades floor accelerations for drift does not pass.
 2. **at rest** — sensor noise only, no ground motion: the peak drift ratio stays below the bound.
 3. **closed-loop stability** — for a policy (a function of the observation), the closed loop
-   linearised at rest on the design model, without the experiment's supervisor (whose trigger
-   would switch the policy off at rest), has spectral radius < 1; the same number on every linear
-   plant of the standard scenarios is reported (not a pass criterion: the verdict says where it is
-   not stable).
+   linearised at rest on the design model, without the experiment's supervisor (whose trigger would
+   switch the policy off at rest), has spectral radius < 1; the same number on every linear plant of
+   the standard scenarios is reported (not a pass criterion: the verdict says where it is not stable).
 
 The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the policy it judges, with the
 sha256 of what it judged (the policy's files, the experiment, the standard): a verdict whose digests no

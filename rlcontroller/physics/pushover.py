@@ -23,6 +23,7 @@ import numpy as np
 
 from rlcontroller.physics.hysteresis import drift_matrix, story_springs
 from rlcontroller.physics.opensees import (
+    NonConvergence,
     build_model,
     condensed_stiffness,
     floor_masses,
@@ -94,6 +95,8 @@ def pushover(path: Path, function: str, roof_drift: float = 0.04, steps: int = 2
         displacements.append(np.array([ops.nodeDisp(n, dof) for n in nodes]) - at_rest)
         factors.append(float(ops.getTime()))
     ops.wipe()
+    if len(factors) < 3:
+        raise NonConvergence(f"{path}: the pushover did not converge at its first steps (of {increment:g} at the roof)")
     floors = np.array(displacements) * description.length
     story_shear = np.outer(factors, np.cumsum(pattern[::-1])[::-1]) * description.force
     story_drift = floors @ drift_matrix(len(nodes)).T
