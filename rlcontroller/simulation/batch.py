@@ -73,6 +73,7 @@ class BuildingBatch:
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
         self._ground_cache: dict[int, tuple] = {}  # id(load) -> (load, sub-steps, its forcing)
         self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
+        self._member_rows = [self.rows] * size  # each member's output rows (its drawn plant's)
         self._members = np.arange(size)
 
     def _resize(self, state_size: int, length: int) -> None:
@@ -142,6 +143,7 @@ class BuildingBatch:
         readings = noisy_readings(plant, ground, rng)
         forcing[:n_steps, size:][:, self.rows.readings] += readings[1:]
         self.plants[member] = plant
+        self._member_rows[member] = rows
         self.ground_samples[member] = ground
         self.term_factors[member] = self.rows.term_factors(ground)
         self.steps[member], self.k[member] = n_steps, 0
@@ -250,7 +252,7 @@ class BuildingBatch:
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
             state = plant.integrator.step(self.states[member, :n], clipped[member], windows[k], self.control_dt)
-            rows = self.rows if plant is self.plant else step_outputs(plant)
+            rows = self._member_rows[member]
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T
         return new
