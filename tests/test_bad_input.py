@@ -603,3 +603,16 @@ def test_identification_mistakes_are_one_line(tmp_path, monkeypatch, arguments, 
 def test_mpc_mistakes_are_one_line(tmp_path, monkeypatch, arguments, expected):
     monkeypatch.chdir(tmp_path)
     assert one_error_line(CliRunner().invoke(app, ["compare", "lqg", *arguments])).startswith(expected)
+
+
+def test_yielding_stories_that_hold_more_than_the_stiffness_matrix_are_one_line(tmp_path):
+    """A matrix whose floor 2 is held to the ground by a spring of its own: read as story springs under the
+    first mode, fully yielded stories would leave it with negative stiffness; refused naming the part."""
+    stiffness = np.array([[2e7, -1e7, 0.0], [-1e7, 5e7, -1e7], [0.0, -1e7, 1e7]])
+    np.savez(tmp_path / "k.npz", M=np.eye(3) * 1e5, K=stiffness, modal_damping=np.array([0.02]))
+    (tmp_path / "bad.yaml").write_text(
+        "building: {matrices: k.npz, units: {mass: kg, force: N, length: m}, story_heights: [3, 3, 3]}\n"
+        "actuators: [{story: 1}]\nplant: {hysteresis: {yield_drift: 0.01, post_yield_ratio: 0.0}}\n"
+    )
+    line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
+    assert line.startswith(f"error: {tmp_path / 'bad.yaml'}: plant.hysteresis: the yielded building's stiffness")

@@ -81,9 +81,8 @@ class BoucWen:
         lowest, highest = np.linalg.eigvalsh(linear)[[0, -1]]
         if lowest < -1e-9 * highest:
             raise ValueError(
-                f"hysteresis: with these post-yield ratios the yielded building's stiffness is not positive "
-                f"semi-definite (lowest eigenvalue {lowest:.3g} N/m): its stories' springs hold more than its "
-                "stiffness matrix; raise post_yield_ratio"
+                f"the yielded building's stiffness is not positive semi-definite (lowest eigenvalue {lowest:.3g} "
+                "N/m): its stories' springs hold more than its stiffness matrix; expected a larger post_yield_ratio"
             )
         return cls(
             floor_gain=building.actuator_matrix * building.force_limits,

@@ -32,11 +32,13 @@ import numpy as np
 from rlcontroller.config import (
     ActuatorConfig,
     BuildingPart,
+    ConfigError,
     Experiment,
     Quantity,
     SensorConfig,
     StateSpaceBuildingConfig,
     WindGeneratorConfig,
+    location,
 )
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
@@ -107,7 +109,10 @@ class Plant:
         hysteresis = self.config.hysteresis if self.config is not None else None
         self.yielding = None
         if hysteresis is not None:
-            self.yielding = BoucWen.of(self.building, hysteresis)
+            try:
+                self.yielding = BoucWen.of(self.building, hysteresis)
+            except ValueError as error:  # known only with the building's matrices: a fault of the file
+                raise ConfigError(f"{location(*experiment.origin('plant'), 'hysteresis')}: {error}") from None
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
         fe = self.config.opensees if self.config is not None else None
         self.fe_model = None
