@@ -53,8 +53,12 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     """The first-mode pushover through the Tcl interpreter, in kip and foot: the story stiffnesses are the
     paper's (N/m), shear over drift stays there to the end (a linear model), so no story yields."""
     pushed = in_own_process(
-        "import json; from pathlib import Path; from rlcontroller.physics.pushover import pushover; "
-        f"p = pushover(Path({str(TCL_MODEL)!r}), 'build_model'); "
+        "import json; import numpy as np; from pathlib import Path; "
+        "from rlcontroller.physics.pushover import pushover; "
+        "from rlcontroller.physics.opensees import reduced_building; "
+        f"r = reduced_building(Path({str(TCL_MODEL)!r}), 'build_model'); "
+        f"p = pushover(Path({str(TCL_MODEL)!r}), 'build_model', np.array(r['mass_matrix']), "
+        "np.array(r['stiffness_matrix'])); "
         "print(json.dumps({'k': p.stiffness.tolist(), 'yielded': p.yielded.tolist(), "
         "'secant': (p.shear[-1] / p.drift[-1]).tolist()}))"
     )

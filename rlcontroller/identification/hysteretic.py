@@ -94,8 +94,7 @@ def reduced_drifts(design: Plant, hysteresis: HysteresisConfig | None, motion: L
         return design.bare.sampled(grid.substeps).simulate(grid).drift
     model = BoucWen.of(design.building, hysteresis)
     states = model.history(grid.ground, grid.substeps, design.control_dt)
-    x = states[:, : design.building.n_floors]
-    return np.diff(np.hstack([np.zeros((x.shape[0], 1)), x]), axis=1)
+    return states[:, : design.building.n_floors] @ design.building.drift_matrix().T
 
 
 def residual(drift: np.ndarray, control_dt: float) -> np.ndarray:
@@ -117,7 +116,7 @@ def hysteresis_of(parameters: np.ndarray, substeps: int) -> HysteresisConfig:
 
 
 def fit(
-    design: Plant, motions: list[Load], targets: list[np.ndarray], pushed: Pushover, substeps: int = 2
+    design: Plant, motions: list[Load], targets: list[np.ndarray], pushed: Pushover, substeps: int = FIT_SUBSTEPS
 ) -> tuple[HysteresisConfig, float, int]:
     """Least-squares Bouc-Wen parameters of every story against the FE drift histories `targets`
     ((K + 1, n) per motion), from the yield drifts and post-yield ratios of the FE model's pushover
@@ -190,7 +189,7 @@ def calibrate(
     targets = [response.drift for response in histories]
     say("a first-mode pushover of the FE model: each story's yield drift and post-yield ratio to start from")
     fe = plant.config.opensees
-    pushed = pushover(Path(fe.model), fe.function)
+    pushed = pushover(Path(fe.model), fe.function, design.building.mass, design.building.stiffness)
     say(f"fitting {4 * design.building.n_floors} parameters to {fit_count} of the motions")
     hysteresis, cost, evaluations = fit(design, fitting, targets[:fit_count], pushed, FIT_SUBSTEPS)
     hysteresis = hysteresis.model_copy(update={"substeps": PLANT_SUBSTEPS})

@@ -76,7 +76,7 @@ class BoucWen:
         springs = story_springs(building.mass[:n, :n], stiffness)
         yield_drift = per_story(config.yield_drift, n)
         yielding = (1.0 - per_story(config.post_yield_ratio, n)) * springs
-        drift = drift_matrix(n)
+        drift = building.drift_matrix()  # floors only: yielding stories take no mass devices
         linear = stiffness - drift.T @ np.diag(yielding) @ drift
         lowest, highest = np.linalg.eigvalsh(linear)[[0, -1]]
         if lowest < -1e-9 * highest:

@@ -43,7 +43,7 @@ from rlcontroller.config import (
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.generators import GroundModel
-from rlcontroller.physics.hysteresis import BoucWen, drift_matrix
+from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.opensees import OpenSeesIntegrator
 from rlcontroller.physics.sampled import SampledPlant
@@ -214,7 +214,9 @@ class Plant:
         if self._pushover is None:
             from rlcontroller.physics.pushover import pushover
 
-            self._pushover = pushover(self.fe_model.path, self.fe_model.function)
+            n = self.building.n_floors  # the building is the FE model's reduced one
+            floors = (self.building.mass[:n, :n], self.building.stiffness[:n, :n])
+            self._pushover = pushover(self.fe_model.path, self.fe_model.function, *floors)
         return self._pushover.yield_drift
 
     @property
@@ -256,7 +258,7 @@ class Plant:
     def _yielding_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """Outputs on [x; v; z]: the restoring force is K_e x + D' h z (`physics.hysteresis`)."""
         n, yielding = self.building.n_floors, self.yielding
-        hysteretic = drift_matrix(n).T @ np.diag(yielding.hysteretic_stiffness)
+        hysteretic = self.building.drift_matrix().T @ np.diag(yielding.hysteretic_stiffness)
         c, d = output_matrices(replace(self.building, stiffness=yielding.linear_stiffness), quantity)
         z_columns = np.zeros((c.shape[0], n))
         if quantity == "absolute_acceleration":

@@ -22,13 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.physics.hysteresis import drift_matrix, story_springs
-from rlcontroller.physics.opensees import (
-    NonConvergence,
-    build_model,
-    condensed_stiffness,
-    floor_masses,
-    opensees,
-)
+from rlcontroller.physics.opensees import NonConvergence, build_model, opensees
 
 PUSH_SERIES = PUSH_PATTERN = 103  # beside the plant's own (`physics.opensees`: 101, 102)
 ELASTIC_TOLERANCE = 0.05  # a story within 5 % of its initial stiffness at the end of the push never yielded
@@ -61,16 +55,16 @@ def bilinear(drift: np.ndarray, shear: np.ndarray, stiffness: float) -> tuple[fl
     return yield_drift, slope / stiffness, True
 
 
-def pushover(path: Path, function: str, roof_drift: float = 0.04, steps: int = 200) -> Pushover:
+def pushover(
+    path: Path, function: str, mass: np.ndarray, stiffness: np.ndarray, roof_drift: float = 0.04, steps: int = 200
+) -> Pushover:
     """Push the FE model of `path` in its first mode's shape to `roof_drift` (of its height) and idealise
-    each story's curve (module docstring)."""
+    each story's curve (module docstring); `mass` (kg) and `stiffness` (N/m) are its reduced model's floor
+    matrices (`physics.opensees.reduced_building`: the plant's design building), which give the shape."""
     import scipy.linalg
 
-    description = build_model(path, function)
-    masses, stiffness = floor_masses(description), condensed_stiffness(description)
-    description = build_model(path, function)  # afresh: at rest under its gravity loads, as the push starts
+    description = build_model(path, function)  # at rest under its gravity loads, as the push starts
     ops, nodes, dof = opensees(), description.control_nodes, description.direction
-    mass = np.diag(masses)
     _, shapes = scipy.linalg.eigh(stiffness, mass, subset_by_index=[0, 0])
     pattern = mass @ shapes[:, 0]
     pattern = pattern / pattern[-1]  # the roof's force 1 (the load factor's unit, in the model's force)
