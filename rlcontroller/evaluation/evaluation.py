@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,14 +23,10 @@ from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import (
-    Load,
-    content_seed,
-)
+from rlcontroller.physics.excitation import Load, content_seed, with_settling_tail
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
-    SETTLING_TAIL_S,
     WIND_METRICS,
     YIELDING_METRICS,
     device_metrics,
@@ -49,15 +45,6 @@ PASSIVE = "passive devices"  # the mass devices with no command: tuned masses as
 DAMPER_LEVELS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # passive command levels of a damper sweep, of its range
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
-
-
-def with_settling_tail(motion: Load) -> Load:
-    """The motion followed by SETTLING_TAIL_S of zero ground motion and floor loads (for residual drifts)."""
-    tail = np.zeros(round(SETTLING_TAIL_S / motion.dt))
-    forces = motion.floor_forces
-    if forces is not None:
-        forces = np.concatenate([forces, np.zeros((tail.size, forces.shape[1]))])
-    return replace(motion, acceleration=np.concatenate([motion.acceleration, tail]), floor_forces=forces)
 
 
 @dataclass

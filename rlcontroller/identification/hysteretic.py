@@ -35,10 +35,10 @@ from rlcontroller.config import (
     RandomRange,
 )
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, on_control_grid
+from rlcontroller.physics.excitation import SETTLING_TAIL_S, STANDARD_GRAVITY, Load, on_control_grid, with_settling_tail
 from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.hysteresis import BoucWen
-from rlcontroller.physics.metrics import RESIDUAL_WINDOW_S, SETTLING_TAIL_S, peak
+from rlcontroller.physics.metrics import RESIDUAL_WINDOW_S, peak
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.pushover import Pushover, pushover
 
@@ -74,8 +74,6 @@ class Calibration:
 
 def calibration_motions(count: int, seed: int) -> list[Load]:
     """`count` strong generated motions, each followed by SETTLING_TAIL_S of rest."""
-    from rlcontroller.evaluation.evaluation import with_settling_tail
-
     return [with_settling_tail(motion) for motion in generate_suite(CALIBRATION_MOTIONS, count, seed)]
 
 

@@ -32,6 +32,7 @@ UNITS_TO_SI |= {f"m{per}": 1.0 for per in ("/s2", "/s^2", "/s²", "/s/s", "_s2",
 UNITS_TO_SI |= {f"cm{per}": 0.01 for per in ("/s2", "/s^2", "/s²", "/s/s", "_s2", "ps2")}
 
 
+SETTLING_TAIL_S = 20.0  # s of zero ground motion after a record on a yielding plant (its residual drift)
 GROUND_ACCELERATION = "ground_acceleration"
 FLOOR_FORCES = "floor_forces"
 
@@ -275,6 +276,15 @@ def scale_to_pga(motion: Load, pga: float) -> Load:
     if motion.floor_forces is not None:
         raise MotionError(f"{motion.name}: a record of floor forces has no ground acceleration to scale")
     return replace(motion, acceleration=motion.acceleration * (pga / motion.pga))
+
+
+def with_settling_tail(motion: Load) -> Load:
+    """The motion followed by SETTLING_TAIL_S of zero ground motion and floor loads (for residual drifts)."""
+    tail = np.zeros(round(SETTLING_TAIL_S / motion.dt))
+    forces = motion.floor_forces
+    if forces is not None:
+        forces = np.concatenate([forces, np.zeros((tail.size, forces.shape[1]))])
+    return replace(motion, acceleration=np.concatenate([motion.acceleration, tail]), floor_forces=forces)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,6 @@ DEVICE_METRICS = (  # with devices: per mass device, then per commanded device
     "power_rms_W",
     "dissipated_energy_J",
 )
-SETTLING_TAIL_S = 20.0  # s of zero ground motion after a record on a yielding plant
 RESIDUAL_WINDOW_S = 5.0  # the residual drift is the mean drift over the tail's last seconds
 
 

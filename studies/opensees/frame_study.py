@@ -3,7 +3,7 @@ controllers are designed on. Prints, on the seven records, the LQG variants' J1 
 model as the plant (to set beside `rlc compare lqg --config configs/experiments/nine_story_frame.yaml`, the
 FE model as the plant) and, per record, the uncontrolled peak drift ratio (% of the story height) of the FE
 model and of the reduced model, and the residual drift ratio of the FE model (uncontrolled and under LQG +
-ground model) after a settling tail of zero ground motion (`evaluation.with_settling_tail`).
+ground model) after a settling tail of zero ground motion (`excitation.with_settling_tail`).
 
 Usage: python studies/opensees/frame_study.py RECORDS    (≈ 15 min on 2 cores: the FE runs)
 """
@@ -17,8 +17,8 @@ from rlcontroller import api
 from rlcontroller.assets import CONFIGS
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.evaluation.evaluation import compare, with_settling_tail
-from rlcontroller.physics.metrics import SETTLING_TAIL_S
+from rlcontroller.evaluation.evaluation import compare
+from rlcontroller.physics.excitation import SETTLING_TAIL_S, with_settling_tail
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.records import load_records
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
