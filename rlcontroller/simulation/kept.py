@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rlcontroller.errors import ModelError
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import Load
@@ -28,6 +29,7 @@ from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import uncontrolled_responses
 
 MODEL_SUFFIXES = (".py", ".tcl", ".yaml")
+STANDING_STILL = 1e-12  # m: a building's peak drift under a ground motion is never this small
 
 
 def cache_folder() -> Path:
@@ -64,6 +66,13 @@ def uncontrolled(plant: Plant, motions: list[Load]) -> list[Response]:
     if kept is not None:
         return kept
     responses = uncontrolled_responses(plant, motions)
+    for motion, response in zip(motions, responses, strict=True):
+        if np.any(motion.acceleration) and np.max(np.abs(response.drift)) < STANDING_STILL:
+            raise ModelError(
+                f"{plant.fe_model.path}: the model stands still under {motion.name}'s ground motion (peak drift "
+                f"{np.max(np.abs(response.drift)):.1e} m): no mass feels the ground; masses on nodes tied by equalDOF "
+                "under the Transformation handler do not (docs/opensees.md, \"A Tcl model\"): try constraints: [Plain]"
+            )
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(path, _packed(responses))
     return responses

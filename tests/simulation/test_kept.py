@@ -56,3 +56,23 @@ def test_a_plant_of_rlc_own_keeps_nothing(tmp_path, monkeypatch):
 
     kept.uncontrolled(Plant(Experiment()), short_motions())
     assert not (tmp_path / "cache").exists()
+
+
+def test_a_model_the_ground_does_not_move_is_refused_in_one_line(tmp_path, monkeypatch):
+    """An FE model whose masses feel no ground motion (the published benchmark frame under the Transformation
+    handler stood still: docs/opensees.md) is refused before its runs are kept, naming the model."""
+    from dataclasses import replace
+
+    from rlcontroller.errors import ModelError
+
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    plant = Plant(api.load(Path("studies/opensees/five_story_opensees.yaml"))).bare
+    moving = kept.uncontrolled_responses
+
+    def standing(plant, motions):  # the model's runs, its drift gone: what the benchmark frame returned
+        return [replace(response, drift=np.zeros_like(response.drift)) for response in moving(plant, motions)]
+
+    monkeypatch.setattr(kept, "uncontrolled_responses", standing)
+    with pytest.raises(ModelError, match=r"five_story_shear\.py: the model stands still under m0's ground motion"):
+        kept.uncontrolled(plant, short_motions())
+    assert not (tmp_path / "cache").exists()
