@@ -7,7 +7,8 @@ named by the sha256 of everything they depend on: the model's folder (every .py,
 a model sources its neighbours), the function that builds it, the analysis and control steps, every
 motion's samples, and rlc's version. A change to any of them names another file; a file that does not read
 back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
-~/.cache/rlcontroller; deleting it costs only the runs.
+~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under a ground motion (no mass
+feels the ground) is refused before anything is kept or judged.
 """
 
 from __future__ import annotations
