@@ -34,13 +34,14 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=777)
     arguments = parser.parse_args()
     base = load(EXPERIMENT)
+    check = load_safety_check(safety_standard(base))
+    if arguments.seed == check.seed:
+        parser.error(f"seed {arguments.seed} is the check suite's: pick another")
+    standard = check.model_copy(update={"seed": arguments.seed})
+    names = {f"mixture_{arguments.seed}_{i}" for i in MOTIONS}
     for step in arguments.steps:
         opensees = base.plant.opensees.model_copy(update={"analysis_dt": step})
         plant = Plant(base.model_copy(update={"plant": base.plant.model_copy(update={"opensees": opensees})}))
-        standard = load_safety_check(safety_standard(base)).model_copy(update={"seed": arguments.seed})
-        if arguments.seed == load_safety_check(safety_standard(base)).seed:
-            parser.error(f"seed {arguments.seed} is the check suite's: pick another")
-        names = {f"mixture_{arguments.seed}_{i}" for i in MOTIONS}
         motions = [motion for motion in check_suite(plant, standard) if motion.name in names]
         controller = classical_policy(plant, "lqg_ground_model")
         start = time.perf_counter()
