@@ -51,10 +51,10 @@ CALIBRATION_MOTIONS = KanaiTajimiConfig(
 )
 FIT_SEED, TEST_SEED = 20_000, 20_001  # training draws from 0 up, validation 10000, the check suites 31337
 YIELD_RANGE = 3.0  # the fit keeps each story's yield drift within this factor of its pushover's
-BOUNDS = {"post_yield_ratio": (0.0, 0.95), "exponent": (1.0, 10.0), "beta": (0.05, 0.95)}  # per story
-# RK4 sub-steps per ground sample: 2 while fitting (fast), 4 in the model written and judged. With 2, the fitted
-# frame's sharpest loops (exponent 10) diverge on 4 of the check suite's 320 motions (1.1-1.5 g sampled once a
-# control step); with 4 on none.
+BOUNDS = {"post_yield_ratio": (0.0, 0.95), "exponent": (1.0, 20.0), "beta": (0.05, 0.95)}  # per story
+# RK4 sub-steps per ground sample: 2 while fitting (fast), 4 in the model written and judged. The exponent may
+# reach 20 (an elastic-plastic hinge): the integrator reads |z|^n as at most 1 (`integrators.z_rate`), without
+# which loops of exponent 10 diverged on 4 of the check suite's 320 motions at 2 sub-steps.
 FIT_SUBSTEPS, PLANT_SUBSTEPS = 2, 4
 MAX_EVALUATIONS = 200  # of the residuals (each Jacobian takes 4 n more)
 YIELD_SPREAD = (0.8, 1.25)  # training draws every story's yield drift times a factor in this range

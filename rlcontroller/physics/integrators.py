@@ -13,9 +13,11 @@ import numpy as np
 
 @numba.njit(cache=True)
 def z_rate(z: float, drift_rate: float, yield_drift: float, exponent: float, beta: float, gamma: float) -> float:
-    """dz/dt of one Bouc-Wen story."""
+    """dz/dt of one Bouc-Wen story. With beta + gamma = 1 the exact z never leaves [-1, 1]; |z|^n is read as at
+    most 1, so an RK4 stage that overshoots the bound on a sharp loop (large n) stops there instead of being
+    thrown back by |z|^n >> 1 (what made such loops diverge)."""
     sign = 1.0 if drift_rate * z > 0.0 else (-1.0 if drift_rate * z < 0.0 else 0.0)
-    return drift_rate / yield_drift * (1.0 - abs(z) ** exponent * (beta * sign + gamma))
+    return drift_rate / yield_drift * (1.0 - min(abs(z) ** exponent, 1.0) * (beta * sign + gamma))
 
 
 @numba.njit(cache=True)

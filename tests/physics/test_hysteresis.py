@@ -130,6 +130,19 @@ def test_the_error_falls_at_the_integrators_order_when_substeps_double():
     assert np.all(np.diff(errors) < 0) and np.log2(errors[0] / errors[-1]) / 3 > 2.0
 
 
+def test_a_sharp_loop_stays_bounded_with_few_substeps():
+    """An exponent of 10-20 (an elastic-plastic story) at one or two sub-steps: an RK4 stage past |z| = 1 once
+    raised |z|^n far above 1 and threw z back ever further (NaN within the record); with |z|^n read as at most 1
+    the run stays finite and near the one with 64 sub-steps."""
+    for exponent in (10.0, 20.0):
+        reference = run(bouc_wen(yield_drift=0.01, post_yield_ratio=0.05, exponent=exponent, substeps=64), 600)
+        assert np.abs(reference).max() / 0.01 > 10  # deep into yielding
+        for substeps, tolerance in ((1, 0.2), (2, 0.04)):
+            drifts = run(bouc_wen(yield_drift=0.01, post_yield_ratio=0.05, exponent=exponent, substeps=substeps), 600)
+            assert np.all(np.isfinite(drifts))
+            assert np.abs(drifts - reference).max() < tolerance * np.abs(reference).max()
+
+
 def test_a_yielding_plant_reports_ductility_residual_drift_and_hysteretic_energy():
     from rlcontroller.control.controllers import Uncontrolled
     from rlcontroller.evaluation.evaluation import evaluate
