@@ -121,6 +121,16 @@ def test_a_long_command_shows_its_progress_at_a_terminal_and_nothing_when_captur
     assert captured.returncode == 0 and "━" not in captured.stdout + captured.stderr
 
 
+def test_progress_asked_for_into_a_file_is_a_line_per_step(tmp_path, records):
+    """`--progress` into a log (nohup): a live bar draws nothing there, so each finished step is a line on stderr."""
+    kobe = str(records / "RSN1106_KOBE_KJM000.AT2")
+    arguments = ["evaluate", "--records", kobe, "--out", str(tmp_path / "out")]
+    asked = CliRunner().invoke(app, [*arguments, "--progress"])
+    assert asked.exit_code == 0 and re.search(r"^evaluating 1 motion: 1/1, \d+ s$", asked.stderr, re.M), asked.stderr
+    quiet = CliRunner().invoke(app, [*arguments[:-1], str(tmp_path / "quiet")])
+    assert quiet.exit_code == 0 and "1/1" not in quiet.stderr
+
+
 def test_top_level_help_cuts_nothing_and_says_where_to_start():
     result = CliRunner().invoke(app, ["--help"], terminal_width=80)
     commands = result.output.split("Commands:")[1].strip().splitlines()

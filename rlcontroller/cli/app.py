@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from enum import Enum
@@ -164,6 +165,19 @@ def show_progress(progress: bool | None) -> bool:
     return sys.stdout.isatty() if progress is None else progress
 
 
+def counted_lines(description: str, total: int) -> Callable[..., None]:
+    """Progress as plain lines on stderr (done/total, seconds since the start): for `--progress` into a file."""
+    started, done = time.monotonic(), 0
+
+    def advance(amount: int = 1, label: str = "") -> None:
+        nonlocal done
+        done += amount
+        what = f"{description}: {label}" if label else description
+        typer.echo(f"{what}: {done}/{total}, {time.monotonic() - started:.0f} s", err=True)
+
+    return advance
+
+
 class Printed:
     """A command's `api.Report` on the terminal: its lines on stdout, notes on stderr, and (when `bars`) a
     progress bar on stderr while a long step runs (what it does, done/total, elapsed, time left), gone
@@ -193,6 +207,9 @@ class Printed:
             TimeRemainingColumn,
         )
 
+        if not Console(stderr=True).is_terminal:  # a log (nohup): a live bar draws nothing there, so a line a step
+            yield counted_lines(description, total)
+            return
         columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
         with Progress(
             *columns, TextColumn("left"), TimeRemainingColumn(), console=Console(stderr=True), transient=True
