@@ -207,12 +207,13 @@ class Printed:
             TimeRemainingColumn,
         )
 
-        if not Console(stderr=True).is_terminal:  # a log (nohup): a live bar draws nothing there, so a line a step
+        console = Console(stderr=True)
+        if not console.is_terminal:  # a log (nohup): a live bar draws nothing there, so a line a step
             yield counted_lines(description, total)
             return
         columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
         with Progress(
-            *columns, TextColumn("left"), TimeRemainingColumn(), console=Console(stderr=True), transient=True
+            *columns, TextColumn("left"), TimeRemainingColumn(), console=console, transient=True
         ) as bar:
             task = bar.add_task(description, total=total)
 
