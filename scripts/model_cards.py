@@ -23,8 +23,8 @@ from rlcontroller.control.policy_file import read_policy
 from rlcontroller.control.supervisor import trigger_readings
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness, summary
-from rlcontroller.evaluation.safety import Verdict
 from rlcontroller.evaluation.tables import markdown_table
+from rlcontroller.evaluation.verdict import Verdict
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.loads import load_suite
 from rlcontroller.physics.plant import Plant
@@ -150,7 +150,8 @@ def card(folder: Path, records: Path) -> str:
             else f"- **Training**: `{config}` ({policy.algorithm}, {policy.steps:,} steps; {wall} on 2 CPU cores); "
             "selected on generated validation motions, never on records."
         ),
-        f"- **Safety check** (`rlc check`): **{'PASSED' if verdict.passed else 'FAILED'}**",
+        f"- **Safety check** (`rlc check`): **{verdict.lines()[0].split(': ', 1)[1]}** (the folder's claim until "
+        f"re-run: `rlc check models/{folder.name} --verify`)",
         *(f"  -{line[1:]}" for line in verdict.lines()[1:]),
     ]
     columns = WIND_COLUMNS if wind else ("J1", "J2", "J3", "J4")

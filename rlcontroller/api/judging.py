@@ -83,11 +83,9 @@ def evaluate(
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
-    note = unchecked_note(folder, model)
-    if note is not None:
-        report.note(note)
     with drawing() as plots:  # matplotlib's import and the plots on the other core
         _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report)
+        report.note(unchecked_note(folder, model))  # once the records are read (a bad one is its only line)
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
     return evaluation, out
@@ -211,7 +209,8 @@ def compare_passive(
     from rlcontroller.evaluation.evaluation import PASSIVE
     from rlcontroller.evaluation.evaluation import evaluate as evaluate_controllers
     from rlcontroller.evaluation.report import write_report
-    from rlcontroller.evaluation.safety import Verdict, passive_verdict
+    from rlcontroller.evaluation.safety import passive_verdict
+    from rlcontroller.evaluation.verdict import Verdict
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
 

@@ -27,7 +27,8 @@ def check(
     results/, as it judges the policy on a plant its folder does not name."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy_file import read_policy
-    from rlcontroller.evaluation.safety import judged_digests, safety_check, write_verdict
+    from rlcontroller.evaluation.safety import safety_check
+    from rlcontroller.evaluation.verdict import judged_digests, write_verdict
     from rlcontroller.physics.plant import Plant
 
     experiment = folder_experiment(folder) if config is None else load(config)
@@ -59,17 +60,60 @@ def check(
     return verdict, write_verdict(verdict, target, model, other)
 
 
+def verify(folder: Path, model: str = "best", scenarios: Path | None = None, report: Report = QUIET) -> list[str]:
+    """`rlc check FOLDER --verify`: re-run the check of a folder's verdict under the project's standard and
+    return each recorded figure the re-run does not reproduce (`evaluation.verdict.differences`; empty:
+    they agree). The recorded verdict must exist; whether it judged these files is one of the figures."""
+    import yaml
+
+    from rlcontroller.config import display_path, load_safety_check, load_scenarios
+    from rlcontroller.control.policy_file import read_policy
+    from rlcontroller.evaluation.safety import safety_check
+    from rlcontroller.evaluation.verdict import differences, judged_digests, verdict_path
+    from rlcontroller.physics.plant import Plant
+
+    path = verdict_path(folder, model)
+    if not path.is_file():
+        raise ConfigError(f"{display_path(path)}: no verdict to verify; run 'rlc check {display_path(folder)}'")
+    try:
+        recorded = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{display_path(path)}: unreadable ({type(error).__name__}); nothing to verify") from None
+    if not isinstance(recorded, dict):
+        raise ConfigError(f"{display_path(path)}: expected a verdict (a mapping), got {type(recorded).__name__}")
+    experiment = folder_experiment(folder)
+    plant = Plant(experiment)
+    checking = load_safety_check(safety_standard(experiment))
+    named = load_scenarios(scenarios or default_scenarios(experiment), experiment)
+    report.line(f"verifying {display_path(path)}: re-running its check...")
+    with report.progress("safety check", 3 + (checking.also is not None)) as advance:
+        verdict = safety_check(plant, read_policy(folder, model, plant), checking, named, lambda name: advance(1, name))
+    verdict.judged = judged_digests(folder, model, checking)
+    return differences(recorded, yaml.safe_load(verdict.to_yaml()))
+
+
 def verdict_state(folder: Path, model: str):
-    """The verdict on a folder's policy under the project's standard for its experiment, if it judged these files."""
+    """The verdict on a folder's policy under the project's standard for its experiment, if it judged these
+    files and its figures agree with it."""
     from rlcontroller.config import load_safety_check
-    from rlcontroller.evaluation.safety import read_verdict
+    from rlcontroller.evaluation.verdict import read_verdict
 
-    return read_verdict(folder, model, load_safety_check(safety_standard(folder_experiment(folder))))
+    experiment = folder_experiment(folder)
+    standard = load_safety_check(safety_standard(experiment))
+    return read_verdict(folder, model, standard, experiment.building.system)
 
 
-def unchecked_note(folder: Path, model: str) -> str | None:
-    """One line when the policy failed the safety check or was never checked (as its files are now)."""
-    from rlcontroller.evaluation.safety import verdict_path
+def claim(folder: Path) -> str:
+    """What a verdict read from a folder is, in a few words, and how to verify it."""
+    from rlcontroller.config import display_path
+
+    return f"the folder's claim until re-run: 'rlc check {display_path(folder)} --verify'"
+
+
+def unchecked_note(folder: Path, model: str) -> str:
+    """One line on the policy's verdict as its files are now: never checked, FAILED, or passed (whether it
+    dominates) as the folder's claim, with the command that verifies it."""
+    from rlcontroller.evaluation.verdict import verdict_path
 
     state = verdict_state(folder, model)
     if state.passed is None:
@@ -80,20 +124,21 @@ def unchecked_note(folder: Path, model: str) -> str | None:
             f"warning: {folder}'s {model} policy FAILED the safety check (it can be worse than no control): "
             f"{verdict_path(folder, model)}"
         )
-    return None
+    passed = "passed the safety check, dominating" if state.dominates else "passed the safety check"
+    return f"note: {folder}'s {model} policy {passed}: {claim(folder)}"
 
 
 def verdict_lines(folder: Path, model: str) -> tuple[list[str], bool]:
-    """`rlc check --show`: the verdict's lines when it judged the folder's files as they are, and whether
-    it passed (False too when there is no such verdict)."""
+    """`rlc check --show`: the verdict's lines when it judged the folder's files as they are and agrees with
+    its own figures, and whether it passed (False too when there is no such verdict)."""
     import yaml
 
-    from rlcontroller.evaluation.safety import Verdict, verdict_path
+    from rlcontroller.evaluation.verdict import Verdict, verdict_path
 
     state = verdict_state(folder, model)
     if state.passed is None:
         return [f"{folder}'s {model} policy counts as never safety-checked: {state.reason}"], False
     path = verdict_path(folder, model)
     lines = Verdict(**yaml.safe_load(path.read_text(encoding="utf-8"))).lines()
-    lines.append(f"verdict in {path}, judging these files (sha256 of policy, experiment and standard match)")
+    lines.append(f"verdict in {path}: it judged these files and agrees with its own figures; {claim(folder)}")
     return lines, bool(state.passed)

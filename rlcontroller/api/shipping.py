@@ -24,7 +24,8 @@ def shipped_models() -> list[str]:
     for folder, experiment in shipped.items():
         policy = yaml.safe_load((folder / "best_policy.yaml").read_text())
         state = verdict_state(folder, "best")
-        verdict = {True: "safety check passed", False: "safety check FAILED"}.get(state.passed)
+        passed = "safety check passed, dominates" if state.dominates else "safety check passed"
+        verdict = {True: passed, False: "safety check FAILED"}.get(state.passed)
         mark = " (default)" if folder == DEFAULT_MODEL else ""
         made = (
             f"classical, {policy['law']}" if policy.get("kind") == "classical"
@@ -33,6 +34,7 @@ def shipped_models() -> list[str]:
         line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}"
         groups.setdefault(hardware_label(experiment), []).append(line)
     lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
+    lines.append("each verdict is its folder's claim until re-run: 'rlc check models/NAME --verify'")
     served = [experiment.hardware() for experiment in shipped.values()]
     unserved: dict[str, list[str]] = {}
     passive: list[str] = []
@@ -88,9 +90,7 @@ def export(run_dir: Path | None = None, out: Path | None = None, model: str = "b
         raise ConfigError(f"--out {out}: exists; an export is never overwritten (choose another --out)")
     if not out.parent.is_dir():
         raise ConfigError(f"--out {out}: expected a file path in an existing folder")
-    note = unchecked_note(folder, model)
-    if note is not None:
-        report.note(note)
+    report.note(unchecked_note(folder, model))
     export_onnx(folder, model, out)
     outputs = "forces (N) and damper commands" if folder_experiment(folder).has_dampers else "forces (N)"
     report.line(f"wrote {out}: readings (SI) and state in, {outputs} out; see docs/deployment.md")

@@ -172,6 +172,10 @@ def check(
     show: Annotated[
         bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
     ] = False,
+    verify: Annotated[
+        bool,
+        typer.Option("--verify", help="Re-run the check and compare it with the folder's verdict, figure by figure."),
+    ] = False,
     config: Annotated[
         Path | None,
         typer.Option(help="Experiment YAML to check the controller in (e.g. an OpenSees plant); default its own."),
@@ -183,7 +187,8 @@ def check(
     (generated wind for a controller against wind) never worse than the building when the controller fails
     safe (no control; devices at their fail-safe command), no higher floor accelerations on average, quiet
     at rest, a stable closed loop. Writes MODEL_check.yaml in the run folder (for a shipped model: in a new
-    folder under results/); exit code 1 when it fails."""
+    folder under results/); exit code 1 when it fails. --verify re-runs it and compares with the recorded
+    verdict (exit code 1 when a figure differs beyond 0.1 % plus its rounding)."""
     from rlcontroller import api
 
     report = Printed(progress)
@@ -191,6 +196,15 @@ def check(
     if show:
         lines, passed = api.verdict_lines(folder, model)
         typer.echo("\n".join(lines))
+    elif verify:
+        if standard is not None or config is not None:
+            from rlcontroller.config import ConfigError
+
+            raise ConfigError("--verify re-runs the folder's own verdict: leave out --standard and --config")
+        with fan_out(engine.value, address):
+            differing = api.verify(folder, model, scenarios, report)
+        typer.echo("\n".join(differing) or "verified: the re-run reproduces every figure of the recorded verdict")
+        passed = not differing
     else:
         with fan_out(engine.value, address):
             verdict, path = api.check(folder, model, standard, scenarios, report, config)

@@ -23,6 +23,9 @@ from rlcontroller.config.base import (
 )
 from rlcontroller.devices import DeviceConfig
 
+# The lateral system, for the performance levels of FEMA 356 Table C1-3 (`evaluation.verdict.DRIFT_LIMITS`).
+StructuralSystem = Literal["steel_moment_frame", "concrete_moment_frame", "concrete_wall"]
+
 
 class RayleighPair(StrictModel):
     mode: PositiveInt
@@ -58,6 +61,7 @@ class BuildingConfig(StrictModel):
         rayleigh=(RayleighPair(mode=1, ratio=0.01), RayleighPair(mode=5, ratio=0.05))
     )
     story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]] | None = None
+    system: StructuralSystem = "steel_moment_frame"
 
     @property
     def n_floors(self) -> int:
@@ -114,6 +118,7 @@ class MatrixBuildingConfig(StrictModel):
     damping_matrix: Matrix | None = None
     modal_damping: list[Annotated[float, Field(ge=0.0, lt=1.0)]] | None = None
     story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]]
+    system: StructuralSystem = "steel_moment_frame"
 
     @property
     def masses(self) -> list[float]:

@@ -144,6 +144,8 @@ def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str, reduce: Red
             "loaded with a reduction (rlcontroller.api.load, or load_experiment(..., reduce=reduced_building))"
         )
     raw["building"] = reduce(Path(fe["model"]), fe.get("function", "build_model"))
+    if "system" in fe:  # the FE model's lateral system is its design model's
+        raw["building"]["system"] = fe["system"]
 
 
 def build_experiment(

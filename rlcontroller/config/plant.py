@@ -14,6 +14,7 @@ from pydantic import (
 )
 
 from rlcontroller.config.base import Factor, IntRange, StrictModel, TimeStep, unique
+from rlcontroller.config.building import StructuralSystem
 from rlcontroller.config.state_space import BuildingPart
 
 
@@ -98,12 +99,14 @@ class OpenSeesConfig(StrictModel):
     (code: run only when the user names it; absolute once loaded), the function in it, and the longest
     analysis step (s; Newmark average acceleration, on every ground sample: 2.5 ms keeps the five-story
     model within 0.1 % of the exact integration, 10 ms is 0.5 % off). `train_on`: what `rlc train` learns
-    on — the reduced design model (the default: fast) or the FE model itself (slow: one model per process)."""
+    on — the reduced design model (the default: fast) or the FE model itself (slow: one model per process).
+    `system`: the frame's lateral system (the safety check's performance levels)."""
 
     model: str = Field(min_length=1)
     function: str = Field("build_model", pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
     analysis_dt: float = Field(0.0025, gt=0.0, le=0.1)
     train_on: Literal["reduced", "fe"] = "reduced"
+    system: StructuralSystem = "steel_moment_frame"  # its lateral system: the design model (reduced) takes it
 
 
 class PlantConfig(StrictModel):

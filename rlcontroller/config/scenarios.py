@@ -47,8 +47,10 @@ class SafetyCheckConfig(StrictModel):
     with its own `seed`, the drift below which a motion is insignificant (a ratio of the story
     height; `story_height` (m) where the building gives none), and the at-rest test: `rest_runs`
     noise realisations of `rest_duration` (s) without ground motion. A significant motion fails when its peak
-    drift ratio (or mean J1) to the reference exceeds 1 + `tolerance`. The reference a controller must
-    never be worse than is the building with its controller failed safe (`evaluation.safety.fail_safe`)."""
+    drift ratio (or mean J1) to the reference exceeds 1 + `tolerance`; k such motions of N significant pass
+    while the one-sided `confidence` Clopper-Pearson upper bound on their probability is at most `risk_bound`
+    (0: none may fail). The reference is the building with its controller failed safe
+    (`evaluation.safety.fail_safe`)."""
 
     motions: Annotated[int, Field(ge=1, le=100_000)] = 320
     seed: Seed = 31_337
@@ -58,6 +60,8 @@ class SafetyCheckConfig(StrictModel):
     rest_duration: Annotated[float, Field(gt=0.0, le=3600.0)] = 60.0
     rest_runs: Annotated[int, Field(ge=1, le=1000)] = 16
     tolerance: Annotated[float, Field(ge=0.0, le=0.05)] = 0.01
+    risk_bound: Annotated[float, Field(ge=0.0, le=0.5)] = 0.05
+    confidence: Annotated[float, Field(ge=0.5, lt=1.0)] = 0.95
     also: SafetyCheckConfig | None = None  # in YAML a file beside this one, whose check suite must pass too
 
 

@@ -24,7 +24,7 @@ from pydantic import Field, NonNegativeInt, model_validator
 
 from rlcontroller.bounds import MAX_FLOORS
 from rlcontroller.config.base import StrictModel, first_repeat
-from rlcontroller.config.building import BuildingConfig, MatrixBuildingConfig
+from rlcontroller.config.building import BuildingConfig, MatrixBuildingConfig, StructuralSystem
 
 MAX_STATES = 4 * MAX_FLOORS
 Matrix = list[list[float]]
@@ -68,6 +68,7 @@ class StateSpaceBuildingConfig(StrictModel):
     outputs: StateSpaceOutputs
     state: Literal["abstract", "physical"] = "abstract"
     story_heights: list[Annotated[float, Field(gt=0.0, le=1000.0)]] | None = None
+    system: StructuralSystem = "steel_moment_frame"
 
     @property
     def n_floors(self) -> int:

@@ -98,10 +98,10 @@ def evaluate(
     settle = settle and (yielding is not None or plant.fe_model is not None)
     yield_drift = plant.yield_drift if settle else None
     simulated = [with_settling_tail(motion) for motion in motions] if settle else motions
+    seeds = [content_seed(motion) for motion in motions]
     bare = kept.uncontrolled(plant.bare, simulated)  # an FE model's kept between commands (`simulation.kept`)
     devices = plant.building.devices
     passive = uncontrolled_responses(plant, simulated) if devices else []
-    seeds = [content_seed(motion) for motion in motions]
     # the optimum on the other core while the controllers run here (`background`): the same numbers
     optimum = in_background(optimal_responses, plant, simulated) if include_optimal else None
     controlled = batch_rollout(plant, simulated, controllers, seeds=seeds, on_motions=on_motions)

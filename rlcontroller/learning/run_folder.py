@@ -56,6 +56,7 @@ CURVE_COLUMNS = (
     "lqg_ground_J2",
     "lqg_ground_model_J1",
     "lqg_ground_model_J2",
+    "eval_spectral_radius",  # measured for `select_by: standard` only (nan otherwise)
 )
 KEPT_CHECKPOINTS = 2
 
@@ -168,7 +169,7 @@ class RunFolder:
 
     def append_curve(self, row: dict[str, float]) -> None:
         with open(self.curve_path, "a", newline="") as handle:
-            csv.writer(handle).writerow([row[c] for c in CURVE_COLUMNS])
+            csv.writer(handle).writerow([row.get(c, float("nan")) for c in CURVE_COLUMNS])
 
     def truncate_curve(self, steps: int) -> None:
         """Drop rows logged after the checkpoint being resumed (they will be logged again); columns

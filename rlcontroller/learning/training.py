@@ -115,9 +115,11 @@ def _callback(
 
 def selection_score(result: dict[str, float], select_by: str) -> float:
     """Higher is better: the validation reward, or minus the validation J1 or J1 + J2 (`algorithm.select_by`),
-    or for `standard` minus the share of motions worse than the building failed safe, then J1 + J2."""
+    or for `standard` a stable closed loop first, then minus the share of motions worse than the building failed
+    safe, then J1 + J2."""
     if select_by == "standard":  # one motion in a hundred outweighs any J1 + J2 (each at most about 2)
-        return -1000.0 * result["eval_worse"] - result["eval_J1"] - result["eval_J2"]
+        unstable = result.get("eval_spectral_radius", 0.0) >= 1.0  # the check's stability criterion fails
+        return -1.0e6 * unstable - 1000.0 * result["eval_worse"] - result["eval_J1"] - result["eval_J2"]
     if select_by == "reward":
         return result["eval_reward"]
     return -result["eval_J1"] - (result["eval_J2"] if select_by == "J1+J2" else 0.0)

@@ -6,7 +6,8 @@ The deterministic policy runs on `excitation.validation_motions` motions of the 
 and the three LQGs, designed on the design model as deployed, are run once on them as references.
 `eval_worse` is the share of the motions on which the policy is worse than the building failed safe (the
 safety check's measure, `metrics.ratio_to_reference`, above 1 + the standard's default tolerance): what
-`select_by: standard` minimises first.
+`select_by: standard` minimises first, among the policies whose closed loop linearised at rest on the design
+model is stable (`eval_spectral_radius` below 1, the check's stability criterion; measured only then).
 With `plant_randomization`, motion i runs on the plant drawn with seed i, the same draw for every
 controller and every validation.
 """
@@ -22,6 +23,7 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import j_metrics, peak, ratio_to_reference
 from rlcontroller.physics.plant import Plant
+from rlcontroller.simulation.linearised import spectral_radius
 from rlcontroller.simulation.rollout import batch_rollout
 
 
@@ -56,7 +58,10 @@ class Validator:
 
     def __call__(self, policy: PolicyController) -> dict[str, float]:
         """The validation row of `policy` (a model's `policy_controller`), with the references."""
-        return self.run(policy) | self.reference
+        row = self.run(policy) | self.reference
+        if self.plant.experiment.algorithm.select_by == "standard":
+            row["eval_spectral_radius"] = spectral_radius(self.plant.design, policy)
+        return row
 
     def _rollouts(self, controller) -> list:
         """Motion i on the plant drawn with seed i (with randomisation), noise seeded i: in one batch."""

@@ -48,7 +48,7 @@ def objective(trial: optuna.Trial, suite_seed: int) -> float:
     standard = load_safety_check(safety_standard(base)).model_copy(update={"seed": suite_seed})
     controller = classical_policy(plant, "lqg_ground_model")
     verdict = suite_criterion(plant, controller, standard, drift_bounds(plant, standard))
-    worst = verdict["worst_significant"]["value"]
+    worst = verdict["per_motion"][verdict["worst_significant"]]["ratio"] if verdict["worst_significant"] else 0.0
     for key in ("failure_count", "mean_J1", "mean_J2"):
         trial.set_user_attr(key, verdict[key])
     print(trial.number, [round(c) for c in damping], round(drift, 4), verdict["summary"], flush=True)

@@ -56,8 +56,8 @@ def main() -> None:
         suite = strong_suite(check, seed, arguments.motions, arguments.pga_low, arguments.pga_high)
         verdict = suite_criterion(plant, controller, suite, drift_bounds(plant, suite))
         print(f"seed {seed}: {verdict['summary']}")
-        for failure in verdict["failures"]:
-            print(f"  {failure}")
+        for name in verdict["failures"]:
+            print(f"  {name}: {verdict['per_motion'][name]}")
 
 
 if __name__ == "__main__":

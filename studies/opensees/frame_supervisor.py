@@ -22,7 +22,7 @@ from rlcontroller.config import SupervisorConfig, load_experiment
 from rlcontroller.config.scenarios import load_safety_check
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.evaluation import scaled_weights
-from rlcontroller.evaluation.safety import check_suite, drift_bounds, suite_criterion
+from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
 from rlcontroller.physics.hysteresis import story_springs
 from rlcontroller.physics.plant import Plant
 
@@ -83,10 +83,10 @@ def main() -> None:
         )
         verdict = suite_criterion(plant, controller, suite, drift_bounds(plant, suite))
         print(f"seed {seed}: {verdict['summary']}", flush=True)
-        for failure in verdict["failures"]:
-            print(f"  {failure}")
-        pga = {motion.name: np.max(np.abs(motion.acceleration)) / 9.80665 for motion in check_suite(plant, suite)}
-        rows = np.array([[pga[name], *values] for name, values in verdict["J1_J2_per_motion"].items()])
+        motions = verdict["per_motion"]
+        for name in verdict["failures"]:
+            print(f"  {name}: {motions[name]}")
+        rows = np.array([[row["pga_g"], row["J1"], row["J2"]] for row in motions.values() if "J1" in row])
         for low, high in PGA_BINS:
             inside = rows[(rows[:, 0] >= low) & (rows[:, 0] < high)]
             if inside.size:

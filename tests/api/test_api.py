@@ -79,7 +79,9 @@ def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
 
     from rlcontroller.assets import DEFAULT_MODEL
 
-    assert api.unchecked_note(DEFAULT_MODEL, "best") is None  # the shipped default passed
+    passed = api.unchecked_note(DEFAULT_MODEL, "best")  # the shipped default passed: the folder's claim
+    assert passed.endswith("policy passed the safety check, dominating: the folder's claim until re-run: "
+                           "'rlc check models/five_story_every_story --verify'")  # fmt: skip
     copy = tmp_path / "model"
     shutil.copytree(DEFAULT_MODEL, copy)
     (copy / "best_check.yaml").unlink()

@@ -141,7 +141,7 @@ def test_loop_transfer_recovery_keeps_lqg_stable_with_a_detuned_damper():
     """The 76-story active tuned mass damper's LQG + wind model goes unstable when the damper's frequency is
     10 % off its design; with sensors.input_noise (fictitious noise at the driver's input) it does not."""
     from rlcontroller.control.classical import classical_policy
-    from rlcontroller.evaluation.safety import spectral_radius
+    from rlcontroller.simulation.linearised import spectral_radius
 
     config = REPOSITORY / "studies" / "safety_check" / "seventy_six_story_atmd_stroke_weighted.yaml"
     robust = load_experiment(config)

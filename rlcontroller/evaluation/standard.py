@@ -1,0 +1,162 @@
+"""The standard's rules on a check suite's figures: performance levels, the stated risk, the verdict's numbers.
+
+Everything here is a function of a suite's per-motion figures (drift ratios, J1, J2) and the standard, so a
+verdict file can be re-derived from its own rows (`evaluation.verdict.contradictions`): a criterion whose
+recorded outcome, counts, bound or means its rows contradict is refused wherever it is read.
+
+- **Performance levels** (FEMA 356, *Prestandard and Commentary for the Seismic Rehabilitation of Buildings*,
+  2000, Table C1-3; ASCE 41 keeps them): a story drift ratio within Immediate Occupancy, Life Safety or
+  Collapse Prevention, or beyond it, by the peak transient drift ratio and, where the plant yields, the
+  permanent (residual) one. "Negligible" permanent drift at IO is read as 1/500 (0.2 %), the out-of-plumb
+  tolerance of steel erection (AISC 303, Code of Standard Practice, 7.13.1.1). The controlled building may
+  reach no higher level than the reference on any significant motion; its drift counts against a limit
+  only beyond 1 + tolerance of it.
+- **Risk** (the form of ASCE 7-16 16.2.4, which allows a stated share of unacceptable responses, and FEMA
+  P-695, which states collapse as a probability): k significant motions worse than the reference beyond the
+  tolerance, of N; the one-sided Clopper-Pearson upper bound on that probability at the standard's
+  confidence must be at most its `risk_bound` (0.05 at 95 %: k <= 9 of 320). A `risk_bound` of 0 asks k = 0.
+- **k = 0 dominates**: never worse than the reference on any motion (round 5's standard).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+ROUNDING = 1e-9  # a controller that never acts equals the reference to this relative rounding
+PLUMB = 0.002  # "negligible" permanent drift: AISC 303's erection tolerance, 1/500
+LEVELS = ("IO", "LS", "CP", "beyond CP")  # index = how many limits the drift ratio exceeds
+# FEMA 356 Table C1-3: drift ratio limits (IO, LS, CP), transient and permanent, per lateral system
+DRIFT_LIMITS = {
+    "steel_moment_frame": {"transient": (0.007, 0.025, 0.05), "permanent": (PLUMB, 0.01, 0.05)},
+    "concrete_moment_frame": {"transient": (0.01, 0.02, 0.04), "permanent": (PLUMB, 0.01, 0.04)},
+    "concrete_wall": {"transient": (0.005, 0.01, 0.02), "permanent": (PLUMB, 0.005, 0.02)},
+}
+SYSTEM_WORDS = {
+    "steel_moment_frame": "steel moment frame",
+    "concrete_moment_frame": "concrete moment frame",
+    "concrete_wall": "concrete walls",
+}
+
+
+def level(drift_ratio: float, limits: tuple[float, ...], slack: float = 1.0) -> str:
+    """The performance level a peak drift ratio reaches: the first limit (times `slack`) it does not exceed."""
+    return LEVELS[sum(drift_ratio > limit * slack for limit in limits)]
+
+
+def risk_upper_bound(k: int, n: int, confidence: float) -> float:
+    """One-sided Clopper-Pearson upper bound on a probability after k events in n trials."""
+    from scipy.stats import beta
+
+    if n == 0:
+        return 1.0
+    return 1.0 if k >= n else float(beta.ppf(confidence, k + 1, n - k))
+
+
+def motion_levels(row: dict, system: str, tolerance: float) -> tuple[str, str]:
+    """The performance levels a significant motion leaves the controlled building and the reference at: the
+    higher of the level by peak transient drift and, where the row has residual drift ratios (a yielding
+    plant), by permanent drift, as FEMA 356 defines a level (both within its limits). The controlled
+    building's drifts count against a limit only beyond 1 + tolerance of it."""
+    kinds = [("transient", "drift_ratio")] + [("permanent", "residual_ratio")] * ("residual_ratio" in row)
+    levels = []
+    for prefix, slack in (("", 1.0 + tolerance), ("reference_", 1.0)):
+        reached = [LEVELS.index(level(row[prefix + key], DRIFT_LIMITS[system][kind], slack)) for kind, key in kinds]
+        levels.append(LEVELS[max(reached)])
+    return levels[0], levels[1]
+
+
+def suite_figures(rows: dict[str, dict], words: str, system: str, standard) -> dict:
+    """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
+    insignificant: over_bound) against the reference `words` describes, under `standard`
+    (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`."""
+    tolerance = standard.tolerance
+    significant = {name: row for name, row in rows.items() if "ratio" in row}
+    quiet = {name: row for name, row in rows.items() if "ratio" not in row}
+    above = [name for name, row in significant.items() if row["ratio"] > 1.0 + tolerance]
+    strict = sum(row["ratio"] > 1.0 + ROUNDING for row in significant.values())
+    levels = {name: motion_levels(row, system, tolerance) for name, row in significant.items()}
+    higher = {name: list(pair) for name, pair in levels.items() if LEVELS.index(pair[0]) > LEVELS.index(pair[1])}
+    loud = [name for name, row in quiet.items() if row["over_bound"] >= 1.0]
+    n, k = len(significant), len(above)
+    bound = risk_upper_bound(k, n, standard.confidence)
+    risk_ok = k == 0 if standard.risk_bound == 0.0 else bound <= standard.risk_bound
+    j1 = float(np.mean([row["J1"] for row in significant.values()])) if n else float("nan")
+    j2 = float(np.mean([row["J2"] for row in significant.values()])) if n else float("nan")
+    means_ok = not n or (j1 <= 1.0 + ROUNDING and j2 <= 1.0 + ROUNDING)
+    passed = bool(risk_ok and means_ok and not higher and not loud)
+    worst = max(significant, key=lambda name: significant[name]["ratio"], default=None)
+    worst_j2 = max(significant, key=lambda name: significant[name]["J2"], default=None)
+    figures = {
+        "passed": passed,
+        "dominates": passed and k == 0,
+        "reference": words,
+        "system": system,
+        "motions": len(rows),
+        "insignificant_motions": len(quiet),
+        "significant_motions": n,
+        "failure_count": k,  # significant motions above the reference beyond the tolerance
+        "failures": above,
+        "failure_probability_bound": round(bound, 4),
+        "strict_failure_count": strict,  # significant motions above the reference by more than rounding
+        "higher_level": higher,  # motion: [its level, the reference's]
+        "insignificant_above_bound": loud,
+        "mean_J1": round(j1, 4),
+        "mean_J2": round(j2, 4),
+        "worst_significant": worst,
+        "worst_J2": worst_j2,
+    }
+    return {"summary": suite_summary(figures, rows, standard)} | figures
+
+
+def suite_summary(figures: dict, rows: dict[str, dict], standard) -> str:
+    """One line: the outcome's figures, as `rlc check` prints them."""
+    n, k = figures["significant_motions"], figures["failure_count"]
+    if standard.risk_bound == 0.0:
+        risk = f"{k} of {n} significant worse than {figures['reference']} beyond {standard.tolerance:.0%} (none may be)"
+    else:
+        risk = (
+            f"{k} of {n} significant worse than {figures['reference']} beyond {standard.tolerance:.0%}, "
+            f"failure probability <= {figures['failure_probability_bound']:.2%} at {standard.confidence:.0%} "
+            f"(at most {standard.risk_bound:.0%})"
+        )
+    text = (
+        f"{risk}{'; dominates' if figures['dominates'] else ''}; {figures['strict_failure_count']} worse at all; "
+        f"{len(figures['higher_level'])} at a higher performance level ({SYSTEM_WORDS[figures['system']]}, "
+        f"FEMA 356); {figures['insignificant_motions']} insignificant, "
+        f"{len(figures['insignificant_above_bound'])} of them above the bound; "
+        f"mean J1 {figures['mean_J1']:.3f}, mean J2 {figures['mean_J2']:.3f}"
+    )
+    if (worst := figures["worst_significant"]) is not None:
+        text += f"; worst {rows[worst]['ratio']:.3f} ({worst}, {strength_text(rows[worst])})"
+    if (worst := figures["worst_J2"]) is not None:
+        text += f"; worst J2 {rows[worst]['J2']:.3f} ({worst})"
+    return text
+
+
+def strength_text(row: dict) -> str:
+    return f"PGA {row['pga_g']:g} g" if "pga_g" in row else row.get("load", "")
+
+
+def rest_figures(peak_over_bound: float, standard) -> dict:
+    """The at-rest criterion from its peak drift over the insignificance bound (the worst noise realisation)."""
+    return {
+        "passed": peak_over_bound < 1.0,
+        "summary": f"peak drift {peak_over_bound:.3f} of the bound over {standard.rest_runs} noise realisations of "
+        f"{standard.rest_duration:g} s",
+        "peak_drift_over_bound": peak_over_bound,
+    }
+
+
+def stability_figures(design: float, per_scenario: dict[str, float | str], supervised: bool) -> dict:
+    """The closed-loop stability criterion from the spectral radius on the design model (and, reported, on
+    each standard scenario's plant; a string where it was not checked)."""
+    unstable = [name for name, radius in per_scenario.items() if not isinstance(radius, str) and radius >= 1.0]
+    where = f"; unstable on {', '.join(unstable)}" if unstable else "; stable on every linear standard scenario"
+    unsupervised = ", without the supervisor" if supervised else ""
+    return {
+        "passed": design < 1.0,
+        "summary": f"spectral radius {design:.5f} on the design model (linearised at rest{unsupervised}){where}",
+        "spectral_radius_design_model": design,
+        "spectral_radius_scenarios": per_scenario,
+        "supervisor_left_out": supervised,
+    }

@@ -1,0 +1,99 @@
+"""The standard's rules on hand-made figures: performance levels by FEMA 356's limits with the tolerance at a
+limit, the Clopper-Pearson bound against its closed form and at the 320-motion threshold (k = 9 passes,
+k = 10 fails), the strict rule, dominance, and permanent drift on a yielding plant."""
+
+import pytest
+from conftest import REPOSITORY
+
+from rlcontroller.config import load_safety_check
+from rlcontroller.evaluation.standard import DRIFT_LIMITS, level, risk_upper_bound, suite_figures
+
+STANDARD = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
+STEEL = "steel_moment_frame"
+
+
+def row(ratio: float = 0.5, drift: float = 0.003, reference: float = 0.003, **more) -> dict:
+    return {"pga_g": 0.3, "J1": min(ratio, 0.5), "J2": 0.8, "ratio": ratio, "drift_ratio": drift,
+            "reference_drift_ratio": reference} | more  # fmt: skip
+
+
+def figures(rows: list[dict], standard=STANDARD, system: str = STEEL) -> dict:
+    return suite_figures({f"m{index}": item for index, item in enumerate(rows)}, "no control", system, standard)
+
+
+def test_the_levels_are_fema_356_s_limits_for_the_lateral_system():
+    steel, concrete = DRIFT_LIMITS[STEEL]["transient"], DRIFT_LIMITS["concrete_moment_frame"]["transient"]
+    assert steel == (0.007, 0.025, 0.05) and concrete == (0.01, 0.02, 0.04)
+    assert [level(ratio, steel) for ratio in (0.006, 0.007, 0.0071, 0.03, 0.051)] == [
+        "IO",
+        "IO",
+        "LS",
+        "CP",
+        "beyond CP",
+    ]
+    assert level(0.015, concrete) == "LS" and level(0.015, steel) == "LS" and level(0.022, concrete) == "CP"
+
+
+def test_a_motion_that_crosses_a_limit_the_reference_does_not_fails_beyond_the_tolerance():
+    """The reference at 0.69 % stays in Immediate Occupancy; the controlled building at 0.706 % is within 1 % of
+    the 0.7 % limit (IO still), at 0.708 % beyond it (Life Safety): one motion at a higher level fails the check,
+    though its ratio to the reference (1.026) alone would be one of the few allowed."""
+    within = figures([row(1.02, 0.00706, 0.0069)] + [row()] * 319)
+    beyond = figures([row(1.026, 0.00708, 0.0069)] + [row()] * 319)
+    assert within["passed"] and within["higher_level"] == {}
+    assert not beyond["passed"] and beyond["higher_level"] == {"m0": ["LS", "IO"]}
+    assert beyond["failure_count"] == 1 and "1 at a higher performance level" in beyond["summary"]
+    both_collapsed = figures([row(1.2, 0.09, 0.06)] + [row()] * 319)  # both beyond CP: the same level
+    assert both_collapsed["passed"] and both_collapsed["higher_level"] == {}
+
+
+def test_the_bound_is_clopper_pearson_s():
+    """k = 0: the one-sided bound solves (1 - p)^n = 1 - confidence; k = n: 1."""
+    for n in (11, 40, 303, 320):
+        assert risk_upper_bound(0, n, 0.95) == pytest.approx(1.0 - 0.05 ** (1.0 / n), rel=1e-9)
+    assert risk_upper_bound(5, 5, 0.95) == 1.0 and risk_upper_bound(0, 0, 0.95) == 1.0
+    assert risk_upper_bound(9, 320, 0.95) == pytest.approx(0.04856, abs=1e-5)
+
+
+@pytest.mark.parametrize(("k", "passed"), [(9, True), (10, False)])
+def test_nine_motions_worse_of_320_pass_and_ten_fail(k, passed):
+    verdict = figures([row(1.05)] * k + [row(0.5)] * (320 - k))
+    assert (verdict["failure_count"], verdict["significant_motions"], verdict["passed"]) == (k, 320, passed)
+    assert (verdict["failure_probability_bound"] <= 0.05) is passed and not verdict["dominates"]
+    assert sorted(verdict["failures"]) == sorted(f"m{index}" for index in range(k))
+
+
+def test_the_tolerance_keeps_a_motion_out_of_k_and_only_k_0_dominates():
+    """1.009 is within the 1 % tolerance (counted as worse at all, not in k): the controller dominates; the
+    strict rule (risk_bound 0) fails on one motion beyond it."""
+    verdict = figures([row(1.009)] + [row()] * 319)
+    assert (
+        verdict["passed"]
+        and verdict["dominates"]
+        and (verdict["failure_count"], verdict["strict_failure_count"]) == (0, 1)
+    )
+    strict = STANDARD.model_copy(update={"risk_bound": 0.0})
+    assert not figures([row(1.011)] + [row()] * 319, strict)["passed"]
+    assert figures([row(1.009)] + [row()] * 319, strict)["passed"]
+
+
+def test_mean_j1_and_an_insignificant_motion_above_its_bound_still_fail():
+    above_one = figures([{**row(), "J1": 1.02}] * 320)
+    loud = figures([row()] * 320 + [{"pga_g": 0.002, "over_bound": 1.3}])
+    assert not above_one["passed"] and above_one["failure_count"] == 0
+    assert not loud["passed"] and loud["insignificant_above_bound"] == ["m320"] and loud["insignificant_motions"] == 1
+
+
+def test_a_yielding_plant_s_level_is_the_higher_of_its_transient_and_permanent_drift_s():
+    """Steel moment frame: Life Safety allows 2.5 % transient and 1 % permanent drift. A controlled building
+    left leaning 1.2 % where the reference leans 0.8 %, both peaking near 2 %, is at Collapse Prevention by its
+    permanent drift, the reference at Life Safety: a higher level. Where the reference's peak already took
+    it to Collapse Prevention (3 %), the same lean leaves the level as it was."""
+    quiet = row(residual_ratio=0.0, reference_residual_ratio=0.0)
+    leaning = row(0.9, 0.02, 0.022, residual_ratio=0.012, reference_residual_ratio=0.008)
+    verdict = figures([leaning] + [quiet] * 319)
+    assert verdict["higher_level"] == {"m0": ["CP", "LS"]} and not verdict["passed"]
+    after_a_larger_peak = figures(
+        [row(0.9, 0.02, 0.03, residual_ratio=0.012, reference_residual_ratio=0.008)] + [quiet] * 319
+    )
+    assert after_a_larger_peak["higher_level"] == {} and after_a_larger_peak["passed"]
