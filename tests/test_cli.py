@@ -139,7 +139,9 @@ def test_top_level_help_cuts_nothing_and_says_where_to_start():
 
 
 def test_an_experiment_yaml_without_a_shipped_controller_says_what_to_do(tmp_path):
-    config = REPOSITORY / "configs" / "five_story.yaml"
+    config = tmp_path / "stories_2_4.yaml"  # actuators on stories 2 and 4: nothing ships for them
+    building = REPOSITORY / "configs" / "buildings" / "five_story.yaml"
+    config.write_text(f"name: stories_2_4\nbuilding: {building}\nactuators: [{{story: 2}}, {{story: 4}}]\n")
     result = CliRunner().invoke(app, ["evaluate", str(config), "--out", str(tmp_path / "out")])
     assert result.exit_code == 2 and "no shipped controller for its paper five-story" in result.output
     assert f"rlc compare lqg --config {config}" in result.output and len(result.output.splitlines()) == 1

@@ -42,7 +42,9 @@ def train(
     seed: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help="Override the experiment's seed.")] = None,
     run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
     resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
-    device: Annotated[str, typer.Option(help="cpu, cuda or auto.")] = "auto",
+    device: Annotated[
+        str, typer.Option(help="cpu, cuda or auto (the CPU: rlc's MLP policies step slower on a GPU).")
+    ] = "auto",
     time_limit: Annotated[
         float | None,
         typer.Option(

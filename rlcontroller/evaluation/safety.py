@@ -7,24 +7,22 @@ passive-off). Three criteria (the standard, `configs/checks/standard.yaml`, fixe
 for a building controlled against wind `configs/checks/wind.yaml`, whose suite is generated wind and which
 `also` judges on standard.yaml's suite, a fourth: a building controlled against wind will also shake):
 
-1. **check suite** — on every one of its generated motions (own seed, never used in training or
-   selection): the building's peak inter-story drift (max over stories and time) is no larger than
-   the reference's and the mean over stories of J1 (to the reference) is at most 1, each within the
-   standard's `tolerance` (1 %: sensor noise and another CPU's arithmetic move these ratios by about
-   0.1 %; the motions above 1 at all are counted beside, the strict count); on a motion whose
-   reference peak drift ratio is below the insignificance bound, the controlled peak drift ratio
-   stays below the bound instead. Over the significant motions the mean J1 and the mean J2 (peak
-   absolute floor acceleration, to the reference's, mean over floors) are at most 1 as well: a
-   controller that trades floor accelerations for drift does not pass.
+1. **check suite** — its generated motions (own seed, never used in training or selection), each motion's
+   figures judged by the standard's rules (`evaluation.standard`): on a motion whose reference peak drift
+   ratio is below the insignificance bound the controlled one stays below it; on every significant motion
+   no higher performance level (FEMA 356) than the reference; the motions worse than the reference by more
+   than the `tolerance` a stated risk (Clopper-Pearson bound at most `risk_bound`; none: dominates); mean J1
+   and mean J2 over the significant motions at most 1.
 2. **at rest** — sensor noise only, no ground motion: the peak drift ratio stays below the bound.
 3. **closed-loop stability** — for a policy (a function of the observation), the closed loop
    linearised at rest on the design model, without the experiment's supervisor (whose trigger would
-   switch the policy off at rest), has spectral radius < 1; the same number on every linear plant of
+   switch the policy off at rest), has spectral radius < 1, or no larger than the building's failed safe
+   where that has marginal modes of its own (an MR damper's hysteretic memory:
+   `evaluation.standard.stability_figures`); the same number on every linear plant of
    the standard scenarios is reported (not a pass criterion: the verdict says where it is not stable).
 
-The verdict is a YAML file (`best_check.yaml`, `final_check.yaml`) beside the policy it judges, with the
-sha256 of what it judged (the policy's files, the experiment, the standard): a verdict whose digests no
-longer match the folder is read as no verdict (`read_verdict`).
+The verdict is a YAML file beside the policy it judges (`evaluation.verdict`: what it judged, and its figures
+re-derived wherever it is read).
 """
 
 from __future__ import annotations
@@ -222,6 +220,7 @@ def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckCo
 
 def stability_criterion(plant: Plant, controller: PolicyController, scenarios: list[Scenario]) -> dict:
     design = spectral_radius(plant.design, controller)
+    failed_safe = spectral_radius(plant.design, fail_safe_controller(plant.design))
     experiment = plant.experiment
     per_scenario: dict[str, float | str] = {}
     for scenario in scenarios:
@@ -229,5 +228,6 @@ def stability_criterion(plant: Plant, controller: PolicyController, scenarios: l
             per_scenario[scenario.name] = "not linear: not checked"
             continue
         radius = spectral_radius(Plant(experiment.model_copy(update={"plant": scenario.plant})), controller)
-        per_scenario[scenario.name] = round(radius, 6)
-    return stability_figures(round(design, 6), per_scenario, experiment.supervisor is not None)
+        per_scenario[scenario.name] = round(radius, 8)
+    supervised = experiment.supervisor is not None
+    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8))

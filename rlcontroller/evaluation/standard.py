@@ -147,16 +147,27 @@ def rest_figures(peak_over_bound: float, standard) -> dict:
     }
 
 
-def stability_figures(design: float, per_scenario: dict[str, float | str], supervised: bool) -> dict:
-    """The closed-loop stability criterion from the spectral radius on the design model (and, reported, on
-    each standard scenario's plant; a string where it was not checked)."""
-    unstable = [name for name, radius in per_scenario.items() if not isinstance(radius, str) and radius >= 1.0]
+MARGINAL = 1e-6  # a closed loop within this of the building failed safe's own marginal modes is as stable as it
+
+
+def stability_figures(
+    design: float, per_scenario: dict[str, float | str], supervised: bool, failed_safe: float
+) -> dict:
+    """The closed-loop stability criterion from the spectral radius on the design model (and, reported, on each
+    standard scenario's plant; a string where it was not checked): below 1, or where the building failed safe
+    is itself marginal (a radius of 1 to rounding: an MR damper's hysteretic memory, which no command removes),
+    no more than MARGINAL above that building's radius `failed_safe`."""
+    bound = max(1.0, failed_safe + MARGINAL)
+    unstable = [name for name, radius in per_scenario.items() if not isinstance(radius, str) and radius >= bound]
     where = f"; unstable on {', '.join(unstable)}" if unstable else "; stable on every linear standard scenario"
     unsupervised = ", without the supervisor" if supervised else ""
+    marginal = f" (the building failed safe: {failed_safe:.8f}, marginal)" if bound > 1.0 else ""
     return {
-        "passed": design < 1.0,
-        "summary": f"spectral radius {design:.5f} on the design model (linearised at rest{unsupervised}){where}",
+        "passed": design < bound,
+        "summary": f"spectral radius {design:.8f} on the design model (linearised at rest{unsupervised}){marginal}"
+        f"{where}",
         "spectral_radius_design_model": design,
+        "spectral_radius_failed_safe": failed_safe,
         "spectral_radius_scenarios": per_scenario,
         "supervisor_left_out": supervised,
     }

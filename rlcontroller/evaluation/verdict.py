@@ -93,7 +93,10 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
                 derived = rest_figures(item["peak_drift_over_bound"], standard)
             elif name == "closed-loop stability":
                 derived = stability_figures(
-                    item["spectral_radius_design_model"], item["spectral_radius_scenarios"], item["supervisor_left_out"]
+                    item["spectral_radius_design_model"],
+                    item["spectral_radius_scenarios"],
+                    item["supervisor_left_out"],
+                    item["spectral_radius_failed_safe"],
                 )
             else:
                 found.append(f"{name!r} is no criterion of the standard")

@@ -499,3 +499,16 @@ def test_select_by_j1_plus_j2_weighs_floor_accelerations_alike():
     assert selection_score(drift_only, "J1") > selection_score(balanced, "J1")
     assert selection_score(balanced, "J1+J2") > selection_score(drift_only, "J1+J2")
     assert selection_score(drift_only, "reward") > selection_score(balanced, "reward")
+
+
+def test_auto_takes_the_cpu_for_rlc_s_mlp_policies_even_where_cuda_is_visible(tmp_path, monkeypatch):
+    """A GPU steps rlc's small MLPs slower than the CPU (docs/training.md): with CUDA reported visible, a run on
+    `auto` still trains on the CPU (stable-baselines3's own `auto` would take the GPU: here, one that is not there)."""
+    import torch
+
+    from rlcontroller.learning.training import training_device
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    train(smoke(total_steps=200, checkpoint_every=200, eval_every=200), run_dir=tmp_path / "run", device="auto")
+    assert json.loads((tmp_path / "run" / "run.json").read_text())["device"] == "cpu"
+    assert training_device("cuda") == "cuda" and training_device("cpu") == "cpu"
