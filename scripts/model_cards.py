@@ -30,7 +30,10 @@ from rlcontroller.physics.loads import load_suite
 from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[1]
-WIND_SUITES = {"five_story_wind": REPOSITORY / "configs" / "loads" / "wind.yaml"}  # by model
+WIND_SUITES = {  # by model
+    "five_story_wind": REPOSITORY / "configs" / "loads" / "wind.yaml",
+    "seventy_six_story_atmd": REPOSITORY / "configs" / "loads" / "wind_76.yaml",
+}
 WIND_COLUMNS = ("J1", "J2", "rms_acceleration_top", "peak_acceleration_top_mg", "stroke_m")
 RECORDS_TITLE = "The seven records (../shared/records: PEER NGA-West2, as recorded)"
 
@@ -62,6 +65,35 @@ ABOUT = {
         "configs/experiments/five_story_yielding.yaml",
         "",
     ),
+    "five_story_amd_triggered": (
+        "The five-story building with an active mass driver on its roof (a tuned mass with an actuator to its floor), "
+        "controlled by LQG + ground model (classical, no training) with the driver's force weighted 30 times the "
+        "experiment's, behind a trigger on the ground reading that keeps it off below 2 m/s^2 and gives it full "
+        "authority from 5 m/s^2: it acts only in strong shaking. Chosen on a suite of the check's family with "
+        "another seed (777: the fewest motions worse among triggers and force weights; none passes there, the chosen "
+        "one leaves 10 of 311 worse), then judged on the check suite, where it passes under round 6's stated risk: "
+        "5 of 301 worse than the driver switched off (bound 3.5 %), mean J1 0.973, J2 0.980. Target J1 <= 0.85: "
+        "missed by far. Never being worse than the tuned mass leaves a linear law about 1-2 % of the drift (a "
+        "linear programme, docs/safety_check.md), and LQG without the trigger is worse on 25 motions; a linear "
+        "law learned from the driver switched off on the standard's objective left 8-12 of 128 validation motions "
+        "worse, so the standard selected the driver off.",
+        "studies/devices/five_story_amd_triggered.yaml --law lqg_ground_model",
+        "",
+    ),
+    "five_story_mr_standard": (
+        "MR dampers (100 kN, Spencer et al.'s model) on stories 1, 3 and 5 of the five-story building, their voltages "
+        "commanded by a learned affine law on the floors' accelerations and the dampers' measured forces: random "
+        "search started at passive-off (the check's own reference) and climbing the standard's objective, selected by "
+        "the standard on generated validation motions. It ships under round 6's standard, which states a risk: 8 of "
+        "the 298 significant check motions are worse than the dampers at passive-off by more than 1 % (95 % bound "
+        "4.8 %, at most 5 % allowed), none reaches a higher performance level; mean J1 0.917 against passive-off "
+        "(target 0.90: missed), mean J2 0.997. Narrowly: on a suite of the check's family with another seed (777) "
+        "it leaves 5 of 297 worse but its mean J2 is 1.003, which fails. The field's classical answers fail the check "
+        "(clipped-optimal 233 motions, passive-on 187): a held voltage moves the drift to stories 2 and 4, which have "
+        "no damper (docs/safety_check.md), so what passes acts little: the learned law stays near passive-off.",
+        "studies/devices/five_story_mr_standard.yaml",
+        "about 20 min (30 M steps, the best at 21.1 M)",
+    ),
     "five_story_paper_layout": (
         "The paper's layout: the five-story building with actuators on stories 1, 3 and 5 (100 kN each), controlled "
         "by LQG + ground model (classical, no training) behind the standard supervisor (configs/supervisors/"
@@ -73,6 +105,21 @@ ABOUT = {
         "(docs/safety_check.md). PPO's residual on it (`rlc train configs/five_story.yaml`) passes too, behind it "
         "(J1 0.659, J2 0.940 against 0.650, 0.831): the classical law ships by the rule.",
         "studies/assurance/paper_layout_standard.yaml --law lqg_ground_model",
+        "",
+    ),
+    "seventy_six_story_atmd": (
+        "The 76-story wind benchmark building with its active tuned mass damper on floor 75 (500 t, 500 kN), "
+        "controlled by LQG + wind model with the damper's stroke weighted 10 times the benchmark experiment's and "
+        "its Kalman filter robustified by loop transfer recovery (sensors.input_noise 0.1), behind the wind "
+        "supervisor's trigger on the floors' accelerations (0.3-1.0 m/s^2): classical, no training. Retired in "
+        "round 5 (without the trigger it is worse than the tuned mass on 9 of 277 significant ground motions, bound "
+        "5.6 %); the trigger chosen on suites with another seed (777), the fewest loads and motions worse (there one "
+        "wind load worse by 3 %, which the wind suite's strict rule fails, and 2 ground motions), it passes the check "
+        "suite: no wind load worse (mean J1 0.960, J2 0.929), 2 of 277 ground motions (bound 2.3 %). It acts little "
+        "under wind: its trigger keeps it off in moderate winds. Its peak stroke under wind (7.85 m against the "
+        "tuned mass's 5.41 m on the check's loads) is over the 1 m the experiment gives the driver: the simulation "
+        "does not stop the mass.",
+        "studies/safety_check/seventy_six_story_atmd_triggered.yaml --law lqg_wind_model",
         "",
     ),
     "five_story_wind": (

@@ -33,8 +33,7 @@ REPOSITORY = Path(__file__).resolve().parents[1]
 WIN = 0.05  # a learned controller wins at 5 % lower J1 + J2 on both suites, with no more motions worse
 TRAINING = {  # how each learned shipped controller was trained (its command; long runs under nohup with a log)
     "five_story_every_story": "rlc train studies/mpc/five_story_every_story_dagger.yaml",
-    "five_story_mr": "rlc train studies/devices/five_story_mr_standard.yaml",
-    "five_story_amd": "rlc train studies/devices/five_story_amd_standard.yaml",
+    "five_story_mr_standard": "rlc train studies/devices/five_story_mr_standard.yaml",
 }
 
 

@@ -52,14 +52,11 @@ def robustness(
     start = time.perf_counter()
     model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
     dampers = model.semi_active is not None
-    disturbance_model = (
-        LQGController(design_lqg_wind_model(model), model, NOMINAL_WIND_MODEL)
-        if model.wind is not None
-        else LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL)
-    )
     designed: list[Controller] = [  # designed once, without knowing the plant
         LQGController(design_lqg(model), model, NOMINAL_LQG),
-        disturbance_model,
+        LQGController(design_lqg_wind_model(model), model, NOMINAL_WIND_MODEL)
+        if model.wind is not None
+        else LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
     ] if not dampers else [
         ConstantCommand(-1.0, model.building.n_actuators, "passive-off"),
         ConstantCommand(1.0, model.building.n_actuators, "passive-on"),

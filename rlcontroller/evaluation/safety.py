@@ -187,12 +187,10 @@ def judge_suite(
             for key, run in (("residual_ratio", controlled), ("reference_residual_ratio", reference_run)):
                 row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
         rows[motion.name] = row
-    criterion = suite_figures(rows, words, plant.experiment.building.system, standard)
-    strokes = {name: peak_strokes(evaluation, name, motions) for name in (judged, reference)}
-    if strokes[judged].size:
-        metres = [", ".join(f"{value:.2f}" for value in strokes[name]) + " m" for name in (judged, reference)]
-        criterion["summary"] += f"; peak stroke {metres[0]} ({metres[1]} for the reference)"
-        criterion["peak_stroke_m"] = [round(float(value), 4) for value in strokes[judged]]
+    strokes = [
+        [round(float(value), 4) for value in peak_strokes(evaluation, name, motions)] for name in (judged, reference)
+    ]
+    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, strokes if strokes[0] else None)
     return criterion | {"per_motion": rows}
 
 

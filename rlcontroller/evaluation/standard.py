@@ -65,10 +65,13 @@ def motion_levels(row: dict, system: str, tolerance: float) -> tuple[str, str]:
     return levels[0], levels[1]
 
 
-def suite_figures(rows: dict[str, dict], words: str, system: str, standard) -> dict:
+def suite_figures(
+    rows: dict[str, dict], words: str, system: str, standard, strokes: tuple[list, list] | None = None
+) -> dict:
     """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
     insignificant: over_bound) against the reference `words` describes, under `standard`
-    (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`."""
+    (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`; with mass
+    devices their peak `strokes` (m) over the suite, the controlled building's and the reference's."""
     tolerance = standard.tolerance
     significant = {name: row for name, row in rows.items() if "ratio" in row}
     quiet = {name: row for name, row in rows.items() if "ratio" not in row}
@@ -105,6 +108,8 @@ def suite_figures(rows: dict[str, dict], words: str, system: str, standard) -> d
         "worst_significant": worst,
         "worst_J2": worst_j2,
     }
+    if strokes is not None:
+        figures |= {"peak_stroke_m": strokes[0], "reference_peak_stroke_m": strokes[1]}
     return {"summary": suite_summary(figures, rows, standard)} | figures
 
 
@@ -130,6 +135,11 @@ def suite_summary(figures: dict, rows: dict[str, dict], standard) -> str:
         text += f"; worst {rows[worst]['ratio']:.3f} ({worst}, {strength_text(rows[worst])})"
     if (worst := figures["worst_J2"]) is not None:
         text += f"; worst J2 {rows[worst]['J2']:.3f} ({worst})"
+    if "peak_stroke_m" in figures:
+        metres = [
+            ", ".join(f"{value:.2f}" for value in figures[key]) for key in ("peak_stroke_m", "reference_peak_stroke_m")
+        ]
+        text += f"; peak stroke {metres[0]} m ({metres[1]} m for the reference)"
     return text
 
 

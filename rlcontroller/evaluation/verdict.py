@@ -88,7 +88,8 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
     for name, item in criteria.items():
         try:
             if name in SUITES:
-                derived = suite_figures(item["per_motion"], item["reference"], system, standards[SUITES[name]])
+                strokes = (item["peak_stroke_m"], item["reference_peak_stroke_m"]) if "peak_stroke_m" in item else None
+                derived = suite_figures(item["per_motion"], item["reference"], system, standards[SUITES[name]], strokes)
             elif name == "at rest":
                 derived = rest_figures(item["peak_drift_over_bound"], standard)
             elif name == "closed-loop stability":

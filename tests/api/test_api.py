@@ -98,17 +98,20 @@ def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_defau
     group = "paper five-story under ground motion, actuators on stories 1, 2, 3, 4, 5:"
     assert lines[lines.index(group) + 1].startswith("  five_story_every_story (default): ")
     assert all("never checked" not in line for line in lines)
-    unserved = lines[lines.index("none ships yet (models/README.md says why) for:") + 1 :]
-    assert "  paper five-story under ground motion, mr_damper on stories 1, 3, 5 (five_story_mr)" in unserved
+    assert lines[lines.index(group) + 1].endswith("safety check passed, dominates")  # the default dominates
+    unserved = lines[lines.index("none ships yet (models/README.md says why) for:") + 1 : -1]
+    assert [line.rsplit("(", 1)[1] for line in unserved] == ["nine_story_frame)"]  # the FE frame, alone
     wind = lines.index("paper five-story under wind, actuators on stories 1, 2, 3, 4, 5:")
     assert lines[wind + 1].startswith("  five_story_wind: classical, lqg_wind_model, safety check passed")
-    atmd = "  76-story wind benchmark (Yang et al. 2004) under wind, active_mass on floor 75 (seventy_six_story_atmd)"
-    assert atmd in unserved  # its driver fails the ground-motion suite (docs/wind.md)
+    mr = lines.index("paper five-story under ground motion, mr_damper on stories 1, 3, 5:")
+    learned = lines[mr + 1]
+    assert learned.startswith("  five_story_mr_standard: RandomSearch, ") and learned.endswith("check passed")
+    assert "each verdict is its folder's claim until re-run: 'rlc check models/NAME --verify'" in lines
     assert lines[-1] == "nothing to command, its verdict from 'rlc compare passive': five_story_tmd"
 
 
 @pytest.mark.slow
-def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_devices():
+def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_devices(tmp_path):
     from rlcontroller.api.common import shipped_for
     from rlcontroller.assets import DEFAULT_MODEL
 
@@ -123,11 +126,17 @@ def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_de
     assert shipped_for(yielding) == DEFAULT_MODEL.parent / "five_story_yielding"
     wind = load_experiment(experiments / "five_story_wind.yaml")  # the load tells it from the default
     assert shipped_for(wind) == DEFAULT_MODEL.parent / "five_story_wind"
-    for name in ("paper_sac", "five_story_mr"):  # layout, device
-        assert shipped_for(load_experiment(experiments / f"{name}.yaml")) is None, name
-    with pytest.raises(ConfigError, match=r"five_story_mr.yaml: no shipped controller for its paper five-story under "
-                       r"ground motion, mr_damper on stories 1, 3, 5 \(rlc models\): train one"):  # fmt: skip
-        api.model_folder(experiments / "five_story_mr.yaml")
+    paper = load_experiment(experiments / "paper_sac.yaml")  # the paper's layout: its own controller
+    assert shipped_for(paper) == DEFAULT_MODEL.parent / "five_story_paper_layout"
+    dampers = load_experiment(experiments / "five_story_mr.yaml")
+    assert shipped_for(dampers) == DEFAULT_MODEL.parent / "five_story_mr_standard"
+    other = tmp_path / "stories_2_4.yaml"  # actuators on stories 2 and 4: nothing ships for them
+    other.write_text(f"name: stories_2_4\nbuilding: {REPOSITORY}/configs/buildings/five_story.yaml\n"
+                     "actuators: [{story: 2}, {story: 4}]\n")  # fmt: skip
+    assert shipped_for(load_experiment(other)) is None
+    with pytest.raises(ConfigError, match=r"stories_2_4.yaml: no shipped controller for its paper five-story under "
+                       r"ground motion, actuators on stories 2, 4 \(rlc models\): train one"):  # fmt: skip
+        api.model_folder(other)
 
 
 def test_the_api_is_what_the_commands_call():

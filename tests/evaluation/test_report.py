@@ -166,7 +166,8 @@ def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
     result = CliRunner().invoke(app, ["evaluate", "--records", str(records), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "five_story_every_story/best_policy.yaml" in result.output
-    assert "safety check" not in result.output  # said only of a controller that failed or was never checked
+    assert "FAILED" not in result.output and "never safety-checked" not in result.output
+    assert "passed the safety check, dominating: the folder's claim until re-run: 'rlc check" in result.output
     summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
     default = summary.loc[DEFAULT_NAME]  # the learned MPC: LQG + ground model's drift, fewer floor accelerations
     assert default["J1"] < 0.5 and default["J1"] < summary.loc["LQG", "J1"]

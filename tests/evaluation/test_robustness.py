@@ -163,3 +163,19 @@ def test_the_committed_scenario_files_load_for_their_experiments(scenarios, expe
     configs = Path(__file__).resolve().parents[2] / "configs"
     loaded = load_scenarios(configs / "scenarios" / scenarios, load_experiment(configs / "experiments" / experiment))
     assert "nominal" in [scenario.name for scenario in loaded]
+
+
+def test_dampers_are_judged_by_their_own_classical_laws_and_no_lqg_is_designed_for_them():
+    """MR dampers: passive-off, passive-on and clipped-optimal, nominal; an LQG with the ground model cannot be
+    designed for a damper's command (it crashed here before, rlc robustness on five_story_mr.yaml included)."""
+    from conftest import REPOSITORY
+
+    from rlcontroller.config import load_experiment
+    from rlcontroller.physics.loads import generate_suite
+
+    experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
+    plant = Plant(experiment)
+    motions = generate_suite(experiment.excitation.generator, 1, 5, plant.building)
+    result, _ = robustness(experiment, [Scenario(name="nominal")], motions, "dampers")
+    controllers = set(result["controller"])
+    assert controllers >= {"passive-off", "passive-on"} and NOMINAL_GROUND_MODEL not in controllers

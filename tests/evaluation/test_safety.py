@@ -237,7 +237,7 @@ def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypa
     shipped = (DEFAULT_MODEL / "best_check.yaml").read_bytes()
     quick = tmp_path / "quick_standard.yaml"
     standard = yaml.safe_load((REPOSITORY / "configs" / "checks" / "standard.yaml").read_text())
-    quick.write_text(yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0}))
+    quick.write_text(yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "risk_bound": 0.0}))
     monkeypatch.chdir(tmp_path)
     result = CliRunner().invoke(app, ["check", "--standard", str(quick)])
     assert result.exit_code == 0, result.output
@@ -437,15 +437,18 @@ SHIPPED = sorted(path.name for path in DEFAULT_MODEL.parent.iterdir() if (path /
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, name, kernel):
     """`rlc check` on a copy of each shipped controller, in a process whose OpenBLAS takes the kernel the
-    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), gives the shipped verdict: the same
-    pass, the same failing and strictly-worse motions, the means and the worst significant ratio to within 1e-3
-    (the check's loads are the same on every CPU: `physics.excitation.same_on_every_cpu`)."""
+    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), re-issues the shipped verdict: every
+    figure as `rlc check --verify` compares them (`evaluation.verdict.differences`: numbers within 0.1 % plus the
+    rounding, counts, levels, motions and outcomes exactly; the check's loads are the same on every CPU:
+    `physics.excitation.same_on_every_cpu`)."""
     import os
     import shutil
     import subprocess
     import sys
 
     import yaml
+
+    from rlcontroller.evaluation.verdict import differences
 
     folder = tmp_path / name
     shutil.copytree(DEFAULT_MODEL.parent / name, folder)
@@ -457,13 +460,4 @@ def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, na
     command = [sys.executable, "-m", "rlcontroller", "check", str(folder), "--no-progress"]
     subprocess.run(command, env=environment, capture_output=True, text=True, timeout=1800)
     verdict = yaml.safe_load((folder / "best_check.yaml").read_text())
-    assert verdict["passed"] == shipped["passed"] and verdict["judged"] == shipped["judged"]
-    assert verdict["criteria"].keys() == shipped["criteria"].keys()
-    for name in {"check suite", "ground-motion suite"} & shipped["criteria"].keys():  # a wind standard has both
-        suite, expected = verdict["criteria"][name], shipped["criteria"][name]
-        for key in ("failure_count", "strict_failure_count", "insignificant_motions"):
-            assert suite[key] == expected[key], (name, key)
-        for key in ("mean_J1", "mean_J2"):
-            assert suite[key] == pytest.approx(expected[key], abs=1e-3), (name, key)
-        worst = expected["worst_significant"]["value"]
-        assert suite["worst_significant"]["value"] == pytest.approx(worst, abs=1e-3), name
+    assert differences(shipped, verdict) == [], name
