@@ -26,6 +26,9 @@ SUITES = {"check suite": "standard", "wind suite": "also", "ground-motion suite"
 # --verify: figures agree within the noise another CPU's kernel brings (docs/safety_check.md: ratios move by
 # well under 0.1 % between kernels) plus the verdict's rounding (4 decimals)
 VERIFY_RELATIVE, VERIFY_ABSOLUTE = 1e-3, 1.5e-4
+# the scenarios' spectral radii are reported, not judged: a delay makes the linearised loop's eigenvalues defective,
+# and another kernel moves them by up to 1 % (the default's under OPENBLAS_CORETYPE=Prescott: 0.4 % and 0.8 %)
+VERIFY_REPORTED = 0.02
 
 
 @dataclass
@@ -171,12 +174,14 @@ def read_verdict(folder: Path, model: str, standard, system: str) -> VerdictStat
 
 def differences(recorded: dict, rerun: dict, path: str = "") -> list[str]:
     """Each figure of a recorded verdict that a re-run does not reproduce, one line each: numbers within
-    VERIFY_RELATIVE of each other plus VERIFY_ABSOLUTE (the verdict's rounding) agree; the rest exactly.
-    Summaries are words about figures compared on their own and are skipped."""
+    VERIFY_RELATIVE of each other plus VERIFY_ABSOLUTE (the verdict's rounding) agree (the scenarios' reported
+    spectral radii within VERIFY_REPORTED); the rest exactly.
+    Summaries (words about the figures compared on their own) and the controller's label (a classical one's
+    names its folder) are skipped."""
     found = []
     for key in list(recorded) + [key for key in rerun if key not in recorded]:
         where = f"{path}.{key}" if path else str(key)
-        if key == "summary":
+        if key == "summary" or (key == "controller" and not path):
             continue
         if key not in rerun or key not in recorded:
             found.append(f"{where}: {'only in the recorded verdict' if key in recorded else 'missing from it'}")
@@ -184,12 +189,12 @@ def differences(recorded: dict, rerun: dict, path: str = "") -> list[str]:
         mine, theirs = recorded[key], rerun[key]
         if isinstance(mine, dict) and isinstance(theirs, dict):
             found += differences(mine, theirs, where)
-        elif not agree(mine, theirs):
+        elif not agree(mine, theirs, VERIFY_REPORTED if "spectral_radius_scenarios" in where else VERIFY_RELATIVE):
             found.append(f"{where}: recorded {mine!r}, re-run {theirs!r}")
     return found
 
 
-def agree(recorded, rerun) -> bool:
+def agree(recorded, rerun, relative: float = VERIFY_RELATIVE) -> bool:
     numbers = (int, float)
     if isinstance(recorded, bool) or isinstance(rerun, bool) or not isinstance(recorded, numbers):
         return recorded == rerun
@@ -199,4 +204,4 @@ def agree(recorded, rerun) -> bool:
         return math.isnan(recorded) and math.isnan(rerun)
     if isinstance(recorded, int) and isinstance(rerun, int):
         return recorded == rerun
-    return abs(recorded - rerun) <= VERIFY_RELATIVE * max(abs(recorded), abs(rerun)) + VERIFY_ABSOLUTE
+    return abs(recorded - rerun) <= relative * max(abs(recorded), abs(rerun)) + VERIFY_ABSOLUTE

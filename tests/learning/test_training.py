@@ -512,3 +512,17 @@ def test_auto_takes_the_cpu_for_rlc_s_mlp_policies_even_where_cuda_is_visible(tm
     train(smoke(total_steps=200, checkpoint_every=200, eval_every=200), run_dir=tmp_path / "run", device="auto")
     assert json.loads((tmp_path / "run" / "run.json").read_text())["device"] == "cpu"
     assert training_device("cuda") == "cuda" and training_device("cpu") == "cpu"
+
+
+def test_selection_by_the_standard_takes_a_stable_closed_loop_first():
+    """`select_by: standard`: an unstable checkpoint (the check's stability criterion fails) is never preferred,
+    however few motions it makes worse; among stable ones, fewer motions worse, then lower J1 + J2."""
+    from rlcontroller.learning.training import selection_score
+
+    def row(radius, worse, j):
+        return {"eval_spectral_radius": radius, "eval_worse": worse, "eval_J1": j, "eval_J2": j}
+
+    unstable, stable_worse, stable_good = row(1.01, 0.0, 0.1), row(0.99, 0.5, 1.0), row(0.99, 0.0, 0.6)
+    assert selection_score(unstable, "standard") < selection_score(stable_worse, "standard")
+    assert selection_score(stable_worse, "standard") < selection_score(stable_good, "standard")
+    assert selection_score(unstable, "J1") > selection_score(stable_good, "J1")  # other modes read no radius
