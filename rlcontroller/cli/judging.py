@@ -188,7 +188,7 @@ def check(
     safe (no control; devices at their fail-safe command), no higher floor accelerations on average, quiet
     at rest, a stable closed loop. Writes MODEL_check.yaml in the run folder (for a shipped model: in a new
     folder under results/); exit code 1 when it fails. --verify re-runs it and compares with the recorded
-    verdict (exit code 1 when a figure differs beyond 0.1 % plus its rounding)."""
+    verdict (exit code 1 when a figure differs beyond 1 % plus its rounding)."""
     from rlcontroller import api
 
     report = Printed(progress)

@@ -23,9 +23,11 @@ from rlcontroller.evaluation.standard import rest_figures, stability_figures, su
 from rlcontroller.files import atomic_write
 
 SUITES = {"check suite": "standard", "wind suite": "also", "ground-motion suite": "also"}
-# --verify: figures agree within the noise another CPU's kernel brings (docs/safety_check.md: ratios move by
-# well under 0.1 % between kernels) plus the verdict's rounding (4 decimals)
-VERIFY_RELATIVE, VERIFY_ABSOLUTE = 1e-3, 1.5e-4
+# --verify: figures agree within the noise another CPU's kernel brings plus the verdict's rounding (4 decimals):
+# under OPENBLAS_CORETYPE=Prescott the 76-story driver's per-motion J1 moved by up to 0.7 % (its trigger switches
+# on a threshold), every other shipped verdict's by under 0.1 %: the standard's own tolerance, 1 %
+# (docs/safety_check.md)
+VERIFY_RELATIVE, VERIFY_ABSOLUTE = 1e-2, 1.5e-4
 # the scenarios' spectral radii are reported, not judged: a delay makes the linearised loop's eigenvalues defective,
 # and another kernel moves them by up to 1 % (the default's under OPENBLAS_CORETYPE=Prescott: 0.4 % and 0.8 %)
 VERIFY_REPORTED = 0.02
@@ -195,6 +197,8 @@ def differences(recorded: dict, rerun: dict, path: str = "") -> list[str]:
 
 
 def agree(recorded, rerun, relative: float = VERIFY_RELATIVE) -> bool:
+    if isinstance(recorded, list) and isinstance(rerun, list):
+        return len(recorded) == len(rerun) and all(agree(a, b, relative) for a, b in zip(recorded, rerun, strict=True))
     numbers = (int, float)
     if isinstance(recorded, bool) or isinstance(rerun, bool) or not isinstance(recorded, numbers):
         return recorded == rerun

@@ -107,9 +107,9 @@ def test_differences_allow_a_kernel_s_noise_and_nothing_more():
     recorded = {"passed": True, "criteria": {"s": {"mean_J1": 0.2675, "failure_count": 3, "failures": ["a"]}}}
     close = {"passed": True, "criteria": {"s": {"mean_J1": 0.2677, "failure_count": 3, "failures": ["a"]}}}
     assert differences(recorded, close) == []
-    far = {"passed": True, "criteria": {"s": {"mean_J1": 0.2695, "failure_count": 4, "failures": ["a", "b"]}}}
+    far = {"passed": True, "criteria": {"s": {"mean_J1": 0.2725, "failure_count": 4, "failures": ["a", "b"]}}}
     assert differences(recorded, far) == [
-        "criteria.s.mean_J1: recorded 0.2675, re-run 0.2695",
+        "criteria.s.mean_J1: recorded 0.2675, re-run 0.2725",
         "criteria.s.failure_count: recorded 3, re-run 4",
         "criteria.s.failures: recorded ['a'], re-run ['a', 'b']",
     ]
