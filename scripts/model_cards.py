@@ -89,7 +89,8 @@ ABOUT = {
         "4.8 %, at most 5 % allowed), none reaches a higher performance level; mean J1 0.917 against passive-off "
         "(target 0.90: missed), mean J2 0.997. Narrowly: on a suite of the check's family with another seed (777) "
         "it leaves 5 of 297 worse but its mean J2 is 1.003, which fails. The field's classical answers fail the check "
-        "(clipped-optimal 233 motions, passive-on 187): a held voltage moves the drift to stories 2 and 4, which have "
+        "(round 4 counted 233 motions worse under clipped-optimal, 187 under passive-on): a held voltage moves the "
+        "drift to stories 2 and 4, which have "
         "no damper (docs/safety_check.md), so what passes acts little: the learned law stays near passive-off.",
         "studies/devices/five_story_mr_standard.yaml",
         "about 20 min (30 M steps, the best at 21.1 M)",

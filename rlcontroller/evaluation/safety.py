@@ -36,7 +36,7 @@ from rlcontroller.control.controllers import Controller, fail_safe_controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.evaluation.standard import rest_figures, stability_figures, suite_figures
-from rlcontroller.evaluation.verdict import Verdict
+from rlcontroller.evaluation.verdict import Verdict, also_criterion
 from rlcontroller.physics.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import ratio_to_reference, residual_drift
@@ -95,8 +95,7 @@ def safety_check(
         "at rest": lambda: rest_criterion(plant, controller, standard, bounds),
     }
     if (also := standard.also) is not None:
-        name = "wind suite" if also.generator.kind == "wind" else "ground-motion suite"
-        judges[name] = lambda: suite_criterion(plant, controller, also, drift_bounds(plant, also))
+        judges[also_criterion(also)] = lambda: suite_criterion(plant, controller, also, drift_bounds(plant, also))
     if isinstance(controller, PolicyController):
         judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios)
     criteria = {}
