@@ -7,7 +7,8 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
 1. A quiet sweep of `--runs` seeds of a small run (configs/testing/tiny.yaml with `--steps`
    training steps and a checkpoint every `--checkpoint-every`; its PPO, or with `--learner
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
-2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform), a kill falls
+2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform; the first after training is
+   first seen running), a kill falls
    due: the next moment a run is training, the process training a random one (the pid in its run
    folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times, so that the soak tests
    resuming, not the sweep's limit of losses per run.
@@ -94,12 +95,14 @@ def main() -> None:
     command = sweep_command(out / "soak.yaml", arguments.runs, arguments.workers, arguments.engine, out / "soak")
     soak = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     kills = []
-    next_kill = start + chooser.uniform(*arguments.kill_every)
+    next_kill = None  # the first kill falls LOW-HIGH s after training is first seen running (not after start-up)
     killed_runs: Counter[str] = Counter()
     while soak.poll() is None:
         time.sleep(0.2)
         pids = {run: pid for run, pid in training_pids(out / "soak").items() if killed_runs[run] < WORKER_LOSSES // 2}
-        if time.perf_counter() < next_kill or not pids:
+        if next_kill is None and pids:
+            next_kill = time.perf_counter() + chooser.uniform(*arguments.kill_every)
+        if next_kill is None or time.perf_counter() < next_kill or not pids:
             continue
         run = chooser.choice(sorted(pids))
         try:

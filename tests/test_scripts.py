@@ -111,11 +111,11 @@ def test_a_small_soak_kills_workers_and_ends_as_the_quiet_sweep(tmp_path):
         "--runs",
         "2",
         "--steps",
-        "12288",  # training lasts past the first kill, due at 4-6 s, even on a fast machine
+        "36864",  # training lasts past the first kill, due 1-2 s after training starts, even on a fast idle machine
         "--checkpoint-every",
         "256",
     ]
-    done = subprocess.run([*command, "--kill-every", "4", "6"], capture_output=True, text=True, timeout=900)
+    done = subprocess.run([*command, "--kill-every", "1", "2"], capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr
     report = (out / "soak.md").read_text()
     assert "every run finished and evaluated: yes" in report, report
