@@ -197,7 +197,7 @@ def card(folder: Path, records: Path) -> str:
     if wind:  # yielding stories are not modelled under floor loads (`rlc robustness` skips them alike)
         scenarios = [scenario for scenario in scenarios if scenario.plant is None or scenario.plant.hysteresis is None]
     per_scenario = summary(robustness(experiment, scenarios, motions, label, policy)[0])["J1"].unstack("controller")
-    verdict = Verdict(**yaml.safe_load((folder / "best_check.yaml").read_text()))
+    verdict = Verdict.read(yaml.safe_load((folder / "best_check.yaml").read_text()))
     lines = [
         f"# {folder.name}",
         "",

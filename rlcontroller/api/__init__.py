@@ -8,7 +8,7 @@ from rlcontroller.api.describe import describe
 from rlcontroller.api.identification import identify, reduce, simulate_test
 from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
 from rlcontroller.api.multirun import aggregate, sweep, tune
-from rlcontroller.api.safety import check, claim, unchecked_note, verdict_lines, verdict_state, verify
+from rlcontroller.api.safety import check, unchecked_note, verdict_lines, verdict_state, verify
 from rlcontroller.api.shipping import convert, design, export, shipped_models
 from rlcontroller.api.training import demo, train
 
@@ -38,7 +38,6 @@ __all__ = [
     "train",
     "unchecked_note",
     "verify",
-    "claim",
     "verdict_lines",
     "verdict_state",
 ]

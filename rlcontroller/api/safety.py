@@ -25,17 +25,32 @@ def check(
     stay as shipped) in a new folder under results/. `config`: the experiment to check it in instead of its
     own (another plant for the same design, e.g. an OpenSees model); its verdict goes to a new folder under
     results/, as it judges the policy on a plant its folder does not name."""
+    from rlcontroller.evaluation.verdict import write_verdict
+
+    experiment = folder_experiment(folder) if config is None else load(config)
+    own = safety_standard(experiment)
+    standard = standard or own
+    verdict = judged(folder, model, experiment, standard, scenarios, report)
+    target = folder
+    if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
+        on = "" if config is None else f"-on-{experiment.name}"
+        target = output_folder(None, f"check-{folder.resolve().name}{on}")
+        target.mkdir(parents=True)
+    other = "" if standard.resolve() == own.resolve() else standard.stem  # keeps the standard's verdict
+    return verdict, write_verdict(verdict, target, model, other)
+
+
+def judged(folder: Path, model: str, experiment, standard: Path, scenarios: Path | None, report: Report):
+    """A folder's policy run through the check of the standard in `standard` on `experiment`'s plant, with the
+    digests of what it judged; a progress bar per criterion."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.safety import safety_check
-    from rlcontroller.evaluation.verdict import judged_digests, write_verdict
+    from rlcontroller.evaluation.verdict import judged_digests
     from rlcontroller.physics.plant import Plant
 
-    experiment = folder_experiment(folder) if config is None else load(config)
     plant = Plant(experiment)
     policy = read_policy(folder, model, plant)
-    own = safety_standard(experiment)
-    standard = standard or own
     checking = load_safety_check(standard)
     loads = "wind loads" if checking.generator.kind == "wind" else "motions"
     if (also := checking.also) is not None:
@@ -51,13 +66,7 @@ def check(
         except ConfigError as error:  # the standard asks for what this building has not
             raise ConfigError(f"{display_path(standard)}: {error}") from None
     verdict.judged = judged_digests(folder, model, checking)
-    target = folder
-    if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
-        on = "" if config is None else f"-on-{experiment.name}"
-        target = output_folder(None, f"check-{folder.resolve().name}{on}")
-        target.mkdir(parents=True)
-    other = "" if standard.resolve() == own.resolve() else standard.stem  # keeps the standard's verdict
-    return verdict, write_verdict(verdict, target, model, other)
+    return verdict
 
 
 def verify(folder: Path, model: str = "best", scenarios: Path | None = None, report: Report = QUIET) -> list[str]:
@@ -66,11 +75,8 @@ def verify(folder: Path, model: str = "best", scenarios: Path | None = None, rep
     they agree). The recorded verdict must exist; whether it judged these files is one of the figures."""
     import yaml
 
-    from rlcontroller.config import display_path, load_safety_check, load_scenarios
-    from rlcontroller.control.policy_file import read_policy
-    from rlcontroller.evaluation.safety import safety_check
-    from rlcontroller.evaluation.verdict import differences, judged_digests, verdict_path
-    from rlcontroller.physics.plant import Plant
+    from rlcontroller.config import display_path
+    from rlcontroller.evaluation.verdict import differences, verdict_path
 
     path = verdict_path(folder, model)
     if not path.is_file():
@@ -82,13 +88,9 @@ def verify(folder: Path, model: str = "best", scenarios: Path | None = None, rep
     if not isinstance(recorded, dict):
         raise ConfigError(f"{display_path(path)}: expected a verdict (a mapping), got {type(recorded).__name__}")
     experiment = folder_experiment(folder)
-    plant = Plant(experiment)
-    checking = load_safety_check(safety_standard(experiment))
-    named = load_scenarios(scenarios or default_scenarios(experiment), experiment)
+    standard = safety_standard(experiment)
     report.line(f"verifying {display_path(path)}: re-running its check...")
-    with report.progress("safety check", 3 + (checking.also is not None)) as advance:
-        verdict = safety_check(plant, read_policy(folder, model, plant), checking, named, lambda name: advance(1, name))
-    verdict.judged = judged_digests(folder, model, checking)
+    verdict = judged(folder, model, experiment, standard, scenarios, report)
     return differences(recorded, yaml.safe_load(verdict.to_yaml()))
 
 
@@ -139,6 +141,6 @@ def verdict_lines(folder: Path, model: str) -> tuple[list[str], bool]:
     if state.passed is None:
         return [f"{folder}'s {model} policy counts as never safety-checked: {state.reason}"], False
     path = verdict_path(folder, model)
-    lines = Verdict(**yaml.safe_load(path.read_text(encoding="utf-8"))).lines()
+    lines = Verdict.read(yaml.safe_load(path.read_text(encoding="utf-8"))).lines()
     lines.append(f"verdict in {path}: it judged these files and agrees with its own figures; {claim(folder)}")
     return lines, bool(state.passed)

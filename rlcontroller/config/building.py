@@ -23,7 +23,7 @@ from rlcontroller.config.base import (
 )
 from rlcontroller.devices import DeviceConfig
 
-# The lateral system, for the performance levels of FEMA 356 Table C1-3 (`evaluation.verdict.DRIFT_LIMITS`).
+# The lateral system, for the performance levels of FEMA 356 Table C1-3 (`evaluation.standard.DRIFT_LIMITS`).
 StructuralSystem = Literal["steel_moment_frame", "concrete_moment_frame", "concrete_wall"]
 
 

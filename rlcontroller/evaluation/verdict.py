@@ -41,11 +41,17 @@ class Verdict:
     passed: bool
     criteria: dict[str, dict] = field(default_factory=dict)
     judged: dict[str, str] = field(default_factory=dict)  # sha256 of what it judged (`judged_digests`)
-    dominates: bool = False  # passed, with no significant motion worse than the reference beyond the tolerance
 
-    def __post_init__(self) -> None:
+    @classmethod
+    def read(cls, fields: dict) -> Verdict:
+        """A verdict from its file's fields (`dominates` there is derived, not read)."""
+        return cls(fields["controller"], fields["passed"], fields.get("criteria", {}), fields.get("judged", {}))
+
+    @property
+    def dominates(self) -> bool:
+        """Passed, with no significant motion of any suite worse than the reference beyond the tolerance."""
         suites = [item for name, item in self.criteria.items() if name in SUITES]
-        self.dominates = self.passed and bool(suites) and all(item.get("dominates") for item in suites)
+        return self.passed and bool(suites) and all(item.get("dominates") for item in suites)
 
     def to_yaml(self) -> str:
         fields = {"controller": self.controller, "passed": self.passed, "dominates": self.dominates}
@@ -121,7 +127,7 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
     passed = all(isinstance(item, dict) and item.get("passed") is True for item in criteria.values())
     if fields.get("passed") is not passed:
         found.append(f"passed {fields.get('passed')!r}, its criteria give {passed!r}")
-    dominates = Verdict("", passed, criteria).dominates if passed else False
+    dominates = Verdict("", passed, criteria).dominates
     if fields.get("dominates") is not dominates:
         found.append(f"dominates {fields.get('dominates')!r}, its criteria give {dominates!r}")
     return found
