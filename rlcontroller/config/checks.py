@@ -13,7 +13,13 @@ from pydantic import ValidationError
 from rlcontroller.config.base import ConfigError, format_location, location
 from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.experiment import Experiment
-from rlcontroller.config.learning import CHOICE_KWARGS, LEARNER_KWARGS, NUMERIC_KWARGS, RESERVED_KWARGS
+from rlcontroller.config.learning import (
+    CHOICE_KWARGS,
+    JAX_LEARNER_KWARGS,
+    LEARNER_KWARGS,
+    NUMERIC_KWARGS,
+    RESERVED_KWARGS,
+)
 from rlcontroller.config.plant import RANDOMIZED_FIELDS, PlantConfig, randomized_plant
 from rlcontroller.config.state_space import StateSpaceBuildingConfig
 
@@ -338,7 +344,11 @@ def check_algorithm(experiment: Experiment) -> None:
             f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
             "(centring the observation breaks a(-o) = -a(o)); scale the readings in the sensors part instead"
         )
-    accepted = LEARNER_KWARGS[algorithm.name]
+    if algorithm.backend == "sbx":
+        _check_jax_backend(experiment)
+    elif algorithm.name == "TQC":
+        raise ConfigError(f"{location(file, prefix, 'name')}: TQC is an sbx learner; add backend: sbx")
+    accepted = (JAX_LEARNER_KWARGS if algorithm.backend == "sbx" else LEARNER_KWARGS)[algorithm.name]
     for key, value in algorithm.kwargs.items():
         where = location(file, prefix, f"kwargs.{key}")
         if key in RESERVED_KWARGS:
@@ -356,6 +366,17 @@ def check_algorithm(experiment: Experiment) -> None:
             raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
         if key in CHOICE_KWARGS and value not in CHOICE_KWARGS[key]:
             raise ConfigError(f"{where}: expected one of {', '.join(CHOICE_KWARGS[key])}, got {value!r}")
+
+
+def _check_jax_backend(experiment: Experiment) -> None:
+    """sbx-rl learns SAC, TQC and TD3 with squashed MLP actors, which save as data; it has no initial log std."""
+    algorithm = experiment.algorithm
+    file, prefix = experiment.origin("algorithm")
+    if algorithm.name not in JAX_LEARNER_KWARGS:
+        expected = ", ".join(JAX_LEARNER_KWARGS)
+        raise ConfigError(f"{location(file, prefix, 'backend')}: sbx learns {expected}, not {algorithm.name}")
+    if algorithm.policy.log_std_init is not None:
+        raise ConfigError(f"{location(file, prefix, 'policy.log_std_init')}: not with backend: sbx (its SAC has none)")
 
 
 def _check_random_search(experiment: Experiment) -> None:

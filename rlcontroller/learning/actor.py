@@ -16,7 +16,11 @@ from rlcontroller.control.networks import ACTIVATIONS, Actor, Layer
 
 def actor_of(model) -> Actor | None:
     """The deterministic actor of an SB3 model with a flat-observation MLP policy (PPO or A2C with a
-    Gaussian, SAC, TD3, DDPG), or None for anything else."""
+    Gaussian, SAC, TD3, DDPG) or of an sbx one (SAC, TQC, TD3), or None for anything else."""
+    from rlcontroller.learning.jax_learners import is_jax_model, jax_actor
+
+    if is_jax_model(model):
+        return jax_actor(model)
     import torch
     from stable_baselines3.common.distributions import DiagGaussianDistribution
     from stable_baselines3.common.policies import ActorCriticPolicy

@@ -58,16 +58,23 @@ def make_vec_env(plant: Plant, seed: int):
 
 def _gamma(experiment: Experiment) -> float:
     """The learner's discount (the return whose spread scales the rewards)."""
-    gamma = experiment.algorithm.kwargs.get("gamma")
+    algorithm = experiment.algorithm
+    gamma = algorithm.kwargs.get("gamma")
     if gamma is None:
-        gamma = inspect.signature(algorithm_class(experiment.algorithm.name).__init__).parameters["gamma"].default
+        learner = algorithm_class(algorithm.name, algorithm.backend)
+        gamma = inspect.signature(learner.__init__).parameters["gamma"].default
     return float(gamma)
 
 
 def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorboard: Path | None):
+    """A new learner on `vec_env`: stable-baselines3's (on `device`), rlc's own, or sbx's (`backend: sbx`)."""
+    algorithm = experiment.algorithm
+    if algorithm.backend == "sbx":
+        from rlcontroller.learning.jax_learners import build_jax_model
+
+        return build_jax_model(experiment, vec_env, seed, tensorboard)
     import torch
 
-    algorithm = experiment.algorithm
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
     if algorithm.name == "RandomSearch":  # no critic is trained; without actor_arch a linear actor
         net_arch = {"pi": list(algorithm.policy.actor_arch or []), "vf": []}

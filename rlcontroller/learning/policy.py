@@ -25,8 +25,13 @@ from rlcontroller.learning.actor import actor_of
 from rlcontroller.physics.plant import Plant
 
 
-def algorithm_class(name: str) -> type:
-    """The learner class called `name`: a stable-baselines3 one (SAC, PPO, ...), RandomSearch or DAgger."""
+def algorithm_class(name: str, backend: str = "sb3") -> type:
+    """The learner class called `name`: a stable-baselines3 one (SAC, PPO, ...), RandomSearch or DAgger, or
+    with `backend` sbx, sbx-rl's."""
+    if backend == "sbx":
+        from rlcontroller.learning.jax_learners import jax_algorithm_class
+
+        return jax_algorithm_class(name)
     if name == "DAgger":
         from rlcontroller.learning.imitation import DAgger
 

@@ -4,6 +4,8 @@ A run folder holds:
     config.yaml            the resolved experiment (with command-line overrides applied)
     run.json               command line, package versions, seed, device used, host, start time
     checkpoints/step_N/    model.zip, replay_buffer.pkl (off-policy), vecnormalize.pkl (if used),
+                           or with `backend: sbx` learner.npz/.json, replay_buffer.npz, vecnormalize.npz
+                           (no pickle, `learning.jax_learners`);
                            state.json (steps, wall time, best validation); written to a
                            temporary folder and renamed, so the newest complete one is always valid
     learning_curve.csv     steps, wall_time_s, episode_reward, eval_reward, eval_peak_drift_m,
@@ -11,7 +13,7 @@ A run folder holds:
                            references lqg_J1, lqg_J2, lqg_ground_J1, lqg_ground_J2,
                            lqg_ground_model_J1, lqg_ground_model_J2 on the same motions
     best_model.zip         the best validation so far (algorithm.select_by); final_model.zip at the end
-                           (stable-baselines3 files, for this run's own use: they unpickle)
+                           (stable-baselines3 files, for this run's own use: they unpickle; none with sbx)
     best_policy.yaml/.npz  the same policies as data (`control.policy_file`): what evaluate, check and
     final_policy.yaml/.npz export read, never unpickling
     best_check.yaml        the safety check's verdict on the best policy (`rlc train`, `evaluation.safety`)
@@ -39,6 +41,7 @@ from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.control.policy_file import write_policy
 from rlcontroller.files import atomic_savefig, atomic_write, check_new_folder
+from rlcontroller.learning.jax_learners import is_jax_model, save_jax_learner
 from rlcontroller.physics.plant import Plant
 
 CURVE_COLUMNS = (
@@ -62,7 +65,8 @@ KEPT_CHECKPOINTS = 2
 
 
 def package_versions() -> dict[str, str]:
-    names = ("rlcontroller", "stable-baselines3", "gymnasium", "torch", "numpy", "scipy", "control", "pydantic")
+    names = ("rlcontroller", "stable-baselines3", "sbx-rl", "jax", "gymnasium", "torch", "numpy", "scipy", "control")
+    names += ("pydantic",)
     versions = {"python": platform.python_version()}
     for name in names:
         try:
@@ -152,12 +156,15 @@ class RunFolder:
         shutil.rmtree(temporary, ignore_errors=True)
         temporary.mkdir(parents=True)
         try:
-            model.save(temporary / "model.zip")
-            if hasattr(model, "replay_buffer") and model.replay_buffer is not None:
-                model.save_replay_buffer(temporary / "replay_buffer.pkl")
-            normalize = model.get_vec_normalize_env()
-            if normalize is not None:
-                normalize.save(str(temporary / "vecnormalize.pkl"))
+            if is_jax_model(model):
+                save_jax_learner(model, temporary)
+            else:
+                model.save(temporary / "model.zip")
+                if hasattr(model, "replay_buffer") and model.replay_buffer is not None:
+                    model.save_replay_buffer(temporary / "replay_buffer.pkl")
+                normalize = model.get_vec_normalize_env()
+                if normalize is not None:
+                    normalize.save(str(temporary / "vecnormalize.pkl"))
             (temporary / "state.json").write_text(json.dumps(state.to_json(steps)) + "\n")
             os.rename(temporary, final)
         except BaseException:
@@ -190,7 +197,9 @@ class RunFolder:
 
     def save_model(self, model, name: str, controller: PolicyController, plant: Plant) -> Path:
         """Save the model `name` (best or final) atomically: NAME_model.zip (and its
-        .vecnormalize.pkl if used) for this run, and `controller`, its policy, as data."""
+        .vecnormalize.pkl if used) for this run (not with sbx: no pickle), and `controller`, its policy, as data."""
+        if is_jax_model(model):
+            return write_policy(controller, plant, self.path, name)
         temporary = self.path / f".{name}_model.tmp.zip"
         model.save(temporary)
         os.replace(temporary, self.path / f"{name}_model.zip")

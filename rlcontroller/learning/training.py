@@ -26,6 +26,7 @@ from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.files import check_new_folder, folder_lock
 from rlcontroller.learning.algorithms import algorithm_class, build_model, make_vec_env
+from rlcontroller.learning.jax_learners import UnreadableFile, is_jax_model, jax_device, load_jax_learner
 from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder, TrainingState, default_run_dir, plot_learning_curve
 from rlcontroller.learning.validation import Validator
@@ -233,6 +234,11 @@ def _train(
         raise ConfigError(
             f"{where}: nothing to command (no actuators, no active devices): a passive building is not trained"
         )
+    if experiment.algorithm.backend == "sbx" and device != "cpu":
+        raise ConfigError(
+            f"--device {device}: backend: sbx runs where JAX runs (its CPU build, rlcontroller[fast]); "
+            "leave --device out or use backend: sb3"
+        )
     torch.set_num_threads(experiment.algorithm.torch_threads)
     plant = Plant(experiment)
     if plant.fe_model is not None and experiment.plant.opensees.train_on == "reduced":
@@ -256,7 +262,7 @@ def _train(
             for number, handler in previous_handlers.items():
                 signal.signal(number, handler)
     except BaseException:
-        if created and not run.checkpoints() and not (run.path / "best_model.zip").exists():
+        if created and not run.checkpoints() and not (run.path / "best_policy.yaml").exists():
             shutil.rmtree(run.path, ignore_errors=True)  # nothing trained: leave no half-made run folder
         raise
     if remaining > 0:
@@ -299,7 +305,7 @@ def _start(
     if resume:
         run.truncate_curve(0)
     else:
-        RunFolder.create(run.path, experiment, str(model.device))
+        RunFolder.create(run.path, experiment, jax_device() if is_jax_model(model) else str(model.device))
     return model, state
 
 
@@ -321,6 +327,13 @@ def _load_checkpoint(experiment: Experiment, checkpoints: list[Path], vec_env, d
     from stable_baselines3.common.vec_env import VecNormalize
 
     checkpoint = checkpoints[-1]
+    if experiment.algorithm.backend == "sbx":  # arrays into a fresh model of the same config: no pickle
+        model = build_model(experiment, vec_env, experiment.seed, device, None)
+        try:
+            load_jax_learner(model, checkpoint)
+        except UnreadableFile as unreadable:
+            raise _unreadable(checkpoints, unreadable.path, unreadable.error) from None
+        return model
     path = checkpoint / "vecnormalize.pkl"
     try:
         if path.is_file():

@@ -140,7 +140,7 @@ def _train(run: SweepRun) -> str:
     from rlcontroller.learning.training import train
 
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
-    if (run.folder / "final_model.zip").is_file():
+    if (run.folder / "final_policy.yaml").is_file():
         return "finished before"
     if (run.folder / "config.yaml").is_file():
         stored, planned = yaml.safe_load((run.folder / "config.yaml").read_text()), yaml.safe_load(run.config)

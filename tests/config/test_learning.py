@@ -9,15 +9,19 @@ import pytest
 from conftest import REPOSITORY
 
 from rlcontroller.config import ConfigError, build_experiment
-from rlcontroller.config.learning import LEARNER_KWARGS
+from rlcontroller.config.learning import JAX_LEARNER_KWARGS, LEARNER_KWARGS
 
 
-@pytest.mark.parametrize("name", sorted(LEARNER_KWARGS))
-def test_the_table_of_keyword_arguments_is_the_learners_own(name):
+@pytest.mark.parametrize(
+    ("backend", "name"), [("sb3", name) for name in sorted(LEARNER_KWARGS)] + [("sbx", n) for n in JAX_LEARNER_KWARGS]
+)
+def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
     from rlcontroller.learning.policy import algorithm_class
 
-    signature = set(inspect.signature(algorithm_class(name).__init__).parameters) - {"self"}
-    assert LEARNER_KWARGS[name] == signature
+    if backend == "sbx":
+        pytest.importorskip("sbx")
+    signature = set(inspect.signature(algorithm_class(name, backend).__init__).parameters) - {"self"}
+    assert (JAX_LEARNER_KWARGS if backend == "sbx" else LEARNER_KWARGS)[name] == signature
 
 
 @pytest.mark.parametrize(

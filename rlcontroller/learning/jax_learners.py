@@ -1,0 +1,243 @@
+"""sbx-rl's learners (`algorithm.backend: sbx`): SAC, TQC and TD3 with their updates compiled by JAX.
+
+sbx-rl (Stable Baselines Jax) keeps stable-baselines3's interface — the vector env, `learn`, callbacks, the
+replay buffer — so training, validation and the progress bar are those of any run. What differs is kept here:
+building the model, reading its deterministic actor as plain layers (`control.networks.Actor`), and the run
+folder's files. sbx's own `save` pickles the whole policy; this backend never writes or reads a pickle:
+
+    learner.npz        every array of the learner's JAX state (the actor's and critics' parameters, target
+                       parameters, optimiser moments, the entropy coefficient, the random keys), in the order
+                       of its pytree, which a fresh model of the same config rebuilds; counters in learner.json
+    replay_buffer.npz  the replay buffer's filled rows and its position
+    vecnormalize.npz   the observation and return statistics (with normalisation)
+
+all read back with `allow_pickle=False`, and checked against the fresh model's shapes.
+"""
+
+from __future__ import annotations
+
+import collections
+import functools
+import json
+import warnings
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.control.networks import Actor, Layer
+
+# JAX warns at every fork once its threads run. rlc forks after training (the check's fan-out, the report's drawing
+# process); those children simulate in numpy and never call JAX, which is what the warning is about.
+warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called", category=RuntimeWarning)
+
+LEARNER_FILE, LEARNER_COUNTERS = "learner.npz", "learner.json"
+REPLAY_FILE, NORMALIZE_FILE = "replay_buffer.npz", "vecnormalize.npz"
+REPLAY_ARRAYS = ("observations", "next_observations", "actions", "rewards", "dones", "timeouts")
+COUNTERS = ("num_timesteps", "_n_updates", "_episode_num", "reset_idx")
+FLAX_TO_NUMPY = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU", "gelu": "GELU"}
+
+
+def jax_algorithm_class(name: str) -> type:
+    """sbx's learner called `name` (SAC, TQC, TD3); a one-line error when sbx-rl is not installed."""
+    try:
+        import sbx
+    except ImportError:
+        raise ConfigError(
+            "algorithm.backend: sbx needs the sbx-rl package (pip install 'rlcontroller[fast]'), or use backend: sb3"
+        ) from None
+    return getattr(sbx, name)
+
+
+def is_jax_model(model: Any) -> bool:
+    return type(model).__module__.startswith("sbx.")
+
+
+def jax_device() -> str:
+    """Where JAX computes, as run.json records it (e.g. "cpu (JAX)")."""
+    import jax
+
+    return f"{jax.default_backend()} (JAX)"
+
+
+def _activation(name: str):
+    import flax.linen as nn
+
+    if name == "gelu":  # PyTorch's and the numpy actor's GELU are exact; flax's default is the tanh approximation
+        return functools.partial(nn.gelu, approximate=False)
+    return getattr(nn, name)
+
+
+def build_jax_model(experiment: Experiment, vec_env, seed: int, tensorboard: Path | None):
+    """A new sbx learner on `vec_env`, configured as `build_model` configures a stable-baselines3 one."""
+    algorithm = experiment.algorithm
+    net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
+    if algorithm.policy.actor_arch is not None:
+        net_arch = {"pi": list(algorithm.policy.actor_arch), "qf": list(net_arch)}
+    policy_kwargs = {"net_arch": net_arch, "activation_fn": _activation(algorithm.policy.activation)}
+    try:
+        return jax_algorithm_class(algorithm.name)(
+            "MlpPolicy",
+            vec_env,
+            policy_kwargs=policy_kwargs,
+            seed=seed,
+            tensorboard_log=str(tensorboard) if tensorboard else None,
+            verbose=0,
+            **algorithm.kwargs,
+        )
+    except (TypeError, ValueError, AssertionError) as error:
+        from rlcontroller.config import location
+
+        file, prefix = experiment.origin("algorithm")
+        message = str(error).splitlines()[0] if str(error) else type(error).__name__
+        where = location(file, prefix, "kwargs")
+        raise ConfigError(f"{where}: sbx's {algorithm.name} refused them: {message}") from None
+
+
+def jax_actor(model) -> Actor:
+    """The deterministic actor of an sbx SAC/TQC (tanh of the Gaussian's mean) or TD3 (its tanh output) as
+    plain float32 layers: flax's Dense layers in order, the hidden ones followed by the policy's activation."""
+    policy = model.policy
+    params = policy.actor_state.params["params"]
+    dense = sorted((name for name in params if name.startswith("Dense_")), key=lambda n: int(n.split("_")[1]))
+    hidden = len(policy.net_arch_pi)
+    function = policy.activation_fn
+    activation = FLAX_TO_NUMPY[getattr(getattr(function, "func", function), "__name__", "")]
+    layers = []
+    for index, name in enumerate(dense[: hidden + 1]):  # SAC/TQC: the mean layer; the log-std one after it is noise
+        weight = np.asarray(params[name]["kernel"], dtype=np.float32).T.copy()  # flax: (in, out)
+        bias = np.asarray(params[name]["bias"], dtype=np.float32).copy()
+        layers.append(Layer(weight, bias, activation if index < hidden else None))
+    return Actor(tuple(layers), squash=True)
+
+
+def _states(model) -> dict[str, Any]:
+    """The learner's JAX state by attribute: flax train states and random keys, of the model and its policy."""
+    from flax.training.train_state import TrainState
+
+    found = {}
+    for owner_name, owner in (("model", model), ("policy", model.policy)):
+        for name, value in sorted(vars(owner).items()):
+            is_key = name in ("key", "noise_key") and hasattr(value, "shape")
+            if isinstance(value, TrainState) or is_key:
+                found[f"{owner_name}.{name}"] = value
+    return found
+
+
+def _array(leaf) -> np.ndarray:
+    """A state's leaf as JAX holds it (a fresh state's step counter is a Python int: int32, as after an update)."""
+    import jax.numpy as jnp
+
+    return np.asarray(jnp.asarray(leaf))
+
+
+def _open_npz(path: Path):
+    """A .npz archive's arrays, never unpickled (numpy would take any other file for a pickle)."""
+    if not zipfile.is_zipfile(path):
+        raise ValueError("not a numpy .npz archive")
+    return np.load(path, allow_pickle=False)
+
+
+def save_jax_learner(model, folder: Path) -> None:
+    """Write the learner's state, replay buffer and normalisation statistics into `folder` (no pickle)."""
+    import jax
+
+    leaves = jax.tree_util.tree_leaves(_states(model))
+    np.savez(folder / LEARNER_FILE, *[_array(leaf) for leaf in leaves])
+    counters = {name: int(getattr(model, name, 0)) for name in COUNTERS}
+    episodes = [{key: float(value) for key, value in info.items()} for info in model.ep_info_buffer or []]
+    (folder / LEARNER_COUNTERS).write_text(json.dumps({"counters": counters, "episodes": episodes}) + "\n")
+    buffer = model.replay_buffer
+    if buffer is not None:
+        filled = buffer.buffer_size if buffer.full else buffer.pos
+        arrays = {name: getattr(buffer, name)[:filled] for name in REPLAY_ARRAYS}
+        np.savez(folder / REPLAY_FILE, pos=np.int64(buffer.pos), full=np.bool_(buffer.full), **arrays)
+    normalize = model.get_vec_normalize_env()
+    if normalize is not None:
+        save_normalization(normalize, folder / NORMALIZE_FILE)
+
+
+def save_normalization(normalize, path: Path) -> None:
+    """VecNormalize's running statistics as arrays."""
+    obs, ret = normalize.obs_rms, normalize.ret_rms
+    np.savez(
+        path, obs_mean=obs.mean, obs_var=obs.var, obs_count=np.float64(obs.count),
+        ret_mean=ret.mean, ret_var=ret.var, ret_count=np.float64(ret.count),
+    )  # fmt: skip
+
+
+def load_normalization(normalize, path: Path) -> None:
+    with _open_npz(path) as saved:
+        for rms, prefix in ((normalize.obs_rms, "obs"), (normalize.ret_rms, "ret")):
+            mean, var = saved[f"{prefix}_mean"], saved[f"{prefix}_var"]
+            if mean.shape != np.shape(rms.mean) or var.shape != np.shape(rms.var):
+                raise ValueError(f"{prefix} statistics of shape {mean.shape}, expected {np.shape(rms.mean)}")
+            rms.mean, rms.var = mean.astype(np.float64), var.astype(np.float64)
+            rms.count = float(saved[f"{prefix}_count"])
+
+
+class UnreadableFile(Exception):
+    """A checkpoint file that does not load into the fresh model: `path` and the `error` it raised."""
+
+    def __init__(self, path: Path, error: Exception) -> None:
+        super().__init__(f"{path}: {error}")
+        self.path, self.error = path, error
+
+
+def load_jax_learner(model, folder: Path) -> None:
+    """Restore into `model` (a fresh learner of the same config) what `save_jax_learner` wrote into `folder`; a
+    missing file, or one that does not fit the model, is an `UnreadableFile` naming it."""
+    files = [(LEARNER_FILE, _load_states), (LEARNER_COUNTERS, _load_counters)]
+    if model.replay_buffer is not None:
+        files.append((REPLAY_FILE, _load_replay_buffer))
+    if model.get_vec_normalize_env() is not None:
+        files.append((NORMALIZE_FILE, lambda model, path: load_normalization(model.get_vec_normalize_env(), path)))
+    for name, load in files:
+        try:
+            load(model, folder / name)
+        except Exception as error:  # a damaged file: zip, json or shape errors of any kind
+            raise UnreadableFile(folder / name, error) from None
+
+
+def _load_states(model, path: Path) -> None:
+    import jax
+    import jax.numpy as jnp
+
+    leaves, structure = jax.tree_util.tree_flatten(_states(model))
+    with _open_npz(path) as saved:
+        arrays = [saved[f"arr_{index}"] for index in range(len(saved.files))]
+    if len(arrays) != len(leaves):
+        raise ValueError(f"{len(arrays)} arrays, expected {len(leaves)} for this config's {type(model).__name__}")
+    for index, (array, leaf) in enumerate(zip(arrays, leaves, strict=True)):
+        expected = _array(leaf)
+        if array.shape != expected.shape or array.dtype != expected.dtype:
+            raise ValueError(f"array {index} is {array.dtype}{list(array.shape)}, expected {expected.dtype}"
+                             f"{list(expected.shape)}")  # fmt: skip
+    restored = jax.tree_util.tree_unflatten(structure, [jnp.asarray(array) for array in arrays])
+    for attribute, value in restored.items():
+        owner_name, name = attribute.split(".", 1)
+        setattr(model if owner_name == "model" else model.policy, name, value)
+
+
+def _load_counters(model, path: Path) -> None:
+    saved = json.loads(path.read_text())
+    for name in COUNTERS:
+        setattr(model, name, int(saved["counters"][name]))
+    if model.ep_info_buffer is None:  # kept by a learn() that goes on (reset_num_timesteps=False)
+        model.ep_info_buffer = collections.deque(maxlen=model._stats_window_size)
+        model.ep_success_buffer = collections.deque(maxlen=model._stats_window_size)
+    model.ep_info_buffer.extend(dict(info) for info in saved["episodes"])
+
+
+def _load_replay_buffer(model, path: Path) -> None:
+    buffer = model.replay_buffer
+    with _open_npz(path) as saved:
+        pos, full = int(saved["pos"]), bool(saved["full"])
+        for name in REPLAY_ARRAYS:
+            target, rows = getattr(buffer, name), saved[name]
+            if rows.shape[1:] != target.shape[1:] or len(rows) > len(target):
+                raise ValueError(f"replay buffer {name} of shape {rows.shape}, expected at most {target.shape}")
+            target[: len(rows)] = rows
+    buffer.pos, buffer.full = pos, full
