@@ -110,19 +110,19 @@ def test_a_model_that_does_not_converge_names_the_record(tmp_path, records):
         "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
         "    ops.node(0, 0.0); ops.fix(0, 1)\n"
         "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
-        "    ops.node(2, 2.0)\n"  # massless and held by nothing: the first step's system is singular
+        "    ops.node(2, 2.0)\n"  # not a floor, massless and held by nothing: the first step's system is singular
         "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
         "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
-        "    return {'floors': [[1], [2]], 'direction': 1, 'story_heights': [3.0, 3.0], 'modal_damping': [0.02]}\n"
+        "    return {'floors': [[1]], 'direction': 1, 'story_heights': [3.0], 'modal_damping': [0.02]}\n"
     )
     experiment = load_experiment(FIVE_STORY)
     part = {"opensees": {"model": str(model), "analysis_dt": 0.005}}
     raw = experiment.model_dump(mode="json") | {"plant": part}
     raw["building"] = {
-        "masses": [1.0e4, 1.0],
-        "stiffnesses": [1.0e6, 1.0e6],
-        "story_heights": [3.0, 3.0],
-        "damping": {"rayleigh": [{"mode": 1, "ratio": 0.02}, {"mode": 2, "ratio": 0.02}]},
+        "masses": [1.0e4],
+        "stiffnesses": [1.0e6],
+        "story_heights": [3.0],
+        "damping": {"matrix": [[500.0]]},
     }
     raw["actuators"] = [{"story": 1, "force_limit": 1.0e4}]
     from rlcontroller.config.loading import build_experiment
@@ -235,7 +235,7 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
     ("returned", "message"),
     [
         ("'floors': [[7]], 'direction': 1", "floors: floor 1 names node 7, which the model does not have"),
-        ("'floors': [[1]], 'direction': 9", "direction 9: expected a degree of freedom of the floor nodes, 1 to 1"),
+        ("'floors': [[1]], 'direction': 2", "direction 2: expected a degree of freedom of the floor nodes, 1 to 1"),
     ],
 )
 def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, message):

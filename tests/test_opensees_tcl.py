@@ -103,6 +103,13 @@ def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(record
         ("units: {length: furlong, force: kip}", "units: expected length in m, cm, mm, ft, in and force in"),
         ("floors: [[1], [2], [3], [4], [9]]", "floors: floor 5 names node 9, which the model does not have"),
         ("tcl: node 1 oops", 'Tcl error: expected'),
+        ("direction: x", "direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) or 3 (z)"),
+        ("rayleigh: [0.0145]", "rayleigh: expected [a0, a1], two coefficients >= 0 of C = a0 M + a1 K, got [0.0145]"),
+        ("floors: [[1], [2], [3], [4], [1.5]]", "floors: floor 5: expected node tags (whole numbers), got [1.5]"),
+        ("floors: [[1], [2], [3], [4], [4]]", "floors: node 4 is named twice (floor 4 and floor 5)"),
+        ("floors: [[0], [2], [3], [4], [5]]", "floors: floor 1 (nodes [0]) has no mass in direction 1"),
+        ("rayleigh: null\nrayleigh_modes: [[1, 0.02], [9, 0.02]]", "rayleigh_modes: mode 9: a model of 5 floors has 5"),
+        ("story_heights: [3, 3, 3, 3]", "story_heights: expected one positive height per floor (5), got [3.0, 3.0"),
     ],
 )
 def test_what_a_tcl_model_lacks_or_gets_wrong_is_one_line_naming_the_file(tmp_path, change, message):

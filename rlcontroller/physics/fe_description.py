@@ -20,6 +20,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from rlcontroller.errors import ModelError
 
 FALLBACKS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
@@ -67,13 +69,19 @@ class FEDescription:
         missing = sorted({"floors", "direction", "story_heights"} - set(raw))
         if missing:
             raise ModelError(f"{where}: the mapping lacks {', '.join(missing)}")
+        floors = _floors(raw["floors"], f"{where}: floors")
         try:
-            floors = tuple(tuple(int(n) for n in ([f] if isinstance(f, int) else f)) for f in raw["floors"])
             heights = tuple(float(h) for h in raw["story_heights"])
         except (TypeError, ValueError):
-            raise ModelError(f"{where}: expected floors as lists of node tags and story_heights as numbers") from None
-        if not floors or any(not nodes for nodes in floors) or len(heights) != len(floors):
-            raise ModelError(f"{where}: expected one list of nodes and one story height per floor")
+            heights_given = raw["story_heights"]
+            raise ModelError(f"{where}: story_heights: expected a list of numbers, got {heights_given!r}") from None
+        if len(heights) != len(floors) or not all(np.isfinite(h) and h > 0.0 for h in heights):
+            raise ModelError(f"{where}: story_heights: expected one positive height per floor ({len(floors)}), "
+                             f"got {list(heights)}")  # fmt: skip
+        direction = raw["direction"]
+        if not isinstance(direction, int) or isinstance(direction, bool) or not 1 <= direction <= 3:
+            raise ModelError(f"{where}: direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) "
+                             f"or 3 (z), got {direction!r}")  # fmt: skip
         damping = [key for key in ("modal_damping", "rayleigh", "rayleigh_modes") if raw.get(key) is not None]
         if len(damping) != 1:
             raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has) "
@@ -83,17 +91,55 @@ class FEDescription:
         options = {key: _arguments(raw[key], f"{where}: {key}") for key in solver if key in raw}
         return cls(
             floors=floors,
-            direction=int(raw["direction"]),
+            direction=direction,
             story_heights=heights,
-            modal_damping=None if modal is None else tuple(float(r) for r in modal),
-            rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
-            rayleigh_modes=_modes(raw.get("rayleigh_modes"), f"{where}: rayleigh_modes"),
+            modal_damping=None if modal is None else _ratios(modal, f"{where}: modal_damping"),
+            rayleigh=None if rayleigh is None else _rayleigh(rayleigh, f"{where}: rayleigh"),
+            rayleigh_modes=_modes(raw.get("rayleigh_modes"), f"{where}: rayleigh_modes", len(floors)),
             **_units(raw.get("units", {}), f"{where}: units"),
             **options,
         )
 
 
-def _modes(raw: object, where: str) -> tuple[tuple[int, float], tuple[int, float]] | None:
+def _floors(raw: object, where: str) -> tuple[tuple[int, ...], ...]:
+    """Per floor its node tags (whole numbers; a floor of one node may be the tag alone), no node twice."""
+    if not isinstance(raw, list) or not raw:
+        raise ModelError(f"{where}: expected a list with the nodes of each floor, got {raw!r}")
+    floors = [[tags] if _is_tag(tags) else tags for tags in raw]
+    for floor, tags in enumerate(floors, start=1):
+        if not isinstance(tags, list) or not tags or not all(_is_tag(tag) for tag in tags):
+            raise ModelError(f"{where}: floor {floor}: expected node tags (whole numbers), got {raw[floor - 1]!r}")
+    seen: dict[int, int] = {}
+    for floor, tags in enumerate(floors, start=1):
+        for tag in tags:
+            if tag in seen:
+                raise ModelError(f"{where}: node {tag} is named twice (floor {seen[tag]} and floor {floor})")
+            seen[tag] = floor
+    return tuple(tuple(tags) for tags in floors)
+
+
+def _is_tag(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _ratios(raw: object, where: str) -> tuple[float, ...]:
+    if not isinstance(raw, list) or not raw or not all(_is_number(r) and 0.0 <= r < 1.0 for r in raw):
+        raise ModelError(f"{where}: expected damping ratios in [0, 1) per mode (the last repeated), got {raw!r}")
+    return tuple(float(r) for r in raw)
+
+
+def _rayleigh(raw: object, where: str) -> tuple[float, float]:
+    if not isinstance(raw, list) or len(raw) != 2 or not all(_is_number(a) and a >= 0.0 for a in raw):
+        raise ModelError(f"{where}: expected [a0, a1], two coefficients >= 0 of C = a0 M + a1 K, got {raw!r}")
+    return float(raw[0]), float(raw[1])
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
+
+
+def _modes(raw: object, where: str, floors: int) -> tuple[tuple[int, float], tuple[int, float]] | None:
+    """Two (mode, ratio) pairs: modes in rising order among the model's `floors` lateral modes."""
     if raw is None:
         return None
     try:
@@ -103,6 +149,8 @@ def _modes(raw: object, where: str) -> tuple[tuple[int, float], tuple[int, float
         pairs = None
     if pairs is None or not 1 <= pairs[0][0] < pairs[1][0] or not all(0.0 < zeta < 1.0 for _, zeta in pairs):
         raise ModelError(f"{where}: expected [[mode, ratio], [mode, ratio]], two modes in rising order, got {raw!r}")
+    if pairs[1][0] > floors:
+        raise ModelError(f"{where}: mode {pairs[1][0]}: a model of {floors} floors has {floors} lateral modes")
     return pairs
 
 

@@ -179,8 +179,8 @@ def _build_tcl_model(path: Path) -> FEDescription:
 
 
 def check_in_domain(description: FEDescription, where: str) -> None:
-    """ModelError (one line) unless every floor node is in the domain and `direction` is one of the degrees of
-    freedom of every one."""
+    """ModelError (one line) unless every floor node is in the domain, `direction` is one of the degrees of
+    freedom of every one and every floor has mass in it (a fixed base node has none)."""
     ops = opensees()
     nodes = set(ops.getNodeTags())
     for floor, tags in enumerate(description.floors, start=1):
@@ -192,6 +192,12 @@ def check_in_domain(description: FEDescription, where: str) -> None:
             raise ModelError(
                 f"{where}: direction {description.direction}: expected a degree of freedom of the floor nodes, "
                 f"1 to {freedoms}"
+            )
+    for floor, mass in enumerate(floor_masses(description), start=1):
+        if not mass > 0.0:
+            raise ModelError(
+                f"{where}: floors: floor {floor} (nodes {list(description.floors[floor - 1])}) has no mass in "
+                f"direction {description.direction}: a floor is a level with mass (a fixed base node has none)"
             )
 
 
