@@ -2,6 +2,7 @@
 frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
 
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -246,6 +247,34 @@ def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, 
     model = one_story_model(tmp_path, returned)
     with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
         build_model(model, "build_model")
+
+
+def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
+    from rlcontroller.physics.opensees import build_model
+
+    model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
+    model.write_text(model.read_text().replace("    return", "    raise SystemExit(0)\n    return"))
+    with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: the model calls exit; return its")):
+        build_model(model, "build_model")
+
+
+def test_a_model_without_elements_is_one_line_without_numpy_warnings(tmp_path):
+    from rlcontroller.physics.opensees import reduced_building
+
+    model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
+    model.write_text(model.read_text().replace("    ops.element('truss', 1, 0, 1, 1.0, 1)\n", ""))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy RuntimeWarning (a period of 2 pi / 0) fails the test
+        with pytest.raises(ModelError, match=re.escape(f"{model}: the eigen analysis finds 0 of 1 modes")):
+            reduced_building(model, "build_model")
+
+
+def test_a_model_with_other_floors_than_the_building_is_one_line(tmp_path):
+    from rlcontroller.physics.opensees import OpenSeesIntegrator
+
+    model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
+    with pytest.raises(ModelError, match=re.escape(f"{model}: the model has 1 floors, the experiment's building 5")):
+        OpenSeesIntegrator(model, "build_model", 0.005, np.ones((5, 1)), np.ones(1)).reset()
 
 
 @pytest.mark.slow

@@ -67,6 +67,21 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     assert not any(pushed["yielded"])
 
 
+def test_a_pushover_given_a_system_opensees_does_not_take_is_one_line(tmp_path):
+    shutil.copy(TCL_MODEL, tmp_path)
+    sidecar = TCL_MODEL.with_suffix(".yaml").read_text() + "system: [NoSuchSolver]\n"
+    (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
+    model = tmp_path / TCL_MODEL.name
+    done = subprocess.run(
+        [sys.executable, "-c", "import numpy as np; from pathlib import Path; "
+         "from rlcontroller.errors import ModelError; from rlcontroller.physics.pushover import pushover\n"
+         f"try: pushover(Path({str(model)!r}), 'build_model', np.eye(5) * 1e5, np.eye(5) * 1e8)\n"
+         "except ModelError as error: print(error)"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.stdout.strip() == f"{model}: system ['NoSuchSolver']: OpenSees does not take it", done.stderr
+
+
 @pytest.mark.slow
 def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(records):
     """The ground (m/s^2 -> ft/s^2), the actuators' forces (N -> kip) and the floors' response (ft -> m): under a
@@ -103,6 +118,7 @@ def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(record
         ("units: {length: furlong, force: kip}", "units: expected length in m, cm, mm, ft, in and force in"),
         ("floors: [[1], [2], [3], [4], [9]]", "floors: floor 5 names node 9, which the model does not have"),
         ("tcl: node 1 oops", 'Tcl error: expected'),
+        ("tcl: exit", "the model calls exit (line 27), which would end rlc: remove it"),
         ("direction: x", "direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) or 3 (z)"),
         ("rayleigh: [0.0145]", "rayleigh: expected [a0, a1], two coefficients >= 0 of C = a0 M + a1 K, got [0.0145]"),
         ("floors: [[1], [2], [3], [4], [1.5]]", "floors: floor 5: expected node tags (whole numbers), got [1.5]"),

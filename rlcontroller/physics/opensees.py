@@ -30,6 +30,7 @@ import atexit
 import importlib.util
 import math
 import os
+import re
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -103,6 +104,12 @@ def _quiet_at_exit() -> None:
 
 
 _QUIET_EXIT: list[bool] = []
+EXITED = "rlc: the model called exit"
+# Tcl's exit would end the process (rlc with it, exit code 0): in the interpreter that builds models it is an error.
+EXIT_AS_ERROR = (
+    "if {[info commands ::rlc_tcl_exit] eq {}} {rename ::exit ::rlc_tcl_exit; "
+    f'proc ::exit {{args}} {{error "{EXITED}"}}}}'
+)
 _TCL: list = []
 
 
@@ -122,6 +129,8 @@ def model_function(path: Path, function: str) -> Callable:
     module = importlib.util.module_from_spec(spec)
     try:
         spec.loader.exec_module(module)
+    except SystemExit:
+        raise ModelError(f"{path}: the model file calls exit as it is loaded") from None
     except Exception as error:
         raise ModelError(f"{path}: {type(error).__name__}: {error}") from None
     if not callable(getattr(module, function, None)):
@@ -141,6 +150,8 @@ def build_model(path: Path, function: str) -> FEDescription:
         built = model_function(path, function)(ops)
     except ModelError:
         raise
+    except SystemExit:  # exit() would end rlc itself, silently and with its code
+        raise ModelError(f"{path}: {function}: the model calls exit; return its description instead") from None
     except Exception as error:  # the user's code: whatever it raises is a fault of the model
         raise ModelError(f"{path}: {function}: {type(error).__name__}: {error}") from None
     description = FEDescription.of(built, f"{path}: {function}")
@@ -158,19 +169,24 @@ def _build_tcl_model(path: Path) -> FEDescription:
     ops.wipe()
     try:
         os.chdir(path.parent)  # a published model sources its neighbours by relative names
+        ops.eval(EXIT_AS_ERROR)
         # code, like a Python model file: it runs only for an experiment the user named (a run or model folder
         # that names a model file is refused at loading, `config.loading.UNTRUSTED_MODEL`)
         with _quiet():
             ops.eval(f"source {{{path.name}}}")
     except Exception as error:  # the model's own Tcl: whatever it raises is a fault of the model
         message = " ".join(str(error).split())
+        if EXITED in message:
+            line = re.search(rf'file "{re.escape(path.name)}" line (\d+)', message)
+            where = f" (line {line.group(1)})" if line else ""
+            raise ModelError(f"{path}: the model calls exit{where}, which would end rlc: remove it") from None
         raise ModelError(f"{path}: Tcl error: {message}") from None
     finally:
         os.chdir(folder)
     check_in_domain(description, str(sidecar))
     if description.rayleigh_modes is not None:  # what the model's own analysis script would give it
         (i, zeta_i), (j, zeta_j) = description.rayleigh_modes
-        w_i, w_j = 2.0 * np.pi / periods(j)[[i - 1, j - 1]]
+        w_i, w_j = 2.0 * np.pi / periods(j, path)[[i - 1, j - 1]]
         a1 = 2.0 * (zeta_j * w_j - zeta_i * w_i) / (w_j**2 - w_i**2)  # zeta = a0 / (2 w) + a1 w / 2 at both
         a0 = 2.0 * zeta_i * w_i - a1 * w_i**2
         ops.rayleigh(a0, 0.0, a1, 0.0)
@@ -208,8 +224,9 @@ def floor_masses(description: FEDescription) -> np.ndarray:
     return np.array(masses) * description.mass
 
 
-def periods(count: int) -> np.ndarray:
-    """The first `count` natural periods (s) of the model in the domain."""
+def periods(count: int, path: Path) -> np.ndarray:
+    """The first `count` natural periods (s) of the model in the domain; a ModelError naming `path` where it has
+    fewer modes with stiffness and mass (no element, or a floor nothing holds)."""
     ops = opensees()
     ops.wipeAnalysis()  # an eigen analysis of its own (one the model file ran may be left over)
     with _quiet():
@@ -217,7 +234,13 @@ def periods(count: int) -> np.ndarray:
             eigenvalues = ops.eigen(count)
         except _error(ops):  # ARPACK wants more equations than modes: a model of as many as asked
             eigenvalues = ops.eigen("-fullGenLapack", count)
-    return 2.0 * np.pi / np.sqrt(np.asarray(eigenvalues, dtype=float))
+    eigenvalues = np.asarray(eigenvalues, dtype=float)
+    if eigenvalues.size < count or not np.all(np.isfinite(eigenvalues) & (eigenvalues > 0.0)):
+        raise ModelError(
+            f"{path}: the eigen analysis finds {int(np.sum(eigenvalues > 0.0))} of {count} modes with stiffness and "
+            "mass: an element missing, or a floor nothing holds"
+        )
+    return 2.0 * np.pi / np.sqrt(eigenvalues)
 
 
 @contextmanager
@@ -238,10 +261,10 @@ def _quiet() -> Iterator[None]:
         os.close(devnull)
 
 
-def condensed_stiffness(description: FEDescription) -> np.ndarray:
+def condensed_stiffness(description: FEDescription, path: Path) -> np.ndarray:
     """The lateral stiffness at the control nodes (N/m): the inverse of the flexibility measured by a
     static analysis under a unit load at each (small: an elastic response of a yielding model), about the
-    model's gravity state (its P-Delta included)."""
+    model's gravity state (its P-Delta included). A floor nothing holds is a ModelError naming it."""
     ops = opensees()
     nodes, dof = description.control_nodes, description.direction
     ndf = np.atleast_1d(ops.nodeDisp(nodes[0])).size
@@ -252,8 +275,13 @@ def condensed_stiffness(description: FEDescription) -> np.ndarray:
         ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
         ops.load(node, *[1.0 if d == dof else 0.0 for d in range(1, ndf + 1)])
         _static_analysis(ops)
-        if ops.analyze(1) != 0:
-            raise NonConvergence("the static analysis for the condensed stiffness did not converge")
+        with _quiet():
+            failed = ops.analyze(1) != 0
+        if failed:
+            raise ModelError(
+                f"{path}: a unit load on floor {j + 1} (node {node}, direction {dof}) finds no static equilibrium: "
+                "no element holds that floor, or the model is a mechanism"
+            )
         flexibility[:, j] = np.array([ops.nodeDisp(n, dof) for n in nodes]) - at_rest
         ops.remove("loadPattern", FORCE_PATTERN)
         ops.wipeAnalysis()
@@ -286,7 +314,7 @@ def damping_ratios(description: FEDescription, circular_frequencies: np.ndarray)
 def fe_modes(path: Path, function: str, count: int) -> tuple[np.ndarray, list[float]]:
     """The first `count` periods (s) of the FE model in `path` and its damping ratio in each."""
     description = build_model(path, function)
-    fe_periods = periods(count)
+    fe_periods = periods(count, path)
     opensees().wipe()
     return fe_periods, damping_ratios(description, 2.0 * np.pi / fe_periods)
 
@@ -297,9 +325,9 @@ def reduced_building(path: Path, function: str) -> dict:
     first periods (s) for `rlc info`."""
     description = build_model(path, function)
     n = len(description.floors)
-    fe_periods = periods(n)
+    fe_periods = periods(n, path)
     masses = floor_masses(description)
-    stiffness = condensed_stiffness(description)
+    stiffness = condensed_stiffness(description, path)
     ratios = damping_ratios(description, 2.0 * np.pi / fe_periods)
     opensees().wipe()
     return {
@@ -332,17 +360,12 @@ class OpenSeesIntegrator:
 
     def reset(self) -> None:
         self.description = build_model(self.path, self.function)
+        check_floors(self.description, self.placement.shape[0], self.path)
         ops = opensees()  # the module of the model just built
         ops.timeSeries("Constant", FORCE_SERIES)
         self.series = GROUND_SERIES  # the ground's series of the last step (each its own: the Tcl build removes none)
         ops.numberer("RCM")
-        for command in ("constraints", "system", "test", "algorithm"):
-            arguments = getattr(self.description, command)
-            try:
-                with _quiet():
-                    getattr(ops, command)(*arguments)
-            except _error(ops):
-                raise ModelError(f"{self.path}: {command} {list(arguments)}: OpenSees does not take it") from None
+        set_solver(self.description, self.path)
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
         self.ndf = np.atleast_1d(ops.nodeDisp(self.description.control_nodes[0])).size
@@ -383,6 +406,28 @@ class OpenSeesIntegrator:
         )
         self._last = state
         return state
+
+
+def check_floors(description: FEDescription, floors: int, path: Path) -> None:
+    """ModelError unless the FE model has the design building's number of floors."""
+    if len(description.floors) != floors:
+        raise ModelError(
+            f"{path}: the model has {len(description.floors)} floors, the experiment's building {floors}: name no "
+            "building (the design model is then the FE model's reduced one) or one with as many floors"
+        )
+
+
+def set_solver(description: FEDescription, path: Path) -> None:
+    """The description's constraints, system, test and algorithm set in the domain; one OpenSees does not take
+    is a ModelError naming it."""
+    ops = opensees()
+    for command in ("constraints", "system", "test", "algorithm"):
+        arguments = getattr(description, command)
+        try:
+            with _quiet():
+                getattr(ops, command)(*arguments)
+        except _error(ops):
+            raise ModelError(f"{path}: {command} {list(arguments)}: OpenSees does not take it") from None
 
 
 def _advance(ops, step: float, algorithms: tuple, halvings: int) -> None:

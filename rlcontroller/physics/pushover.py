@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.physics.hysteresis import drift_matrix, story_springs
-from rlcontroller.physics.opensees import NonConvergence, build_model, opensees
+from rlcontroller.physics.opensees import NonConvergence, build_model, check_floors, opensees, set_solver
 
 PUSH_SERIES = PUSH_PATTERN = 103  # beside the plant's own (`physics.opensees`: 101, 102)
 ELASTIC_TOLERANCE = 0.05  # a story within 5 % of its initial stiffness at the end of the push never yielded
@@ -64,6 +64,7 @@ def pushover(
     import scipy.linalg
 
     description = build_model(path, function)  # at rest under its gravity loads, as the push starts
+    check_floors(description, len(mass), path)
     ops, nodes, dof = opensees(), description.control_nodes, description.direction
     _, shapes = scipy.linalg.eigh(stiffness, mass, subset_by_index=[0, 0])
     pattern = mass @ shapes[:, 0]
@@ -76,10 +77,8 @@ def pushover(
         ops.load(node, *[float(force) if d == dof else 0.0 for d in range(1, ndf + 1)])
     height = sum(description.story_heights)  # model units
     increment = roof_drift * height / steps
-    for command in ("constraints", "system", "test"):
-        getattr(ops, command)(*getattr(description, command))
+    set_solver(description, path)
     ops.numberer("RCM")
-    ops.algorithm(*description.algorithms[0])
     ops.integrator("DisplacementControl", nodes[-1], dof, increment)
     ops.analysis("Static")
     displacements, factors = [np.zeros(len(nodes))], [0.0]
