@@ -67,6 +67,23 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     assert not any(pushed["yielded"])
 
 
+def test_a_wrong_but_valid_length_unit_warns_with_the_unit(tmp_path):
+    """The kip-foot model read as kip-inch is 12 times too stiff per metre and its stories 0.25 m high."""
+    shutil.copy(TCL_MODEL, tmp_path)
+    sidecar = TCL_MODEL.with_suffix(".yaml").read_text().replace("length: ft", "length: in")
+    (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
+    model = tmp_path / TCL_MODEL.name
+    done = subprocess.run(
+        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.opensees import reduced_building; "
+         f"reduced_building(Path({str(model)!r}), 'build_model')"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert f"warning: {model}: story heights 0.25 to 0.25 m, read in in (units.length), are outside 1.5 to 12 m" in (
+        done.stderr
+    )
+
+
 def test_a_pushover_given_a_system_opensees_does_not_take_is_one_line(tmp_path):
     shutil.copy(TCL_MODEL, tmp_path)
     sidecar = TCL_MODEL.with_suffix(".yaml").read_text() + "system: [NoSuchSolver]\n"

@@ -13,7 +13,9 @@ has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> 
   gives the model once built, with those ratios at those modes of the FE model (as such scripts do);
 - optionally `units: {length: m | cm | mm | ft | in, force: N | kN | MN | kip | lbf}` (default m and N; mass
   is force / (length / s^2), time is s): many published models are in kip and inch or foot, `rlc` in SI;
-- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the time steps.
+- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the time steps; the test's
+  tolerance in SI (m for NormDispIncr and the other displacement tests, N for force tests, J for energy ones),
+  converted into the model's units (default NormDispIncr 1e-10 m).
 """
 
 from __future__ import annotations
@@ -51,6 +53,17 @@ class FEDescription:
     def algorithms(self) -> tuple[tuple[str | float, ...], ...]:
         """The model's algorithm, then the fallbacks for a step it does not converge."""
         return (self.algorithm, *(fallback for fallback in FALLBACKS if fallback != self.algorithm))
+
+    @property
+    def test_in_model_units(self) -> tuple[str | float, ...]:
+        """The convergence test with its tolerance, given in SI (m for displacement norms, N for force norms, J
+        for energy), in the model's own units."""
+        name, *rest = self.test
+        unit = {"Disp": self.length, "Unbalance": self.force, "Energy": self.force * self.length}
+        scale = next((value for key, value in unit.items() if key in str(name)), 1.0)
+        if rest and isinstance(rest[0], int | float):
+            rest[0] = rest[0] / scale
+        return (name, *rest)
 
     @property
     def control_nodes(self) -> list[int]:

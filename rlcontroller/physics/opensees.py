@@ -41,7 +41,7 @@ import numpy as np
 
 from rlcontroller.config.base import read_yaml
 from rlcontroller.errors import ConfigError, ModelError
-from rlcontroller.physics.fe_description import FEDescription
+from rlcontroller.physics.fe_description import LENGTHS, FEDescription
 
 MISSING = (
     'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '
@@ -311,6 +311,22 @@ def damping_ratios(description: FEDescription, circular_frequencies: np.ndarray)
     return [float(a0 / (2.0 * w) + a1 * w / 2.0) for w in circular_frequencies]
 
 
+PLAUSIBLE_STORY = (1.5, 12.0)  # m: a story's height in buildings; far outside it, the length unit is likely wrong
+
+
+def warn_story_heights(description: FEDescription, path: Path) -> None:
+    """A warning on the standard error where a story height, in m, is outside `PLAUSIBLE_STORY`."""
+    heights = [height * description.length for height in description.story_heights]
+    low, high = PLAUSIBLE_STORY
+    if min(heights) < low or max(heights) > high:
+        unit = next(name for name, metres in LENGTHS.items() if metres == description.length)
+        print(
+            f"warning: {path}: story heights {min(heights):.3g} to {max(heights):.3g} m, read in {unit} "
+            f"(units.length), are outside {low:g} to {high:g} m: is the model's length unit {unit}?",
+            file=sys.stderr,
+        )
+
+
 def fe_modes(path: Path, function: str, count: int) -> tuple[np.ndarray, list[float]]:
     """The first `count` periods (s) of the FE model in `path` and its damping ratio in each."""
     description = build_model(path, function)
@@ -330,6 +346,7 @@ def reduced_building(path: Path, function: str) -> dict:
     stiffness = condensed_stiffness(description, path)
     ratios = damping_ratios(description, 2.0 * np.pi / fe_periods)
     opensees().wipe()
+    warn_story_heights(description, path)
     return {
         "name": f"reduced from {path.name}",
         "source": str(path),
@@ -422,7 +439,7 @@ def set_solver(description: FEDescription, path: Path) -> None:
     is a ModelError naming it."""
     ops = opensees()
     for command in ("constraints", "system", "test", "algorithm"):
-        arguments = getattr(description, command)
+        arguments = description.test_in_model_units if command == "test" else getattr(description, command)
         try:
             with _quiet():
                 getattr(ops, command)(*arguments)
