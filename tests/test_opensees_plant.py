@@ -16,7 +16,8 @@ from rlcontroller.errors import ModelError
 
 ops = pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
 
-from rlcontroller.physics.opensees import NonConvergence, fe_modes, reduced_building  # noqa: E402
+from rlcontroller.physics.fe_build import fe_modes, reduced_building  # noqa: E402
+from rlcontroller.physics.opensees import NonConvergence  # noqa: E402
 from rlcontroller.physics.plant import Plant  # noqa: E402
 from rlcontroller.physics.records import load_records  # noqa: E402
 from rlcontroller.simulation.rollout import uncontrolled_responses  # noqa: E402
@@ -179,7 +180,7 @@ def test_train_on_fe_learns_on_the_fe_model_and_resumes_only_with_it_named(tmp_p
     from rlcontroller import api
     from rlcontroller.api.training import _fe_experiment_of
     from rlcontroller.learning.training import train
-    from rlcontroller.physics.opensees import OpenSeesIntegrator
+    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
 
     steps = []
     original = OpenSeesIntegrator.step
@@ -225,7 +226,7 @@ def one_story_model(folder: Path, returned: str) -> Path:
     [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
 )
 def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
-    from rlcontroller.physics.opensees import OpenSeesIntegrator
+    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
 
     model = one_story_model(tmp_path, f"'floors': [[1]], 'direction': 1, {given}")
     with pytest.raises(ModelError, match=re.escape(message)):
@@ -242,7 +243,7 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
 def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, message):
     """What the model function says of its model is checked against the domain it built (OpenSees itself
     would stop later with "OpenSeesError: See stderr output")."""
-    from rlcontroller.physics.opensees import build_model
+    from rlcontroller.physics.fe_build import build_model
 
     model = one_story_model(tmp_path, returned)
     with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
@@ -250,7 +251,7 @@ def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, 
 
 
 def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
-    from rlcontroller.physics.opensees import build_model
+    from rlcontroller.physics.fe_build import build_model
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     model.write_text(model.read_text().replace("    return", "    raise SystemExit(0)\n    return"))
@@ -259,7 +260,7 @@ def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
 
 
 def test_a_model_without_elements_is_one_line_without_numpy_warnings(tmp_path):
-    from rlcontroller.physics.opensees import reduced_building
+    from rlcontroller.physics.fe_build import reduced_building
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     model.write_text(model.read_text().replace("    ops.element('truss', 1, 0, 1, 1.0, 1)\n", ""))
@@ -270,7 +271,7 @@ def test_a_model_without_elements_is_one_line_without_numpy_warnings(tmp_path):
 
 
 def test_a_model_with_other_floors_than_the_building_is_one_line(tmp_path):
-    from rlcontroller.physics.opensees import OpenSeesIntegrator
+    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     with pytest.raises(ModelError, match=re.escape(f"{model}: the model has 1 floors, the experiment's building 5")):

@@ -36,7 +36,7 @@ def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
     damping matched mode by mode (1 % in mode 1, 5 % in mode 5): the paper's building, from a Tcl file sourced
     unmodified."""
     reduced = in_own_process(
-        "import json; from pathlib import Path; from rlcontroller.physics.opensees import reduced_building; "
+        "import json; from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
         f"print(json.dumps(reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')))"
     )
     paper = Experiment().building  # configs/buildings/five_story.yaml
@@ -55,7 +55,7 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     pushed = in_own_process(
         "import json; import numpy as np; from pathlib import Path; "
         "from rlcontroller.physics.pushover import pushover; "
-        "from rlcontroller.physics.opensees import reduced_building; "
+        "from rlcontroller.physics.fe_build import reduced_building; "
         f"r = reduced_building(Path({str(TCL_MODEL)!r}), 'build_model'); "
         f"p = pushover(Path({str(TCL_MODEL)!r}), 'build_model', np.array(r['mass_matrix']), "
         "np.array(r['stiffness_matrix'])); "
@@ -74,7 +74,7 @@ def test_a_wrong_but_valid_length_unit_warns_with_the_unit(tmp_path):
     (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
     model = tmp_path / TCL_MODEL.name
     done = subprocess.run(
-        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.opensees import reduced_building; "
+        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
          f"reduced_building(Path({str(model)!r}), 'build_model')"],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
@@ -175,7 +175,7 @@ def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
     """The two OpenSees builds abort a process that steps both: the second is refused before it loads."""
     outcome = in_own_process(
         "import json; from pathlib import Path; from rlcontroller.errors import ConfigError\n"
-        "from rlcontroller.physics.opensees import reduced_building\n"
+        "from rlcontroller.physics.fe_build import reduced_building\n"
         f"reduced_building(Path({str(REPOSITORY / 'configs' / 'opensees' / 'five_story_shear.py')!r}), 'build_model')\n"
         f"try: reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')\n"
         "except ConfigError as error: print(json.dumps({'error': str(error)}))"

@@ -1,45 +1,22 @@
-"""An OpenSees finite-element model as the plant, and the reduced model controllers are designed on.
+"""OpenSees in this process: its library (OpenSeesPy, or OpenSees' own Tcl interpreter for a Tcl model) and what
+rlc reads of a model built in its domain: the floors' masses, the periods, the stiffness condensed to the floors
+(the inverse of the flexibility under unit floor loads, about the gravity state) and the damping in each mode.
 
-A model file is code (not data: `docs/opensees.md`, "The trust boundary"), Python or Tcl. A Python file defines
-a function (default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
-(nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe_description`: floors,
-direction, story heights, damping, units, solver options). A Tcl file (`.tcl`, a published model run
-unmodified) is sourced, from its own folder, in OpenSees' own Tcl interpreter (the `opensees` package, STAIRlab's
-xara build, whose `opensees.openseespy` module drives the same domain), and what `rlc` needs of it is in the YAML
-file beside it of the same name. The solver options default to `["Transformation"]`, `["UmfPack"]`,
-`["NormDispIncr", 1e-10, 30]` and `["Newton"]`: any model (a model whose only multi-point constraints are
-`equalDOF` may take `["Plain"]`, one whose tangent is symmetric `["SparseSYM"]`; docs/opensees.md, "Speed").
-Everything `rlc` passes in or reads out is converted between SI and the model's units.
-
-`rlc` owns the time loop (`OpenSeesIntegrator`): each control step the ground acceleration enters as a
-uniform excitation (its samples over the step, linear between them), the actuator forces as nodal loads
-held over the step (on the floors the design building's actuator matrix puts them), and the model's own analysis
-advances Newmark average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with the
-model's algorithm (Newton-Raphson by default), falling back to Newton, modified Newton on the initial tangent,
-Newton with line search, then smaller steps; a step that still does not converge raises
-`NonConvergence` (the evaluation reports the record, never a silent zero).
-
-The reduced model (`reduced_building`): the floor masses, the lateral stiffness condensed statically to the
-control nodes (the inverse of the flexibility under unit floor loads), and the file's damping matched
-mode by mode at the FE model's frequencies.
+Building a model is `physics.fe_build` (a model file is code: docs/opensees.md, "The trust boundary"); stepping it
+`physics.fe_integrator`. Everything rlc passes in or reads out is converted between SI and the model's units.
 """
 
 from __future__ import annotations
 
 import atexit
-import importlib.util
-import math
 import os
-import re
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.config.base import read_yaml
 from rlcontroller.errors import ConfigError, ModelError
 from rlcontroller.physics.fe_description import LENGTHS, FEDescription
 
@@ -70,7 +47,7 @@ def opensees():
     return ops
 
 
-def _use(tcl: bool) -> None:
+def use_library(tcl: bool) -> None:
     """The models built from now on in this process are Tcl (OpenSees' own interpreter) or Python ones."""
     _TCL.clear()
     if tcl:
@@ -83,7 +60,7 @@ def _use(tcl: bool) -> None:
         _quiet_at_exit()
 
 
-def _error(ops) -> type[BaseException]:
+def refusal(ops) -> type[BaseException]:
     """What the module raises for a command OpenSees refuses (openseespy's OpenSeesError; the Tcl build's own)."""
     error = getattr(ops, "OpenSeesError", None)
     return error if isinstance(error, type) and issubclass(error, BaseException) else Exception
@@ -104,12 +81,6 @@ def _quiet_at_exit() -> None:
 
 
 _QUIET_EXIT: list[bool] = []
-EXITED = "rlc: the model called exit"
-# Tcl's exit would end the process (rlc with it, exit code 0): in the interpreter that builds models it is an error.
-EXIT_AS_ERROR = (
-    "if {[info commands ::rlc_tcl_exit] eq {}} {rename ::exit ::rlc_tcl_exit; "
-    f'proc ::exit {{args}} {{error "{EXITED}"}}}}'
-)
 _TCL: list = []
 
 
@@ -119,79 +90,6 @@ def _quiet_exit() -> None:
     sys.stderr.flush()
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 2)
-
-
-def model_function(path: Path, function: str) -> Callable:
-    """The model file's function (the file runs here: only ever for a file the user named)."""
-    spec = importlib.util.spec_from_file_location(f"rlc_opensees_model_{abs(hash(str(path)))}", path)
-    if spec is None or spec.loader is None:
-        raise ModelError(f"{path}: not a Python file")
-    module = importlib.util.module_from_spec(spec)
-    try:
-        spec.loader.exec_module(module)
-    except SystemExit:
-        raise ModelError(f"{path}: the model file calls exit as it is loaded") from None
-    except Exception as error:
-        raise ModelError(f"{path}: {type(error).__name__}: {error}") from None
-    if not callable(getattr(module, function, None)):
-        raise ModelError(f"{path}: no function {function!r}")
-    return getattr(module, function)
-
-
-def build_model(path: Path, function: str) -> FEDescription:
-    """Wipe the OpenSees domain and build the model of `path` in it (a Tcl file: sourced from its folder, its
-    description read beside it)."""
-    _use(path.suffix == ".tcl")
-    if path.suffix == ".tcl":
-        return _build_tcl_model(path)
-    ops = opensees()
-    ops.wipe()
-    try:
-        built = model_function(path, function)(ops)
-    except ModelError:
-        raise
-    except SystemExit:  # exit() would end rlc itself, silently and with its code
-        raise ModelError(f"{path}: {function}: the model calls exit; return its description instead") from None
-    except Exception as error:  # the user's code: whatever it raises is a fault of the model
-        raise ModelError(f"{path}: {function}: {type(error).__name__}: {error}") from None
-    description = FEDescription.of(built, f"{path}: {function}")
-    check_in_domain(description, f"{path}: {function}")
-    return description
-
-
-def _build_tcl_model(path: Path) -> FEDescription:
-    sidecar = path.with_suffix(".yaml")
-    if not sidecar.is_file():
-        raise ModelError(f"{path}: a Tcl model needs {sidecar.name} beside it (its floors, direction, story heights, "
-                         "damping and units: docs/opensees.md)")  # fmt: skip
-    description = FEDescription.of(read_yaml(sidecar), str(sidecar))
-    ops, folder = opensees(), os.getcwd()
-    ops.wipe()
-    try:
-        os.chdir(path.parent)  # a published model sources its neighbours by relative names
-        ops.eval(EXIT_AS_ERROR)
-        # code, like a Python model file: it runs only for an experiment the user named (a run or model folder
-        # that names a model file is refused at loading, `config.loading.UNTRUSTED_MODEL`)
-        with _quiet():
-            ops.eval(f"source {{{path.name}}}")
-    except Exception as error:  # the model's own Tcl: whatever it raises is a fault of the model
-        message = " ".join(str(error).split())
-        if EXITED in message:
-            line = re.search(rf'file "{re.escape(path.name)}" line (\d+)', message)
-            where = f" (line {line.group(1)})" if line else ""
-            raise ModelError(f"{path}: the model calls exit{where}, which would end rlc: remove it") from None
-        raise ModelError(f"{path}: Tcl error: {message}") from None
-    finally:
-        os.chdir(folder)
-    check_in_domain(description, str(sidecar))
-    if description.rayleigh_modes is not None:  # what the model's own analysis script would give it
-        (i, zeta_i), (j, zeta_j) = description.rayleigh_modes
-        w_i, w_j = 2.0 * np.pi / periods(j, path)[[i - 1, j - 1]]
-        a1 = 2.0 * (zeta_j * w_j - zeta_i * w_i) / (w_j**2 - w_i**2)  # zeta = a0 / (2 w) + a1 w / 2 at both
-        a0 = 2.0 * zeta_i * w_i - a1 * w_i**2
-        ops.rayleigh(a0, 0.0, a1, 0.0)
-        description = replace(description, rayleigh=(float(a0), float(a1)))
-    return description
 
 
 def check_in_domain(description: FEDescription, where: str) -> None:
@@ -229,10 +127,10 @@ def periods(count: int, path: Path) -> np.ndarray:
     fewer modes with stiffness and mass (no element, or a floor nothing holds)."""
     ops = opensees()
     ops.wipeAnalysis()  # an eigen analysis of its own (one the model file ran may be left over)
-    with _quiet():
+    with quiet():
         try:
             eigenvalues = ops.eigen(count)
-        except _error(ops):  # ARPACK wants more equations than modes: a model of as many as asked
+        except refusal(ops):  # ARPACK wants more equations than modes: a model of as many as asked
             eigenvalues = ops.eigen("-fullGenLapack", count)
     eigenvalues = np.asarray(eigenvalues, dtype=float)
     if eigenvalues.size < count or not np.all(np.isfinite(eigenvalues) & (eigenvalues > 0.0)):
@@ -244,7 +142,7 @@ def periods(count: int, path: Path) -> np.ndarray:
 
 
 @contextmanager
-def _quiet() -> Iterator[None]:
+def quiet() -> Iterator[None]:
     """OpenSees' own messages (on the standard error, or the output in the Tcl build) silenced: a failed first
     try that has a fallback."""
     sys.stdout.flush()
@@ -275,7 +173,7 @@ def condensed_stiffness(description: FEDescription, path: Path) -> np.ndarray:
         ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
         ops.load(node, *[1.0 if d == dof else 0.0 for d in range(1, ndf + 1)])
         _static_analysis(ops)
-        with _quiet():
+        with quiet():
             failed = ops.analyze(1) != 0
         if failed:
             raise ModelError(
@@ -327,141 +225,3 @@ def warn_story_heights(description: FEDescription, path: Path) -> None:
         )
 
 
-def fe_modes(path: Path, function: str, count: int) -> tuple[np.ndarray, list[float]]:
-    """The first `count` periods (s) of the FE model in `path` and its damping ratio in each."""
-    description = build_model(path, function)
-    fe_periods = periods(count, path)
-    opensees().wipe()
-    return fe_periods, damping_ratios(description, 2.0 * np.pi / fe_periods)
-
-
-def reduced_building(path: Path, function: str) -> dict:
-    """The design model of the FE model in `path`: a building part of matrices (SI) with its floors'
-    masses, the condensed stiffness and the model's damping matched mode by mode, and the FE model's
-    first periods (s) for `rlc info`."""
-    description = build_model(path, function)
-    n = len(description.floors)
-    fe_periods = periods(n, path)
-    masses = floor_masses(description)
-    stiffness = condensed_stiffness(description, path)
-    ratios = damping_ratios(description, 2.0 * np.pi / fe_periods)
-    opensees().wipe()
-    warn_story_heights(description, path)
-    return {
-        "name": f"reduced from {path.name}",
-        "source": str(path),
-        "mass_matrix": np.diag(masses).tolist(),
-        "stiffness_matrix": stiffness.tolist(),
-        "modal_damping": ratios,
-        "story_heights": [height * description.length for height in description.story_heights],
-    }
-
-
-class OpenSeesIntegrator:
-    """The FE model stepped one control step at a time (`physics.protocol.Integrator`).
-
-    Its state x is [floor displacements; floor velocities (relative to the ground); floor absolute
-    accelerations] at the control nodes (m, m/s, m/s^2): every output `rlc` reads is linear in it. One
-    OpenSees domain per process: it steps one run at a time, starting afresh from a zero state.
-    """
-
-    def __init__(self, path: Path, function: str, analysis_dt: float, placement: np.ndarray, force_limits: np.ndarray):
-        self.path, self.function, self.analysis_dt = path, function, analysis_dt
-        self.placement = placement  # the floor forces of a unit command (the design building's actuator matrix)
-        self.force_limits = force_limits
-        self._last: np.ndarray | None = None
-        self.description: FEDescription | None = None
-
-    def __getstate__(self) -> dict:  # a copy in another process builds its own domain
-        return self.__dict__ | {"_last": None, "description": None}
-
-    def reset(self) -> None:
-        self.description = build_model(self.path, self.function)
-        check_floors(self.description, self.placement.shape[0], self.path)
-        ops = opensees()  # the module of the model just built
-        ops.timeSeries("Constant", FORCE_SERIES)
-        self.series = GROUND_SERIES  # the ground's series of the last step (each its own: the Tcl build removes none)
-        ops.numberer("RCM")
-        set_solver(self.description, self.path)
-        ops.integrator("Newmark", 0.5, 0.25)
-        ops.analysis("Transient")
-        self.ndf = np.atleast_1d(ops.nodeDisp(self.description.control_nodes[0])).size
-
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
-        """The state after one control step with the forces `action` * force limits (N) held and `ground`
-        the ground accelerations (m/s^2) over the step (its first and last sample at its ends)."""
-        continuing = self._last is not None and np.array_equal(state, self._last)
-        if not continuing and not np.any(state):
-            self.reset()
-        elif not continuing:
-            raise RuntimeError("the OpenSees plant steps one run at a time (one domain per process)")
-        ops, description = opensees(), self.description
-        time = ops.getTime()
-        ops.remove("loadPattern", GROUND_PATTERN)
-        self.series += 1000
-        values = np.asarray(ground, dtype=float) / description.length  # in the model's units
-        # the last sample held beyond the step: the analysis' time may pass its end by a rounding
-        interval = control_dt / (values.size - 1)
-        ops.timeSeries("Path", self.series, "-dt", interval, "-values", *values, "-startTime", time, "-useLast")
-        ops.pattern("UniformExcitation", GROUND_PATTERN, description.direction, "-accel", self.series)
-        ops.remove("loadPattern", FORCE_PATTERN)
-        ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
-        nodes = description.control_nodes
-        floor_forces = self.placement @ (np.asarray(action) * self.force_limits) / description.force  # per floor
-        for node, force in zip(nodes, floor_forces, strict=True):
-            if force != 0.0:
-                ops.load(node, *[float(force) if d == description.direction else 0.0 for d in range(1, self.ndf + 1)])
-        intervals = values.size - 1
-        steps = intervals * math.ceil(interval / self.analysis_dt - 1e-9)  # on every ground sample
-        for _ in range(steps):
-            _advance(ops, control_dt / steps, description.algorithms, HALVINGS)
-        dof = description.direction
-        state = np.array(
-            [ops.nodeDisp(n, dof) * description.length for n in nodes]
-            + [ops.nodeVel(n, dof) * description.length for n in nodes]
-            + [ops.nodeAccel(n, dof) * description.length + float(ground[-1]) for n in nodes]
-        )
-        self._last = state
-        return state
-
-
-def check_floors(description: FEDescription, floors: int, path: Path) -> None:
-    """ModelError unless the FE model has the design building's number of floors."""
-    if len(description.floors) != floors:
-        raise ModelError(
-            f"{path}: the model has {len(description.floors)} floors, the experiment's building {floors}: name no "
-            "building (the design model is then the FE model's reduced one) or one with as many floors"
-        )
-
-
-def set_solver(description: FEDescription, path: Path) -> None:
-    """The description's constraints, system, test and algorithm set in the domain; one OpenSees does not take
-    is a ModelError naming it."""
-    ops = opensees()
-    for command in ("constraints", "system", "test", "algorithm"):
-        arguments = description.test_in_model_units if command == "test" else getattr(description, command)
-        try:
-            with _quiet():
-                getattr(ops, command)(*arguments)
-        except _error(ops):
-            raise ModelError(f"{path}: {command} {list(arguments)}: OpenSees does not take it") from None
-
-
-def _advance(ops, step: float, algorithms: tuple, halvings: int) -> None:
-    """One analysis step of `step` (s), with each algorithm in turn (the first stays set); where all fail,
-    two steps of half the size, `halvings` times at most; then `NonConvergence`."""
-    start = ops.getTime()
-    if ops.analyze(1, step) == 0:
-        return
-    for algorithm in algorithms[1:]:  # a failed step has been undone (the domain at its last commit)
-        ops.setTime(start)
-        ops.algorithm(*algorithm)
-        converged = ops.analyze(1, step) == 0
-        ops.algorithm(*algorithms[0])
-        if converged:
-            return
-    ops.setTime(start)
-    if halvings == 0:
-        raise NonConvergence(f"the FE model did not converge at t = {start:.3f} s")
-    _advance(ops, step / 2.0, algorithms, halvings - 1)
-    _advance(ops, step / 2.0, algorithms, halvings - 1)

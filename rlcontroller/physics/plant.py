@@ -42,10 +42,10 @@ from rlcontroller.config import (
 )
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
+from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
 from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
-from rlcontroller.physics.opensees import OpenSeesIntegrator
 from rlcontroller.physics.sampled import SampledPlant
 from rlcontroller.physics.semi_active import SemiActiveDampers
 from rlcontroller.physics.sensors import sensor_matrices

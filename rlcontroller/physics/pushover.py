@@ -21,8 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from rlcontroller.physics.fe_build import build_model
+from rlcontroller.physics.fe_integrator import check_floors, set_solver
 from rlcontroller.physics.hysteresis import drift_matrix, story_springs
-from rlcontroller.physics.opensees import NonConvergence, build_model, check_floors, opensees, set_solver
+from rlcontroller.physics.opensees import NonConvergence, opensees
 
 PUSH_SERIES = PUSH_PATTERN = 103  # beside the plant's own (`physics.opensees`: 101, 102)
 ELASTIC_TOLERANCE = 0.05  # a story within 5 % of its initial stiffness at the end of the push never yielded
@@ -60,7 +62,7 @@ def pushover(
 ) -> Pushover:
     """Push the FE model of `path` in its first mode's shape to `roof_drift` (of its height) and idealise
     each story's curve (module docstring); `mass` (kg) and `stiffness` (N/m) are its reduced model's floor
-    matrices (`physics.opensees.reduced_building`: the plant's design building), which give the shape."""
+    matrices (`physics.fe_build.reduced_building`: the plant's design building), which give the shape."""
     import scipy.linalg
 
     description = build_model(path, function)  # at rest under its gravity loads, as the push starts

@@ -35,7 +35,7 @@ def test_equal_energy_holds_for_a_rounded_curve_and_an_elastic_one_never_yields(
 @pytest.mark.slow
 def test_the_frame_pushover_starts_at_its_condensed_story_stiffness_and_yields_every_story():
     pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
-    from rlcontroller.physics.opensees import reduced_building
+    from rlcontroller.physics.fe_build import reduced_building
     from rlcontroller.physics.pushover import pushover
 
     model = Path("configs/opensees/nine_story_frame.py")
