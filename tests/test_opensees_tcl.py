@@ -67,6 +67,63 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     assert not any(pushed["yielded"])
 
 
+PUBLISHED_TAIL = """
+vup 0 1 0 ;# the display commands of OpenSees' own build
+vrp 0 0 0
+recorder Node -file disp.out -time -node 5 -dof 1 disp
+pattern Plain 1 Linear { load 5 0.0 } ;# the script's own gravity analysis
+constraints Plain; numberer RCM; system BandGeneral; test NormDispIncr 1e-8 10; algorithm Newton
+integrator LoadControl 0.1; analysis Static; analyze 10
+loadConst -time 0.0
+pattern Plain 2 Linear { load 5 1.0 } ;# then its own pushover, which rlc skips
+integrator DisplacementControl 5 1 0.01; analyze 100
+wipe all
+"""
+
+
+def test_a_published_script_runs_unmodified_as_it_stands_after_gravity(tmp_path):
+    """Display commands, a recorder, the script's gravity analysis, then its own pushover and a wipe: rlc takes the
+    model at loadConst (the same reduced model as the bare file), and nothing is written beside the model."""
+    shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
+    (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
+    model = tmp_path / TCL_MODEL.name
+    reduce = ("import json; from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
+              "print(json.dumps(reduced_building(Path({!r}), 'build_model')['stiffness_matrix']))")  # fmt: skip
+    published, bare = (in_own_process(reduce.format(str(path))) for path in (model, TCL_MODEL))
+    np.testing.assert_allclose(published, bare, rtol=1e-9)
+    assert sorted(path.name for path in tmp_path.iterdir()) == sorted([TCL_MODEL.name, TCL_MODEL.stem + ".yaml"])
+
+
+def test_a_script_run_to_its_end_that_wipes_its_model_is_one_line(tmp_path):
+    (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(
+        TCL_MODEL.with_suffix(".yaml").read_text() + "build_until: end\n"
+    )
+    (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
+    done = subprocess.run(
+        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.errors import ModelError\n"
+         "from rlcontroller.physics.fe_build import build_model\n"
+         f"try: build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')\n"
+         "except ModelError as error: print(error)"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.stdout.strip().endswith("no model is left in the domain once the file has run (does it end with "
+                                        "wipe? a Tcl script's description may say build_until: loadConst)")  # fmt: skip
+
+
+def test_a_missing_tcl_package_is_one_line_naming_it_and_tcllibpath(tmp_path):
+    shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
+    (tmp_path / TCL_MODEL.name).write_text("package require math::nosuchpackage\n" + TCL_MODEL.read_text())
+    done = subprocess.run(
+        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.errors import ModelError\n"
+         "from rlcontroller.physics.fe_build import build_model\n"
+         f"try: build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')\n"
+         "except ModelError as error: print(error)"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert "needs the Tcl package math::nosuchpackage, which OpenSees' interpreter lacks" in done.stdout, done.stderr
+    assert "TCLLIBPATH" in done.stdout and len(done.stdout.strip().splitlines()) == 1
+
+
 def test_a_wrong_but_valid_length_unit_warns_with_the_unit(tmp_path):
     """The kip-foot model read as kip-inch is 12 times too stiff per metre and its stories 0.25 m high."""
     shutil.copy(TCL_MODEL, tmp_path)

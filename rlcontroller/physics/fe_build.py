@@ -38,12 +38,46 @@ from rlcontroller.physics.opensees import (
     warn_story_heights,
 )
 
-EXITED = "rlc: the model called exit"
-# Tcl's exit would end the process (rlc with it, exit code 0): in the interpreter that builds models it is an error.
-EXIT_AS_ERROR = (
-    "if {[info commands ::rlc_tcl_exit] eq {}} {rename ::exit ::rlc_tcl_exit; "
-    f'proc ::exit {{args}} {{error "{EXITED}"}}}}'
-)
+EXITED, BUILT = "rlc: the model called exit", "rlc: the model stands after gravity (loadConst)"
+# What a published script does beyond building its model, made harmless in the interpreter that builds it: `exit`
+# (it would end rlc, exit code 0) is an error; `recorder` writes nothing (rlc reads the domain itself; the files
+# went into the model's folder, from every worker); the display commands of OpenSees' own build are no-ops; and
+# `loadConst`, which holds the gravity loads before the script's own analyses, ends the build there (unless the
+# description's build_until is end). OpenSees registers its commands anew at `model` and `wipe`: wrapped again.
+TCL_PRELUDE = """
+proc ::rlc_wrap {name body} {
+    if {[info commands ::$name] eq {} || [info procs ::$name] ne {}} { return }
+    if {[info commands ::rlc_tcl_$name] ne {}} { rename ::rlc_tcl_$name {} }
+    rename ::$name ::rlc_tcl_$name
+    proc ::$name {args} $body
+}
+proc ::rlc_prelude {} {
+    rlc_wrap wipe {::rlc_tcl_wipe {*}$args; ::rlc_prelude}
+    rlc_wrap model {::rlc_tcl_model {*}$args; ::rlc_prelude}
+    rlc_wrap loadConst {::rlc_tcl_loadConst {*}$args; if {$::rlc_stop_at_load_const} {error "BUILT"}}
+    rlc_wrap recorder {}
+    rlc_wrap exit {error "EXITED"}
+    foreach name {vup vrp vpn prp viewWindow plane port projection fill display} {
+        if {[info commands ::$name] eq {}} { proc ::$name {args} {} }
+    }
+}
+::rlc_prelude
+""".replace("BUILT", BUILT).replace("EXITED", EXITED)
+
+
+def _tcl_error(path: Path, message: str) -> ModelError:
+    """The model's Tcl error in one line: an exit, a missing package, or the interpreter's own words."""
+    if EXITED in message:
+        line = re.search(rf'file "{re.escape(path.name)}" line (\d+)', message)
+        where = f" (line {line.group(1)})" if line else ""
+        return ModelError(f"{path}: the model calls exit{where}, which would end rlc: remove it")
+    package = re.search(r"can't find package (\S+)", message)
+    if package:
+        return ModelError(
+            f"{path}: the model needs the Tcl package {package.group(1)}, which OpenSees' interpreter lacks: install "
+            "it (e.g. tcllib) and name the folder that holds it in TCLLIBPATH"
+        )
+    return ModelError(f"{path}: Tcl error: {message}")
 
 
 def model_function(path: Path, function: str) -> Callable:
@@ -94,18 +128,15 @@ def _build_tcl_model(path: Path) -> FEDescription:
     ops.wipe()
     try:
         os.chdir(path.parent)  # a published model sources its neighbours by relative names
-        ops.eval(EXIT_AS_ERROR)
+        ops.eval(TCL_PRELUDE + f"set ::rlc_stop_at_load_const {int(description.build_until == 'loadConst')}")
         # code, like a Python model file: it runs only for an experiment the user named (a run or model folder
         # that names a model file is refused at loading, `config.loading.UNTRUSTED_MODEL`)
         with quiet():
             ops.eval(f"source {{{path.name}}}")
     except Exception as error:  # the model's own Tcl: whatever it raises is a fault of the model
         message = " ".join(str(error).split())
-        if EXITED in message:
-            line = re.search(rf'file "{re.escape(path.name)}" line (\d+)', message)
-            where = f" (line {line.group(1)})" if line else ""
-            raise ModelError(f"{path}: the model calls exit{where}, which would end rlc: remove it") from None
-        raise ModelError(f"{path}: Tcl error: {message}") from None
+        if BUILT not in message:
+            raise _tcl_error(path, message) from None
     finally:
         os.chdir(folder)
     check_in_domain(description, str(sidecar))

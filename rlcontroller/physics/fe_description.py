@@ -13,6 +13,8 @@ has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> 
   gives the model once built, with those ratios at those modes of the FE model (as such scripts do);
 - optionally `units: {length: m | cm | mm | ft | in, force: N | kN | MN | kip | lbf}` (default m and N; mass
   is force / (length / s^2), time is s): many published models are in kip and inch or foot, `rlc` in SI;
+- optionally `build_until` (a Tcl script): `loadConst` (the default), the model as it stands when the script holds
+  its gravity loads with `loadConst`, what follows (its own pushover or time history, `wipe`) skipped; or `end`;
 - optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the time steps; the test's
   tolerance in SI (m for NormDispIncr and the other displacement tests, N for force tests, J for energy ones),
   converted into the model's units (default NormDispIncr 1e-10 m).
@@ -48,6 +50,7 @@ class FEDescription:
     system: tuple[str | float, ...] = ("UmfPack",)
     test: tuple[str | float, ...] = ("NormDispIncr", 1e-10, 30)
     algorithm: tuple[str | float, ...] = FALLBACKS[0]
+    build_until: str = "loadConst"  # a Tcl script: the model as it stands at its loadConst, or at its end
 
     @property
     def algorithms(self) -> tuple[tuple[str | float, ...], ...]:
@@ -100,11 +103,16 @@ class FEDescription:
             raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has) "
                              "or rayleigh_modes (the damping rlc gives it)")  # fmt: skip
         modal, rayleigh = raw.get("modal_damping"), raw.get("rayleigh")
+        build_until = raw.get("build_until", "loadConst")
+        if build_until not in ("loadConst", "end"):
+            raise ModelError(f"{where}: build_until: expected loadConst (the model as it stands after its gravity "
+                             f"analysis) or end (the whole script), got {build_until!r}")  # fmt: skip
         solver = ("constraints", "system", "test", "algorithm")
         options = {key: _arguments(raw[key], f"{where}: {key}") for key in solver if key in raw}
         return cls(
             floors=floors,
             direction=direction,
+            build_until=build_until,
             story_heights=heights,
             modal_damping=None if modal is None else _ratios(modal, f"{where}: modal_damping"),
             rayleigh=None if rayleigh is None else _rayleigh(rayleigh, f"{where}: rayleigh"),

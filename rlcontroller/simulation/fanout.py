@@ -11,6 +11,8 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
+import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -82,12 +84,25 @@ def fanned_map(function: Callable[[Any, Any], Any], shared: Any, items: list) ->
         return
     global _SHARED
     _SHARED = (function, shared)
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+    context = multiprocessing.get_context("fork")
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_end_with_parent, initargs=(os.getpid(),))
     try:
         yield from pool.map(_call, items)
     finally:
         pool.shutdown(cancel_futures=True)
         _SHARED = ()
+
+
+def _end_with_parent(parent: int) -> None:
+    """Worker initializer: the worker ends once its parent is gone (a SIGTERM or kill of rlc would otherwise
+    leave it running its FE model, or waiting for work, for good)."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="end-with-parent", daemon=True).start()
 
 
 def _call(item: Any) -> Any:

@@ -1,5 +1,10 @@
 """Runs fanned out over processes (`simulation.fanout`): the local and Dask engines give what one process gives."""
 
+import os
+import signal
+import subprocess
+import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -56,3 +61,35 @@ def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
             np.testing.assert_array_equal(one.drift, other.drift)
             assert reward_one == reward_other
     assert np.abs(runs["local"][1][0][0].force).max() > 0.0  # the controller acted
+
+
+def test_local_workers_end_with_their_parent(tmp_path):
+    """A SIGTERM to the command that fanned runs out ends its workers too (they were left running an FE model)."""
+    script = (
+        "import os, time\n"
+        "from rlcontroller.simulation.fanout import fanned_map\n"
+        "def work(folder, item):\n"
+        "    open(os.path.join(folder, str(os.getpid())), 'w').close(); time.sleep(120)\n"
+        f"list(fanned_map(work, {str(tmp_path)!r}, [1, 2]))\n"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", script])
+    deadline = time.monotonic() + 60
+    while len(list(tmp_path.iterdir())) < 2 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    workers = [int(path.name) for path in tmp_path.iterdir()]
+    assert len(workers) == 2
+    parent.send_signal(signal.SIGTERM)
+    parent.wait(timeout=30)
+    deadline = time.monotonic() + 10
+    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(_alive(pid) for pid in workers)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    with open(f"/proc/{pid}/stat") as handle:  # a zombie (exited, not yet reaped by init) is gone
+        return handle.read().split()[2] != "Z"
