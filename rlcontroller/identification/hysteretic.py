@@ -34,6 +34,7 @@ from rlcontroller.config import (
     PlantRandomization,
     RandomRange,
 )
+from rlcontroller.errors import ModelError
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import SETTLING_TAIL_S, STANDARD_GRAVITY, Load, on_control_grid, with_settling_tail
 from rlcontroller.physics.generators import generate_suite
@@ -182,12 +183,17 @@ def calibrate(
     say = on_progress or (lambda _: None)
     design = plant.design
     fitting, testing = calibration_motions(fit_count, FIT_SEED), calibration_motions(test_count, TEST_SEED)
-    say(f"the FE model on {fit_count + test_count} generated motions of 0.3-1.2 g, then {SETTLING_TAIL_S:g} s of rest")
-    histories = fe_responses(plant, fitting + testing)
-    targets = [response.drift for response in histories]
     say("a first-mode pushover of the FE model: each story's yield drift and post-yield ratio to start from")
     fe = plant.config.opensees
     pushed = pushover(Path(fe.model), fe.function, design.building.mass, design.building.stiffness)
+    if not pushed.yielded.any():
+        raise ModelError(
+            f"{fe.model}: no story yields in a first-mode pushover to 4 % of the height: the model is linear, and its "
+            "reduced model is the linear one rlc designs on already (a yielding fit of it would be wrong)"
+        )
+    say(f"the FE model on {fit_count + test_count} generated motions of 0.3-1.2 g, then {SETTLING_TAIL_S:g} s of rest")
+    histories = fe_responses(plant, fitting + testing)
+    targets = [response.drift for response in histories]
     say(f"fitting {4 * design.building.n_floors} parameters to {fit_count} of the motions")
     hysteresis, cost, evaluations = fit(design, fitting, targets[:fit_count], pushed, FIT_SUBSTEPS)
     hysteresis = hysteresis.model_copy(update={"substeps": PLANT_SUBSTEPS})
