@@ -38,7 +38,7 @@ def comparison(
     """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
     horizon of `mpc` control steps if given)."""
     from rlcontroller.control.policy_file import read_policy
-    from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.evaluation.evaluation import compare, progress_total
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
@@ -52,7 +52,7 @@ def comparison(
 
         extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
+    with report.progress(f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)) as advance:
         evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
     for controller in extra:
         if controller.fallbacks:
@@ -206,7 +206,7 @@ def compare_passive(
     devices' own verdict: the safety check's suite criterion, the passive devices against the building
     without them (passive_check.yaml). Returns the evaluation, its folder and the verdict (None under wind)."""
     from rlcontroller.config import load_safety_check
-    from rlcontroller.evaluation.evaluation import PASSIVE
+    from rlcontroller.evaluation.evaluation import PASSIVE, progress_total
     from rlcontroller.evaluation.evaluation import evaluate as evaluate_controllers
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.evaluation.safety import passive_verdict
@@ -221,7 +221,7 @@ def compare_passive(
     check_new_folder(out)
     plant = Plant(experiment)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    with report.progress(f"evaluating {motions_text(len(motions))}", len(motions)) as advance:
+    with report.progress(f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)) as advance:
         evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
     verdict = None
     if experiment.load_kind == "ground motion":

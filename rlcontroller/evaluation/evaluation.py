@@ -78,6 +78,11 @@ class Evaluation:
         return table.loc[self.controllers, [m for m in columns if m in table.columns]]
 
 
+def progress_total(plant: Plant, motions: list) -> int:
+    """The motions `evaluate` reports to its `on_motions`: an FE plant's uncontrolled runs, then the controlled."""
+    return len(motions) * (2 if plant.fe_model is not None else 1)
+
+
 def evaluate(
     plant: Plant,
     motions: list[Load],
@@ -88,7 +93,8 @@ def evaluate(
     settle: bool = True,
 ) -> Evaluation:
     """Run the uncontrolled building, every controller and (optionally) the optimal reference;
-    `on_motions(count)` is called as each batch of `count` motions is done (a progress bar). A yielding or
+    `on_motions(count)` is called as each batch of `count` motions is done (a progress bar of
+    `progress_total(plant, motions)`: an FE plant's uncontrolled runs count too). A yielding or
     FE plant reports each story's ductility demand (peak drift over `Plant.yield_drift`) and, if `settle`,
     its residual drift after SETTLING_TAIL_S of rest appended to every motion."""
     start = time.perf_counter()
@@ -99,7 +105,7 @@ def evaluate(
     yield_drift = plant.yield_drift if settle else None
     simulated = [with_settling_tail(motion) for motion in motions] if settle else motions
     seeds = [content_seed(motion) for motion in motions]
-    bare = kept.uncontrolled(plant.bare, simulated)  # an FE model's kept between commands (`simulation.kept`)
+    bare = kept.uncontrolled(plant.bare, simulated, on_motions)  # an FE model's kept between commands
     devices = plant.building.devices
     passive = uncontrolled_responses(plant, simulated) if devices else []
     # the optimum on the other core while the controllers run here (`background`): the same numbers

@@ -18,6 +18,7 @@ import hashlib
 import io
 import os
 import zipfile
+from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
 
@@ -59,15 +60,20 @@ def reference_key(plant: Plant, motions: list[Load]) -> str:
     return digest.hexdigest()
 
 
-def uncontrolled(plant: Plant, motions: list[Load]) -> list[Response]:
-    """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring)."""
+def uncontrolled(
+    plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None
+) -> list[Response]:
+    """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring); an FE plant's runs are
+    reported to `on_motions` as each is done (all at once when kept)."""
     if plant.fe_model is None:
         return uncontrolled_responses(plant, motions)
     path = cache_folder() / f"uncontrolled-{reference_key(plant, motions)}.npz"
     kept = _read(path, len(motions))
     if kept is not None:
+        if on_motions is not None:
+            on_motions(len(motions))
         return kept
-    responses = uncontrolled_responses(plant, motions)
+    responses = uncontrolled_responses(plant, motions, on_motions)
     designed = uncontrolled_responses(plant.design, motions)  # the reduced (or named) design model, in numpy
     for motion, response, design in zip(motions, responses, designed, strict=True):
         peak, expected = np.max(np.abs(response.drift)), np.max(np.abs(design.drift))

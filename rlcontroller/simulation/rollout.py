@@ -151,11 +151,14 @@ def fused_lanes(lanes: list[tuple[Controller, slice]], rows: int) -> list[tuple[
     return fused
 
 
-def uncontrolled_responses(plant: Plant, motions: list[Load]) -> list[Response]:
+def uncontrolled_responses(
+    plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None
+) -> list[Response]:
     """`plant` with no command (`plant.bare` is the building without its devices): whole-record
-    simulations with the step map, or a batch through the non-linear step for yielding stories."""
+    simulations with the step map, or a batch through the non-linear step for yielding stories (and an FE
+    model's runs, each motion reported to `on_motions` as it is done)."""
     if plant.integrator is not None:
-        runs = batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)])[0]
+        runs = batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)], on_motions=on_motions)[0]
         return [response for response, _ in runs]
     grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
     return [plant.sampled(grid.substeps).simulate(grid) for grid in grids]

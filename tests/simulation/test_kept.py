@@ -32,10 +32,12 @@ def test_kept_responses_read_back_and_follow_the_model_folder(tmp_path, monkeypa
     (tmp_path / "experiment.yaml").write_text(text)
     plant = Plant(api.load(tmp_path / "experiment.yaml")).bare
     motions = short_motions()
-    first = kept.uncontrolled(plant, motions)
+    done: list[int] = []  # the progress bar's advances: each FE run as it ends, a kept suite at once
+    first = kept.uncontrolled(plant, motions, done.append)
     files = list((tmp_path / "cache").iterdir())
-    assert len(files) == 1
-    again = kept.uncontrolled(plant, motions)  # read back: the same arrays
+    assert len(files) == 1 and sum(done) == len(motions)
+    again = kept.uncontrolled(plant, motions, done.append)  # read back: the same arrays
+    assert sum(done) == 2 * len(motions) and done[-1] == len(motions)
     for a, b in zip(first, again, strict=True):
         np.testing.assert_array_equal(a.drift, b.drift)
         np.testing.assert_array_equal(a.absolute_acceleration, b.absolute_acceleration)
@@ -69,9 +71,9 @@ def test_a_model_the_ground_does_not_move_is_refused_in_one_line(tmp_path, monke
     plant = Plant(api.load(Path("studies/opensees/five_story_opensees.yaml"))).bare
     moving = kept.uncontrolled_responses
 
-    def standing(plant, motions):  # the FE model's runs at 1e-4 of their drift: what the benchmark frame returned
+    def standing(plant, motions, on_motions=None):  # the FE runs at 1e-4 of their drift: the benchmark frame's
         scale = 1.0e-4 if plant.fe_model is not None else 1.0  # (0.006 mm against 56 mm), well above 1e-12 m
-        return [replace(response, drift=scale * response.drift) for response in moving(plant, motions)]
+        return [replace(response, drift=scale * response.drift) for response in moving(plant, motions, on_motions)]
 
     monkeypatch.setattr(kept, "uncontrolled_responses", standing)
     with pytest.raises(ModelError, match=r"five_story_shear\.py: the model stands still under m0's ground motion"):
