@@ -79,7 +79,7 @@ from rlcontroller.config.building import (  # noqa: F401
     SensorConfig,
     paper_actuators,
 )
-from rlcontroller.config.checks import check_algorithm, check_plant  # noqa: F401
+from rlcontroller.config.checks import check_plant  # noqa: F401
 from rlcontroller.config.control import (  # noqa: F401
     AssuranceConfig,
     FallbackConfig,
@@ -102,6 +102,7 @@ from rlcontroller.config.excitation import (  # noqa: F401
     names_wind_suite,
 )
 from rlcontroller.config.experiment import OPTIONAL_PARTS, PARTS, Experiment  # noqa: F401
+from rlcontroller.config.learner_checks import check_algorithm  # noqa: F401
 from rlcontroller.config.learning import (  # noqa: F401
     AlgorithmConfig,
     PolicyConfig,

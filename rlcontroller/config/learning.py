@@ -1,5 +1,5 @@
 """The learner: algorithm, policy network, schedule, `rlc tune`'s search space, and what each learner's
-constructor takes (`LEARNER_KWARGS`, checked at loading by `checks.check_algorithm`)."""
+constructor takes (`LEARNER_KWARGS`, checked at loading by `learner_checks.check_algorithm`)."""
 
 from __future__ import annotations
 

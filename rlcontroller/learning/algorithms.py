@@ -1,7 +1,7 @@
 """The stable-baselines3 learners: the training vector env and the model.
 
 `algorithm.kwargs` of an experiment go to the learner's constructor; they were checked when the
-experiment was loaded (`config.checks.check_algorithm`).
+experiment was loaded (`config.learner_checks.check_algorithm`).
 """
 
 from __future__ import annotations
