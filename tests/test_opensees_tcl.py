@@ -31,6 +31,16 @@ def in_own_process(code: str) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def model_error_in_own_process(call: str) -> subprocess.CompletedProcess:
+    """`call` (build_model, pushover, ...) in a fresh interpreter: the ModelError it raises printed on stdout."""
+    code = (
+        "import numpy as np; from pathlib import Path; from rlcontroller.errors import ModelError\n"
+        "from rlcontroller.physics.fe_build import build_model; from rlcontroller.physics.pushover import pushover\n"
+        f"try: {call}\nexcept ModelError as error: print(error)"
+    )
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+
+
 def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
     """Masses (kip s^2/ft -> kg), the condensed stiffness (kip/ft -> N/m), story heights (ft -> m) and the
     damping matched mode by mode (1 % in mode 1, 5 % in mode 5): the paper's building, from a Tcl file sourced
@@ -99,13 +109,7 @@ def test_a_script_run_to_its_end_that_wipes_its_model_is_one_line(tmp_path):
         TCL_MODEL.with_suffix(".yaml").read_text() + "build_until: end\n"
     )
     (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
-    done = subprocess.run(
-        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.errors import ModelError\n"
-         "from rlcontroller.physics.fe_build import build_model\n"
-         f"try: build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')\n"
-         "except ModelError as error: print(error)"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = model_error_in_own_process(f"build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')")
     assert done.stdout.strip().endswith("no model is left in the domain once the file has run (does it end with "
                                         "wipe? a Tcl script's description may say build_until: loadConst)")  # fmt: skip
 
@@ -113,13 +117,7 @@ def test_a_script_run_to_its_end_that_wipes_its_model_is_one_line(tmp_path):
 def test_a_missing_tcl_package_is_one_line_naming_it_and_tcllibpath(tmp_path):
     shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
     (tmp_path / TCL_MODEL.name).write_text("package require math::nosuchpackage\n" + TCL_MODEL.read_text())
-    done = subprocess.run(
-        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.errors import ModelError\n"
-         "from rlcontroller.physics.fe_build import build_model\n"
-         f"try: build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')\n"
-         "except ModelError as error: print(error)"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    done = model_error_in_own_process(f"build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')")
     assert "needs the Tcl package math::nosuchpackage, which OpenSees' interpreter lacks" in done.stdout, done.stderr
     assert "TCLLIBPATH" in done.stdout and len(done.stdout.strip().splitlines()) == 1
 
@@ -146,13 +144,8 @@ def test_a_pushover_given_a_system_opensees_does_not_take_is_one_line(tmp_path):
     sidecar = TCL_MODEL.with_suffix(".yaml").read_text() + "system: [NoSuchSolver]\n"
     (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
     model = tmp_path / TCL_MODEL.name
-    done = subprocess.run(
-        [sys.executable, "-c", "import numpy as np; from pathlib import Path; "
-         "from rlcontroller.errors import ModelError; from rlcontroller.physics.pushover import pushover\n"
-         f"try: pushover(Path({str(model)!r}), 'build_model', np.eye(5) * 1e5, np.eye(5) * 1e8)\n"
-         "except ModelError as error: print(error)"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+    call = f"pushover(Path({str(model)!r}), 'build_model', np.eye(5) * 1e5, np.eye(5) * 1e8)"
+    done = model_error_in_own_process(call)
     assert done.stdout.strip() == f"{model}: system ['NoSuchSolver']: OpenSees does not take it", done.stderr
 
 
