@@ -69,10 +69,10 @@ def _gamma(experiment: Experiment) -> float:
 def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorboard: Path | None):
     """A new learner on `vec_env`: stable-baselines3's (on `device`), rlc's own, or sbx's (`backend: sbx`)."""
     algorithm = experiment.algorithm
-    if algorithm.backend == "sbx":
-        from rlcontroller.learning.jax_learners import build_jax_model
+    if algorithm.backend == "sbx":  # JAX's device, not torch's
+        from rlcontroller.learning.jax_learners import jax_policy_kwargs
 
-        return build_jax_model(experiment, vec_env, seed, tensorboard)
+        return _constructed(experiment, vec_env, seed, "MlpPolicy", jax_policy_kwargs(experiment), {}, tensorboard)
     import torch
 
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
@@ -94,18 +94,25 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorb
         from rlcontroller.learning.odd_policy import OddActorCriticPolicy
 
         policy = OddActorCriticPolicy
+    return _constructed(experiment, vec_env, seed, policy, policy_kwargs, {"device": device}, tensorboard)
+
+
+def _constructed(experiment: Experiment, vec_env, seed: int, policy, policy_kwargs: dict, extra: dict, tensorboard):
+    """The learner of the experiment's algorithm and backend; what its constructor refuses is one line."""
+    algorithm = experiment.algorithm
     try:
-        return algorithm_class(algorithm.name)(
+        return algorithm_class(algorithm.name, algorithm.backend)(
             policy,
             vec_env,
             policy_kwargs=policy_kwargs,
             seed=seed,
-            device=device,
             tensorboard_log=str(tensorboard) if tensorboard else None,
             verbose=0,
+            **extra,
             **algorithm.kwargs,
         )
     except (TypeError, ValueError, AssertionError) as error:
         file, prefix = experiment.origin("algorithm")
         message = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise ConfigError(f"{location(file, prefix, 'kwargs')}: {algorithm.name} refused them: {message}") from None
+        learner = f"sbx's {algorithm.name}" if algorithm.backend == "sbx" else algorithm.name
+        raise ConfigError(f"{location(file, prefix, 'kwargs')}: {learner} refused them: {message}") from None

@@ -70,30 +70,13 @@ def _activation(name: str):
     return getattr(nn, name)
 
 
-def build_jax_model(experiment: Experiment, vec_env, seed: int, tensorboard: Path | None):
-    """A new sbx learner on `vec_env`, configured as `build_model` configures a stable-baselines3 one."""
-    algorithm = experiment.algorithm
-    net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
-    if algorithm.policy.actor_arch is not None:
-        net_arch = {"pi": list(algorithm.policy.actor_arch), "qf": list(net_arch)}
-    policy_kwargs = {"net_arch": net_arch, "activation_fn": _activation(algorithm.policy.activation)}
-    try:
-        return jax_algorithm_class(algorithm.name)(
-            "MlpPolicy",
-            vec_env,
-            policy_kwargs=policy_kwargs,
-            seed=seed,
-            tensorboard_log=str(tensorboard) if tensorboard else None,
-            verbose=0,
-            **algorithm.kwargs,
-        )
-    except (TypeError, ValueError, AssertionError) as error:
-        from rlcontroller.config import location
-
-        file, prefix = experiment.origin("algorithm")
-        message = str(error).splitlines()[0] if str(error) else type(error).__name__
-        where = location(file, prefix, "kwargs")
-        raise ConfigError(f"{where}: sbx's {algorithm.name} refused them: {message}") from None
+def jax_policy_kwargs(experiment: Experiment) -> dict[str, Any]:
+    """sbx's policy arguments for the experiment's network, as `algorithms.build_model` builds stable-baselines3's."""
+    policy = experiment.algorithm.policy
+    net_arch: list[int] | dict[str, list[int]] = list(policy.net_arch)
+    if policy.actor_arch is not None:
+        net_arch = {"pi": list(policy.actor_arch), "qf": list(net_arch)}
+    return {"net_arch": net_arch, "activation_fn": _activation(policy.activation)}
 
 
 def jax_actor(model) -> Actor:
