@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pandas as pd
 import pytest
 import yaml
@@ -271,3 +272,30 @@ def test_compare_passive_states_the_devices_own_verdict(records, tmp_path):
     assert words in result.output
     assert len(suite["failures"]) == suite["failure_count"]  # every failing motion listed
     assert (out / "metrics_per_story.png").is_file()
+
+
+def test_criteria_other_than_the_papers_and_the_benchmarks_or_without_story_heights_are_one_line(tmp_path):
+    config = str(REPOSITORY / "configs" / "five_story.yaml")
+    for criteria, message in (("ohtori", "expected one of paper, benchmark"), ("benchmark", "no story_heights")):
+        arguments = ["compare", "lqg", "--config", config, "--criteria", criteria, "--out", str(tmp_path / criteria)]
+        result = CliRunner().invoke(app, arguments)
+        assert result.exit_code == 2 and message in result.output and len(result.output.splitlines()) == 1
+        assert not (tmp_path / criteria).exists()
+
+
+@pytest.mark.slow
+def test_the_frames_benchmark_criteria_on_a_record(tmp_path, records, monkeypatch):
+    """The FE frame's J1-J17 (`evaluation.benchmark`): its member ends read, the uncontrolled run kept with them."""
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    config = str(REPOSITORY / "configs" / "experiments" / "nine_story_frame.yaml")
+    out = tmp_path / "out"
+    arguments = ["compare", "lqg", "--config", config, "--records", str(records / "RSN1106_KOBE_KJM000.AT2")]
+    result = CliRunner().invoke(app, [*arguments, "--out", str(out), "--criteria", "benchmark"])
+    assert result.exit_code == 0, result.output
+    assert "The benchmark's criteria J1-J17" in result.output
+    table = pd.read_csv(out / "benchmark_criteria.csv").set_index(["controller", "criterion"])["value"]
+    assert table.loc["uncontrolled"].loc[[f"J{i}" for i in range(1, 11)]].tolist() == [1.0] * 10
+    lqg = table.loc["LQG"]
+    assert 0.5 < lqg["J1"] < 1.0 and 0.5 < lqg["J7"] < 1.0 and 0.0 < lqg["J8"] < 1.0  # it yields, less than bare
+    assert (lqg["J15"], lqg["J16"]) == (9, 10) and lqg["J11"] > 0.0
+    assert all(np.isfinite(lqg.loc[[f"J{i}" for i in range(1, 18)]]))

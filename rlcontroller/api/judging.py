@@ -25,6 +25,8 @@ from rlcontroller.bounds import MAX_HORIZON
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.files import check_new_folder, new_folder
 
+CRITERIA = ("paper", "benchmark")  # J1-J4 always; "benchmark" adds Ohtori et al.'s J1-J17 (evaluation.benchmark)
+
 
 def comparison(
     experiment: Experiment,
@@ -34,17 +36,25 @@ def comparison(
     scale_pga: float | None,
     report: Report = QUIET,
     mpc: int | None = None,
+    criteria: str = "paper",
 ):
     """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
-    horizon of `mpc` control steps if given)."""
+    horizon of `mpc` control steps if given); with `criteria` "benchmark" an FE plant's member ends are read
+    too (`physics.fe_connections`)."""
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.evaluation import compare, progress_total
     from rlcontroller.physics.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
+    if criteria not in CRITERIA:
+        raise ConfigError(f"--criteria {criteria}: expected one of {', '.join(CRITERIA)}")
     plant = Plant(experiment)
+    if criteria == "benchmark" and plant.building.story_heights is None:
+        name = experiment.building.name
+        raise ConfigError(f"--criteria benchmark: the building {name} has no story_heights (J1, J4: drift ratios)")
     if plant.fe_model is not None:
         report.note(f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})")
+        plant.fe_model.record_connections = plant.bare.fe_model.record_connections = criteria == "benchmark"
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     extra = ()
     if mpc is not None:
@@ -71,12 +81,15 @@ def evaluate(
     model: str = "best",
     report: Report = QUIET,
     config: Path | None = None,
+    criteria: str = "paper",
 ):
     """A run's (default: the default model's) policy against LQG and no control on the records: returns
     the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to. `config`: the
     experiment to judge it in instead of its own (another plant, e.g. an OpenSees model, for the same
-    design: its building, actuators and sensors)."""
+    design: its building, actuators and sensors). `criteria` "benchmark": the nonlinear benchmark's J1-J17
+    too (`evaluation.benchmark`: benchmark_criteria.csv and .md)."""
     from rlcontroller.api.safety import unchecked_note
+    from rlcontroller.evaluation.benchmark import write_benchmark
     from rlcontroller.evaluation.report import write_report
 
     folder = model_folder(run_dir, report)
@@ -84,10 +97,12 @@ def evaluate(
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
     with drawing() as plots:  # matplotlib's import and the plots on the other core
-        _, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report)
+        plant, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report, criteria=criteria)
         report.note(unchecked_note(folder, model))  # once the records are read (a bad one is its only line)
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
+            if criteria == "benchmark":
+                write_benchmark(evaluation, plant.building, staging)
     return evaluation, out
 
 
@@ -124,13 +139,15 @@ def compare_lqg(
     model: str = "best",
     report: Report = QUIET,
     mpc: int | None = None,
+    criteria: str = "paper",
 ) -> LQGComparison:
     """LQG with the reward's cost (and its variants) against no control and, given a run, its policy;
     with `sweep` LQG's trade-off over force weights (dampers: passive levels and clipped-optimal weights),
     with `preview` full-state LQR knowing the ground ahead, with `mpc` MPC over that many control steps
-    (docs/mpc.md)."""
+    (docs/mpc.md); with `criteria` "benchmark" the nonlinear benchmark's J1-J17 too (`evaluate`)."""
     import numpy as np
 
+    from rlcontroller.evaluation.benchmark import write_benchmark
     from rlcontroller.evaluation.evaluation import (
         DAMPER_LEVELS,
         LQG_VARIANTS,
@@ -161,10 +178,12 @@ def compare_lqg(
         raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
-    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc)
+    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc, criteria)
     label = evaluation.label
     with new_folder(out) as staging:
         write_report(evaluation, staging)
+        if criteria == "benchmark":
+            write_benchmark(evaluation, plant.building, staging)
         if sweep and experiment.has_dampers:
             levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
             with report.progress("dampers' trade-off", len(motions)) as advance:
@@ -292,6 +311,8 @@ def summary_text(evaluation, out: Path) -> str:
     for metric in ("J1", "J2"):
         banded = markdown_table(by_pga(evaluation, metric))
         lines += [f"mean {metric} by the record's PGA (records in the band):", banded]
+    if (out / "benchmark_criteria.md").is_file():
+        lines.append((out / "benchmark_criteria.md").read_text().rstrip())
     count = len(evaluation.records)
     lines.append(f"evaluated {motions_text(count)} in {evaluation.seconds:.1f} s; tables and plots in {out}")
     return "\n".join(lines)

@@ -130,6 +130,13 @@ ScaleOption = Annotated[
     float | None, typer.Option(callback=positive_finite(10.0), help="Scale every record to this PGA (g).")
 ]
 ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: best or final.")]
+CriteriaOption = Annotated[
+    str,
+    typer.Option(
+        help="paper: J1-J4; benchmark: also the nonlinear benchmark's J1-J17 (Ohtori et al. 2004; member ends "
+        "of an FE plant), benchmark_criteria.md"
+    ),
+]
 RUN_HELP = (
     "Run or model folder, or an experiment YAML for the controller shipped for its building and devices "
     "(default: the default model; see rlc models)."
@@ -212,9 +219,7 @@ class Printed:
             yield counted_lines(description, total)
             return
         columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-        with Progress(
-            *columns, TextColumn("left"), TimeRemainingColumn(), console=console, transient=True
-        ) as bar:
+        with Progress(*columns, TextColumn("left"), TimeRemainingColumn(), console=console, transient=True) as bar:
             task = bar.add_task(description, total=total)
 
             def advance(amount: int = 1, label: str = "") -> None:

@@ -11,6 +11,7 @@ from rlcontroller.cli.app import (
     RUN_HELP,
     SCENARIOS_DEFAULT,
     AddressOption,
+    CriteriaOption,
     Engine,
     EngineOption,
     ModelOption,
@@ -43,12 +44,13 @@ def evaluate(
     ] = None,
     engine: EngineOption = Engine.local,
     address: AddressOption = None,
+    criteria: CriteriaOption = "paper",
 ) -> None:
     """Uncontrolled vs LQG vs the trained policy on the records: J1-J4 tables and the paper's plots."""
     from rlcontroller import api
 
     with fan_out(engine.value, address):
-        evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config)
+        evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config, criteria)
     typer.echo(api.summary_text(evaluation, out))
 
 
@@ -90,13 +92,14 @@ def compare_lqg(
     progress: ProgressOption = None,
     engine: EngineOption = Engine.local,
     address: AddressOption = None,
+    criteria: CriteriaOption = "paper",
 ) -> None:
     """LQG (same cost) against the uncontrolled building, and against the RL policy of a run; MPC too with --mpc."""
     from rlcontroller import api
 
     with fan_out(engine.value, address):
         compared = api.compare_lqg(
-            run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress), mpc
+            run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress), mpc, criteria
         )
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):

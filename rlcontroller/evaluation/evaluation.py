@@ -59,6 +59,7 @@ class Evaluation:
     sources: dict[str, str] = field(default_factory=dict)  # controller -> what was evaluated (a model file)
     descriptions: dict[str, str] = field(default_factory=dict)  # record -> event, station ... (may be empty)
     pgas: dict[str, float] = field(default_factory=dict)  # record -> peak ground acceleration (m/s^2)
+    costs: dict[str, tuple[int, int, int]] = field(default_factory=dict)  # controller -> devices, sensors, states
 
     @property
     def controllers(self) -> list[str]:
@@ -138,9 +139,12 @@ def evaluate(
     descriptions = {motion.name: motion.description for motion in motions}
     pgas = {motion.name: motion.pga for motion in motions}
     seconds = time.perf_counter() - start
+    costs = {"uncontrolled": (0, 0, 0)}
+    costs |= {c.name: controller_costs(c, plant.layout, plant.building.n_actuators) for c in controllers}
     return Evaluation(
-        label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions, pgas=pgas
-    )
+        label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions, pgas=pgas,
+        costs=costs,
+    )  # fmt: skip
 
 
 def compare(
@@ -185,6 +189,25 @@ def classical_controllers(plant: Plant) -> list[Controller]:
             "LQG + ground model": design_lqg_ground_model(design),
         }
     return [LQGController(lqg, design, name) for name, lqg in designs.items()]
+
+
+def controller_costs(controller, layout, n_commands: int) -> tuple[int, int, int]:
+    """(J15 devices, J16 sensors, J17 states carried between steps) of a controller of `n_commands` commanded
+    devices reading observations laid out as `layout` (`physics.observation.ObservationLayout`): an LQG its
+    filter's states (and the last ground reading), clipped-optimal its LQG's; a commanded constant reads
+    nothing; a policy or law on the observation carries what the observation keeps beyond this step's readings
+    (their history, an estimate, the last actions)."""
+    if getattr(controller, "name", "") == "uncontrolled":
+        return 0, 0, 0
+    if not hasattr(controller, "act") or hasattr(controller, "value"):  # a constant command
+        return n_commands, 0, 0
+    sensors = layout.block
+    if hasattr(controller, "transition"):
+        return n_commands, sensors, int(controller.transition.shape[0])
+    design = getattr(controller, "design", None)
+    if design is not None and hasattr(design, "filter"):
+        return n_commands, sensors, int(design.filter.size) + 1
+    return n_commands, sensors, int(layout.size - layout.block)
 
 
 def percent_better(candidate: float, reference: float) -> float:

@@ -327,6 +327,7 @@ class Response:
     stroke: np.ndarray | None = None  # mass devices: displacement relative to the floor (m)
     stroke_velocity: np.ndarray | None = None  # mass devices (m/s)
     device_velocity: np.ndarray | None = None  # across each commanded device (m/s): power = force x this
+    connections: np.ndarray | None = None  # FE member ends, when recorded (`physics.fe_connections`)
 
     def quantity(self, name: str) -> np.ndarray:
         return getattr(self, name)

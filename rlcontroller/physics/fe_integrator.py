@@ -20,6 +20,7 @@ import numpy as np
 
 from rlcontroller.errors import ModelError
 from rlcontroller.physics.fe_build import build_model
+from rlcontroller.physics.fe_connections import connection_probes, read_connections
 from rlcontroller.physics.fe_description import FEDescription
 from rlcontroller.physics.opensees import (
     FORCE_PATTERN,
@@ -48,9 +49,16 @@ class OpenSeesIntegrator:
         self.force_limits = force_limits
         self._last: np.ndarray | None = None
         self.description: FEDescription | None = None
+        self.record_connections = False  # read the member ends each control step (`connection_history`)
+        self._connections: list[np.ndarray] = []
 
     def __getstate__(self) -> dict:  # a copy in another process builds its own domain
-        return self.__dict__ | {"_last": None, "description": None}
+        return self.__dict__ | {"_last": None, "description": None, "_connections": []}
+
+    def connection_history(self) -> np.ndarray | None:
+        """With `record_connections`: the member ends of the run stepped last (`physics.fe_connections`),
+        (control steps + 1, connections, 3), row 0 the state after gravity; else None."""
+        return np.array(self._connections) if self.record_connections else None
 
     def reset(self) -> None:
         self.description = build_model(self.path, self.function)
@@ -63,6 +71,9 @@ class OpenSeesIntegrator:
         ops.integrator("Newmark", 0.5, 0.25)
         ops.analysis("Transient")
         self.ndf = np.atleast_1d(ops.nodeDisp(self.description.control_nodes[0])).size
+        if self.record_connections:
+            self._probes = connection_probes(ops)
+            self._connections = [read_connections(ops, self._probes)]
 
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state after one control step with the forces `action` * force limits (N) held and `ground`
@@ -99,6 +110,8 @@ class OpenSeesIntegrator:
             + [ops.nodeAccel(n, dof) * description.length + float(ground[-1]) for n in nodes]
         )
         self._last = state
+        if self.record_connections:
+            self._connections.append(read_connections(ops, self._probes))
         return state
 
 

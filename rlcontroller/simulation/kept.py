@@ -4,9 +4,9 @@ Every controller is judged against the building uncontrolled on the same motions
 fail-safe reference of a building without devices or supervisor): on an FE model those runs are half of
 `rlc check`'s work and never depend on the controller. They are kept in one file per FE model and suite,
 named by the sha256 of everything they depend on: the model's folder (every .py, .tcl and .yaml file in it:
-a model sources its neighbours), the function that builds it, the analysis and control steps, every
-motion's samples, and rlc's version. A change to any of them names another file; a file that does not read
-back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
+a model sources its neighbours), the function that builds it, the analysis and control steps, whether member ends
+are read, every motion's samples, and rlc's version. A change to any of them names another file; a file that does
+not read back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
 ~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under a ground motion (its peak
 drift under 1 % of its design model's under the same motion: its masses do not feel the ground) is refused before
 anything is kept or judged.
@@ -49,6 +49,8 @@ def reference_key(plant: Plant, motions: list[Load]) -> str:
 
     fe = plant.fe_model
     digest = hashlib.sha256(f"rlc {__version__}; {fe.function}; {fe.analysis_dt!r}; {plant.control_dt!r}".encode())
+    if fe.record_connections:  # the member ends too
+        digest.update(b"connections")
     folder = Path(fe.path).parent
     for path in sorted(p for p in folder.iterdir() if p.suffix in MODEL_SUFFIXES and p.is_file()):
         digest.update(path.name.encode() + b"\0" + path.read_bytes())
@@ -60,9 +62,7 @@ def reference_key(plant: Plant, motions: list[Load]) -> str:
     return digest.hexdigest()
 
 
-def uncontrolled(
-    plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None
-) -> list[Response]:
+def uncontrolled(plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None) -> list[Response]:
     """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring); an FE plant's runs are
     reported to `on_motions` as each is done (all at once when kept)."""
     if plant.fe_model is None:
@@ -81,7 +81,7 @@ def uncontrolled(
             raise ModelError(
                 f"{plant.fe_model.path}: the model stands still under {motion.name}'s ground motion (peak drift "
                 f"{peak:.1e} m, its design model {expected:.1e} m): its masses do not feel the ground; masses on nodes "
-                "tied by equalDOF under the Transformation handler do not (docs/opensees.md, \"A Tcl model\"): try "
+                'tied by equalDOF under the Transformation handler do not (docs/opensees.md, "A Tcl model"): try '
                 "constraints: [Plain]"
             )
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -5,6 +5,7 @@ building left alone (`uncontrolled_responses`)."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -128,6 +129,8 @@ def _rollout_chunk(
                 batch.ground_samples[member],
                 batch.floor_forces[member],
             )
+            if plant.fe_model is not None and plant.fe_model.record_connections:  # one run per process
+                response = replace(response, connections=plant.fe_model.connection_history())
             runs.append((response, float(totals[member])))
         responses.append(runs)
     return responses
