@@ -219,13 +219,13 @@ def accuracy_lines(table) -> list[str]:
 
 def calibration_report(config: Path, calibration, fit_motions: int, test_motions: int) -> str:
     """calibration.md: what was fitted to what, the parameters per story and the accuracy on other motions."""
-    from rlcontroller.identification.hysteretic import FIT_SEED, TEST_SEED
+    from rlcontroller.identification.hysteretic import COLLAPSE_DRIFT_RATIO, FIT_SEED, TEST_SEED
 
     hysteresis, pushed = calibration.hysteresis, calibration.pushover
     rows = "\n".join(
         f"| {i + 1} | {pushed.yield_drift[i] * 1e3:.1f} | {pushed.post_yield_ratio[i]:.3f} | "
         f"{hysteresis.yield_drift[i] * 1e3:.1f} | {hysteresis.post_yield_ratio[i]:.3f} | "
-        f"{hysteresis.exponent[i]:.2f} | {hysteresis.beta[i]:.3f} |"
+        f"{hysteresis.exponent[i]:.2f} | {hysteresis.beta[i]:.3f} | {hysteresis.collapse_drift[i] * 1e3:.0f} |"
         for i in range(len(hysteresis.yield_drift))
     )
     table = calibration.accuracy
@@ -242,10 +242,12 @@ model's first-mode pushover (`physics.pushover`) and fitted by least squares to 
 residual drifts on {fit_motions} generated Kanai-Tajimi motions of
 0.3-1.2 g (seed {FIT_SEED}; cost {calibration.fit_cost:.4g} after {calibration.evaluations} evaluations), judged
 on {test_motions} others (seed {TEST_SEED}). Errors are medians over the judged motions of |model - FE| / FE (the
-residual's against 1 % of the FE peak drift where the FE residual is smaller).
+residual's against 1 % of the FE peak drift where the FE residual is smaller). A negative post-yield ratio: the
+story loses strength past yield (the FE model's P-Delta); every story collapses past {COLLAPSE_DRIFT_RATIO:.0%} of
+its height, and the reduced model then stays as it lies (reported as collapsed).
 
-| story | pushover: yield drift (mm) | post-yield ratio | fit: yield drift (mm) | post-yield ratio | exponent | beta |
-|---|---|---|---|---|---|---|
+| story | pushover: d_y (mm) | post-yield ratio | fit: d_y (mm) | post-yield ratio | exponent | beta | collapse (mm) |
+|---|---|---|---|---|---|---|---|
 {rows}
 
 | story | peak drift error (%) | linear's | residual drift error (%) | linear's | FE peak (mm) | FE residual (mm) |

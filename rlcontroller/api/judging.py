@@ -311,6 +311,11 @@ def summary_text(evaluation, out: Path) -> str:
     for metric in ("J1", "J2"):
         banded = markdown_table(by_pga(evaluation, metric))
         lines += [f"mean {metric} by the record's PGA (records in the band):", banded]
+    metrics = evaluation.metrics
+    fallen = metrics[(metrics.metric == "collapsed") & (metrics.value > 0)]
+    for controller, rows in fallen.groupby("controller", sort=False):
+        records = ", ".join(dict.fromkeys(rows.record))
+        lines.append(f"{controller}: collapsed (a story past its collapse drift) on {records}")
     if (out / "benchmark_criteria.md").is_file():
         lines.append((out / "benchmark_criteria.md").read_text().rstrip())
     count = len(evaluation.records)

@@ -56,28 +56,40 @@ class SensorFaultConfig(StrictModel):
     dead_floors: Annotated[list[PositiveInt], AfterValidator(unique)] = []
 
 
+Drift = Annotated[float, Field(gt=0.0, le=10.0)]  # m
+
+
 class HysteresisConfig(StrictModel):
     """Yielding stories (Bouc-Wen, `physics.hysteresis`): story spring force F = a k d + (1 - a) k d_y z with
     z' = (d'/d_y) [1 - |z|^n (beta sgn(d' z) + gamma)], beta + gamma = 1 (|z| -> 1 at yield).
-    `yield_drift` d_y (m), `post_yield_ratio` a (1: linear), `exponent` n (sharper yielding for larger n),
-    `beta` and `gamma` the loop's shape: each a scalar or one value per story. `substeps` RK4 steps per
-    ground-sample interval."""
+    `yield_drift` d_y (m), `post_yield_ratio` a (1: linear; negative: the story loses strength past yield, as
+    gravity's P-Delta makes a frame do), `exponent` n (sharper yielding for larger n), `beta` and `gamma` the
+    loop's shape: each a scalar or one value per story. `collapse_drift` (m, per story or one): a story past it
+    has collapsed, and the building stays as it lies for the rest of the motion (needed with a negative a,
+    whose drift would otherwise run away). `substeps` RK4 steps per ground-sample interval."""
 
     model: Literal["bouc_wen"] = "bouc_wen"
     yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
-    post_yield_ratio: Annotated[float, Field(ge=0.0, le=1.0)] | list[Annotated[float, Field(ge=0.0, le=1.0)]] = 0.1
+    post_yield_ratio: Annotated[float, Field(ge=-0.5, le=1.0)] | list[Annotated[float, Field(ge=-0.5, le=1.0)]] = 0.1
     exponent: Annotated[float, Field(ge=1.0, le=20.0)] | list[Annotated[float, Field(ge=1.0, le=20.0)]] = 2.0
     beta: Annotated[float, Field(ge=0.0, le=1.0)] | list[Annotated[float, Field(ge=0.0, le=1.0)]] = 0.5
     gamma: Annotated[float, Field(ge=-1.0, le=1.0)] | list[Annotated[float, Field(ge=-1.0, le=1.0)]] = 0.5
+    collapse_drift: Drift | list[Drift] | None = None
     substeps: int = Field(4, ge=1, le=100)
 
-    PER_STORY: ClassVar[tuple[str, ...]] = ("yield_drift", "post_yield_ratio", "exponent", "beta", "gamma")
+    PER_STORY: ClassVar[tuple[str, ...]] = (
+        "yield_drift", "post_yield_ratio", "exponent", "beta", "gamma", "collapse_drift",
+    )  # fmt: skip
 
     @model_validator(mode="after")
     def _yields_at_one(self) -> HysteresisConfig:
         lengths = {len(v) for key in self.PER_STORY if isinstance(v := getattr(self, key), list)}
         if len(lengths) > 1:
             raise ValueError(f"the per-story lists must be of one length, got {sorted(lengths)}")
+        if np.min(self.post_yield_ratio) < 0.0 and self.collapse_drift is None:
+            raise ValueError("a negative post_yield_ratio (a story losing strength) needs a collapse_drift (m)")
+        if self.collapse_drift is not None and np.any(np.asarray(self.collapse_drift) <= np.asarray(self.yield_drift)):
+            raise ValueError("collapse_drift must exceed yield_drift in every story")
         total = np.asarray(self.beta, dtype=float) + np.asarray(self.gamma, dtype=float)
         if np.max(np.abs(total - 1.0)) > 1e-9:
             raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {np.round(total, 12).tolist()}")

@@ -124,7 +124,7 @@ def evaluate(
             responses[name, motion.name] = result
             metrics = j_metrics(result, bare[number])
             if settle and yielding is not None:
-                metrics |= yielding_metrics(result, yield_drift)
+                metrics |= yielding_metrics(result, yield_drift, yielding.collapse_drift)
             elif settle:  # an FE plant: no hysteretic force to integrate
                 metrics |= {"ductility": peak(result.drift) / yield_drift} | residual_drift(result)
             if motion.floor_forces is not None:

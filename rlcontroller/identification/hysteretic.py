@@ -9,9 +9,11 @@ Calibration: a first-mode pushover of the FE model (`physics.pushover`) gives ea
 post-yield ratio to start from; the FE model runs uncontrolled on generated Kanai-Tajimi motions strong
 enough to yield it (PGA 0.3-1.2 g, soft to firm soil, each followed by the settling tail that leaves the
 residual drift); least squares (scipy's trust region reflective, within bounds: the yield drifts within a
-factor 3 of the pushover's) fits the 4 n parameters to the FE story drift histories, each story's on each
-motion scaled by its peak, and to the residual drifts. Holding the pushover's yield drifts and ratios and
-fitting only n and beta leaves a cost 7x higher on the nine-story frame (docs/opensees.md). The fit is
+factor 3 of the pushover's; a post-yield ratio down to -0.5, a story losing strength as the FE model's P-Delta
+makes it, with every story collapsing past COLLAPSE_DRIFT_RATIO of its height) fits the 4 n parameters to the FE
+story drift histories, each story's on each motion scaled by its peak, and to the residual drifts. Holding the
+pushover's yield drifts and ratios and fitting only n and beta leaves a cost 7x higher on the nine-story frame
+(docs/opensees.md). The fit is
 judged on other motions from another seed, never the records or a check suite's: per story, the median
 relative error of the peak drift and of the residual drift, beside the linear reduced model's. Nothing
 here knows what the FE model is made of: a Python or Tcl model, through the plant protocol.
@@ -52,7 +54,9 @@ CALIBRATION_MOTIONS = KanaiTajimiConfig(
 )
 FIT_SEED, TEST_SEED = 20_000, 20_001  # training draws from 0 up, validation 10000, the check suites 31337
 YIELD_RANGE = 3.0  # the fit keeps each story's yield drift within this factor of its pushover's
-BOUNDS = {"post_yield_ratio": (0.0, 0.95), "exponent": (1.0, 20.0), "beta": (0.05, 0.95)}  # per story
+# per story; a negative post-yield ratio: the story loses strength past yield (the FE model's P-Delta)
+BOUNDS = {"post_yield_ratio": (-0.5, 0.95), "exponent": (1.0, 20.0), "beta": (0.05, 0.95)}
+COLLAPSE_DRIFT_RATIO = 0.10  # of the story height: the reduced model's stories collapse past it
 # RK4 sub-steps per ground sample: 2 while fitting (fast), 4 in the model written and judged. The exponent may
 # reach 20 (an elastic-plastic hinge): the integrator reads |z|^n as at most 1 (`integrators.z_rate`), without
 # which loops of exponent 10 diverged on 4 of the check suite's 320 motions at 2 sub-steps.
@@ -101,10 +105,12 @@ def residual(drift: np.ndarray, control_dt: float) -> np.ndarray:
     return np.mean(drift[-max(1, round(RESIDUAL_WINDOW_S / control_dt)) :], axis=0)
 
 
-def hysteresis_of(parameters: np.ndarray, substeps: int) -> HysteresisConfig:
-    """The per-story HysteresisConfig of the fit's parameter vector [log d_y; a; n; beta] (4 n)."""
+def hysteresis_of(parameters: np.ndarray, substeps: int, collapse_drift: list[float] | None) -> HysteresisConfig:
+    """The per-story HysteresisConfig of the fit's parameter vector [log d_y; a; n; beta] (4 n), its stories
+    collapsing past `collapse_drift` (m; None: never)."""
     log_drift, ratio, exponent, beta = parameters.reshape(4, -1)
     return HysteresisConfig(
+        collapse_drift=collapse_drift,
         yield_drift=np.exp(log_drift).tolist(),
         post_yield_ratio=ratio.tolist(),
         exponent=exponent.tolist(),
@@ -115,24 +121,31 @@ def hysteresis_of(parameters: np.ndarray, substeps: int) -> HysteresisConfig:
 
 
 def fit(
-    design: Plant, motions: list[Load], targets: list[np.ndarray], pushed: Pushover, substeps: int = FIT_SUBSTEPS
+    design: Plant,
+    motions: list[Load],
+    targets: list[np.ndarray],
+    pushed: Pushover,
+    substeps: int = FIT_SUBSTEPS,
+    collapse: list[float] | None = None,
 ) -> tuple[HysteresisConfig, float, int]:
     """Least-squares Bouc-Wen parameters of every story against the FE drift histories `targets`
     ((K + 1, n) per motion), from the yield drifts and post-yield ratios of the FE model's pushover
     (`pushed`), exponent 2 and beta 0.5: each story's history on a motion scaled by its FE peak, sampled
-    every control step, and its residual drift (weight RESIDUAL_WEIGHT) on the same scale."""
+    every control step, and its residual drift (weight RESIDUAL_WEIGHT) on the same scale. With `collapse`
+    drifts (m per story) a story may lose strength past yield (a down to BOUNDS' lower one); without, a >= 0."""
     import scipy.optimize
 
     n = design.building.n_floors
-    ratio = np.clip(pushed.post_yield_ratio, *BOUNDS["post_yield_ratio"])
+    bounds = BOUNDS if collapse is not None else BOUNDS | {"post_yield_ratio": (0.0, BOUNDS["post_yield_ratio"][1])}
+    ratio = np.clip(pushed.post_yield_ratio, *bounds["post_yield_ratio"])
     start = np.concatenate([np.log(pushed.yield_drift), ratio, np.full(n, 2.0), np.full(n, 0.5)])
-    low = np.concatenate([start[:n] - np.log(YIELD_RANGE), *(np.full(n, bound[0]) for bound in BOUNDS.values())])
-    high = np.concatenate([start[:n] + np.log(YIELD_RANGE), *(np.full(n, bound[1]) for bound in BOUNDS.values())])
+    low = np.concatenate([start[:n] - np.log(YIELD_RANGE), *(np.full(n, bound[0]) for bound in bounds.values())])
+    high = np.concatenate([start[:n] + np.log(YIELD_RANGE), *(np.full(n, bound[1]) for bound in bounds.values())])
     scales = [np.maximum(peak(target), 1e-6) for target in targets]
     dt = design.control_dt
 
     def residuals(parameters: np.ndarray) -> np.ndarray:
-        hysteresis = hysteresis_of(parameters, substeps)
+        hysteresis = hysteresis_of(parameters, substeps, collapse)
         parts = []
         for motion, target, scale in zip(motions, targets, scales, strict=True):
             drift = reduced_drifts(design, hysteresis, motion)
@@ -143,7 +156,15 @@ def fit(
         return np.concatenate(parts)
 
     result = scipy.optimize.least_squares(residuals, start, bounds=(low, high), x_scale="jac", max_nfev=MAX_EVALUATIONS)
-    return hysteresis_of(result.x, substeps), float(result.cost), int(result.nfev)
+    return hysteresis_of(result.x, substeps, collapse), float(result.cost), int(result.nfev)
+
+
+def collapse_drifts(design: Plant) -> list[float]:
+    """Each story's collapse drift (m): COLLAPSE_DRIFT_RATIO of its height (the design model's)."""
+    heights = design.building.story_heights
+    if heights is None:
+        raise ModelError("the FE model's description gives no story_heights: the reduced model's collapse needs them")
+    return (COLLAPSE_DRIFT_RATIO * np.asarray(heights)).tolist()
 
 
 def accuracy(
@@ -195,7 +216,8 @@ def calibrate(
     histories = fe_responses(plant, fitting + testing)
     targets = [response.drift for response in histories]
     say(f"fitting {4 * design.building.n_floors} parameters to {fit_count} of the motions")
-    hysteresis, cost, evaluations = fit(design, fitting, targets[:fit_count], pushed, FIT_SUBSTEPS)
+    collapse = collapse_drifts(design)
+    hysteresis, cost, evaluations = fit(design, fitting, targets[:fit_count], pushed, FIT_SUBSTEPS, collapse)
     hysteresis = hysteresis.model_copy(update={"substeps": PLANT_SUBSTEPS})
     say(f"judged on the other {test_count}")
     table = accuracy(design, hysteresis, testing, targets[fit_count:])

@@ -7,12 +7,15 @@ building, the frame action of a condensed FE model (it carries no load in the fi
 the nine-story frame it is positive semi-definite, so no post-yield ratio makes it unstable, where
 reading the coupling of adjacent floors as the story springs, as Patsialis & Taflanidis 2020 do, leaves
 it indefinite below a = 0.65). A building whose yielded stiffness K - D' diag((1 - a) k) D would not be
-positive semi-definite is refused. Story i's spring (drift d_i = x_i - x_{i-1}) resists with
+positive semi-definite is refused, unless a story's a is negative (losing strength is then the point). Story i's
+spring (drift d_i = x_i - x_{i-1}) resists with
 F_i = a_i k_i d_i + (1 - a_i) k_i d_y,i z_i, where
 
     z_i' = (d_i' / d_y,i) [1 - |z_i|^n_i (beta_i sgn(d_i' z_i) + gamma_i)],   beta_i + gamma_i = 1,
 
-so |z| -> 1 once the story yields. With the drift matrix D (d = D x) the floors obey
+so |z| -> 1 once the story yields; a < 0 (P-Delta past yield) makes the story lose strength, and a story
+whose drift reaches its collapse drift has collapsed: the building stays as it lies, at rest. With the drift
+matrix D (d = D x) the floors obey
 
     M v' = -C v - K_e x - D' h z + Gamma u - M 1 a_g,   x' = v,
 
@@ -67,6 +70,7 @@ class BoucWen:
     exponent: np.ndarray  # n_i (n,)
     beta: np.ndarray  # (n,)
     gamma: np.ndarray  # (n,)
+    collapse_drift: np.ndarray  # (n,) m: past it a story has collapsed (inf: never)
     substeps: int
 
     @classmethod
@@ -79,7 +83,8 @@ class BoucWen:
         drift = building.drift_matrix()  # floors only: yielding stories take no mass devices
         linear = stiffness - drift.T @ np.diag(yielding) @ drift
         lowest, highest = np.linalg.eigvalsh(linear)[[0, -1]]
-        if lowest < -1e-9 * highest:
+        softening = np.min(config.post_yield_ratio) < 0.0  # the yielded building may lose stiffness: on purpose
+        if lowest < -1e-9 * highest and not softening:
             raise ValueError(
                 f"the yielded building's stiffness is not positive semi-definite (lowest eigenvalue {lowest:.3g} "
                 "N/m): its stories' springs hold more than its stiffness matrix; expected a larger post_yield_ratio"
@@ -94,6 +99,7 @@ class BoucWen:
             exponent=per_story(config.exponent, n),
             beta=per_story(config.beta, n),
             gamma=per_story(config.gamma, n),
+            collapse_drift=per_story(np.inf if config.collapse_drift is None else config.collapse_drift, n),
             substeps=config.substeps,
         )
 
@@ -116,6 +122,7 @@ class BoucWen:
             self.exponent,
             self.beta,
             self.gamma,
+            self.collapse_drift,
         )
 
     def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
@@ -127,5 +134,6 @@ class BoucWen:
         return bouc_wen_history(
             np.zeros(3 * n), np.zeros(n), ground, per_step, control_dt, self.substeps, self.mass_inverse, self.damping,
             self.linear_stiffness, self.hysteretic_stiffness, self.yield_drift, self.exponent, self.beta, self.gamma,
+            self.collapse_drift,
         )  # fmt: skip
 

@@ -44,14 +44,30 @@ def _derivative(
 
 
 @numba.njit(cache=True)
+def collapsed(state, collapse):
+    """Whether a story's drift |x_i - x_(i-1)| has reached its collapse drift (m)."""
+    below = 0.0
+    for i in range(collapse.size):
+        if abs(state[i] - below) >= collapse[i]:
+            return True
+        below = state[i]
+    return False
+
+
+@numba.njit(cache=True)
 def bouc_wen_step(
     state, floor_force, ground, control_dt, substeps, mass_inverse, damping, linear, hysteretic, yield_drift, exponent,
-    beta, gamma,
+    beta, gamma, collapse,
 ):  # fmt: skip
-    """RK4 over one control step: `substeps` steps per interval between the ground samples."""
+    """RK4 over one control step: `substeps` steps per interval between the ground samples. Once a story has
+    collapsed (`collapse`, m per story; inf: never) the building stays where it lies, at rest."""
     intervals = ground.size - 1
     h = control_dt / (intervals * substeps)
     s = state.copy()
+    n = collapse.size
+    if collapsed(s, collapse):
+        s[n : 2 * n] = 0.0
+        return s
     args = (mass_inverse, damping, linear, hysteretic, yield_drift, exponent, beta, gamma)
     for interval in range(intervals):
         start, slope = ground[interval], (ground[interval + 1] - ground[interval]) / (h * substeps)
@@ -62,13 +78,16 @@ def bouc_wen_step(
             k3 = _derivative(s + 0.5 * h * k2, floor_force, a0 + 0.5 * h * slope, *args)
             k4 = _derivative(s + h * k3, floor_force, a0 + h * slope, *args)
             s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            if collapsed(s, collapse):
+                s[n : 2 * n] = 0.0
+                return s
     return s
 
 
 @numba.njit(cache=True)
 def bouc_wen_history(
     state, floor_force, ground, per_step, control_dt, substeps, mass_inverse, damping, linear, hysteretic, yield_drift,
-    exponent, beta, gamma,
+    exponent, beta, gamma, collapse,
 ):  # fmt: skip
     """The states at every control step (K + 1, size) under `ground` (K * per_step + 1 samples), the floor
     forces held throughout: a whole record in one call (calibration's many runs)."""
@@ -78,7 +97,7 @@ def bouc_wen_history(
     for k in range(steps):
         states[k + 1] = bouc_wen_step(
             states[k], floor_force, ground[k * per_step : (k + 1) * per_step + 1], control_dt, substeps, mass_inverse,
-            damping, linear, hysteretic, yield_drift, exponent, beta, gamma,
+            damping, linear, hysteretic, yield_drift, exponent, beta, gamma, collapse,
         )  # fmt: skip
     return states
 

@@ -17,7 +17,7 @@ from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.excitation import STANDARD_GRAVITY
 
 METRICS = ("J1", "J2", "J3", "J4")
-YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J")  # per story, yielding plants
+YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J", "collapsed")  # per story, yielding plants
 WIND_METRICS = (  # under floor loads
     "rms_acceleration",
     "rms_acceleration_top",
@@ -105,17 +105,23 @@ def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarra
     }
 
 
-def yielding_metrics(result: Response, yield_drift: np.ndarray) -> dict[str, np.ndarray]:
+def yielding_metrics(
+    result: Response, yield_drift: np.ndarray, collapse_drift: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
     """Per story of a yielding plant, for a response that ends with the settling tail:
     ductility demand max|d| / d_y, residual drift |mean d| over the last RESIDUAL_WINDOW_S (m;
     the mean over several periods removes the free vibration left), and the hysteretic energy
-    sum of the integral of (1 - a) k d_y z dd (J, trapezoid rule on the control steps)."""
+    sum of the integral of (1 - a) k d_y z dd (J, trapezoid rule on the control steps); with finite
+    `collapse_drift` (m) also whether the story collapsed (1) or not (0)."""
     force = result.hysteretic_force
-    return {
+    metrics = {
         "ductility": peak(result.drift) / yield_drift,
         **residual_drift(result),
         "hysteretic_energy_J": np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(result.drift, axis=0), axis=0),
     }
+    if collapse_drift is not None and np.all(np.isfinite(collapse_drift)):
+        metrics["collapsed"] = (peak(result.drift) >= collapse_drift).astype(float)
+    return metrics
 
 
 def residual_drift(result: Response) -> dict[str, np.ndarray]:

@@ -22,12 +22,12 @@ TRUE = HysteresisConfig(
 )  # fmt: skip
 
 
-def motions(count: int, seed: int, seconds: float = 12.0):
-    """Short strong motions (3 m/s^2) that yield every story, with their settling tail."""
+def motions(count: int, seed: int, seconds: float = 12.0, pga: float = 3.0):
+    """Short strong motions (`pga`, m/s^2: 3 yields every story), with their settling tail."""
     chosen = []
     for motion in calibration_motions(count, seed):
         keep = round(seconds / motion.dt)
-        chosen.append(scale_to_pga(replace(motion, acceleration=motion.acceleration[:keep]), 3.0))
+        chosen.append(scale_to_pga(replace(motion, acceleration=motion.acceleration[:keep]), pga))
     return chosen
 
 
@@ -43,6 +43,23 @@ def test_the_fit_recovers_the_histories_that_known_parameters_made():
     table = accuracy(DESIGN, fitted, testing, [reduced_drifts(DESIGN, TRUE, motion) for motion in testing])
     assert table["peak_drift_error_nonlinear"].max() < 0.02 < 0.2 < table["peak_drift_error_linear"].min()
     assert cost < 1e-2
+
+
+def test_the_fit_finds_a_story_that_loses_strength_where_stories_may_collapse():
+    """With collapse drifts the fit may take a negative post-yield ratio, and finds the one that made the
+    histories (story 2 losing strength); without, the ratios stay at or above 0."""
+    true = TRUE.model_copy(update={"post_yield_ratio": [0.1, -0.02, 0.15, 0.1, 0.2], "collapse_drift": 0.3})
+    fitting, testing = motions(2, 1, pga=2.0), motions(2, 2, pga=2.0)  # story 2 to a ductility of 6, not 30
+    targets = [reduced_drifts(DESIGN, true, motion) for motion in fitting]
+    assert 4.0 < np.max(np.abs(targets[0][:, 1])) / true.yield_drift[1] < 0.3 / true.yield_drift[1]  # none falls
+    guess = np.array(true.yield_drift) * np.array([1.2, 0.8, 1.2, 0.8, 1.2])
+    pushed = Pushover(np.zeros((1, 5)), np.zeros((1, 5)), np.ones(5), guess, np.full(5, 0.1), np.ones(5, bool))
+    fitted, _, _ = fit(DESIGN, fitting, targets, pushed, collapse=[0.3] * 5)
+    assert fitted.post_yield_ratio[1] == pytest.approx(-0.02, abs=0.01) and fitted.collapse_drift == [0.3] * 5
+    table = accuracy(DESIGN, fitted, testing, [reduced_drifts(DESIGN, true, motion) for motion in testing])
+    assert table["peak_drift_error_nonlinear"].max() < 0.02
+    held, _, _ = fit(DESIGN, fitting, targets, pushed)
+    assert min(held.post_yield_ratio) >= 0.0 and held.collapse_drift is None
 
 
 def test_accuracy_is_the_median_relative_error_per_story():

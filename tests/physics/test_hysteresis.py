@@ -219,3 +219,39 @@ def test_story_springs_of_a_shear_building_are_its_story_stiffnesses():
 
     springs = story_springs(BUILDING.mass, BUILDING.stiffness)
     np.testing.assert_allclose(springs, EXPERIMENT.building.stiffnesses, rtol=1e-10)
+
+
+def _one_story(**settings) -> tuple[BoucWen, float]:
+    """A one-story building of 1e5 kg and 4e6 N/m with Bouc-Wen `settings` and one actuator of 1 MN; its
+    spring's stiffness."""
+    from rlcontroller.physics.structure import Building
+
+    building = Building(
+        mass=np.array([[1.0e5]]), stiffness=np.array([[4.0e6]]), damping=np.array([[2.0e4]]),
+        actuator_matrix=np.array([[1.0]]), force_limits=np.array([1.0e6]), story_heights=np.array([3.0]),
+    )  # fmt: skip
+    return BoucWen.of(building, HysteresisConfig(**settings)), 4.0e6
+
+
+@pytest.mark.parametrize("fraction, falls", [(0.9, False), (1.1, True)])
+def test_a_story_losing_strength_stands_below_its_strength_and_collapses_above_it(fraction, falls):
+    """a = -0.2: the story's force peaks at k d_y at yield and falls after, so a force held below k d_y is carried
+    and one above it pushes the story to its collapse drift, where it stays at rest."""
+    model, k = _one_story(yield_drift=0.01, post_yield_ratio=-0.2, exponent=20.0, collapse_drift=0.3, substeps=8)
+    strength, state, drifts = k * 0.01, np.zeros(3), []
+    for step in range(4000):  # the force raised over 40 s (quasi-static: the period is 1 s), then held
+        force = fraction * strength * min(1.0, step / 2000)
+        state = model.step(state, np.array([force / 1.0e6]), np.zeros(2), 0.02)
+        drifts.append(state[0])
+    assert (max(drifts) >= 0.3) == falls
+    if falls:
+        assert drifts[-1] == drifts[-2] and state[1] == 0.0  # as it lies, at rest
+    else:  # carried on the rising branch, about 0.9 d_y (the sharp loop is near elastic below yield)
+        assert drifts[-1] == pytest.approx(0.009, rel=0.05)
+
+
+def test_a_negative_post_yield_ratio_needs_a_collapse_drift_beyond_yield():
+    with pytest.raises(ValueError, match="needs a collapse_drift"):
+        HysteresisConfig(yield_drift=0.01, post_yield_ratio=-0.1)
+    with pytest.raises(ValueError, match="must exceed yield_drift"):
+        HysteresisConfig(yield_drift=0.01, post_yield_ratio=-0.1, collapse_drift=0.005)
