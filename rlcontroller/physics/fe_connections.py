@@ -2,7 +2,8 @@
 criteria (Ohtori et al. 2004: ductility, dissipated energy, plastic connections; `evaluation.benchmark`).
 
 A connection is either an end section of a beam-column with sections (its first and last integration points:
-the member's ends under Lobatto integration), read as (curvature, moment, flexural tangent stiffness), or one
+the member's ends under Lobatto integration), read as (curvature, moment, flexural tangent stiffness) about the
+section's z axis (a 2-D frame's only one), or one
 material of a zero-length element (a concentrated hinge or spring), read as (deformation, force, tangent). Both
 in the model's units: the criteria use them only as ratios to the connection's own yield values. Elements of
 other kinds (elastic members, trusses) cannot yield here and are not connections. Which of these do yield is
@@ -37,11 +38,11 @@ def read_connections(ops, probes: list[tuple]) -> np.ndarray:
     """(connections, 3): deformation, force, tangent of each probe now (model units)."""
     values = np.empty((len(probes), 3))
     for row, (kind, element, index) in enumerate(probes):
-        if kind == "section":  # 2-D: deformation (axial strain, curvature), then force (N, M); the 2x2 tangent
+        if kind == "section":  # deformations (axial strain, curvature about z, ...), then forces (N, M_z, ...)
             deformation_force = ops.eleResponse(element, "section", index, "forceAndDeformation")
-            tangent = ops.eleResponse(element, "section", index, "stiffness")
-            half = len(deformation_force) // 2
-            values[row] = deformation_force[1], deformation_force[half + 1], tangent[-1]
+            tangent = ops.eleResponse(element, "section", index, "stiffness")  # k x k, row by row
+            k = len(deformation_force) // 2
+            values[row] = deformation_force[1], deformation_force[k + 1], tangent[k + 1]
         else:
             stress, strain, tangent = ops.eleResponse(element, "material", index, "stressStrainTangent")
             values[row] = strain, stress, tangent
