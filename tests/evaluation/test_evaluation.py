@@ -221,3 +221,23 @@ def test_rlc_compare_lqg_sweep_of_a_damper_experiment_writes_its_trade_off(recor
     assert result.exit_code == 0, result.output
     assert {"damper_sweep.csv", "damper_sweep.md", "damper_sweep.png"} <= {p.name for p in out.iterdir()}
     assert "| passive | 1.000 |" in result.output and "- passive-on: J1 = " in result.output
+
+
+def test_a_story_that_collapses_is_reported_per_story_and_by_record(tmp_path):
+    """A building whose first story loses strength (a = -0.3) and collapses past 5 cm on a strong motion: the
+    uncontrolled run reports story 1 collapsed and no other, and the printed summary names the record."""
+    from rlcontroller.api.judging import summary_text
+
+    hysteresis = {"yield_drift": 0.004, "post_yield_ratio": [-0.3, 0.1, 0.1, 0.1, 0.1], "collapse_drift": 0.05}
+    plant = Plant(Experiment(plant={"hysteresis": hysteresis}))
+    motions = synthetic_suite(count=1)  # PGA 2-6 m/s^2: well past the first story's strength
+    result = evaluate(plant, motions, [], SYNTHETIC_LABEL)
+    frame = result.metrics
+    fallen = frame[(frame["controller"] == "uncontrolled") & (frame["metric"] == "collapsed")]
+    assert fallen["value"].tolist() == [1.0, 0.0, 0.0, 0.0, 0.0]
+    drift = result.responses["uncontrolled", motions[0].name].drift[:, 0]
+    landed = int(np.argmax(np.abs(drift) >= 0.05))
+    assert np.all(drift[landed:] == drift[landed])  # it lies where it fell, for the rest of the motion
+    assert f"uncontrolled: collapsed (a story past its collapse drift) on {motions[0].name}" in summary_text(
+        result, tmp_path
+    )
