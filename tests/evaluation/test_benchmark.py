@@ -83,7 +83,7 @@ def test_member_end_criteria_of_bilinear_hinges_through_known_cycles():
     runs = {}
     for name, amplitudes in {"uncontrolled": (6.0, 3.0), "controlled": (4.0, 1.0)}.items():
         runs[name] = np.stack([_elastic_perfectly_plastic(_cycles(a), k, m_y) for a in amplitudes], axis=1)
-    criteria = connection_criteria(runs["controlled"], runs["uncontrolled"], DT)
+    criteria = connection_criteria(runs["controlled"], runs["uncontrolled"])
     assert criteria["J7"] == pytest.approx((4.0 / 2.0) / (6.0 / 2.0), rel=1e-6)
     assert criteria["J9"] == pytest.approx(1 / 2)  # the second hinge yields only uncontrolled
 
@@ -99,7 +99,7 @@ def test_member_end_criteria_of_bilinear_hinges_through_known_cycles():
 
 def test_member_end_criteria_are_undefined_where_nothing_yields_uncontrolled():
     elastic = _elastic_perfectly_plastic(_cycles(1.0), 2.0, 4.0)[:, None, :]
-    criteria = connection_criteria(elastic, elastic, DT)
+    criteria = connection_criteria(elastic, elastic)
     assert all(np.isnan(criteria[key]) for key in ("J7", "J8", "J9", "J10"))
 
 
