@@ -18,7 +18,7 @@ import pandas as pd
 
 from rlcontroller.background import in_background
 from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, display_path
-from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController
+from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
@@ -191,23 +191,21 @@ def classical_controllers(plant: Plant) -> list[Controller]:
     return [LQGController(lqg, design, name) for name, lqg in designs.items()]
 
 
-def controller_costs(controller, layout, n_commands: int) -> tuple[int, int, int]:
+def controller_costs(controller: Controller, layout, n_commands: int) -> tuple[int, int, int]:
     """(J15 devices, J16 sensors, J17 states carried between steps) of a controller of `n_commands` commanded
     devices reading observations laid out as `layout` (`physics.observation.ObservationLayout`): an LQG its
     filter's states (and the last ground reading), clipped-optimal its LQG's; a commanded constant reads
     nothing; a policy or law on the observation carries what the observation keeps beyond this step's readings
     (their history, an estimate, the last actions)."""
-    if getattr(controller, "name", "") == "uncontrolled":
+    if isinstance(controller, Uncontrolled):
         return 0, 0, 0
-    if not hasattr(controller, "act") or hasattr(controller, "value"):  # a constant command
+    if isinstance(controller, ConstantCommand):
         return n_commands, 0, 0
-    sensors = layout.block
-    if hasattr(controller, "transition"):
-        return n_commands, sensors, int(controller.transition.shape[0])
-    design = getattr(controller, "design", None)
-    if design is not None and hasattr(design, "filter"):
-        return n_commands, sensors, int(design.filter.size) + 1
-    return n_commands, sensors, int(layout.size - layout.block)
+    if isinstance(controller, LQGController):
+        return n_commands, layout.block, int(controller.transition.shape[0])
+    if isinstance(controller, ClippedOptimal):
+        return n_commands, layout.block, int(controller.design.filter.size) + 1
+    return n_commands, layout.block, int(layout.size - layout.block)
 
 
 def percent_better(candidate: float, reference: float) -> float:
