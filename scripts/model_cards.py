@@ -53,17 +53,19 @@ ABOUT = {
     ),
     "five_story_yielding": (
         "The five-story building with an actuator on every story (100 kN each) on stories that yield (Bouc-Wen, "
-        "3 cm yield drift, 10 % post-yield stiffness), controlled by LQG + ground model designed on the elastic "
-        "design model (classical, no training) behind the yielding building's supervisor "
-        "(configs/supervisors/yielding.yaml): a trigger at 0.2-0.6 m/s^2, the dissipative rule on stroke "
-        "velocities integrated from the floors' accelerations (no model), and past 2 cm of estimated story "
-        "drift a hand-over for good to stiffness-proportional viscous dampers (0.05 s x the story stiffness) on "
-        "those measured velocities, saturating in proportion. Every number was chosen on generated suites other "
-        "than the check's (docs/assurance.md, 'A building that yields'). It passes the check by a narrow margin: "
-        "its worst significant motion (1.20 g, whose building failed safe drifts 16 % of its story height, a "
-        "collapse the Bouc-Wen stories cannot model) is 0.99 % worse than the reference, within the 1 % tolerance.",
-        "configs/experiments/five_story_yielding.yaml",
-        "",
+        "3 cm yield drift, 10 % post-yield stiffness), behind the yielding building's supervisor "
+        "(configs/supervisors/yielding.yaml: a trigger at 0.2-0.6 m/s^2, the dissipative rule on stroke velocities "
+        "integrated from the floors' accelerations, and past 2 cm of estimated story drift a hand-over for good to "
+        "stiffness-proportional viscous dampers on those measured velocities), controlled by the learned MPC: a "
+        "network (2 x 64, tanh) on the observation's Kalman estimate, taught by DAgger to act as MPC over 20 control "
+        "steps with the floors' accelerations in the cost, MPC designed on the elastic design model, the rollouts on "
+        "the yielding plant under motions of the check's family drawn with other seeds. Shipped by the rule: it "
+        "passes and dominates with the lowest mean J1 + J2 on the check suite, 0.549 + 0.749 = 1.298, against LQG + "
+        "ground model with the same cost 0.551 + 0.766 = 1.317 and LQG + ground model with the experiment's cost "
+        "(the controller shipped before it) 0.547 + 0.777 = 1.324: learning wins here by 1.4 %, not the 5 % that "
+        "counts as a win (docs/scoreboard.md).",
+        "studies/mpc/five_story_yielding_ship_dagger.yaml",
+        "7 min (417 k steps, the best at 314 k)",
     ),
     "five_story_amd_triggered": (
         "The five-story building with an active mass driver on its roof (a tuned mass with an actuator to its floor), "
@@ -96,17 +98,19 @@ ABOUT = {
         "about 20 min (30 M steps, the best at 21.1 M)",
     ),
     "five_story_paper_layout": (
-        "The paper's layout: the five-story building with actuators on stories 1, 3 and 5 (100 kN each), controlled "
-        "by LQG + ground model (classical, no training) behind the standard supervisor (configs/supervisors/"
-        "standard.yaml: a ground trigger at 0.25-1.0 m/s^2 and the dissipative rule). It ships under round 6's "
-        "standard, which states a risk: 6 of the 303 significant check motions are worse than the building without "
-        "control by more than 1 % (95 % bound 3.9 %, at most 5 % allowed), each on a motion where story 2 or 4, which "
-        "no actuator spans, takes the peak; no motion reaches a higher performance level. Target J1 <= 0.55 on the "
-        "check suite: missed (0.650): with three actuators the unactuated stories keep most of their drift "
-        "(docs/safety_check.md). PPO's residual on it (`rlc train configs/five_story.yaml`) passes too, behind it "
-        "(J1 0.659, J2 0.940 against 0.650, 0.831): the classical law ships by the rule.",
-        "studies/assurance/paper_layout_standard.yaml --law lqg_ground_model",
-        "",
+        "The paper's layout: the five-story building with actuators on stories 1, 3 and 5 (100 kN each) behind the "
+        "standard supervisor (a ground trigger at 0.25-1.0 m/s^2 and the dissipative rule), controlled by the learned "
+        "MPC: a network (2 x 64, tanh) on the observation's Kalman estimate, taught by DAgger to act as MPC over 20 "
+        "control steps with the floors' accelerations in the cost, on motions of the check's family drawn with other "
+        "seeds. It ships under round 6's standard, which states a risk: 2 of the 303 significant check motions are "
+        "worse than the building without control by more than 1 % (95 % bound 2.1 %, at most 5 % allowed); no motion "
+        "reaches a higher performance level. By the rule (lowest mean J1 + J2 on the check suite) it ties LQG + "
+        "ground model with the same cost, 1.444 against 1.446 (4 motions worse), and is ahead of LQG + ground model "
+        "with the experiment's cost, shipped before it (0.650 + 0.831 = 1.481, 6 worse): where the limits rarely "
+        "bind MPC is LQG. Target J1 <= 0.55 on the check suite: missed (0.670): with three actuators the unactuated "
+        "stories keep most of their drift (docs/safety_check.md).",
+        "studies/mpc/five_story_paper_layout_dagger.yaml",
+        "4 min (417 k steps, the best at 417 k)",
     ),
     "seventy_six_story_atmd": (
         "The 76-story wind benchmark building with its active tuned mass damper on floor 75 (500 t, 500 kN), "

@@ -34,6 +34,8 @@ WIN = 0.05  # a learned controller wins at 5 % lower J1 + J2 on both suites, wit
 TRAINING = {  # how each learned shipped controller was trained (its command; long runs under nohup with a log)
     "five_story_every_story": "rlc train studies/mpc/five_story_every_story_dagger.yaml",
     "five_story_mr_standard": "rlc train studies/devices/five_story_mr_standard.yaml",
+    "five_story_paper_layout": "rlc train studies/mpc/five_story_paper_layout_dagger.yaml",
+    "five_story_yielding": "rlc train studies/mpc/five_story_yielding_ship_dagger.yaml",
 }
 
 
