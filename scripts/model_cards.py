@@ -129,14 +129,18 @@ ABOUT = {
     ),
     "five_story_wind": (
         "The five-story building with an actuator on every story (100 kN each), controlled against wind for "
-        "occupant comfort by LQG + wind model (classical, no training) whose Kalman filter also models the ground "
-        "from its reading (sensors.ground_model): the building it protects will also shake. Behind the wind "
-        "supervisor (configs/supervisors/wind.yaml): a trigger at 0.3-1.0 m/s^2 on the floors' accelerations, "
-        "which wind and earthquakes both move, so that sensor noise never drives it (without it: 10 times the "
-        "at-rest bound). It passes the wind standard and the ground-motion suite (docs/wind.md, 'A wind "
-        "controller that will also shake'); below, its wind suite and the seven earthquake records.",
-        "configs/experiments/five_story_wind.yaml",
-        "",
+        "occupant comfort by the learned MPC: a network (2 x 64, tanh) on the observation's Kalman estimate (LQG + "
+        "wind model's filter, which also models the ground from its reading: the building it protects will also "
+        "shake), taught by DAgger to act as MPC over 20 control steps on the wind model's map, which plans around "
+        "the force limits strong winds reach where LQG + wind model clips; trained on generated wind. Behind the "
+        "wind supervisor (configs/supervisors/wind.yaml): a trigger at 0.3-1.0 m/s^2 on the floors' accelerations, "
+        "which wind and earthquakes both move, so that sensor noise never drives it. Shipped by the rule: wind suite "
+        "J1 + J2 0.744 against LQG + wind model's 0.757 (the controller shipped before it), no wind load worse. "
+        "What it gives up against that law: one of the 303 significant ground motions worse than no control by "
+        "more than 1 % (LQG + wind model: none; within round 6's stated risk), and its linearised loop is unstable "
+        "with a 20 ms actuator lag as well as with a 40 ms delay (LQG + wind model: the delay only).",
+        "studies/mpc/five_story_wind_dagger.yaml",
+        "6 min (1.06 M steps, the best at 288 k)",
     ),
 }
 

@@ -20,7 +20,8 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.api.common import safety_standard
+from rlcontroller.api.common import folder_experiment, load, safety_standard, shipped_folders
+from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import classical_controllers, compare
@@ -35,6 +36,7 @@ TRAINING = {  # how each learned shipped controller was trained (its command; lo
     "five_story_every_story": "rlc train studies/mpc/five_story_every_story_dagger.yaml",
     "five_story_mr_standard": "rlc train studies/devices/five_story_mr_standard.yaml",
     "five_story_paper_layout": "rlc train studies/mpc/five_story_paper_layout_dagger.yaml",
+    "five_story_wind": "rlc train studies/mpc/five_story_wind_dagger.yaml",
     "five_story_yielding": "rlc train studies/mpc/five_story_yielding_ship_dagger.yaml",
 }
 
@@ -85,7 +87,15 @@ def wins(row: dict) -> bool:
     return row["kind"] != "classical" and on_check and on_records and shipped["worse"] <= classical["worse"]
 
 
-def page(rows: dict[str, dict]) -> str:
+def unshipped() -> list[str]:
+    """The experiments under configs/experiments with something to command that no shipped controller is made
+    for (`rlc models` lists them too)."""
+    served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
+    experiments = {config.stem: load(config) for config in sorted((CONFIGS / "experiments").glob("*.yaml"))}
+    return [name for name, e in experiments.items() if e.command_labels() and e.hardware() not in served]
+
+
+def page(rows: dict[str, dict], nothing: list[str]) -> str:
     lines = [
         "# Scoreboard: the shipped controllers against the best classical law",
         "",
@@ -113,7 +123,10 @@ def page(rows: dict[str, dict]) -> str:
         )
     learned = [name for name, row in rows.items() if row["kind"] != "classical"]
     won = sum(wins(row) for row in rows.values())
-    lines += ["", f"Learned controllers ship on {len(learned)} of the {len(rows)} experiments here; {won} win by 5 %."]
+    total = len(rows) + len(nothing)
+    lines += ["", f"Learned controllers ship on {len(learned)} of the {total} experiments ({len(rows)} here; nothing "
+              f"ships for {', '.join(nothing) or 'none'}: models/README.md says why); {won} win by 5 %."]  # fmt: skip
+    lines += ["", "Why none wins by 5 % where it counts: docs/mpc.md, \"Why none wins by 5 %\"."]
     lines += ["", "## How the learned ones were trained", ""]
     lines += [f"- `{name}`: `{TRAINING.get(name, 'see its card.md')}`" for name in learned]
     return "\n".join(lines) + "\n"
@@ -128,7 +141,7 @@ def main() -> None:
     for folder in sorted(p for p in (REPOSITORY / "models").iterdir() if (p / "best_check.yaml").is_file()):
         rows[folder.name] = scores(folder, arguments.records)
         print(folder.name, rows[folder.name], flush=True)
-    atomic_write(arguments.out, page(rows))
+    atomic_write(arguments.out, page(rows, unshipped()))
     print(f"wrote {arguments.out}")
 
 

@@ -172,8 +172,6 @@ def compare_lqg(
         raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
     if mpc is not None and not 1 <= mpc <= MAX_HORIZON:
         raise ConfigError(f"--mpc {mpc}: expected a horizon of 1..{MAX_HORIZON} control steps")
-    if mpc is not None and experiment.load_kind == "wind":
-        raise ConfigError("--mpc: MPC is built for ground motion (its prediction is the ground model's), not wind")
     if experiment.has_dampers and preview:
         raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")

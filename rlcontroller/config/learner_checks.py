@@ -86,7 +86,7 @@ def _check_random_search(experiment: Experiment) -> None:
 
 def _check_dagger(experiment: Experiment) -> None:
     """DAgger imitates MPC on raw observations (its data set holds them as the env gives them), on the batched
-    env's plant, under ground motion (MPC is not built for wind)."""
+    env's plant."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
     refused = {
@@ -97,10 +97,6 @@ def _check_dagger(experiment: Experiment) -> None:
     for key, (wrong, why) in refused.items():
         if wrong:
             raise ConfigError(f"{location(file, prefix, key)}: not for DAgger ({why})")
-    if experiment.load_kind == "wind":
-        raise ConfigError(
-            f"{location(file, prefix, 'name')}: DAgger imitates MPC, which is built for ground motion (not for wind)"
-        )
 
 
 def _in_range(value: Any, low: float, high: float, integer: bool) -> bool:

@@ -1,11 +1,13 @@
 """Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps, subject
 to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of LQG +
-ground model (`MPCController`; `ObservedMPC` takes the estimate an observation holds, as a controller file's MPC
-does); for semi-active dampers with passivity as bounds (`SemiActiveMPC`). `MPCDesign` is what it is made of
-(model, cost, terminal weight, stroke rows, horizon), as a controller file holds it; `MPCDesign.problem()` the QP.
+ground model, or under wind of LQG + wind model (`MPCController`; `ObservedMPC` takes the estimate an observation
+holds, as a controller file's MPC does); for semi-active dampers with passivity as bounds (`SemiActiveMPC`).
+`MPCDesign` is what it is made of (model, cost, terminal weight, stroke rows, horizon), as a controller file holds
+it; `MPCDesign.problem()` the QP.
 
 With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the coming
-ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation) and the reward's cost
+ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation; under wind the wind model's,
+whose states are the floor forces) and the reward's cost
 rows (`lqr.quadratic_cost`), each step solves
 
     min over a, s   sum_k |H_z z_k + H_u a_k|^2 + z_N' P z_N + sum_k,j (rho_1 s_kj + rho_2 s_kj^2 / 2)
@@ -30,7 +32,7 @@ import numpy as np
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.controllers import ClippedOptimal, LQGController, LQGPrior
-from rlcontroller.control.lqg import design_lqg_ground_model
+from rlcontroller.control.lqg import design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
 from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
@@ -158,10 +160,10 @@ class MPCDesign:
 
 
 def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCDesign:
-    """MPC on `plant`'s ground-model map with the experiment's cost (or `reward`'s), its terminal weight the
-    stationary Riccati solution."""
-    step = plant.sampled().ground_model
-    cost = quadratic_cost(plant, reward or plant.experiment.reward, step)
+    """MPC on `plant`'s ground-model map (under wind its wind-model map) with the experiment's cost (or `reward`'s),
+    its terminal weight the stationary Riccati solution."""
+    step = plant.sampled().ground_model if plant.wind is None else plant.sampled().wind_model
+    cost = quadratic_cost(plant, reward or plant.experiment.reward, step, floor_loads=plant.wind is not None)
     _, riccati = lqr_gain(step, cost, plant.force_limits)
     action_gain = step.force_gain * plant.force_limits
     return MPCDesign(
@@ -277,13 +279,14 @@ class _Planned:
 
 
 class MPCController(_Planned):
-    """MPC on the estimate of LQG + ground model's Kalman filter (the same filter, the QP in place of its gain):
-    `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (the last plan's next
+    """MPC on the estimate of LQG + ground model's Kalman filter (under wind LQG + wind model's; the QP in place of
+    its gain): `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (the last plan's next
     action taken instead, or LQR's clipped action)."""
 
     def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
         self.name = name or f"MPC (N = {horizon})"
-        self.estimator = LQGController(design_lqg_ground_model(plant), plant, self.name)  # and LQR's fallback
+        lqg = design_lqg_ground_model(plant) if plant.wind is None else design_lqg_wind_model(plant)
+        self.estimator = LQGController(lqg, plant, self.name)  # and LQR's fallback
         self.planner = MPCPlanner(mpc_design(plant, horizon).problem())
         self.problem = self.planner.problem
 

@@ -167,7 +167,13 @@ def test_what_dagger_refuses_is_refused_at_loading(algorithm, message):
     assert str(error.value).startswith(f"<config>: {message}") and "\n" not in str(error.value)
 
 
-def test_dagger_refuses_wind():
+def test_dagger_under_wind_takes_mpc_on_the_wind_model():
+    """Under wind DAgger's expert plans on the wind model's map, from LQG + wind model's estimate."""
+    from rlcontroller.control.mpc import mpc_controller
+    from rlcontroller.physics.plant import Plant
+
     wind = {"kind": "wind", "dt": 0.02, "duration": [60.0, 60.0], "speed": [20.0, 20.0]}
-    with pytest.raises(ConfigError, match="DAgger imitates MPC, which is built for ground motion"):
-        build_experiment({"algorithm": {"name": "DAgger", "kwargs": {}}, "excitation": {"generator": wind}})
+    experiment = build_experiment({"algorithm": {"name": "DAgger", "kwargs": {}}, "excitation": {"generator": wind}})
+    plant = Plant(experiment)
+    expert = mpc_controller(plant.design)
+    assert plant.wind is not None and expert.problem.linear.shape[1] == plant.design.sampled().wind_model.phi.shape[0]
