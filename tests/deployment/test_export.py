@@ -199,9 +199,10 @@ def test_the_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path):
 
 @pytest.mark.slow
 def test_the_shipped_wind_controller_exports_with_its_floor_trigger(tmp_path, monkeypatch):
-    """Named by its experiment from another folder, the five-story wind controller (LQG + wind and ground
-    model behind a trigger on the floors' accelerations) exports; its graph gives the env's forces under a
-    generated wind load, within 1e-3 of their peak, and the metadata names what the trigger watches."""
+    """Named by its experiment from another folder, the five-story wind controller (the learned MPC on LQG + wind
+    and ground model's estimate, behind a trigger on the floors' accelerations) exports; its graph gives the env's
+    forces under a generated wind load, within 1e-3 of their peak, and the metadata names what the trigger
+    watches."""
     from rlcontroller import api
 
     monkeypatch.chdir(tmp_path)
