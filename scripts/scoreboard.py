@@ -92,7 +92,8 @@ def unshipped() -> list[str]:
     for (`rlc models` lists them too)."""
     served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
     experiments = {config.stem: load(config) for config in sorted((CONFIGS / "experiments").glob("*.yaml"))}
-    return [name for name, e in experiments.items() if e.command_labels() and e.hardware() not in served]
+    return [name for name, experiment in experiments.items()
+            if experiment.command_labels() and experiment.hardware() not in served]  # fmt: skip
 
 
 def page(rows: dict[str, dict], nothing: list[str]) -> str:
@@ -126,7 +127,8 @@ def page(rows: dict[str, dict], nothing: list[str]) -> str:
     total = len(rows) + len(nothing)
     lines += ["", f"Learned controllers ship on {len(learned)} of the {total} experiments ({len(rows)} here; nothing "
               f"ships for {', '.join(nothing) or 'none'}: models/README.md says why); {won} win by 5 %."]  # fmt: skip
-    lines += ["", "Why none wins by 5 % where it counts: docs/mpc.md, \"Why none wins by 5 %\"."]
+    if not won:
+        lines += ["", "Why none wins by 5 % where it counts: docs/mpc.md, \"Why none wins by 5 %\"."]
     lines += ["", "## How the learned ones were trained", ""]
     lines += [f"- `{name}`: `{TRAINING.get(name, 'see its card.md')}`" for name in learned]
     return "\n".join(lines) + "\n"
