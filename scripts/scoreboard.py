@@ -20,8 +20,8 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.api.common import folder_experiment, load, safety_standard, shipped_folders
-from rlcontroller.assets import CONFIGS
+from rlcontroller.api.common import safety_standard
+from rlcontroller.api.shipping import unshipped_experiments
 from rlcontroller.config import load_experiment, load_safety_check
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import classical_controllers, compare
@@ -87,15 +87,6 @@ def wins(row: dict) -> bool:
     return row["kind"] != "classical" and on_check and on_records and shipped["worse"] <= classical["worse"]
 
 
-def unshipped() -> list[str]:
-    """The experiments under configs/experiments with something to command that no shipped controller is made
-    for (`rlc models` lists them too)."""
-    served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
-    experiments = {config.stem: load(config) for config in sorted((CONFIGS / "experiments").glob("*.yaml"))}
-    return [name for name, experiment in experiments.items()
-            if experiment.command_labels() and experiment.hardware() not in served]  # fmt: skip
-
-
 def page(rows: dict[str, dict], nothing: list[str]) -> str:
     lines = [
         "# Scoreboard: the shipped controllers against the best classical law",
@@ -143,7 +134,7 @@ def main() -> None:
     for folder in sorted(p for p in (REPOSITORY / "models").iterdir() if (p / "best_check.yaml").is_file()):
         rows[folder.name] = scores(folder, arguments.records)
         print(folder.name, rows[folder.name], flush=True)
-    atomic_write(arguments.out, page(rows, unshipped()))
+    atomic_write(arguments.out, page(rows, list(unshipped_experiments()[0])))
     print(f"wrote {arguments.out}")
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from rlcontroller.api.common import QUIET, Report, folder_experiment, load, model_folder, shipped_folders
 from rlcontroller.api.safety import unchecked_note, verdict_state
 from rlcontroller.assets import CONFIGS, DEFAULT_MODEL
-from rlcontroller.config import ConfigError
+from rlcontroller.config import ConfigError, Experiment
 
 
 def shipped_models() -> list[str]:
@@ -35,21 +35,31 @@ def shipped_models() -> list[str]:
         groups.setdefault(hardware_label(experiment), []).append(line)
     lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
     lines.append("each verdict is its folder's claim until re-run: 'rlc check models/NAME --verify'")
-    served = [experiment.hardware() for experiment in shipped.values()]
+    unshipped, passive = unshipped_experiments()
     unserved: dict[str, list[str]] = {}
-    passive: list[str] = []
-    for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
-        experiment = load(config)
-        if not experiment.command_labels():
-            passive.append(config.stem)
-        elif experiment.hardware() not in served:
-            unserved.setdefault(hardware_label(experiment), []).append(config.stem)
+    for name, experiment in unshipped.items():
+        unserved.setdefault(hardware_label(experiment), []).append(name)
     if unserved:
         lines.append("none ships yet (models/README.md says why) for:")
         lines += [f"  {label} ({', '.join(names)})" for label, names in unserved.items()]
     if passive:
         lines.append(f"nothing to command, its verdict from 'rlc compare passive': {', '.join(passive)}")
     return lines
+
+
+def unshipped_experiments() -> tuple[dict[str, Experiment], list[str]]:
+    """The experiments under configs/experiments (by name) with something to command that no shipped controller
+    is made for, and the names of those with nothing to command."""
+    served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
+    unshipped: dict[str, Experiment] = {}
+    passive: list[str] = []
+    for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
+        experiment = load(config)
+        if not experiment.command_labels():
+            passive.append(config.stem)
+        elif experiment.hardware() not in served:
+            unshipped[config.stem] = experiment
+    return unshipped, passive
 
 
 def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
