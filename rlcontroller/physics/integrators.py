@@ -1,5 +1,6 @@
 """The compiled (numba) integrators of the non-linear plants over one control step: yielding stories
-(`hysteresis.BoucWen`, classical RK4) and semi-active dampers (`semi_active.SemiActiveDampers`: the
+(`hysteresis.BoucWen`, classical RK4), the fishbone frame (`fishbone.Fishbone`, RK4 with its massless floor rotations
+in equilibrium) and semi-active dampers (`semi_active.SemiActiveDampers`: the
 building's exact linear map over sub-steps, implicit Euler on the MR damper's z). The equations are
 in those modules' docstrings. This module is imported on first use: numba's own import (~0.2 s) is
 never paid by a linear plant.
@@ -188,3 +189,57 @@ def damper_step(
                 s[base + 1] = z_new
                 s[base + 3] = c1 * y_rate + k1 * drift
     return s
+
+
+@numba.njit(cache=True)
+def _fishbone_derivative(
+    s, ground, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, expo, beta
+):  # fmt: skip
+    n = mass_inverse.size
+    v, z = s[n : 2 * n], s[2 * n :]
+    rate = np.empty(3 * n)
+    elastic = -(rotation @ v)  # theta' were the hinges not yielding (n + 1: the base's first)
+    theta_rate = elastic.copy()
+    for _ in range(2):  # Phi from the signs of the last estimate of theta', then the linear solve
+        phi = np.zeros(n + 1)
+        for j in range(n):
+            t = theta_rate[j + 1]
+            sign = 1.0 if t * z[j] > 0.0 else (-1.0 if t * z[j] < 0.0 else 0.0)
+            phi[j + 1] = (1.0 - min(abs(z[j]) ** expo[j], 1.0) * (beta[j] * sign + 1.0 - beta[j])) / yield_rotation[j]
+        theta_rate = np.linalg.solve(np.eye(n + 1) + hinge * phi[np.newaxis, :], elastic)
+    for j in range(n):
+        rate[2 * n + j] = z_rate(z[j], theta_rate[j + 1], yield_rotation[j], expo[j], beta[j], 1.0 - beta[j])
+    rate[:n] = v
+    rate[n : 2 * n] = mass_inverse * (-(damping @ v) - linear @ s[:n] - coupling @ z) - ground
+    return rate
+
+
+@numba.njit(cache=True)
+def fishbone_history(
+    ground, per_step, control_dt, substeps, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation,
+    exponent, beta,
+):  # fmt: skip
+    """The fishbone's states [x; v; z] at every control step (`physics.fishbone`), uncontrolled, RK4 with
+    `substeps` steps per ground-sample interval; nan from where a run diverges (a floor past 50 m)."""
+    n = mass_inverse.size
+    steps = (ground.size - 1) // per_step
+    out = np.full((steps + 1, 3 * n), np.nan)
+    s = np.zeros(3 * n)
+    out[0] = s
+    h = control_dt / (per_step * substeps)
+    args = (mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, exponent, beta)
+    for k in range(steps):
+        for interval in range(per_step):
+            start = ground[k * per_step + interval]
+            slope = (ground[k * per_step + interval + 1] - start) / (h * substeps)
+            for j in range(substeps):
+                a0 = start + slope * h * j
+                k1 = _fishbone_derivative(s, a0, *args)
+                k2 = _fishbone_derivative(s + 0.5 * h * k1, a0 + 0.5 * h * slope, *args)
+                k3 = _fishbone_derivative(s + 0.5 * h * k2, a0 + 0.5 * h * slope, *args)
+                k4 = _fishbone_derivative(s + h * k3, a0 + h * slope, *args)
+                s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        if not np.all(np.isfinite(s)) or np.max(np.abs(s[:n])) > 50.0:
+            break
+        out[k + 1] = s
+    return out

@@ -1,0 +1,126 @@
+"""A fishbone model of a moment frame: floors that sway, floor rotations that couple the stories, beams that yield.
+
+One elastic column line carries the frame's bending (flexural stiffness EI_i per story, Euler-Bernoulli between
+the floors), each floor's beams act as one rotational spring k_b,j on the floor's rotation theta_j, the base's
+rotation is held by a spring k_0, and the floors' weights stand on a leaning column (P-Delta: -W_i / h_i on story
+i's drift, W_i the weight above it) — Nakashima, Ogawa & Inoue (2002), "Generic frame model for simulation of
+earthquake responses of steel moment frames", Earthquake Eng. Struct. Dyn. 31(3). Masses sit on the floors'
+lateral displacements x only, so the n + 1 rotations (the base's first) are massless. Where story springs
+(`physics.hysteresis`) make each story yield alone, here a floor's beam hinge acts on the stories above and
+below it, which is what lets a frame's upper stories lean back while its lower ones keep their lean.
+
+Each floor's beam spring yields (Bouc-Wen on its rotation): moment k_b (a theta + (1 - a) theta_y z) with
+z' = (theta'/theta_y) [1 - |z|^n (beta sgn(theta' z) + gamma)]. The rotations are in equilibrium at every instant,
+theta = -K_tt^-1 (K_tx x + H z) (K_tt with the beams' a k_b only, H = diag((1 - a) k_b theta_y), 0 at the base),
+so the floors obey
+
+    M v' = -C v - K_e x - B z + F - M 1 a_g,   K_e = K_xx - K_xt K_tt^-1 K_tx,   B = -K_xt K_tt^-1 H,
+
+and theta' = -(I + G Phi)^-1 A v (A = K_tt^-1 K_tx, G = K_tt^-1 H, Phi = diag(z'/theta')), a linear solve per RK4
+stage with the sign of theta' taken from a first pass (`integrators.fishbone_history`). SI units throughout:
+N m^2, N m/rad, m, kg, s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rlcontroller.physics.excitation import STANDARD_GRAVITY
+
+
+@dataclass(frozen=True)
+class ColumnLine:
+    """The fishbone's elastic parts: floor masses (kg), story heights (m), the column line's EI per story
+    (N m^2), the beams' rotational stiffness per floor (N m/rad) and the base's (N m/rad)."""
+
+    masses: np.ndarray
+    heights: np.ndarray
+    column: np.ndarray
+    beams: np.ndarray
+    base: float
+
+    @property
+    def n(self) -> int:
+        return self.masses.size
+
+    def matrices(self, beam_factor: np.ndarray | float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """K_xx (P-Delta included, N/m), K_xt (N/rad), K_tt (N m/rad; rotations 0..n, 0 the base) with each
+        floor's beam spring times `beam_factor` (the hinges' linear part: their post-yield ratio)."""
+        n = self.n
+        full = np.zeros((2 * n + 1, 2 * n + 1))  # [x_1..x_n, theta_0..theta_n]
+        for i, (stiffness, h) in enumerate(zip(self.column, self.heights, strict=True)):
+            k = stiffness / h**3 * np.array(
+                [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                 [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+            )  # fmt: skip
+            dofs = [i - 1, n + i, i, n + i + 1]  # x below (-1: the ground, fixed), theta below, x above, theta above
+            for a, p in enumerate(dofs):
+                for b, q in enumerate(dofs):
+                    if p >= 0 and q >= 0:
+                        full[p, q] += k[a, b]
+        full[n, n] += self.base
+        full[n + 1 :, n + 1 :] += np.diag(self.beams * beam_factor)
+        drift = np.eye(n) - np.eye(n, k=-1)
+        weight_above = STANDARD_GRAVITY * np.cumsum(self.masses[::-1])[::-1]
+        p_delta = -drift.T @ np.diag(weight_above / self.heights) @ drift
+        return full[:n, :n] + p_delta, full[:n, n:], full[n:, n:]
+
+    def lateral(self) -> np.ndarray:
+        """The lateral stiffness (N/m, n x n) the floors feel with the beams elastic, rotations condensed out."""
+        xx, xt, tt = self.matrices()
+        return xx - xt @ np.linalg.solve(tt, xt.T)
+
+
+@dataclass(frozen=True)
+class Fishbone:
+    """A column line with yielding beam hinges, as arrays the integrator takes (SI; module docstring)."""
+
+    mass_inverse: np.ndarray  # (n,) 1/m_j
+    damping: np.ndarray  # C (n, n)
+    linear_stiffness: np.ndarray  # K_e (n, n)
+    hysteretic_matrix: np.ndarray  # B (n, n): the floors' restoring forces from the hinges' z, B z (N)
+    rotation_map: np.ndarray  # A (n + 1, n)
+    hinge_map: np.ndarray  # G (n + 1, n + 1)
+    yield_rotation: np.ndarray  # theta_y,j (rad)
+    exponent: np.ndarray
+    beta: np.ndarray
+
+    @classmethod
+    def of(
+        cls,
+        line: ColumnLine,
+        damping: np.ndarray,
+        yield_rotation: np.ndarray,
+        post_yield_ratio: np.ndarray,
+        exponent: np.ndarray,
+        beta: np.ndarray,
+    ) -> Fishbone:
+        """The fishbone of `line` with damping C (N s/m) and per floor's beam hinge: yield rotation (rad),
+        post-yield ratio a, exponent n and beta (gamma = 1 - beta)."""
+        xx, xt, tt = line.matrices(post_yield_ratio)
+        hinge = np.concatenate([[0.0], (1.0 - post_yield_ratio) * line.beams * yield_rotation])
+        inverse = np.linalg.inv(tt)
+        hinge_map = inverse * hinge[np.newaxis, :]
+        return cls(
+            mass_inverse=1.0 / line.masses,
+            damping=np.ascontiguousarray(damping),
+            linear_stiffness=np.ascontiguousarray(xx - xt @ inverse @ xt.T),
+            hysteretic_matrix=np.ascontiguousarray(-(xt @ hinge_map)[:, 1:]),
+            rotation_map=np.ascontiguousarray(inverse @ xt.T),
+            hinge_map=np.ascontiguousarray(hinge_map),
+            yield_rotation=np.asarray(yield_rotation, dtype=float),
+            exponent=np.asarray(exponent, dtype=float),
+            beta=np.asarray(beta, dtype=float),
+        )
+
+    def history(self, ground: np.ndarray, per_step: int, control_dt: float, substeps: int) -> np.ndarray:
+        """The uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest under `ground`
+        (m/s^2, K * per_step + 1 samples); a run that diverges is nan from there on."""
+        from rlcontroller.physics.integrators import fishbone_history
+
+        return fishbone_history(
+            ground, per_step, control_dt, substeps, self.mass_inverse, self.damping, self.linear_stiffness,
+            self.hysteretic_matrix, self.rotation_map, self.hinge_map, self.yield_rotation, self.exponent, self.beta,
+        )  # fmt: skip

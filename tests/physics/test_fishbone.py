@@ -1,0 +1,84 @@
+"""The fishbone frame: its column line against beam theory, its elastic response against the linear building,
+and its massless rotations against an independent solver that gives them a small inertia."""
+
+import numpy as np
+import pytest
+import scipy.integrate
+
+from rlcontroller.physics.fishbone import ColumnLine, Fishbone
+from rlcontroller.physics.integrators import z_rate
+
+H, EI = 3.5, 2.0e8  # m, N m^2
+
+
+def line(masses=(1e5, 1e5), beams=3.0e8, base=1e22) -> ColumnLine:
+    n = len(masses)
+    return ColumnLine(np.asarray(masses, float), np.full(n, H), np.full(n, EI), np.full(n, beams), base)
+
+
+def test_one_story_column_is_a_cantilever_without_beams_and_guided_with_rigid_ones():
+    weightless = (1e-9,)  # no P-Delta
+    assert line(weightless, beams=0.0).lateral()[0, 0] == pytest.approx(3 * EI / H**3, rel=1e-9)
+    assert line(weightless, beams=1e18).lateral()[0, 0] == pytest.approx(12 * EI / H**3, rel=1e-6)
+    heavy = line((2e5,), beams=0.0).lateral()[0, 0]  # the leaning column's P-Delta: -W / h
+    assert heavy == pytest.approx(3 * EI / H**3 - 2e5 * 9.80665 / H, rel=1e-9)
+
+
+def test_two_story_cantilever_flexibility_is_beam_theory():
+    flexibility = np.linalg.inv(line((1e-9, 1e-9), beams=0.0).lateral())
+    # deflection at a under a unit load at b >= a: a^2 (3 b - a) / (6 EI)
+    expected = np.array([[1 / 3, 5 / 6], [5 / 6, 8 / 3]]) * H**3 / EI
+    np.testing.assert_allclose(flexibility, expected, rtol=1e-9)
+
+
+def ground_motion(duration=4.0, dt=0.01, amplitude=4.0, frequency=2.5):
+    t = np.arange(0.0, duration + dt / 2, dt)
+    return t, amplitude * np.sin(2 * np.pi * frequency * t) * np.minimum(t, 1.0)
+
+
+def frame(yield_rotation, ratio=0.05, exponent=2.0) -> tuple[ColumnLine, Fishbone]:
+    column_line = line()
+    damping = 0.01 * 2 * np.sqrt(1e5 * 5e7) / 1e5 * np.diag(column_line.masses)  # about 1 % in the first mode
+    n = column_line.n
+    fishbone = Fishbone.of(column_line, damping, np.full(n, yield_rotation), np.full(n, ratio), np.full(n, exponent),
+                           np.full(n, 0.5))  # fmt: skip
+    return column_line, fishbone
+
+
+def test_beams_that_never_yield_give_the_linear_building():
+    column_line, fishbone = frame(yield_rotation=1e3)  # |z| stays below 1e-5: the hinges are elastic
+    t, ground = ground_motion()
+    states = fishbone.history(ground, 1, 0.01, 4)
+    m, k, c = np.diag(column_line.masses), column_line.lateral(), fishbone.damping
+    rate = lambda time, s: np.concatenate([s[2:], np.linalg.solve(m, -c @ s[2:] - k @ s[:2]) - np.interp(time, t, ground)])  # noqa: E731, E501
+    exact = scipy.integrate.solve_ivp(rate, (0, t[-1]), np.zeros(4), t_eval=t, rtol=1e-10, atol=1e-12).y.T
+    np.testing.assert_allclose(states[:, :2], exact[:, :2], atol=1e-6 * np.abs(exact[:, :2]).max())
+
+
+def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
+    """The integrator solves theta' = -(I + G Phi)^-1 A v at each stage; an independent model gives the rotations
+    an inertia J (their frequencies 50 times the first mode's) and integrates them as states with scipy."""
+    column_line, fishbone = frame(yield_rotation=0.002, ratio=0.05, exponent=2.0)
+    n, ratio, yield_rotation, beta = 2, 0.05, 0.002, 0.5
+    t, ground = ground_motion()
+    states = fishbone.history(ground, 1, 0.01, 8)
+    xx, xt, tt = column_line.matrices(ratio)
+    hinge = np.concatenate([[0.0], (1 - ratio) * column_line.beams * yield_rotation])
+    first = np.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(column_line.masses), column_line.lateral())).real.min())
+    inertia = np.diag(tt + np.diag(np.concatenate([[0.0], (1 - ratio) * column_line.beams]))) / (50 * first) ** 2
+    masses, damping = column_line.masses, fishbone.damping
+
+    def rate(time, s):
+        x, theta, v = s[:n], s[n : 2 * n + 1], s[2 * n + 1 : 3 * n + 1]
+        omega, z = s[3 * n + 1 : 4 * n + 2], s[4 * n + 2 :]
+        moments = xt.T @ x + tt @ theta + hinge * np.concatenate([[0.0], z])
+        acceleration = (-damping @ v - xx @ x - xt @ theta) / masses - np.interp(time, t, ground)
+        z_dot = [z_rate(z[j], omega[j + 1], yield_rotation, 2.0, beta, 1 - beta) for j in range(n)]
+        return np.concatenate([v, omega, acceleration, -moments / inertia, z_dot])
+
+    independent = scipy.integrate.solve_ivp(rate, (0, t[-1]), np.zeros(5 * n + 2), t_eval=t, method="Radau",
+                                            rtol=1e-8, atol=1e-11).y.T  # fmt: skip
+    drift, expected = np.diff(states[:, :n], prepend=0.0), np.diff(independent[:, :n], prepend=0.0)
+    assert np.abs(independent[:, 4 * n + 2 :]).max() > 0.9  # the hinges yielded
+    np.testing.assert_allclose(drift, expected, atol=0.01 * np.abs(expected).max())
+    np.testing.assert_allclose(states[:, 2 * n :], independent[:, 4 * n + 2 :], atol=0.02)
