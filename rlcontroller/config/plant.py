@@ -57,6 +57,7 @@ class SensorFaultConfig(StrictModel):
 
 
 Drift = Annotated[float, Field(gt=0.0, le=10.0)]  # m
+Rotation = Annotated[float, Field(gt=0.0, le=1.0)]  # rad
 
 
 class HysteresisConfig(StrictModel):
@@ -66,9 +67,15 @@ class HysteresisConfig(StrictModel):
     gravity's P-Delta makes a frame do), `exponent` n (sharper yielding for larger n), `beta` and `gamma` the
     loop's shape: each a scalar or one value per story. `collapse_drift` (m, per story or one): a story past it
     has collapsed, and the building stays as it lies for the rest of the motion (needed with a negative a,
-    whose drift would otherwise run away). `substeps` RK4 steps per ground-sample interval."""
+    whose drift would otherwise run away). `substeps` RK4 steps per ground-sample interval.
 
-    model: Literal["bouc_wen"] = "bouc_wen"
+    `model: fishbone` (`physics.fishbone`) makes each floor's beams yield instead of each story: an elastic column
+    line (`column_stiffness` EI per story, N m^2), the beams' rotational springs (`beam_stiffness` per floor, N m/rad)
+    and the base's (`base_stiffness`, N m/rad), the floors' weights on a leaning column; the per-story lists then
+    give each floor's beam hinge (its `yield_rotation`, rad, in place of a yield drift), and `yield_drift` stays
+    the stories' (m: ductility, collapse)."""
+
+    model: Literal["bouc_wen", "fishbone"] = "bouc_wen"
     yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
     post_yield_ratio: Annotated[float, Field(ge=-0.5, le=1.0)] | list[Annotated[float, Field(ge=-0.5, le=1.0)]] = 0.1
     exponent: Annotated[float, Field(ge=1.0, le=20.0)] | list[Annotated[float, Field(ge=1.0, le=20.0)]] = 2.0
@@ -76,9 +83,15 @@ class HysteresisConfig(StrictModel):
     gamma: Annotated[float, Field(ge=-1.0, le=1.0)] | list[Annotated[float, Field(ge=-1.0, le=1.0)]] = 0.5
     collapse_drift: Drift | list[Drift] | None = None
     substeps: int = Field(4, ge=1, le=100)
+    yield_rotation: Rotation | list[Rotation] | None = None
+    column_stiffness: list[Annotated[float, Field(gt=0.0)]] | None = None
+    beam_stiffness: list[Annotated[float, Field(ge=0.0)]] | None = None
+    base_stiffness: Annotated[float, Field(gt=0.0)] | None = None
 
+    FISHBONE: ClassVar[tuple[str, ...]] = ("yield_rotation", "column_stiffness", "beam_stiffness", "base_stiffness")
     PER_STORY: ClassVar[tuple[str, ...]] = (
-        "yield_drift", "post_yield_ratio", "exponent", "beta", "gamma", "collapse_drift",
+        "yield_drift", "post_yield_ratio", "exponent", "beta", "gamma", "collapse_drift", "yield_rotation",
+        "column_stiffness", "beam_stiffness",
     )  # fmt: skip
 
     @model_validator(mode="after")
@@ -90,6 +103,12 @@ class HysteresisConfig(StrictModel):
             raise ValueError("a negative post_yield_ratio (a story losing strength) needs a collapse_drift (m)")
         if self.collapse_drift is not None and np.any(np.asarray(self.collapse_drift) <= np.asarray(self.yield_drift)):
             raise ValueError("collapse_drift must exceed yield_drift in every story")
+        given = [key for key in self.FISHBONE if getattr(self, key) is not None]
+        if self.model == "fishbone" and len(given) < len(self.FISHBONE):
+            missing = ", ".join(key for key in self.FISHBONE if key not in given)
+            raise ValueError(f"model fishbone needs {missing}")
+        if self.model == "bouc_wen" and given:
+            raise ValueError(f"{', '.join(given)}: only for model fishbone (yielding beams), not bouc_wen (stories)")
         total = np.asarray(self.beta, dtype=float) + np.asarray(self.gamma, dtype=float)
         if np.max(np.abs(total - 1.0)) > 1e-9:
             raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {np.round(total, 12).tolist()}")
@@ -212,6 +231,8 @@ def randomized_plant(base: PlantConfig | None, values: dict[str, float]) -> Plan
             target = target[step]
         if key in FACTORS_ON_THE_PLANT:
             target[leaf] = (np.asarray(target[leaf], dtype=float) * value).tolist()
+            if key == "yield_drift" and target["model"] == "fishbone":  # its beams yield: their rotations too
+                target["yield_rotation"] = (np.asarray(target["yield_rotation"], dtype=float) * value).tolist()
         else:
             target[leaf] = value
     return PlantConfig.model_validate(plant)

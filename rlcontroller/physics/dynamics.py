@@ -344,12 +344,12 @@ def response(
     time: np.ndarray,
     ground: np.ndarray,
     floor_forces: np.ndarray | None = None,
-    hysteretic_stiffness: np.ndarray | None = None,
+    story_force_map: np.ndarray | None = None,
 ) -> Response:
     """Every time history from states x (K+1, size), the forces (N) held just before each instant (K+1, m)
     and the floor forces (N) at each instant (K+1, floors), if any, through `outputs(quantity)` = (C, D) on
-    x and `load_outputs(quantity)` (how floor forces enter it); with `hysteretic_stiffness` ((1 - a) k d_y per
-    story: yielding stories, x = [x; v; z]) also the story hysteretic forces (N)."""
+    x and `load_outputs(quantity)` (how floor forces enter it); with `story_force_map` (n, n: the stories' shear
+    carried by the hysteretic parts from z, x = [x; v; z]) also the story hysteretic forces (N)."""
     values = {}
     for quantity in RESPONSE_QUANTITIES:
         c, d = outputs(quantity)
@@ -358,8 +358,8 @@ def response(
             values[quantity] += floor_forces @ load_outputs(quantity).T
     c, d = outputs("base_shear")
     values["base_shear"] = (states @ c.T + held_forces @ d.T)[:, 0]
-    if hysteretic_stiffness is not None:
-        values["hysteretic_force"] = states[:, 2 * hysteretic_stiffness.size :] * hysteretic_stiffness
+    if story_force_map is not None:
+        values["hysteretic_force"] = states[:, 2 * len(story_force_map) :] @ story_force_map.T
     return Response(time=time, ground=ground, **values)
 
 

@@ -23,11 +23,14 @@ N m^2, N m/rad, m, kg, s.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from rlcontroller.config import HysteresisConfig
 from rlcontroller.physics.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.hysteresis import per_story
+from rlcontroller.physics.structure import Building
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,15 @@ class Fishbone:
     yield_rotation: np.ndarray  # theta_y,j (rad)
     exponent: np.ndarray
     beta: np.ndarray
+    floor_gain: np.ndarray | None = None  # Gamma times the force limits (n, m): actions to floor forces (N)
+    yield_drift: np.ndarray | None = None  # (n,) m: the stories' (ductility)
+    collapse_drift: np.ndarray | None = None  # (n,) m: past it a story has collapsed (inf: never)
+    substeps: int = 4
+
+    @property
+    def story_force_map(self) -> np.ndarray:
+        """(n, n): each story's shear carried by the hinges' part, from z (N)."""
+        return np.triu(np.ones((self.mass_inverse.size,) * 2)) @ self.hysteretic_matrix
 
     @classmethod
     def of(
@@ -115,12 +127,43 @@ class Fishbone:
             beta=np.asarray(beta, dtype=float),
         )
 
+    @classmethod
+    def of_building(cls, building: Building, config: HysteresisConfig) -> Fishbone:
+        """The fishbone `config` (model fishbone) describes, on `building`'s floors, damping and actuators."""
+        n = building.n_floors
+        if building.story_heights is None:
+            raise ValueError("model fishbone needs the building's story_heights (m)")
+        if len(config.column_stiffness) != n or len(config.beam_stiffness) != n:
+            raise ValueError(f"column_stiffness and beam_stiffness: expected {n} values each (one per story, floor)")
+        masses = np.diag(building.mass)[:n].copy()
+        line = ColumnLine(masses, np.asarray(building.story_heights, dtype=float), np.asarray(config.column_stiffness),
+                          np.asarray(config.beam_stiffness), config.base_stiffness)  # fmt: skip
+        fishbone = cls.of(
+            line, building.damping[:n, :n], per_story(config.yield_rotation, n), per_story(config.post_yield_ratio, n),
+            per_story(config.exponent, n), per_story(config.beta, n),
+        )  # fmt: skip
+        collapse = np.inf if config.collapse_drift is None else config.collapse_drift
+        gain = building.actuator_matrix[:n] * building.force_limits
+        return replace(fishbone, floor_gain=gain, yield_drift=per_story(config.yield_drift, n),
+                       collapse_drift=per_story(collapse, n), substeps=config.substeps)  # fmt: skip
+
+    def _arrays(self) -> tuple:
+        return (
+            self.mass_inverse, self.damping, self.linear_stiffness, self.hysteretic_matrix, self.rotation_map,
+            self.hinge_map, self.yield_rotation, self.exponent, self.beta,
+        )  # fmt: skip
+
+    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+        """The state [x; v; z] after one control step: the action (forces / force limits) held, `ground` the
+        r + 1 ground samples (m/s^2) spanning the step."""
+        from rlcontroller.physics.integrators import fishbone_step
+
+        return fishbone_step(state, self.floor_gain @ action, ground, control_dt, self.substeps, self.collapse_drift,
+                             *self._arrays())  # fmt: skip
+
     def history(self, ground: np.ndarray, per_step: int, control_dt: float, substeps: int) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest under `ground`
         (m/s^2, K * per_step + 1 samples); a run that diverges is nan from there on."""
         from rlcontroller.physics.integrators import fishbone_history
 
-        return fishbone_history(
-            ground, per_step, control_dt, substeps, self.mass_inverse, self.damping, self.linear_stiffness,
-            self.hysteretic_matrix, self.rotation_map, self.hinge_map, self.yield_rotation, self.exponent, self.beta,
-        )  # fmt: skip
+        return fishbone_history(ground, per_step, control_dt, substeps, *self._arrays())

@@ -103,6 +103,16 @@ class BoucWen:
             substeps=config.substeps,
         )
 
+    @property
+    def hysteretic_matrix(self) -> np.ndarray:
+        """D' diag(h) (n, n): the floors' restoring forces from the stories' z (N)."""
+        return drift_matrix(self.hysteretic_stiffness.size).T @ np.diag(self.hysteretic_stiffness)
+
+    @property
+    def story_force_map(self) -> np.ndarray:
+        """diag(h) (n, n): each story's hysteretic force from z (N)."""
+        return np.diag(self.hysteretic_stiffness)
+
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state after one control step: the action (forces / force limits) held, `ground` the
         r + 1 ground samples (m/s^2) spanning the step."""

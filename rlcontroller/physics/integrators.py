@@ -193,7 +193,7 @@ def damper_step(
 
 @numba.njit(cache=True)
 def _fishbone_derivative(
-    s, ground, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, expo, beta
+    s, floor_force, ground, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, expo, beta
 ):  # fmt: skip
     n = mass_inverse.size
     v, z = s[n : 2 * n], s[2 * n :]
@@ -210,8 +210,38 @@ def _fishbone_derivative(
     for j in range(n):
         rate[2 * n + j] = z_rate(z[j], theta_rate[j + 1], yield_rotation[j], expo[j], beta[j], 1.0 - beta[j])
     rate[:n] = v
-    rate[n : 2 * n] = mass_inverse * (-(damping @ v) - linear @ s[:n] - coupling @ z) - ground
+    rate[n : 2 * n] = mass_inverse * (floor_force - damping @ v - linear @ s[:n] - coupling @ z) - ground
     return rate
+
+
+@numba.njit(cache=True)
+def fishbone_step(
+    state, floor_force, ground, control_dt, substeps, collapse, mass_inverse, damping, linear, coupling, rotation,
+    hinge, yield_rotation, exponent, beta,
+):  # fmt: skip
+    """RK4 over one control step of the fishbone (`physics.fishbone`), the floor forces held: `substeps` steps per
+    interval between the ground samples; once a story has collapsed the building stays where it lies, at rest."""
+    intervals = ground.size - 1
+    h = control_dt / (intervals * substeps)
+    s = state.copy()
+    n = collapse.size
+    if collapsed(s, collapse):
+        s[n : 2 * n] = 0.0
+        return s
+    args = (mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, exponent, beta)
+    for interval in range(intervals):
+        start, slope = ground[interval], (ground[interval + 1] - ground[interval]) / (h * substeps)
+        for j in range(substeps):
+            a0 = start + slope * h * j
+            k1 = _fishbone_derivative(s, floor_force, a0, *args)
+            k2 = _fishbone_derivative(s + 0.5 * h * k1, floor_force, a0 + 0.5 * h * slope, *args)
+            k3 = _fishbone_derivative(s + 0.5 * h * k2, floor_force, a0 + 0.5 * h * slope, *args)
+            k4 = _fishbone_derivative(s + h * k3, floor_force, a0 + h * slope, *args)
+            s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            if collapsed(s, collapse):
+                s[n : 2 * n] = 0.0
+                return s
+    return s
 
 
 @numba.njit(cache=True)
@@ -219,26 +249,18 @@ def fishbone_history(
     ground, per_step, control_dt, substeps, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation,
     exponent, beta,
 ):  # fmt: skip
-    """The fishbone's states [x; v; z] at every control step (`physics.fishbone`), uncontrolled, RK4 with
-    `substeps` steps per ground-sample interval; nan from where a run diverges (a floor past 50 m)."""
+    """The fishbone's uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest; nan from where a
+    run diverges (a floor past 50 m)."""
     n = mass_inverse.size
     steps = (ground.size - 1) // per_step
     out = np.full((steps + 1, 3 * n), np.nan)
-    s = np.zeros(3 * n)
-    out[0] = s
-    h = control_dt / (per_step * substeps)
-    args = (mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation, exponent, beta)
+    out[0] = 0.0
+    never, idle = np.full(n, np.inf), np.zeros(n)
     for k in range(steps):
-        for interval in range(per_step):
-            start = ground[k * per_step + interval]
-            slope = (ground[k * per_step + interval + 1] - start) / (h * substeps)
-            for j in range(substeps):
-                a0 = start + slope * h * j
-                k1 = _fishbone_derivative(s, a0, *args)
-                k2 = _fishbone_derivative(s + 0.5 * h * k1, a0 + 0.5 * h * slope, *args)
-                k3 = _fishbone_derivative(s + 0.5 * h * k2, a0 + 0.5 * h * slope, *args)
-                k4 = _fishbone_derivative(s + h * k3, a0 + h * slope, *args)
-                s = s + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        s = fishbone_step(
+            out[k], idle, ground[k * per_step : (k + 1) * per_step + 1], control_dt, substeps, never, mass_inverse,
+            damping, linear, coupling, rotation, hinge, yield_rotation, exponent, beta,
+        )  # fmt: skip
         if not np.all(np.isfinite(s)) or np.max(np.abs(s[:n])) > 50.0:
             break
         out[k + 1] = s

@@ -43,6 +43,7 @@ from rlcontroller.config import (
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+from rlcontroller.physics.fishbone import Fishbone
 from rlcontroller.physics.generators import GroundModel
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
@@ -110,7 +111,10 @@ class Plant:
         self.yielding = None
         if hysteresis is not None:
             try:
-                self.yielding = BoucWen.of(self.building, hysteresis)
+                if hysteresis.model == "fishbone":
+                    self.yielding = Fishbone.of_building(self.building, hysteresis)
+                else:
+                    self.yielding = BoucWen.of(self.building, hysteresis)
             except ValueError as error:  # known only with the building's matrices: a fault of the file
                 raise ConfigError(f"{location(*experiment.origin('plant'), 'hysteresis')}: {error}") from None
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None
@@ -256,9 +260,10 @@ class Plant:
         return np.hstack([c, np.zeros((c.shape[0], n))]), d
 
     def _yielding_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
-        """Outputs on [x; v; z]: the restoring force is K_e x + D' h z (`physics.hysteresis`)."""
+        """Outputs on [x; v; z]: the restoring force is K_e x + B z (story springs: B = D' diag(h),
+        `physics.hysteresis`; a fishbone, `physics.fishbone`)."""
         n, yielding = self.building.n_floors, self.yielding
-        hysteretic = self.building.drift_matrix().T @ np.diag(yielding.hysteretic_stiffness)
+        hysteretic = yielding.hysteretic_matrix
         c, d = output_matrices(replace(self.building, stiffness=yielding.linear_stiffness), quantity)
         z_columns = np.zeros((c.shape[0], n))
         if quantity == "absolute_acceleration":

@@ -215,9 +215,9 @@ class SampledPlant:
     ) -> Response:
         """Time histories from the plant's states x (K+1, n_state), the forces (N) held just before each
         instant and the floor forces (N) at each instant, if any; for yielding plants also the story
-        hysteretic forces (1 - a) k d_y z (N)."""
+        hysteretic forces (N: (1 - a) k d_y z for story springs)."""
         plant = self.plant
-        hysteretic = None if plant.yielding is None else plant.yielding.hysteretic_stiffness
+        hysteretic = None if plant.yielding is None else plant.yielding.story_force_map
         return response(plant.outputs, plant.load_outputs, states, held_forces, time, ground, floor_forces, hysteretic)
 
 

@@ -1,6 +1,6 @@
 """A fishbone reduced model of the nine-story FE frame: does floor-rotation coupling bring the residual drift in?
 
-Usage: python studies/opensees/fishbone.py [--fit 20] [--test 8]   (about 30 min on 2 cores)
+Usage: python studies/opensees/fishbone.py [--fit 20] [--test 8] [--out FOLDER]   (about 20 min on 2 cores)
 
 `rlc reduce` gives each story a Bouc-Wen spring (`identification.hysteretic`): peak drift within 10 % in 9 of 9
 stories on the motions it did not fit, residual drift within 25 % in 6 (docs/opensees.md). The FE frame yields in
@@ -18,7 +18,10 @@ beams one yielding rotational spring, the floors' rotations massless and in equi
 3. Judged as `rlc reduce` judges: per story, the median relative error of peak and residual drift on the test
    motions (seed TEST_SEED), beside the story springs' figures of studies/opensees/nine_story_frame_reduced.
 
-The FE runs are those `rlc reduce` keeps (`simulation.kept`): with them kept, no FE model runs here.
+The FE runs are those `rlc reduce` keeps (`simulation.kept`): with them kept, no FE model runs here. With `--out`,
+FOLDER/config.yaml is the experiment on the fitted fishbone (`plant.hysteresis` with `model: fishbone`; every story's
+yield drift from the pushover, for ductility, and its collapse at 10 % of the height, as `rlc reduce` writes them;
+for training the yield rotations drawn x0.8-1.25) and FOLDER/accuracy.csv the table printed.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ import pandas as pd
 import scipy.optimize
 
 from rlcontroller.api.common import load
+from rlcontroller.config import HysteresisConfig
+from rlcontroller.files import atomic_write, new_folder
 from rlcontroller.identification import hysteretic
 from rlcontroller.physics.excitation import Load, on_control_grid
 from rlcontroller.physics.fishbone import ColumnLine, Fishbone
@@ -132,7 +137,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fit", type=int, default=20)
     parser.add_argument("--test", type=int, default=8)
+    parser.add_argument("--out", type=Path, help="a new folder for config.yaml and accuracy.csv")
     args = parser.parse_args()
+    if args.out is not None and args.out.exists():
+        raise SystemExit(f"{args.out}: exists; expected a new folder")
     plant = Plant(load(CONFIG))
     design, fe = plant.design, plant.config.opensees
     model = FrameModel(design)
@@ -169,6 +177,25 @@ def main() -> None:
             f"{name} drift within {bound:.0%}: fishbone {int((table[column] < bound).sum())} of {model.n}, "
             f"story springs {int((table['story_springs_' + name] < bound).sum())}"
         )
+    if args.out is not None:
+        write(args.out, plant, model.line, result.x, pushed.yield_drift, table)
+
+
+def write(out: Path, plant: Plant, line: ColumnLine, parameters: np.ndarray, yield_drift: np.ndarray, table) -> None:
+    """FOLDER/config.yaml: the experiment on the fitted fishbone; FOLDER/accuracy.csv."""
+    log_rotation, ratio, exponent, beta = parameters.reshape(4, -1)
+    hysteresis = HysteresisConfig(
+        model="fishbone", yield_drift=yield_drift.tolist(), yield_rotation=np.exp(log_rotation).tolist(),
+        post_yield_ratio=ratio.tolist(), exponent=exponent.tolist(), beta=beta.tolist(), gamma=(1 - beta).tolist(),
+        collapse_drift=hysteretic.collapse_drifts(plant.design), substeps=hysteretic.PLANT_SUBSTEPS,
+        column_stiffness=line.column.tolist(), beam_stiffness=line.beams.tolist(), base_stiffness=line.base,
+    )  # fmt: skip
+    reduced = hysteretic.nonlinear_reduced_experiment(plant, hysteresis)
+    header = "# The nine-story FE frame's fishbone reduced model, fitted by studies/opensees/fishbone.py\n"
+    with new_folder(out, "fishbone model") as staging:
+        atomic_write(staging / "config.yaml", header + reduced.to_yaml())
+        atomic_write(staging / "accuracy.csv", table.to_csv(float_format="%.6g"))
+    print(f"wrote {out}: config.yaml, accuracy.csv")
 
 
 if __name__ == "__main__":

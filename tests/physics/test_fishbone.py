@@ -82,3 +82,68 @@ def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
     assert np.abs(independent[:, 4 * n + 2 :]).max() > 0.9  # the hinges yielded
     np.testing.assert_allclose(drift, expected, atol=0.01 * np.abs(expected).max())
     np.testing.assert_allclose(states[:, 2 * n :], independent[:, 4 * n + 2 :], atol=0.02)
+
+
+def fishbone_plant(yield_rotation=0.004, ratio=0.05):
+    """The default experiment's five-story building simulated as a fishbone frame (3 m stories)."""
+    from rlcontroller.config import Experiment, HysteresisConfig, PlantConfig
+    from rlcontroller.physics.plant import Plant
+
+    experiment = Experiment()
+    building = experiment.building.model_copy(update={"story_heights": [3.0] * 5})
+    hysteresis = HysteresisConfig(
+        model="fishbone", yield_drift=0.03, yield_rotation=yield_rotation, column_stiffness=[4e7] * 5,
+        beam_stiffness=[6e7] * 5, base_stiffness=1e12, post_yield_ratio=ratio,
+    )  # fmt: skip
+    update = {"building": building, "plant": PlantConfig(hysteresis=hysteresis)}
+    return Plant(experiment.model_copy(update=update))
+
+
+def test_the_fishbone_is_refused_without_its_values_and_its_values_without_it():
+    from rlcontroller.config import HysteresisConfig
+
+    with pytest.raises(ValueError, match="model fishbone needs yield_rotation, column_stiffness"):
+        HysteresisConfig(model="fishbone", yield_drift=0.01)
+    with pytest.raises(ValueError, match="base_stiffness: only for model fishbone"):
+        HysteresisConfig(yield_drift=0.01, base_stiffness=1e9)
+
+
+def test_the_plant_steps_the_fishbone_as_its_history_runs_it():
+    plant = fishbone_plant(yield_rotation=0.004)
+    t, ground = ground_motion(dt=0.02, amplitude=3.0)
+    state, states = np.zeros(15), [np.zeros(15)]
+    for k in range(t.size - 1):
+        state = plant.integrator.step(state, np.zeros(plant.force_limits.size), ground[k : k + 2], 0.02)
+        states.append(state)
+    history = plant.yielding.history(ground, 1, 0.02, plant.yielding.substeps)
+    assert np.abs(history[:, 10:]).max() > 0.9  # the hinges yielded
+    np.testing.assert_allclose(np.array(states), history, rtol=1e-12, atol=1e-15)
+
+
+def test_a_held_actuator_force_settles_to_the_column_lines_static_deflection():
+    plant = fishbone_plant(ratio=1.0)  # elastic: the hinges keep all of their stiffness
+    action = np.zeros(plant.force_limits.size)
+    action[0] = 0.5  # half the first actuator's force
+    state = np.zeros(15)
+    for _ in range(15000):  # 300 s: the free vibration has died out
+        state = plant.integrator.step(state, action, np.zeros(2), 0.02)
+    building = plant.building
+    line = ColumnLine(np.diag(building.mass), np.full(5, 3.0), np.full(5, 4e7), np.full(5, 6e7), 1e12)
+    static = np.linalg.solve(line.lateral(), building.actuator_matrix @ (action * plant.force_limits))
+    np.testing.assert_allclose(state[:5], static, rtol=1e-4)
+
+
+def test_the_absolute_acceleration_output_is_the_floors_acceleration():
+    plant = fishbone_plant(yield_rotation=0.004)
+    c, _ = plant.outputs("absolute_acceleration")
+    dt, steps = 0.001, 3000
+    t = np.arange(steps + 1) * dt
+    ground = 3.0 * np.sin(2 * np.pi * 2.0 * t)
+    states = [np.zeros(15)]
+    for k in range(steps):
+        states.append(plant.integrator.step(states[-1], np.zeros(plant.force_limits.size), ground[k : k + 2], dt))
+    states = np.array(states)
+    relative = (states[2:, 5:10] - states[:-2, 5:10]) / (2 * dt)  # central differences of the floors' velocities
+    absolute = relative + ground[1:-1, None]
+    assert np.abs(states[:, 10:]).max() > 0.5  # yielding on the way
+    np.testing.assert_allclose(states[1:-1] @ c.T, absolute, atol=2e-3 * np.abs(absolute).max())
