@@ -17,7 +17,7 @@ so the floors obey
     M v' = -C v - K_e x - B z + F - M 1 a_g,   K_e = K_xx - K_xt K_tt^-1 K_tx,   B = -K_xt K_tt^-1 H,
 
 and theta' = -(I + G Phi)^-1 A v (A = K_tt^-1 K_tx, G = K_tt^-1 H, Phi = diag(z'/theta')), a linear solve per RK4
-stage with the sign of theta' taken from a first pass (`integrators.fishbone_history`). SI units throughout:
+stage with the sign of theta' taken from a first pass (`integrators.fishbone_step`). SI units throughout:
 N m^2, N m/rad, m, kg, s.
 """
 
@@ -29,7 +29,7 @@ import numpy as np
 
 from rlcontroller.config import HysteresisConfig
 from rlcontroller.physics.excitation import STANDARD_GRAVITY
-from rlcontroller.physics.hysteresis import per_story
+from rlcontroller.physics.hysteresis import drift_matrix, per_story
 from rlcontroller.physics.structure import Building
 
 
@@ -65,7 +65,7 @@ class ColumnLine:
                         full[p, q] += k[a, b]
         full[n, n] += self.base
         full[n + 1 :, n + 1 :] += np.diag(self.beams * beam_factor)
-        drift = np.eye(n) - np.eye(n, k=-1)
+        drift = drift_matrix(n)
         weight_above = STANDARD_GRAVITY * np.cumsum(self.masses[::-1])[::-1]
         p_delta = -drift.T @ np.diag(weight_above / self.heights) @ drift
         return full[:n, :n] + p_delta, full[:n, n:], full[n:, n:]
