@@ -1,5 +1,5 @@
-"""Benchmark: control steps per second of a nonlinear reduced model (`rlc reduce`: Bouc-Wen stories on an FE
-model's condensed stiffness; the FE model's own rate: scripts/bench_opensees.py).
+"""Benchmark: control steps per second of a nonlinear reduced model (`rlc reduce`: Bouc-Wen stories or a fishbone on
+an FE model's condensed stiffness; the FE model's own rate: scripts/bench_opensees.py).
 
 Usage: python scripts/bench_reduced.py [REDUCED_FOLDER] [--seconds S]
 REDUCED_FOLDER is what `rlc reduce configs/experiments/nine_story_frame.yaml --out FOLDER` wrote (default:

@@ -170,13 +170,13 @@ def identification_report(identified, recordings: list[Path], band: float) -> st
 
 
 def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8, report: Report = QUIET) -> Path:
-    """The nonlinear reduced model of the FE plant of the experiment `config`: its design model's stories
-    made Bouc-Wen springs calibrated to the FE model's own responses on `fit_motions` generated strong
-    motions, judged on `test_motions` others (`identification.hysteretic`). Written to the new folder `out`:
-    config.yaml (the experiment with the reduced model as its plant: rlc train, evaluate and check take it),
-    accuracy.csv (per story, the median errors of peak and residual drift, nonlinear and linear reduced
-    model) and calibration.md. Returns `out`."""
-    from rlcontroller.identification.hysteretic import calibrate, nonlinear_reduced_experiment
+    """The nonlinear reduced model of the FE plant of the experiment `config`: its design model's stories made
+    Bouc-Wen springs, or its floors' beams yielding hinges on a column line (a fishbone), whichever fits the FE
+    model's own responses on `fit_motions` generated strong motions better, judged on `test_motions` others
+    (`identification.reduction`). Written to the new folder `out`: config.yaml (the experiment with the reduced
+    model as its plant: rlc train, evaluate and check take it), accuracy.csv (per story, the median errors of peak
+    and residual drift of both models and the linear reduced model) and calibration.md. Returns `out`."""
+    from rlcontroller.identification.reduction import MODELS, calibrate, nonlinear_reduced_experiment
     from rlcontroller.physics.plant import Plant
 
     check_new_folder(out, "reduced model")
@@ -192,65 +192,85 @@ def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8,
     building = reduced.building.model_copy(update={"source": model})  # the matrices' file, as the user sees it
     reduced = reduced.model_copy(update={"building": building})
     header = (
-        f"# The nonlinear reduced model of {model}, calibrated by rlc reduce "
+        f"# The nonlinear reduced model of {model}, {MODELS[calibration.chosen]}, calibrated by rlc reduce "
         f"({fit_motions} motions fitted, {test_motions} judged): calibration.md\n"
     )
     with new_folder(out, "reduced model") as staging:
         atomic_write(staging / "config.yaml", header + reduced.to_yaml())
         atomic_write(staging / "accuracy.csv", calibration.accuracy.to_csv(float_format="%.6g"))
         atomic_write(staging / "calibration.md", calibration_report(config, calibration, fit_motions, test_motions))
-    for line in accuracy_lines(calibration.accuracy):
+    for line in accuracy_lines(calibration.accuracy, calibration.chosen):
         report.line(line)
     report.line(f"wrote {out}: config.yaml (the experiment on the reduced model), accuracy.csv, calibration.md")
     return out
 
 
-def accuracy_lines(table) -> list[str]:
-    """The accuracy table as aligned lines: per story the median errors (%), nonlinear and linear."""
-    lines = ["story  peak drift error % (nonlinear / linear)  residual drift error % (nonlinear / linear)"]
+def accuracy_lines(table, chosen: str) -> list[str]:
+    """The accuracy table as aligned lines: per story the median errors (%) of the model kept, the other and the
+    linear one."""
+    other = next(key for key in ("story_springs", "fishbone") if key != chosen)
+    labels = (chosen, other, "linear")
+    lines = [f"story  peak drift error % ({' / '.join(labels)})  residual drift error % (the same)"]
     for story, row in table.iterrows():
-        lines.append(
-            f"{story:>5}  {100 * row['peak_drift_error_nonlinear']:>14.1f} / "
-            f"{100 * row['peak_drift_error_linear']:<10.1f}  {100 * row['residual_drift_error_nonlinear']:>18.1f} / "
-            f"{100 * row['residual_drift_error_linear']:.1f}"
-        )
+        peaks = " / ".join(f"{100 * row[f'peak_drift_error_{label}']:.1f}" for label in labels)
+        residuals = " / ".join(f"{100 * row[f'residual_drift_error_{label}']:.1f}" for label in labels)
+        lines.append(f"{story:>5}  {peaks:>24}  {residuals:>24}")
     return lines
 
 
 def calibration_report(config: Path, calibration, fit_motions: int, test_motions: int) -> str:
-    """calibration.md: what was fitted to what, the parameters per story and the accuracy on other motions."""
-    from rlcontroller.identification.hysteretic import COLLAPSE_DRIFT_RATIO, FIT_SEED, TEST_SEED
+    """calibration.md: what was fitted to what, the parameters of the model kept, and both models' accuracy on
+    other motions."""
+    import pandas as pd
 
-    hysteresis, pushed = calibration.hysteresis, calibration.pushover
-    rows = "\n".join(
-        f"| {i + 1} | {pushed.yield_drift[i] * 1e3:.1f} | {pushed.post_yield_ratio[i]:.3f} | "
-        f"{hysteresis.yield_drift[i] * 1e3:.1f} | {hysteresis.post_yield_ratio[i]:.3f} | "
-        f"{hysteresis.exponent[i]:.2f} | {hysteresis.beta[i]:.3f} | {hysteresis.collapse_drift[i] * 1e3:.0f} |"
-        for i in range(len(hysteresis.yield_drift))
+    from rlcontroller.evaluation.tables import markdown_table
+    from rlcontroller.identification.hysteretic import COLLAPSE_DRIFT_RATIO, FIT_SEED, TEST_SEED
+    from rlcontroller.identification.reduction import MODELS
+
+    hysteresis, pushed, fits = calibration.hysteresis, calibration.pushover, calibration.fits
+    costs = "; ".join(f"{MODELS[key]} {fit.cost:.4g} after {fit.evaluations} evaluations" for key, fit in fits.items())
+    per_story = {"post-yield ratio": (hysteresis.post_yield_ratio, ".3f"), "exponent": (hysteresis.exponent, ".2f"),
+                 "beta": (hysteresis.beta, ".3f"),
+                 "collapse (mm)": (1e3 * np.asarray(hysteresis.collapse_drift), ".0f")}  # fmt: skip
+    if calibration.chosen == "fishbone":
+        columns = {"column EI, story below (GN m²)": (np.asarray(hysteresis.column_stiffness) / 1e9, ".3g"),
+                   "beams (GN m/rad)": (np.asarray(hysteresis.beam_stiffness) / 1e9, ".3g"),
+                   "yield rotation (mrad)": (1e3 * np.asarray(hysteresis.yield_rotation), ".2f"),
+                   "story yield drift, pushover (mm)": (1e3 * pushed.yield_drift, ".1f")} | per_story  # fmt: skip
+        note = f"\n\nThe base's rotational spring: {hysteresis.base_stiffness / 1e9:.3g} GN m/rad."
+    else:
+        columns = {"pushover: d_y (mm)": (1e3 * pushed.yield_drift, ".1f"),
+                   "pushover: post-yield ratio": (pushed.post_yield_ratio, ".3f"),
+                   "fit: d_y (mm)": (1e3 * np.asarray(hysteresis.yield_drift), ".1f")} | per_story  # fmt: skip
+        note = ""
+    n = len(pushed.yield_drift)
+    parameters = pd.DataFrame(
+        {name: [format(v, spec) for v in np.broadcast_to(values, n)] for name, (values, spec) in columns.items()},
+        index=pd.RangeIndex(1, n + 1, name="floor, story"),
     )
-    table = calibration.accuracy
-    errors = "\n".join(
-        f"| {story} | {100 * r['peak_drift_error_nonlinear']:.1f} | {100 * r['peak_drift_error_linear']:.1f} | "
-        f"{100 * r['residual_drift_error_nonlinear']:.1f} | {100 * r['residual_drift_error_linear']:.1f} | "
-        f"{1e3 * r['fe_peak_drift_m']:.1f} | {1e3 * r['fe_residual_drift_m']:.1f} |"
-        for story, r in table.iterrows()
-    )
+    labels = {"story_springs": "story springs", "fishbone": "fishbone", "linear": "linear"}
+    errors = pd.DataFrame(
+        {f"{what} drift error %, {name}": 100 * calibration.accuracy[f"{what}_drift_error_{key}"]
+         for what in ("peak", "residual") for key, name in labels.items()}
+        | {"FE peak (mm)": 1e3 * calibration.accuracy["fe_peak_drift_m"],
+           "FE residual (mm)": 1e3 * calibration.accuracy["fe_residual_drift_m"]}
+    )  # fmt: skip
     return f"""# Nonlinear reduced model of {config}
 
-Bouc-Wen story springs on the FE model's condensed stiffness (`physics.hysteresis`), started from the FE
-model's first-mode pushover (`physics.pushover`) and fitted by least squares to its story drift histories and
-residual drifts on {fit_motions} generated Kanai-Tajimi motions of
-0.3-1.2 g (seed {FIT_SEED}; cost {calibration.fit_cost:.4g} after {calibration.evaluations} evaluations), judged
-on {test_motions} others (seed {TEST_SEED}). Errors are medians over the judged motions of |model - FE| / FE (the
-residual's against 1 % of the FE peak drift where the FE residual is smaller). A negative post-yield ratio: the
-story loses strength past yield (the FE model's P-Delta); every story collapses past {COLLAPSE_DRIFT_RATIO:.0%} of
-its height, and the reduced model then stays as it lies (reported as collapsed).
+Two reduced models on the FE model's condensed stiffness, each started from the FE model's first-mode pushover
+(`physics.pushover`) and fitted by least squares to its story drift histories and residual drifts on
+{fit_motions} generated Kanai-Tajimi motions of 0.3-1.2 g (seed {FIT_SEED}): Bouc-Wen story springs
+(`physics.hysteresis`) and a fishbone (`physics.fishbone`: an elastic column line, each floor's beams one yielding
+rotational spring, P-Delta from the floors' weights). Every story collapses past {COLLAPSE_DRIFT_RATIO:.0%} of its
+height, and the reduced model then stays as it lies (reported as collapsed).
 
-| story | pushover: d_y (mm) | post-yield ratio | fit: d_y (mm) | post-yield ratio | exponent | beta | collapse (mm) |
-|---|---|---|---|---|---|---|---|
-{rows}
+Costs: {costs}.
 
-| story | peak drift error (%) | linear's | residual drift error (%) | linear's | FE peak (mm) | FE residual (mm) |
-|---|---|---|---|---|---|---|
-{errors}
+**Kept: {MODELS[calibration.chosen]}**, the lower cost on the fitted motions. Both are judged on {test_motions}
+others (seed {TEST_SEED}): medians over the judged motions of |model - FE| / FE (the residual's against 1 % of the FE
+peak drift where the FE residual is smaller).
+
+{markdown_table(parameters, digits=3)}{note}
+
+{markdown_table(errors, digits=1)}
 """

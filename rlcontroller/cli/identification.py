@@ -72,10 +72,11 @@ def reduce(
     fit: Annotated[int, typer.Option(help="Generated strong motions the FE model runs to fit.")] = 8,
     test: Annotated[int, typer.Option(help="Other motions the fit is judged on.")] = 8,
 ) -> None:
-    """Run the FE model on generated motions strong enough to yield it, fit Bouc-Wen story springs on its
-    condensed stiffness to its drift histories, and print per story how well the fit holds on other motions
-    beside the linear reduced model. config.yaml is the experiment with the nonlinear reduced model as its
-    plant: train on it in seconds where the FE model takes hours (docs/opensees.md)."""
+    """Run the FE model on generated motions strong enough to yield it, fit two reduced models on its condensed
+    stiffness to its drift histories (Bouc-Wen story springs; a fishbone: a column line whose floors' beams yield),
+    keep the one with the lower cost there, and print per story how well both hold on other motions beside the
+    linear reduced model. config.yaml is the experiment with the kept model as its plant: train on it in seconds
+    where the FE model takes hours (docs/opensees.md)."""
     from rlcontroller import api
 
     api.reduce(config, out, fit, test, Printed())

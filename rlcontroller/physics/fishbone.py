@@ -29,7 +29,7 @@ import numpy as np
 
 from rlcontroller.config import HysteresisConfig
 from rlcontroller.physics.excitation import STANDARD_GRAVITY
-from rlcontroller.physics.hysteresis import drift_matrix, per_story
+from rlcontroller.physics.hysteresis import BoucWen, drift_matrix, per_story
 from rlcontroller.physics.structure import Building
 
 
@@ -161,9 +161,17 @@ class Fishbone:
         return fishbone_step(state, self.floor_gain @ action, ground, control_dt, self.substeps, self.collapse_drift,
                              *self._arrays())  # fmt: skip
 
-    def history(self, ground: np.ndarray, per_step: int, control_dt: float, substeps: int) -> np.ndarray:
+    def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest under `ground`
-        (m/s^2, K * per_step + 1 samples); a run that diverges is nan from there on."""
+        (m/s^2, K * per_step + 1 samples), collapse included; a run that diverges is nan from there on."""
         from rlcontroller.physics.integrators import fishbone_history
 
-        return fishbone_history(ground, per_step, control_dt, substeps, *self._arrays())
+        collapse = np.full(self.mass_inverse.size, np.inf) if self.collapse_drift is None else self.collapse_drift
+        return fishbone_history(ground, per_step, control_dt, self.substeps, collapse, *self._arrays())
+
+
+def hysteretic_model(building: Building, config: HysteresisConfig) -> BoucWen | Fishbone:
+    """The yielding model `config` describes on `building`: story springs (model bouc_wen) or a fishbone."""
+    if config.model == "fishbone":
+        return Fishbone.of_building(building, config)
+    return BoucWen.of(building, config)

@@ -246,19 +246,19 @@ def fishbone_step(
 
 @numba.njit(cache=True)
 def fishbone_history(
-    ground, per_step, control_dt, substeps, mass_inverse, damping, linear, coupling, rotation, hinge, yield_rotation,
-    exponent, beta,
+    ground, per_step, control_dt, substeps, collapse, mass_inverse, damping, linear, coupling, rotation, hinge,
+    yield_rotation, exponent, beta,
 ):  # fmt: skip
-    """The fishbone's uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest; nan from where a
-    run diverges (a floor past 50 m)."""
+    """The fishbone's uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest, stories collapsing
+    past `collapse` (m); nan from where a run diverges (a floor past 50 m)."""
     n = mass_inverse.size
     steps = (ground.size - 1) // per_step
     out = np.full((steps + 1, 3 * n), np.nan)
     out[0] = 0.0
-    never, idle = np.full(n, np.inf), np.zeros(n)
+    idle = np.zeros(n)
     for k in range(steps):
         s = fishbone_step(
-            out[k], idle, ground[k * per_step : (k + 1) * per_step + 1], control_dt, substeps, never, mass_inverse,
+            out[k], idle, ground[k * per_step : (k + 1) * per_step + 1], control_dt, substeps, collapse, mass_inverse,
             damping, linear, coupling, rotation, hinge, yield_rotation, exponent, beta,
         )  # fmt: skip
         if not np.all(np.isfinite(s)) or np.max(np.abs(s[:n])) > 50.0:

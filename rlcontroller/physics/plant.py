@@ -43,9 +43,8 @@ from rlcontroller.config import (
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
-from rlcontroller.physics.fishbone import Fishbone
+from rlcontroller.physics.fishbone import hysteretic_model
 from rlcontroller.physics.generators import GroundModel
-from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.sampled import SampledPlant
 from rlcontroller.physics.semi_active import SemiActiveDampers
@@ -111,10 +110,7 @@ class Plant:
         self.yielding = None
         if hysteresis is not None:
             try:
-                if hysteresis.model == "fishbone":
-                    self.yielding = Fishbone.of_building(self.building, hysteresis)
-                else:
-                    self.yielding = BoucWen.of(self.building, hysteresis)
+                self.yielding = hysteretic_model(self.building, hysteresis)
             except ValueError as error:  # known only with the building's matrices: a fault of the file
                 raise ConfigError(f"{location(*experiment.origin('plant'), 'hysteresis')}: {error}") from None
         self.semi_active = SemiActiveDampers.of(self.building) if self.building.dampers else None

@@ -39,10 +39,11 @@ def test_the_fit_recovers_the_histories_that_known_parameters_made():
     assert np.max(np.abs(targets[0]) / np.array(TRUE.yield_drift)) > 2  # they yield
     guess = np.array(TRUE.yield_drift) * np.array([1.4, 0.6, 1.4, 0.6, 1.4])
     pushed = Pushover(np.zeros((1, 5)), np.zeros((1, 5)), np.ones(5), guess, np.full(5, 0.1), np.ones(5, bool))
-    fitted, cost, _ = fit(DESIGN, fitting, targets, pushed)
-    table = accuracy(DESIGN, fitted, testing, [reduced_drifts(DESIGN, TRUE, motion) for motion in testing])
-    assert table["peak_drift_error_nonlinear"].max() < 0.02 < 0.2 < table["peak_drift_error_linear"].min()
-    assert cost < 1e-2
+    found = fit(DESIGN, fitting, targets, pushed)
+    models = {"fitted": found.hysteresis, "linear": None}
+    table = accuracy(DESIGN, models, testing, [reduced_drifts(DESIGN, TRUE, motion) for motion in testing])
+    assert table["peak_drift_error_fitted"].max() < 0.02 < 0.2 < table["peak_drift_error_linear"].min()
+    assert found.cost < 1e-2
 
 
 def test_the_fit_finds_a_story_that_loses_strength_where_stories_may_collapse():
@@ -54,11 +55,11 @@ def test_the_fit_finds_a_story_that_loses_strength_where_stories_may_collapse():
     assert 4.0 < np.max(np.abs(targets[0][:, 1])) / true.yield_drift[1] < 0.3 / true.yield_drift[1]  # none falls
     guess = np.array(true.yield_drift) * np.array([1.2, 0.8, 1.2, 0.8, 1.2])
     pushed = Pushover(np.zeros((1, 5)), np.zeros((1, 5)), np.ones(5), guess, np.full(5, 0.1), np.ones(5, bool))
-    fitted, _, _ = fit(DESIGN, fitting, targets, pushed, collapse=[0.3] * 5)
+    fitted = fit(DESIGN, fitting, targets, pushed, collapse=[0.3] * 5).hysteresis
     assert fitted.post_yield_ratio[1] == pytest.approx(-0.02, abs=0.01) and fitted.collapse_drift == [0.3] * 5
-    table = accuracy(DESIGN, fitted, testing, [reduced_drifts(DESIGN, true, motion) for motion in testing])
-    assert table["peak_drift_error_nonlinear"].max() < 0.02
-    held, _, _ = fit(DESIGN, fitting, targets, pushed)
+    table = accuracy(DESIGN, {"fitted": fitted}, testing, [reduced_drifts(DESIGN, true, motion) for motion in testing])
+    assert table["peak_drift_error_fitted"].max() < 0.02
+    held = fit(DESIGN, fitting, targets, pushed).hysteresis
     assert min(held.post_yield_ratio) >= 0.0 and held.collapse_drift is None
 
 
@@ -69,9 +70,9 @@ def test_accuracy_is_the_median_relative_error_per_story():
     chosen = motions(3, 3)
     factors = (1.1, 1.2, 1.3)
     targets = [factor * reduced_drifts(DESIGN, TRUE, motion) for factor, motion in zip(factors, chosen, strict=True)]
-    table = accuracy(DESIGN, TRUE, chosen, targets)
-    np.testing.assert_allclose(table["peak_drift_error_nonlinear"], 0.2 / 1.2, rtol=1e-9)
-    residual = table["residual_drift_error_nonlinear"]
+    table = accuracy(DESIGN, {"model": TRUE}, chosen, targets)
+    np.testing.assert_allclose(table["peak_drift_error_model"], 0.2 / 1.2, rtol=1e-9)
+    residual = table["residual_drift_error_model"]
     assert np.all(residual <= 0.2 / 1.2 + 1e-9) and np.sum(np.isclose(residual, 0.2 / 1.2, rtol=1e-9)) >= 3
 
 

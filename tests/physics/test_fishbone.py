@@ -1,6 +1,8 @@
 """The fishbone frame: its column line against beam theory, its elastic response against the linear building,
 and its massless rotations against an independent solver that gives them a small inertia."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import scipy.integrate
@@ -48,7 +50,7 @@ def frame(yield_rotation, ratio=0.05, exponent=2.0) -> tuple[ColumnLine, Fishbon
 def test_beams_that_never_yield_give_the_linear_building():
     column_line, fishbone = frame(yield_rotation=1e3)  # |z| stays below 1e-5: the hinges are elastic
     t, ground = ground_motion()
-    states = fishbone.history(ground, 1, 0.01, 4)
+    states = fishbone.history(ground, 1, 0.01)
     m, k, c = np.diag(column_line.masses), column_line.lateral(), fishbone.damping
     rate = lambda time, s: np.concatenate([s[2:], np.linalg.solve(m, -c @ s[2:] - k @ s[:2]) - np.interp(time, t, ground)])  # noqa: E731, E501
     exact = scipy.integrate.solve_ivp(rate, (0, t[-1]), np.zeros(4), t_eval=t, rtol=1e-10, atol=1e-12).y.T
@@ -61,7 +63,7 @@ def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
     column_line, fishbone = frame(yield_rotation=0.002, ratio=0.05, exponent=2.0)
     n, ratio, yield_rotation, beta = 2, 0.05, 0.002, 0.5
     t, ground = ground_motion()
-    states = fishbone.history(ground, 1, 0.01, 8)
+    states = replace(fishbone, substeps=8).history(ground, 1, 0.01)
     xx, xt, tt = column_line.matrices(ratio)
     hinge = np.concatenate([[0.0], (1 - ratio) * column_line.beams * yield_rotation])
     first = np.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(column_line.masses), column_line.lateral())).real.min())
@@ -84,7 +86,7 @@ def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
     np.testing.assert_allclose(states[:, 2 * n :], independent[:, 4 * n + 2 :], atol=0.02)
 
 
-def fishbone_plant(yield_rotation=0.004, ratio=0.05):
+def fishbone_plant(yield_rotation=0.004, ratio=0.05, collapse_drift=None):
     """The default experiment's five-story building simulated as a fishbone frame (3 m stories)."""
     from rlcontroller.config import Experiment, HysteresisConfig, PlantConfig
     from rlcontroller.physics.plant import Plant
@@ -92,8 +94,8 @@ def fishbone_plant(yield_rotation=0.004, ratio=0.05):
     experiment = Experiment()
     building = experiment.building.model_copy(update={"story_heights": [3.0] * 5})
     hysteresis = HysteresisConfig(
-        model="fishbone", yield_drift=0.03, yield_rotation=yield_rotation, column_stiffness=[4e7] * 5,
-        beam_stiffness=[6e7] * 5, base_stiffness=1e12, post_yield_ratio=ratio,
+        model="fishbone", yield_drift=0.01, yield_rotation=yield_rotation, column_stiffness=[4e7] * 5,
+        beam_stiffness=[6e7] * 5, base_stiffness=1e12, post_yield_ratio=ratio, collapse_drift=collapse_drift,
     )  # fmt: skip
     update = {"building": building, "plant": PlantConfig(hysteresis=hysteresis)}
     return Plant(experiment.model_copy(update=update))
@@ -108,16 +110,25 @@ def test_the_fishbone_is_refused_without_its_values_and_its_values_without_it():
         HysteresisConfig(yield_drift=0.01, base_stiffness=1e9)
 
 
-def test_the_plant_steps_the_fishbone_as_its_history_runs_it():
-    plant = fishbone_plant(yield_rotation=0.004)
+@pytest.mark.parametrize("collapse_drift", [None, 0.018])
+def test_the_plant_steps_the_fishbone_as_its_history_runs_it(collapse_drift):
+    """Step by step or in one call, the same states; with a collapse drift the frame is still where it lay once a
+    story passes it (the motion's peak drift is 0.025 m), in both."""
+    plant = fishbone_plant(yield_rotation=0.004, collapse_drift=collapse_drift)
     t, ground = ground_motion(dt=0.02, amplitude=3.0)
     state, states = np.zeros(15), [np.zeros(15)]
     for k in range(t.size - 1):
         state = plant.integrator.step(state, np.zeros(plant.force_limits.size), ground[k : k + 2], 0.02)
         states.append(state)
-    history = plant.yielding.history(ground, 1, 0.02, plant.yielding.substeps)
-    assert np.abs(history[:, 10:]).max() > 0.9  # the hinges yielded
+    history = plant.yielding.history(ground, 1, 0.02)
     np.testing.assert_allclose(np.array(states), history, rtol=1e-12, atol=1e-15)
+    drift = np.abs(np.diff(history[:, :5], axis=1, prepend=0.0)).max(axis=1)
+    if collapse_drift is None:
+        assert np.abs(history[:, 10:]).max() > 0.9 and 0.02 < drift.max() < 0.03  # the hinges yielded
+    else:
+        fallen = np.argmax(drift >= collapse_drift)
+        assert 0 < fallen < t.size - 20 and np.all(history[fallen:] == history[fallen])
+        assert np.all(history[fallen, 5:10] == 0.0)
 
 
 def test_a_held_actuator_force_settles_to_the_column_lines_static_deflection():
