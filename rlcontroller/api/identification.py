@@ -208,8 +208,9 @@ def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8,
 def accuracy_lines(table, chosen: str) -> list[str]:
     """The accuracy table as aligned lines: per story the median errors (%) of the model kept, the other and the
     linear one."""
-    other = next(key for key in ("story_springs", "fishbone") if key != chosen)
-    labels = (chosen, other, "linear")
+    from rlcontroller.identification.reduction import MODELS
+
+    labels = (chosen, *(key for key in MODELS if key != chosen), "linear")
     lines = [f"story  peak drift error % ({' / '.join(labels)})  residual drift error % (the same)"]
     for story, row in table.iterrows():
         peaks = " / ".join(f"{100 * row[f'peak_drift_error_{label}']:.1f}" for label in labels)
