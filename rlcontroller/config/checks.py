@@ -172,6 +172,11 @@ def _check_devices(experiment: Experiment) -> None:
             raise ConfigError(f"{file}: {where}.floor: floor {device.floor} does not exist, expected 1..{n_floors}")
         if device.mode > n_floors:
             raise ConfigError(f"{file}: {where}.mode: mode {device.mode} does not exist, expected 1..{n_floors}")
+        if device.stroke_limit is not None and experiment.has_dampers:
+            raise ConfigError(
+                f"{file}: {where}.stroke_limit: end-stops with semi-active dampers are not modelled; "
+                "drop the dampers, or the limit (a free mass)"
+            )
     if experiment.has_dampers and experiment.supervisor is not None:
         raise ConfigError(
             f"{location(*experiment.origin('supervisor'))}: not with semi-active dampers (a damper's "

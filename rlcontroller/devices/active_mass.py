@@ -13,7 +13,7 @@ from rlcontroller.devices.tuned_mass import MassDevice, TunedMassConfig
 
 class ActiveMassConfig(TunedMassConfig):
     """A tuned mass with an actuator between the floor and the mass, commanded like an actuator, with
-    a force limit (N) and a stroke limit (m)."""
+    a force limit (N) and a stroke limit (m): its end-stops, as a tuned mass's."""
 
     fail_safe_action: ClassVar[float | None] = 0.0  # switched off: the tuned mass
 

@@ -186,17 +186,30 @@ def judge_suite(
             for key, run in (("residual_ratio", controlled), ("reference_residual_ratio", reference_run)):
                 row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
         rows[motion.name] = row
-    strokes = [
-        [round(float(value), 4) for value in peak_strokes(evaluation, name, motions)] for name in (judged, reference)
-    ]
-    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, strokes if strokes[0] else None)
+    devices = device_figures(evaluation, judged, reference, motions)
+    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices)
     return criterion | {"per_motion": rows}
 
 
-def peak_strokes(evaluation, name: str, motions: list[Load]) -> np.ndarray:
-    """Each mass device's largest stroke (m) over the motions, under the controller `name`."""
-    peaks = [np.max(np.abs(evaluation.responses[name, motion.name].stroke), axis=0) for motion in motions]
-    return np.max(peaks, axis=0)
+def device_figures(evaluation, judged: str, reference: str, motions: list[Load]) -> dict[str, list] | None:
+    """Per mass device over the motions, under the controller `judged` and the `reference`: the largest stroke
+    (m); with end-stops also their limits (m), the contacts and the largest contact force (N). None without mass
+    devices."""
+    figures: dict[str, list] = {}
+    for name, prefix in ((judged, ""), (reference, "reference_")):
+        runs = [evaluation.responses[name, motion.name] for motion in motions]
+        if runs[0].stroke is None or runs[0].stroke.shape[1] == 0:
+            return None
+        strokes = np.max([np.max(np.abs(run.stroke), axis=0) for run in runs], axis=0)
+        figures[f"{prefix}peak_stroke_m"] = [round(float(value), 4) for value in strokes]
+        if runs[0].stop_contacts is None:
+            continue
+        figures["stroke_limit_m"] = [float(value) for value in runs[0].stroke_limit]
+        contacts = np.sum([np.sum(run.stop_contacts, axis=0) for run in runs], axis=0)
+        forces = np.max([np.max(run.stop_force, axis=0) for run in runs], axis=0)
+        figures[f"{prefix}contacts"] = [int(value) for value in contacts]
+        figures[f"{prefix}peak_contact_force_N"] = [round(float(value), 1) for value in forces]
+    return figures
 
 
 def strength(motion: Load) -> dict:

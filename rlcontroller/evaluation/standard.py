@@ -65,13 +65,23 @@ def motion_levels(row: dict, system: str, tolerance: float) -> tuple[str, str]:
     return levels[0], levels[1]
 
 
-def suite_figures(
-    rows: dict[str, dict], words: str, system: str, standard, strokes: tuple[list, list] | None = None
-) -> dict:
+DEVICE_FIGURES = (  # per mass device over a suite, the controlled building's then the reference's
+    "peak_stroke_m",
+    "reference_peak_stroke_m",
+    "stroke_limit_m",  # with end-stops (`physics.end_stops`), these too
+    "contacts",
+    "reference_contacts",
+    "peak_contact_force_N",
+    "reference_peak_contact_force_N",
+)
+
+
+def suite_figures(rows: dict[str, dict], words: str, system: str, standard, devices: dict | None = None) -> dict:
     """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
     insignificant: over_bound) against the reference `words` describes, under `standard`
     (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`; with mass
-    devices their peak `strokes` (m) over the suite, the controlled building's and the reference's."""
+    devices their figures over the suite (`DEVICE_FIGURES`: peak strokes, m; with end-stops the limits, the
+    contacts and the largest contact force, N)."""
     tolerance = standard.tolerance
     significant = {name: row for name, row in rows.items() if "ratio" in row}
     quiet = {name: row for name, row in rows.items() if "ratio" not in row}
@@ -108,8 +118,8 @@ def suite_figures(
         "worst_significant": worst,
         "worst_J2": worst_j2,
     }
-    if strokes is not None:
-        figures |= {"peak_stroke_m": strokes[0], "reference_peak_stroke_m": strokes[1]}
+    if devices is not None:
+        figures |= {key: devices[key] for key in DEVICE_FIGURES if key in devices}
     return {"summary": suite_summary(figures, rows, standard)} | figures
 
 
@@ -140,6 +150,14 @@ def suite_summary(figures: dict, rows: dict[str, dict], standard) -> str:
             ", ".join(f"{value:.2f}" for value in figures[key]) for key in ("peak_stroke_m", "reference_peak_stroke_m")
         ]
         text += f"; peak stroke {metres[0]} m ({metres[1]} m for the reference)"
+    if "stroke_limit_m" in figures:
+        limits = ", ".join(f"{value:g}" for value in figures["stroke_limit_m"])
+        contacts = [sum(figures[key]) for key in ("contacts", "reference_contacts")]
+        forces = [max(figures[key]) / 1e3 for key in ("peak_contact_force_N", "reference_peak_contact_force_N")]
+        text += (
+            f" on end-stops at {limits} m: {contacts[0]:g} contacts, up to {forces[0]:.0f} kN "
+            f"({contacts[1]:g}, {forces[1]:.0f} kN for the reference)"
+        )
     return text
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.evaluation.standard import rest_figures, stability_figures, suite_figures
+from rlcontroller.evaluation.standard import DEVICE_FIGURES, rest_figures, stability_figures, suite_figures
 from rlcontroller.files import atomic_write
 
 SUITES = {"check suite": "standard", "wind suite": "also", "ground-motion suite": "also"}
@@ -102,8 +102,8 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
     for name, item in criteria.items():
         try:
             if name in SUITES:
-                strokes = (item["peak_stroke_m"], item["reference_peak_stroke_m"]) if "peak_stroke_m" in item else None
-                derived = suite_figures(item["per_motion"], item["reference"], system, standards[SUITES[name]], strokes)
+                devices = {key: item[key] for key in DEVICE_FIGURES if key in item} or None
+                derived = suite_figures(item["per_motion"], item["reference"], system, standards[SUITES[name]], devices)
             elif name == "at rest":
                 derived = rest_figures(item["peak_drift_over_bound"], standard)
             elif name == "closed-loop stability":

@@ -328,6 +328,9 @@ class Response:
     stroke_velocity: np.ndarray | None = None  # mass devices (m/s)
     device_velocity: np.ndarray | None = None  # across each commanded device (m/s): power = force x this
     connections: np.ndarray | None = None  # FE member ends, when recorded (`physics.fe_connections`)
+    stop_force: np.ndarray | None = None  # end-stops, per mass device: the largest |force| over each step (N)
+    stop_contacts: np.ndarray | None = None  # end-stops, per mass device: the contacts begun in each step
+    stroke_limit: np.ndarray | None = None  # end-stops, per mass device (m; nan: a free mass)
 
     def quantity(self, name: str) -> np.ndarray:
         return getattr(self, name)

@@ -265,3 +265,111 @@ def fishbone_history(
             break
         out[k + 1] = s
     return out
+
+
+@numba.njit(cache=True)
+def stop_force(stroke: float, rate: float, limit: float, stiffness: float, damping: float) -> float:
+    """The end-stop's force on its mass (N; `end_stops`): -k sign(s) p - c s' while p = |s| - limit > 0."""
+    penetration = abs(stroke) - limit
+    if penetration <= 0.0:
+        return 0.0
+    return -(stiffness * penetration if stroke > 0.0 else -stiffness * penetration) - damping * rate
+
+
+@numba.njit(cache=True)
+def held_stop_force(stroke, rate, end_stroke, end_rate, limit, stiffness, damping):
+    """The stop's force to hold over a sub-step from (stroke, rate) to the predicted (end_stroke, end_rate): the
+    trapezoid of the contact law over the part of the sub-step in contact, a contact's start or end located by
+    linear interpolation (there the spring's force is zero and the dashpot's -c s' jumps)."""
+    start, end = abs(stroke) - limit, abs(end_stroke) - limit
+    if start <= 0.0 and end <= 0.0:
+        return 0.0
+    force = stop_force(stroke, rate, limit, stiffness, damping)
+    end_force = stop_force(end_stroke, end_rate, limit, stiffness, damping)
+    if start > 0.0 and end > 0.0:
+        return 0.5 * (force + end_force)
+    crossing = start / (start - end)  # the fraction of the sub-step at which the face is crossed
+    face = -damping * (rate + crossing * (end_rate - rate))
+    if start <= 0.0:  # the contact starts
+        return (1.0 - crossing) * 0.5 * (face + end_force)
+    return crossing * 0.5 * (force + face)  # it ends
+
+
+@numba.njit(cache=True)
+def _strokes_at(j, free, forces, first, response):
+    """The strokes and rates at sub-step j: the linear plant's, plus what the stops' forces held over the earlier
+    sub-steps `first`..j-1 added."""
+    y = free[j].copy()
+    for i in range(first, j):
+        y += response[j - i - 1] @ forces[i]
+    return y
+
+
+@numba.njit(cache=True)
+def stop_step(state, force, ground, phi, force_gain, ground_gain, strokes, response, end, limits, stiffness, damping):
+    """One control step of a building whose mass devices meet end-stops (`end_stops`, by superposition on the
+    linear step): the new state [x; per device (force at the end, peak |force|, contacts begun)]. The force held
+    over each sub-step is the contact law's mean over it, its end predicted with the start's force held
+    (`held_stop_force`): an impact's rebound is right to a fraction of a per cent."""
+    n_x, m, d = phi.shape[0], force.size, limits.size
+    total = response.shape[0]
+    inputs = np.empty(n_x + m + ground.size)
+    inputs[:n_x], inputs[n_x : n_x + m], inputs[n_x + m :] = state[:n_x], force, ground
+    free = np.empty((total + 1, 2 * d))
+    for j in range(total + 1):
+        free[j] = strokes[j] @ inputs
+    forces = np.zeros((total, d))
+    new = np.zeros(n_x + 3 * d)
+    first = total  # the first sub-step with a force: before it, the strokes are the linear plant's
+    previous = free[0, :d].copy()
+    for j in range(total + 1):
+        y = _strokes_at(j, free, forces, first, response)
+        start = np.zeros(d)
+        for k in range(d):
+            start[k] = stop_force(y[k], y[d + k], limits[k], stiffness[k], damping[k])
+            if j > 0:
+                new[n_x + d + k] = max(new[n_x + d + k], abs(start[k]))
+                if abs(y[k]) > limits[k] and abs(previous[k]) <= limits[k]:
+                    new[n_x + 2 * d + k] += 1.0
+        previous = y[:d].copy()
+        if j == total:
+            new[n_x : n_x + d] = start
+            break
+        forces[j] = start  # predict the sub-step's end with the start's force held
+        predicted = _strokes_at(j + 1, free, forces, min(first, j), response)
+        pushed = False
+        for k in range(d):
+            forces[j, k] = held_stop_force(
+                y[k], y[d + k], predicted[k], predicted[d + k], limits[k], stiffness[k], damping[k]
+            )
+            pushed = pushed or forces[j, k] != 0.0
+        if pushed and first == total:
+            first = j
+    new[:n_x] = phi @ state[:n_x] + force_gain @ force + ground_gain @ ground
+    for i in range(first, total):
+        new[:n_x] += end[i] @ forces[i]
+    return new
+
+
+@numba.njit(cache=True)
+def stop_step_many(
+    states, forces, grounds, phi, force_gain, ground_gain, strokes, response, end, limits, stiffness, damping
+):
+    """`stop_step` for many buildings of one plant (states (N, S), forces (N, m) in N, grounds (N, r + 1))."""
+    new = np.empty((states.shape[0], phi.shape[0] + 3 * limits.size))
+    for member in range(states.shape[0]):
+        new[member] = stop_step(
+            states[member],
+            forces[member],
+            grounds[member],
+            phi,
+            force_gain,
+            ground_gain,
+            strokes,
+            response,
+            end,
+            limits,
+            stiffness,
+            damping,
+        )
+    return new

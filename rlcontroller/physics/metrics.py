@@ -32,6 +32,9 @@ DEVICE_METRICS = (  # with devices: per mass device, then per commanded device
     "power_peak_W",
     "power_rms_W",
     "dissipated_energy_J",
+    "stroke_over_limit",
+    "contacts",
+    "contact_force_N",
 )
 RESIDUAL_WINDOW_S = 5.0  # the residual drift is the mean drift over the tail's last seconds
 
@@ -102,6 +105,18 @@ def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarra
         "power_peak_W": peak(power),
         "power_rms_W": np.sqrt(energy(power, dt) / duration),
         "dissipated_energy_J": -np.sum(power[1:], axis=0) * dt,
+    } | stop_metrics(result)
+
+
+def stop_metrics(result: Response) -> dict[str, np.ndarray]:
+    """Per mass device meeting end-stops (`physics.end_stops`): its peak stroke over its limit, the contacts with
+    its stops and the largest force one put on it (N); none without stops (nan for a free mass among them)."""
+    if result.stop_contacts is None:
+        return {}
+    return {
+        "stroke_over_limit": peak(result.stroke) / result.stroke_limit,
+        "contacts": np.sum(result.stop_contacts, axis=0),
+        "contact_force_N": np.max(result.stop_force, axis=0),
     }
 
 

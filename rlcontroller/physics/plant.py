@@ -19,7 +19,9 @@ forces f (N) follow the command u through tau f' = u - f; with a delay of d step
 the last d steps wait in a buffer, and without a lag a register holds the force applied over the
 last step. Every output is then C x (no feed-through), and z is always x[:2n]. Yielding stories
 (Bouc-Wen, `physics.hysteresis`) make the state [x_floors; v_floors; z_stories]: the step is then
-the non-linear integrator, and every output is still linear in that state and the command.
+the non-linear integrator, and every output is still linear in that state and the command. Mass devices with
+a stroke limit meet end-stops (`physics.end_stops`): the state gains their registers, the step their integrator;
+the design model has no stops (a linear design knows the stroke limit only as a limit).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from rlcontroller.config import (
     location,
 )
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
+from rlcontroller.physics.end_stops import EndStops
 from rlcontroller.physics.excitation import FLOOR_FORCES
 from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
 from rlcontroller.physics.fishbone import hysteretic_model
@@ -82,10 +85,12 @@ class Plant:
     `control_dt` (s), `n_state` (length of x), `sensors` (`SensorMatrices`), `layout`
     (`ObservationLayout`), `ground_model` (the Kanai-Tajimi model of LQG + ground model and of
     `sensors.ground_model`), `wind` (the design wind's load model of LQG + wind model, or None:
-    `design_wind`), `design` (the design model).
+    `design_wind`), `design` (the design model), `end_stops` (the mass devices' stops, or None).
+
+    `stops=False` leaves the mass devices free: the linear model a design takes (`design`, `elastic`).
     """
 
-    def __init__(self, experiment: Experiment) -> None:
+    def __init__(self, experiment: Experiment, *, stops: bool = True) -> None:
         self.experiment = experiment
         self.config = experiment.plant
         building = experiment.building if self.config is None else true_building(experiment.building, self.config)
@@ -120,7 +125,6 @@ class Plant:
             self.fe_model = OpenSeesIntegrator(
                 Path(fe.model), fe.function, fe.analysis_dt, self.building.actuator_matrix, self.building.force_limits
             )
-        self.integrator = self.fe_model or self.yielding or self.semi_active  # its own step, when not linear
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
         dynamics = self.config.actuators if self.config is not None else None
@@ -133,6 +137,18 @@ class Plant:
         self.n_state += self.building.n_floors if self.yielding is not None else 0
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
         self.n_state += self.building.n_dofs if self.fe_model is not None else 0  # [x; v; absolute accelerations]
+        self.end_stops = None
+        if stops and self.semi_active is None:  # dampers with stopped masses: refused by the experiment's checks
+            self.end_stops = EndStops.of(
+                self.building,
+                experiment.simulation,
+                n_linear=self.n_state,
+                time_constant=self.time_constant,
+                delay_steps=self.delay_steps,
+                linear_step=lambda substeps: self.sampled(substeps).step,
+            )
+        self.n_state += self.end_stops.size if self.end_stops is not None else 0
+        self.integrator = self.fe_model or self.yielding or self.semi_active or self.end_stops  # when not linear
         faults = self.config.sensors if self.config is not None else None
         self.sensors = sensor_matrices(self.outputs, self.building, experiment.sensors, faults)
         self.wind = design_wind(experiment)
@@ -142,7 +158,7 @@ class Plant:
         )
         self.ground_model = GroundModel()
         self._sampled: dict[int, SampledPlant] = {}  # sub-steps -> this plant sampled
-        self._design = self if self.config is None else None
+        self._design = self if self.config is None and self.end_stops is None else None
         self._elastic: Plant | None = None
         self._bare = None if experiment.devices or experiment.supervisor is not None else self
         self._failed_safe = self if experiment.supervisor is None else None
@@ -152,7 +168,7 @@ class Plant:
     def design(self) -> Plant:
         """The design model: the experiment without its plant part."""
         if self._design is None:
-            self._design = Plant(self.experiment.model_copy(update={"plant": None}))
+            self._design = Plant(self.experiment.model_copy(update={"plant": None}), stops=False)
         return self._design
 
     @property
@@ -195,12 +211,13 @@ class Plant:
 
     @property
     def elastic(self) -> Plant:
-        """This plant with linear stories (its initial stiffness): what a linear design can know."""
-        if self.yielding is None:
+        """This plant made linear, what a linear design can know: stories at their initial stiffness, mass
+        devices without their stops."""
+        if self.yielding is None and self.end_stops is None:
             return self
         if self._elastic is None:
-            part = self.config.model_copy(update={"hysteresis": None})
-            self._elastic = Plant(self.experiment.model_copy(update={"plant": part}))
+            part = None if self.config is None else self.config.model_copy(update={"hysteresis": None})
+            self._elastic = Plant(self.experiment.model_copy(update={"plant": part}), stops=False)
         return self._elastic
 
     @property
@@ -220,11 +237,33 @@ class Plant:
         return self._pushover.yield_drift
 
     @property
+    def n_linear(self) -> int:
+        """The length of the state's linear part, before the stops' registers."""
+        return self.n_state - (self.end_stops.size if self.end_stops is not None else 0)
+
+    @property
     def has_actuator_dynamics(self) -> bool:
         return self.time_constant > 0 or self.delay_steps > 0
 
     def outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """(C, D) with quantity = C x + D u on this plant's state x and command u (N)."""
+        if self.end_stops is not None:
+            return self._stopped_outputs(quantity)
+        return self._linear_outputs(quantity)
+
+    def _stopped_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
+        """The linear plant's outputs with the stops' force registers: a stop pushes its mass with f and its floor
+        with -f, felt by the floor accelerations and story shears (`physics.end_stops`)."""
+        c, d = self._linear_outputs(quantity)
+        stops = self.end_stops
+        full = np.zeros((c.shape[0], self.n_state))
+        full[:, : c.shape[1]] = c
+        if quantity in ("absolute_acceleration", "story_shear", "base_shear"):
+            pushed = replace(self.building, actuator_matrix=stops.contact_matrix())
+            full[:, stops.n_linear : stops.n_linear + stops.devices.size] = output_matrices(pushed, quantity)[1]
+        return full, d
+
+    def _linear_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         if self.fe_model is not None:
             return self._fe_outputs(quantity)
         if self.yielding is not None:
@@ -235,12 +274,12 @@ class Plant:
         if not self.has_actuator_dynamics:
             return c, d
         size, m = self.building.n_states, self.building.n_actuators
-        full = np.zeros((c.shape[0], self.n_state))
+        full = np.zeros((c.shape[0], self.n_linear))
         full[:, :size] = c
         if self.time_constant > 0:
             full[:, size : size + m] = d  # the delivered force is a state
         else:
-            full[:, -m:] = d  # the register of the force applied over the last step
+            full[:, self.n_linear - m : self.n_linear] = d  # the register of the force applied over the last step
         return full, np.zeros_like(d)
 
     def _fe_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
@@ -296,7 +335,7 @@ class Plant:
     def cannot_take(self, kind: str) -> str | None:
         """Why this plant cannot be loaded by a load of `kind` (`excitation.FLOOR_FORCES` or
         `GROUND_ACCELERATION`), in one line; None when it can."""
-        if kind == FLOOR_FORCES and self.integrator is not None:
+        if kind == FLOOR_FORCES and self.integrator not in (None, self.end_stops):
             return "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled"
         if kind == FLOOR_FORCES and isinstance(self.building, StateSpaceBuilding):
             return "a state-space model takes the ground acceleration only (it declares no floor-force inputs)"

@@ -22,6 +22,7 @@ alone, from rest) and `response` (every time history, from states and held force
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cached_property
 from typing import Protocol
 
@@ -60,10 +61,12 @@ class Sampleable(Protocol):
     experiment: Experiment
     control_dt: float
     n_state: int
+    n_linear: int
     force_limits: np.ndarray
     time_constant: float
     delay_steps: int
     semi_active: object | None
+    end_stops: object | None
     integrator: object | None
     yielding: object | None
     ground_model: GroundModel
@@ -115,7 +118,7 @@ class SampledPlant:
             core = compose(exact_substep(lagged, self.control_dt / self.substeps), self.substeps, self.control_dt)
         else:
             core = self.structure
-        return _delayed(core, plant.delay_steps, m, self.n_state, lagged=plant.time_constant > 0)
+        return _delayed(core, plant.delay_steps, m, plant.n_linear, lagged=plant.time_constant > 0)
 
     @cached_property
     def load(self) -> LoadMap:
@@ -218,7 +221,19 @@ class SampledPlant:
         hysteretic forces (N: (1 - a) k d_y z for story springs)."""
         plant = self.plant
         hysteretic = None if plant.yielding is None else plant.yielding.story_force_map
-        return response(plant.outputs, plant.load_outputs, states, held_forces, time, ground, floor_forces, hysteretic)
+        outputs = (plant.outputs, plant.load_outputs)
+        result = response(*outputs, states, held_forces, time, ground, floor_forces, hysteretic)
+        stops = plant.end_stops
+        if stops is None:
+            return result
+        count, stopped = len(plant.building.devices), stops.devices.size
+        peaks, contacts = (np.zeros((states.shape[0], count)) for _ in range(2))
+        registers = states[:, plant.n_linear :]
+        peaks[:, stops.devices] = registers[:, stopped : 2 * stopped]
+        contacts[:, stops.devices] = registers[:, 2 * stopped :]
+        limits = np.full(count, np.nan)
+        limits[stops.devices] = stops.limits
+        return replace(result, stop_force=peaks, stop_contacts=contacts, stroke_limit=limits)
 
 
 def _delayed(core: StepMap, delay: int, m: int, size: int, lagged: bool) -> StepMap:

@@ -245,8 +245,8 @@ class BuildingBatch:
     def _advance_nonlinear(self, clipped: np.ndarray) -> np.ndarray:
         size = self._state_size
         new = np.zeros((self.size, size + self._n_outputs))
-        if self.plant.semi_active is not None and all(plant is self.plant for plant in self.plants):
-            return self._advance_dampers(clipped, new)
+        if hasattr(self.plant.integrator, "step_many") and all(plant is self.plant for plant in self.plants):
+            return self._advance_many(clipped, new)
         for member, plant in enumerate(self.plants):
             n, windows = plant.n_state, self._windows[member]
             k = min(self.k[member], windows.shape[0] - 1)
@@ -257,9 +257,9 @@ class BuildingBatch:
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T
         return new
 
-    def _advance_dampers(self, clipped: np.ndarray, new: np.ndarray) -> np.ndarray:
-        """Every member of one damper plant in one compiled call per ground sampling (members whose
-        records share it)."""
+    def _advance_many(self, clipped: np.ndarray, new: np.ndarray) -> np.ndarray:
+        """Every member of one plant that steps many at once (dampers, end-stops) in one compiled call per
+        ground sampling (members whose records share it)."""
         plant, size = self.plant, self._state_size
         n, rows = plant.n_state, self.rows
         groups: dict[int, list[int]] = {}
@@ -267,7 +267,7 @@ class BuildingBatch:
             groups.setdefault(windows.shape[1], []).append(member)
         for members in groups.values():
             grounds = np.stack([self._windows[m][min(self.k[m], self._windows[m].shape[0] - 1)] for m in members])
-            states = plant.semi_active.step_many(self.states[members, :n], clipped[members], grounds, self.control_dt)
+            states = plant.integrator.step_many(self.states[members, :n], clipped[members], grounds, self.control_dt)
             new[members, :n] = states
             new[members, size:] = states @ rows.c.T + clipped[members] @ (rows.d * plant.force_limits).T
         return new

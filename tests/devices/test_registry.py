@@ -63,17 +63,15 @@ def test_a_scaled_variable_damper_scales_its_damping_range():
 
 def test_commands_and_their_fail_safe_actions_follow_the_action_s_order():
     """Actuators first, then mass drivers, then dampers, whatever order the devices are listed in."""
-    from rlcontroller.config import build_experiment
+    from rlcontroller.config import ConfigError, Experiment, build_experiment
 
-    experiment = build_experiment(
-        {
-            "actuators": [{"story": 2}],
-            "devices": [
-                {"type": "mr_damper", "story": 3, "capacity": 1.0e5},
-                {"type": "tuned_mass", "floor": 4, "mass_ratio": 0.01},
-                {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e5, "stroke_limit": 0.5},
-            ],
-        }
-    )
+    driver = {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e5, "stroke_limit": 0.5}
+    damper = {"type": "mr_damper", "story": 3, "capacity": 1.0e5}
+    tuned = {"type": "tuned_mass", "floor": 4, "mass_ratio": 0.01}
+    raw = {"actuators": [{"story": 2}], "devices": [damper, tuned, driver]}
+    experiment = Experiment.model_validate(raw)  # unchecked: the order alone
     assert experiment.command_labels() == ["2", "AMD 5", "MR 3"]
     assert experiment.fail_safe_actions() == [0.0, 0.0, -1.0]
+    # a driver has a housing; its stops are not modelled beside dampers, and that is said
+    with pytest.raises(ConfigError, match=r"devices\[2\]\.stroke_limit: end-stops with semi-active dampers"):
+        build_experiment(raw)
