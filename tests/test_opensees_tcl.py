@@ -231,3 +231,39 @@ def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
         "except ConfigError as error: print(json.dumps({'error': str(error)}))"
     )
     assert outcome["error"].startswith("this process already ran an OpenSeesPy (Python) model: OpenSeesPy and")
+
+
+NEVER_HELD_TAIL = """
+pattern Plain 1 Linear { load 5 1.0 } ;# a lateral load of 1 kip, applied by a static analysis, never held
+constraints Plain; numberer RCM; system BandGeneral; test NormDispIncr 1e-8 10; algorithm Newton
+integrator LoadControl 0.1; analysis Static; analyze 10
+"""
+
+
+def test_a_script_that_never_holds_its_loads_has_them_held_where_they_stand_and_is_told(tmp_path):
+    """A script that applies a load with a Linear pattern and never calls loadConst: rlc holds it (loadConst -time
+    0.0) and says so in one line; through 4 s of motion the roof stays where the held load put it (a Linear pattern
+    left on would push it 1 kip more each second: about 0.5 mm a second on this building)."""
+    shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
+    model = tmp_path / TCL_MODEL.name
+    model.write_text(TCL_MODEL.read_text() + NEVER_HELD_TAIL)
+    code = (
+        "import json, numpy as np\n"
+        "from pathlib import Path\n"
+        "from rlcontroller.physics.fe_build import reduced_building\n"
+        "from rlcontroller.physics.fe_integrator import OpenSeesIntegrator\n"
+        f"path = Path({str(model)!r})\n"
+        "reduced_building(path, 'build_model')\n"
+        "plant = OpenSeesIntegrator(path, 'build_model', 0.005, np.zeros((5, 1)), np.ones(1))\n"
+        "state, roof = np.zeros(15), []\n"
+        "for _ in range(200):\n"
+        "    state = plant.step(state, np.zeros(1), np.zeros(2), 0.02)\n"
+        "    roof.append(state[4])\n"
+        "print(json.dumps([min(roof), max(roof)]))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=REPOSITORY)
+    assert done.returncode == 0, done.stderr[-2000:]
+    low, high = json.loads(done.stdout.strip().splitlines()[-1])
+    assert high - low < 1e-6  # m: held, not growing (25 mm more over the 4 s were it left on)
+    notes = [line for line in done.stderr.splitlines() if "never holds its loads" in line]
+    assert len(notes) == 1 and "loadConst -time 0.0" in notes[0]

@@ -15,6 +15,7 @@ from rlcontroller.config.learning import (
     LEARNER_KWARGS,
     NUMERIC_KWARGS,
     RESERVED_KWARGS,
+    STEP_LIST_KWARGS,
 )
 
 
@@ -57,6 +58,9 @@ def check_algorithm(experiment: Experiment) -> None:
             raise ConfigError(f"{where}: expected {kind} in [{low}, {high}], got {value!r}")
         if key in CHOICE_KWARGS and value not in CHOICE_KWARGS[key]:
             raise ConfigError(f"{where}: expected one of {', '.join(CHOICE_KWARGS[key])}, got {value!r}")
+        steps = isinstance(value, list) and all(_in_range(step, 0, 2**40, True) for step in value)
+        if key in STEP_LIST_KWARGS and not steps:
+            raise ConfigError(f"{where}: expected a list of time steps (whole numbers >= 0), got {value!r}")
 
 
 def _check_jax_backend(experiment: Experiment) -> None:

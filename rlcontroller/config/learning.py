@@ -164,6 +164,7 @@ RESERVED_KWARGS = {
     "_init_setup_model",
 }
 CHOICE_KWARGS = {"objective": ("return", "standard")}  # RandomSearch: what f is (its module docstring)
+STEP_LIST_KWARGS = {"param_resets"}  # sbx: the time steps (whole numbers >= 0) after which its networks are reset
 # (low, high, integer) for the learners' common numeric keyword arguments.
 NUMERIC_KWARGS = {
     "gamma": (0.0, 1.0, False),

@@ -76,12 +76,38 @@ DEVICE_FIGURES = (  # per mass device over a suite, the controlled building's th
 )
 
 
+POSSIBLE = {  # a per-motion figure and its possible range: ratios and drift ratios are finite and not negative
+    "J1": (0.0, np.inf),
+    "J2": (0.0, np.inf),
+    "ratio": (0.0, np.inf),
+    "drift_ratio": (0.0, np.inf),
+    "reference_drift_ratio": (0.0, np.inf),
+    "residual_ratio": (0.0, np.inf),
+    "reference_residual_ratio": (0.0, np.inf),
+    "over_bound": (0.0, np.inf),
+}
+
+
+def check_possible(rows: dict[str, dict]) -> None:
+    """ValueError (one line naming the motion and the figure) for a per-motion figure no run can give: not a number
+    (NaN, a boolean, text), infinite or negative. A verdict with one counts as none (`verdict.contradictions`)."""
+    for name, row in rows.items():
+        for key, (low, high) in POSSIBLE.items():
+            if key not in row:
+                continue
+            value = row[key]
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not number or not low <= value < high:
+                raise ValueError(f"{name}.{key} {value!r} is no possible figure (a finite number >= {low:g})")
+
+
 def suite_figures(rows: dict[str, dict], words: str, system: str, standard, devices: dict | None = None) -> dict:
     """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
     insignificant: over_bound) against the reference `words` describes, under `standard`
     (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`; with mass
     devices their figures over the suite (`DEVICE_FIGURES`: peak strokes, m; with end-stops the limits, the
     contacts and the largest contact force, N)."""
+    check_possible(rows)
     tolerance = standard.tolerance
     significant = {name: row for name, row in rows.items() if "ratio" in row}
     quiet = {name: row for name, row in rows.items() if "ratio" not in row}
@@ -96,7 +122,7 @@ def suite_figures(rows: dict[str, dict], words: str, system: str, standard, devi
     j1 = float(np.mean([row["J1"] for row in significant.values()])) if n else float("nan")
     j2 = float(np.mean([row["J2"] for row in significant.values()])) if n else float("nan")
     means_ok = not n or (j1 <= 1.0 + ROUNDING and j2 <= 1.0 + ROUNDING)
-    passed = bool(risk_ok and means_ok and not higher and not loud)
+    passed = bool(n and risk_ok and means_ok and not higher and not loud)  # a suite that judged nothing passes not
     worst = max(significant, key=lambda name: significant[name]["ratio"], default=None)
     worst_j2 = max(significant, key=lambda name: significant[name]["J2"], default=None)
     figures = {

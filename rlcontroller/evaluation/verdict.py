@@ -116,7 +116,10 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
             else:
                 found.append(f"{name!r} is no criterion of the standard")
                 continue
-        except (KeyError, TypeError, ValueError, AttributeError):
+        except ValueError as error:  # an impossible figure, named
+            found.append(f"{name}: {error}")
+            continue
+        except (KeyError, TypeError, AttributeError):
             found.append(f"{name}: its figures are incomplete or malformed")
             continue
         found += [

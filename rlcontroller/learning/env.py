@@ -38,7 +38,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import Controller
@@ -137,7 +136,7 @@ class BuildingEnv(gym.Env):
             self._transition = self.sampled.transition(self._outputs.c, self._outputs.d)
             self._advance = self._advance_linear
         else:
-            self._windows = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
+            self._windows, self._load_windows = grid.step_windows()
             self._output_ct = self._outputs.c.T.copy()
             self._output_dt = (self._outputs.d * self.force_limits).T.copy()
             self._advance = self._advance_nonlinear
@@ -148,9 +147,11 @@ class BuildingEnv(gym.Env):
         return outputs
 
     def _advance_nonlinear(self, k: int, clipped: np.ndarray) -> np.ndarray:
-        state = self.plant.integrator.step(
-            self._state_action[: self._n_state], clipped, self._windows[k], self.control_dt
-        )
+        state = self._state_action[: self._n_state]
+        if self._load_windows is None:
+            state = self.plant.integrator.step(state, clipped, self._windows[k], self.control_dt)
+        else:  # floor forces: a plant that takes them in its own step (end-stops)
+            state = self.plant.integrator.step(state, clipped, self._windows[k], self.control_dt, self._load_windows[k])
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.physics.dynamics import StateSpace, StepMap, exact_substep, newmark_substep, state_space
+from rlcontroller.physics.dynamics import StateSpace, StepMap, exact_substep, load_map, newmark_substep, state_space
 from rlcontroller.physics.structure import Building
 
 REGISTERS = 3  # per stopped device: force at the step's end (N), peak |force| over the step (N), contacts begun
@@ -48,13 +48,15 @@ SUBSTEPS_PER_STOP_PERIOD = 200
 
 @dataclass(frozen=True)
 class StopMaps:
-    """One ground sampling's maps (module docstring): y_j = strokes[j] @ [x; u; ground window] (j = 0..J),
-    H_l = response[l - 1] (l = 1..J), E_j = end[j] (j = 0..J-1), and the plant's own linear step."""
+    """One load sampling's maps (module docstring), on the inputs v = [x; u; ground window; floor-force window,
+    sample by sample, when the load has floor forces]: y_j = strokes[j] @ v (j = 0..J), H_l = response[l - 1]
+    (l = 1..J), E_j = end[j] (j = 0..J-1), and the plant's own linear step x_{k+1} = linear @ v (its load map
+    for the floor forces)."""
 
-    strokes: np.ndarray  # (J + 1, 2 d, n_x + m + r + 1): strokes (m), then stroke rates (m/s)
+    strokes: np.ndarray  # (J + 1, 2 d, inputs): strokes (m), then stroke rates (m/s)
     response: np.ndarray  # (J, 2 d, d)
     end: np.ndarray  # (J, n_x, d)
-    step: StepMap
+    linear: np.ndarray  # (n_x, inputs)
 
 
 @dataclass(frozen=True)
@@ -124,15 +126,18 @@ class EndStops:
         per_interval = int(np.ceil(control_dt / intervals / longest - 1e-9))
         return per_interval, control_dt / (intervals * per_interval)
 
-    def maps(self, intervals: int, control_dt: float) -> StopMaps:
-        """The maps for `intervals` ground intervals per control step (built once, kept)."""
-        if intervals not in self._maps:
-            self._maps[intervals] = self._build(intervals, control_dt)
-        return self._maps[intervals]
+    def maps(self, intervals: int, control_dt: float, floor_forces: bool = False) -> StopMaps:
+        """The maps for `intervals` load intervals per control step, with or without floor forces (built once,
+        kept)."""
+        key = (intervals, floor_forces)
+        if key not in self._maps:
+            self._maps[key] = self._build(intervals, control_dt, floor_forces)
+        return self._maps[key]
 
     def _substep(self, h: float):
-        """(phi, gain on [command applied; stop forces], ground start, ground end) of the inner state q over h:
-        the building's z, with a lag also the delivered forces."""
+        """(phi, gain on [command applied; stop forces], ground start, ground end, floor forces' start and end
+        (q, floors)) of the inner state q over h: the building's z, with a lag also the delivered forces. Floor
+        forces, linear between their samples, are discretised exactly whatever the method, as the plant's."""
         building, m = self.building, self.building.n_actuators
         pushed = replace(building, actuator_matrix=np.hstack([building.actuator_matrix, self.contact_matrix()]))
         if self.time_constant > 0:
@@ -149,15 +154,18 @@ class EndStops:
             sub = newmark_substep(pushed, h, self.simulation.newmark_beta, self.simulation.newmark_gamma)
         else:
             sub = exact_substep(state_space(pushed), h)
-        return sub.phi, sub.force_gain, sub.ground_start, sub.ground_end
+        loads = np.zeros((sub.phi.shape[0], 2, building.n_floors))
+        loads[: building.n_states] = load_map(building, h).gain
+        return sub.phi, sub.force_gain, sub.ground_start, sub.ground_end, loads[:, 0], loads[:, 1]
 
-    def _build(self, intervals: int, control_dt: float) -> StopMaps:
+    def _build(self, intervals: int, control_dt: float, floor_forces: bool) -> StopMaps:
         building, m, d, n_x = self.building, self.building.n_actuators, self.devices.size, self.n_linear
         per_interval, h = self.substep_seconds(control_dt, intervals)
-        phi, gain, ground_start, ground_end = self._substep(h)
+        phi, gain, ground_start, ground_end, load_start, load_end = self._substep(h)
         command_gain, stop_gain = gain[:, :m], gain[:, m:]
-        inner, total = phi.shape[0], intervals * per_interval
-        columns = n_x + m + intervals + 1
+        inner, total, floors = phi.shape[0], intervals * per_interval, building.n_floors
+        loads = n_x + m + intervals + 1  # the first floor-force column
+        columns = loads + (intervals + 1) * floors * floor_forces
         # the command applied over the step, from [x; u]: u itself, or with a delay the buffer's oldest entry
         applied = np.zeros((m, columns))
         if self.delay_steps > 0:
@@ -179,6 +187,11 @@ class EndStops:
             for weight, column in ((ground_start, part / per_interval), (ground_end, (part + 1) / per_interval)):
                 state[:, n_x + m + interval] += weight * (1.0 - column)
                 state[:, n_x + m + interval + 1] += weight * column
+            if floor_forces:  # sample i's forces in columns loads + i floors ... + (i + 1) floors
+                here, after = (loads + (interval + i) * floors for i in (0, 1))
+                for weight, column in ((load_start, part / per_interval), (load_end, (part + 1) / per_interval)):
+                    state[:, here : here + floors] += weight * (1.0 - column)
+                    state[:, after : after + floors] += weight * column
             strokes[j + 1] = strokes_on_q @ state
         response = np.empty((total, 2 * d, d))
         end = np.zeros((total, n_x, d))
@@ -187,25 +200,55 @@ class EndStops:
             response[lag] = strokes_on_q @ pushed
             end[total - 1 - lag, :inner] = pushed
             pushed = phi @ pushed
+        step = self.linear_step(intervals)
+        linear = np.zeros((n_x, columns))
+        linear[:, :n_x], linear[:, n_x : n_x + m], linear[:, n_x + m : loads] = (
+            step.phi,
+            step.force_gain,
+            step.ground_gain,
+        )
+        if floor_forces:  # the plant's own load map over the control step (`SampledPlant.load`)
+            gain = load_map(building, control_dt, intervals).gain  # (2 n, r + 1, floors)
+            linear[: gain.shape[0], loads:] = gain.reshape(gain.shape[0], -1)
         return StopMaps(
             strokes=np.ascontiguousarray(strokes),
             response=np.ascontiguousarray(response),
             end=np.ascontiguousarray(end),
-            step=self.linear_step(intervals),
+            linear=linear,
         )
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
-        """The state after one control step with `action` (forces / force limits) held and `ground` the r + 1
-        ground samples (m/s^2) spanning it."""
-        return self.step_many(state[None], action[None], ground[None], control_dt)[0]
+    def step(
+        self,
+        state: np.ndarray,
+        action: np.ndarray,
+        ground: np.ndarray,
+        control_dt: float,
+        floor_forces: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The state after one control step with `action` (forces / force limits) held, `ground` the r + 1
+        ground samples (m/s^2) spanning it and `floor_forces` the r + 1 floor-force samples (r + 1, floors; N), if
+        the load has them."""
+        forces = None if floor_forces is None else floor_forces[None]
+        return self.step_many(state[None], action[None], ground[None], control_dt, forces)[0]
 
-    def step_many(self, states: np.ndarray, actions: np.ndarray, grounds: np.ndarray, control_dt: float) -> np.ndarray:
-        """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds (N, r + 1))."""
-        maps = self.maps(grounds.shape[1] - 1, control_dt)
-        forces = actions * self.building.force_limits
+    def step_many(
+        self,
+        states: np.ndarray,
+        actions: np.ndarray,
+        grounds: np.ndarray,
+        control_dt: float,
+        floor_forces: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds (N, r + 1),
+        floor forces (N, r + 1, floors) or None)."""
+        maps = self.maps(grounds.shape[1] - 1, control_dt, floor_forces is not None)
+        loads = [actions * self.building.force_limits, grounds]
+        if floor_forces is not None:
+            loads.append(floor_forces.reshape(len(states), -1))
         from rlcontroller.physics.integrators import stop_step_many  # numba: imported when first needed
 
-        linear = (maps.step.phi, maps.step.force_gain, maps.step.ground_gain)
         stops = (self.limits, self.stiffness, self.damping)
-        inputs = (np.ascontiguousarray(states), np.ascontiguousarray(forces), np.ascontiguousarray(grounds))
-        return stop_step_many(*inputs, *linear, maps.strokes, maps.response, maps.end, *stops)
+        loads = np.ascontiguousarray(np.hstack(loads))
+        return stop_step_many(
+            np.ascontiguousarray(states), loads, maps.linear, maps.strokes, maps.response, maps.end, *stops
+        )

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import (
     MAX_DURATION,
@@ -311,6 +312,15 @@ class LoadGrid:
     def forces_at_steps(self) -> np.ndarray | None:
         """The floor forces at the control instants 0..n_steps (N), or None."""
         return None if self.floor_forces is None else self.floor_forces[:: self.substeps][: self.n_steps + 1]
+
+    def step_windows(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """What a plant's own integrator takes per control step (views): the r + 1 ground samples spanning each
+        step (steps, r + 1), and the floor forces' (steps, r + 1, floors) or None."""
+        r = self.substeps
+        ground = sliding_window_view(self.ground, r + 1)[::r][: self.n_steps]
+        if self.floor_forces is None:
+            return ground, None
+        return ground, sliding_window_view(self.floor_forces, r + 1, axis=0)[::r][: self.n_steps].swapaxes(1, 2)
 
 
 def on_control_grid(load: Load, control_dt: float) -> LoadGrid:

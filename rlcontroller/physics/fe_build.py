@@ -17,6 +17,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -44,6 +45,8 @@ EXITED, BUILT = "rlc: the model called exit", "rlc: the model stands after gravi
 # went into the model's folder, from every worker); the display commands of OpenSees' own build are no-ops; and
 # `loadConst`, which holds the gravity loads before the script's own analyses, ends the build there (unless the
 # description's build_until is end). OpenSees registers its commands anew at `model` and `wipe`: wrapped again.
+# A script that never holds its loads would leave a Linear pattern growing with rlc's time: rlc holds them
+# itself (`loadConst -time 0.0`, where they stand) and says so.
 TCL_PRELUDE = """
 proc ::rlc_wrap {name body} {
     if {[info commands ::$name] eq {} || [info procs ::$name] ne {}} { return }
@@ -54,7 +57,7 @@ proc ::rlc_wrap {name body} {
 proc ::rlc_prelude {} {
     rlc_wrap wipe {::rlc_tcl_wipe {*}$args; ::rlc_prelude}
     rlc_wrap model {::rlc_tcl_model {*}$args; ::rlc_prelude}
-    rlc_wrap loadConst {::rlc_tcl_loadConst {*}$args; if {$::rlc_stop_at_load_const} {error "BUILT"}}
+    rlc_wrap loadConst {::rlc_tcl_loadConst {*}$args; set ::rlc_held 1; if {$::rlc_stop_at_load_const} {error "BUILT"}}
     rlc_wrap recorder {}
     rlc_wrap exit {error "EXITED"}
     foreach name {vup vrp vpn prp viewWindow plane port projection fill display} {
@@ -129,6 +132,7 @@ def _build_tcl_model(path: Path) -> FEDescription:
     try:
         os.chdir(path.parent)  # a published model sources its neighbours by relative names
         ops.eval(TCL_PRELUDE + f"set ::rlc_stop_at_load_const {int(description.build_until == 'loadConst')}")
+        ops.eval("set ::rlc_held 0")
         # code, like a Python model file: it runs only for an experiment the user named (a run or model folder
         # that names a model file is refused at loading, `config.loading.UNTRUSTED_MODEL`)
         with quiet():
@@ -140,6 +144,10 @@ def _build_tcl_model(path: Path) -> FEDescription:
     finally:
         os.chdir(folder)
     check_in_domain(description, str(sidecar))
+    if str(ops.eval("set ::rlc_held")).strip() != "1":  # its loads would grow with rlc's time: held where they stand
+        held = "::rlc_tcl_loadConst" if str(ops.eval("info commands ::rlc_tcl_loadConst")).strip() else "loadConst"
+        ops.eval(f"{held} -time 0.0")  # the model's own command, not rlc's wrapper (which ends a build)
+        description = replace(description, loads_held_by_rlc=True)
     if description.rayleigh_modes is not None:  # what the model's own analysis script would give it
         (i, zeta_i), (j, zeta_j) = description.rayleigh_modes
         w_i, w_j = 2.0 * np.pi / periods(j, path)[[i - 1, j - 1]]
@@ -170,6 +178,12 @@ def reduced_building(path: Path, function: str) -> dict:
     ratios = damping_ratios(description, 2.0 * np.pi / fe_periods)
     opensees().wipe()
     warn_story_heights(description, path)
+    if description.loads_held_by_rlc:
+        print(
+            f"note: {path} never holds its loads with loadConst: rlc holds them where they stand once it has run "
+            "(loadConst -time 0.0), or a Linear pattern would grow with time through the motion",
+            file=sys.stderr,
+        )
     return {
         "name": f"reduced from {path.name}",
         "source": str(path),

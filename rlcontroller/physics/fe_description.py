@@ -22,6 +22,7 @@ has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> 
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +32,22 @@ from rlcontroller.errors import ModelError
 FALLBACKS = (("Newton",), ("ModifiedNewton", "-initial"), ("NewtonLineSearch",))
 LENGTHS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "ft": 0.3048, "in": 0.0254}  # m per unit
 FORCES = {"N": 1.0, "kN": 1.0e3, "MN": 1.0e6, "kip": 4448.2216152605, "lbf": 4.4482216152605}  # N per unit
+
+
+DESCRIPTION_KEYS = (
+    "floors",
+    "direction",
+    "story_heights",
+    "modal_damping",
+    "rayleigh",
+    "rayleigh_modes",
+    "build_until",
+    "units",
+    "constraints",
+    "system",
+    "test",
+    "algorithm",
+)
 
 
 @dataclass(frozen=True)
@@ -51,6 +68,7 @@ class FEDescription:
     test: tuple[str | float, ...] = ("NormDispIncr", 1e-10, 30)
     algorithm: tuple[str | float, ...] = FALLBACKS[0]
     build_until: str = "loadConst"  # a Tcl script: the model as it stands at its loadConst, or at its end
+    loads_held_by_rlc: bool = False  # a Tcl script that never called loadConst: rlc held its loads once built
 
     @property
     def algorithms(self) -> tuple[tuple[str | float, ...], ...]:
@@ -82,6 +100,11 @@ class FEDescription:
         if not isinstance(raw, dict):
             raise ModelError(f"{where}: expected a mapping (floors, direction, story_heights, ...), "
                              f"got {type(raw).__name__}")  # fmt: skip
+        unknown = [key for key in raw if key not in DESCRIPTION_KEYS]
+        if unknown:  # a typo (unit: for units:) would otherwise read a kip-foot model in metres and newtons
+            close = difflib.get_close_matches(str(unknown[0]), DESCRIPTION_KEYS, n=1)
+            hint = f"did you mean {close[0]}? " if close else ""
+            raise ModelError(f"{where}: unknown key {unknown[0]!r}: {hint}expected {', '.join(DESCRIPTION_KEYS)}")
         missing = sorted({"floors", "direction", "story_heights"} - set(raw))
         if missing:
             raise ModelError(f"{where}: the mapping lacks {', '.join(missing)}")

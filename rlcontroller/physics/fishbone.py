@@ -93,6 +93,7 @@ class Fishbone:
     yield_drift: np.ndarray | None = None  # (n,) m: the stories' (ductility)
     collapse_drift: np.ndarray | None = None  # (n,) m: past it a story has collapsed (inf: never)
     substeps: int = 4
+    elastic_stiffness: np.ndarray | None = None  # (n, n) N/m: P-Delta included, the beams elastic (at rest)
 
     @property
     def story_force_map(self) -> np.ndarray:
@@ -144,8 +145,14 @@ class Fishbone:
         )  # fmt: skip
         collapse = np.inf if config.collapse_drift is None else config.collapse_drift
         gain = building.actuator_matrix[:n] * building.force_limits
-        return replace(fishbone, floor_gain=gain, yield_drift=per_story(config.yield_drift, n),
-                       collapse_drift=per_story(collapse, n), substeps=config.substeps)  # fmt: skip
+        return replace(
+            fishbone,
+            floor_gain=gain,
+            yield_drift=per_story(config.yield_drift, n),
+            collapse_drift=per_story(collapse, n),
+            substeps=config.substeps,
+            elastic_stiffness=line.lateral(),
+        )
 
     def _arrays(self) -> tuple:
         return (
@@ -171,7 +178,25 @@ class Fishbone:
 
 
 def hysteretic_model(building: Building, config: HysteresisConfig) -> BoucWen | Fishbone:
-    """The yielding model `config` describes on `building`: story springs (model bouc_wen) or a fishbone."""
+    """The yielding model `config` describes on `building`: story springs (model bouc_wen) or a fishbone. A
+    collapse drift past its story's height, or a frame that cannot stand under its own weight, is refused
+    (ValueError, one line)."""
+    n = building.n_floors
+    if config.collapse_drift is not None and building.story_heights is not None:
+        collapse, heights = per_story(config.collapse_drift, n), np.asarray(building.story_heights, dtype=float)
+        story = int(np.argmax(collapse > heights))
+        if collapse[story] > heights[story]:
+            raise ValueError(
+                f"collapse_drift: {collapse[story]:g} m in story {story + 1}, beyond its height {heights[story]:g} m"
+            )
     if config.model == "fishbone":
-        return Fishbone.of_building(building, config)
+        fishbone = Fishbone.of_building(building, config)
+        lowest = float(np.min(np.linalg.eigvalsh(0.5 * (fishbone.elastic_stiffness + fishbone.elastic_stiffness.T))))
+        if lowest <= 0.0:
+            raise ValueError(
+                "the frame cannot stand under its own weight: its lateral stiffness with P-Delta (column line, "
+                f"beams elastic) is not positive definite (lowest eigenvalue {lowest:.3g} N/m); expected stiffer "
+                "columns or beams (column_stiffness, beam_stiffness, N m^2 and N m/rad) or lighter floors"
+            )
+        return fishbone
     return BoucWen.of(building, config)

@@ -298,26 +298,37 @@ def held_stop_force(stroke, rate, end_stroke, end_rate, limit, stiffness, dampin
 @numba.njit(cache=True)
 def _strokes_at(j, free, forces, first, response):
     """The strokes and rates at sub-step j: the linear plant's, plus what the stops' forces held over the earlier
-    sub-steps `first`..j-1 added."""
+    sub-steps `first`..j-1 added (loops: these products are too small for BLAS calls to pay)."""
     y = free[j].copy()
+    rows, d = response.shape[1], response.shape[2]
     for i in range(first, j):
-        y += response[j - i - 1] @ forces[i]
+        lag = response[j - i - 1]
+        for k in range(d):
+            f = forces[i, k]
+            if f != 0.0:
+                for r in range(rows):
+                    y[r] += lag[r, k] * f
     return y
 
 
 @numba.njit(cache=True)
-def stop_step(state, force, ground, phi, force_gain, ground_gain, strokes, response, end, limits, stiffness, damping):
+def stop_step(state, loads, linear, strokes, response, end, limits, stiffness, damping):
     """One control step of a building whose mass devices meet end-stops (`end_stops`, by superposition on the
-    linear step): the new state [x; per device (force at the end, peak |force|, contacts begun)]. The force held
-    over each sub-step is the contact law's mean over it, its end predicted with the start's force held
-    (`held_stop_force`): an impact's rebound is right to a fraction of a per cent."""
-    n_x, m, d = phi.shape[0], force.size, limits.size
+    linear step; `loads` the commands (N), the ground samples and the floor forces' if any): the new state [x; per
+    device (force at the end, peak |force|, contacts begun)]. The force held over each sub-step is the contact
+    law's mean over it, its end predicted with the start's force held (`held_stop_force`): an impact's rebound is
+    right to a fraction of a per cent."""
+    n_x, d = linear.shape[0], limits.size
     total = response.shape[0]
-    inputs = np.empty(n_x + m + ground.size)
-    inputs[:n_x], inputs[n_x : n_x + m], inputs[n_x + m :] = state[:n_x], force, ground
-    free = np.empty((total + 1, 2 * d))
+    inputs = np.empty(n_x + loads.size)
+    inputs[:n_x], inputs[n_x:] = state[:n_x], loads
+    free = np.zeros((total + 1, 2 * d))
     for j in range(total + 1):
-        free[j] = strokes[j] @ inputs
+        for r in range(2 * d):
+            row, value = strokes[j, r], 0.0
+            for c in range(inputs.size):
+                value += row[c] * inputs[c]
+            free[j, r] = value
     forces = np.zeros((total, d))
     new = np.zeros(n_x + 3 * d)
     first = total  # the first sub-step with a force: before it, the strokes are the linear plant's
@@ -345,31 +356,22 @@ def stop_step(state, force, ground, phi, force_gain, ground_gain, strokes, respo
             pushed = pushed or forces[j, k] != 0.0
         if pushed and first == total:
             first = j
-    new[:n_x] = phi @ state[:n_x] + force_gain @ force + ground_gain @ ground
+    new[:n_x] = linear @ inputs
     for i in range(first, total):
-        new[:n_x] += end[i] @ forces[i]
+        for k in range(d):
+            f = forces[i, k]
+            if f != 0.0:
+                for r in range(n_x):
+                    new[r] += end[i, r, k] * f
     return new
 
 
 @numba.njit(cache=True)
-def stop_step_many(
-    states, forces, grounds, phi, force_gain, ground_gain, strokes, response, end, limits, stiffness, damping
-):
-    """`stop_step` for many buildings of one plant (states (N, S), forces (N, m) in N, grounds (N, r + 1))."""
-    new = np.empty((states.shape[0], phi.shape[0] + 3 * limits.size))
+def stop_step_many(states, loads, linear, strokes, response, end, limits, stiffness, damping):
+    """`stop_step` for many buildings of one plant (states (N, S), loads (N, inputs after x))."""
+    new = np.empty((states.shape[0], linear.shape[0] + 3 * limits.size))
     for member in range(states.shape[0]):
         new[member] = stop_step(
-            states[member],
-            forces[member],
-            grounds[member],
-            phi,
-            force_gain,
-            ground_gain,
-            strokes,
-            response,
-            end,
-            limits,
-            stiffness,
-            damping,
+            states[member], loads[member], linear, strokes, response, end, limits, stiffness, damping
         )
     return new

@@ -154,13 +154,13 @@ class SampledPlant:
     def forcing(self, grid: LoadGrid, c: np.ndarray, load_rows: np.ndarray) -> np.ndarray:
         """What the load adds to each control step beyond the plant's own transition: (n_steps, n_state +
         outputs), its terms in the state x and in outputs y = c x + load_rows F (F the floor forces). A
-        plant with its own integrator takes the ground acceleration in its step: only floor forces are
-        terms here, and it refuses them (`Plant.cannot_take`)."""
+        plant with its own integrator takes the ground acceleration in its step, and the floor forces too
+        (end-stops) or refuses them (`Plant.cannot_take`): only their direct terms in outputs are here."""
         n_steps, n_state = grid.n_steps, self.n_state
         forcing = np.zeros((n_steps, n_state + c.shape[0]))
         if self.plant.integrator is None:
             forcing[:, :n_state] = self.step.ground_terms(grid.ground)
-        if grid.floor_forces is not None:  # `load` refuses them where the plant cannot take them
+        if grid.floor_forces is not None and self.plant.integrator is None:  # end-stops take them in their step
             forcing[:, :n_state] += self.load_terms(grid)
             forcing[:, n_state:] = grid.floor_forces[grid.substeps :: grid.substeps][:n_steps] @ load_rows.T
         forcing[:, n_state:] += forcing[:, :n_state] @ c.T

@@ -15,7 +15,6 @@ its outputs are not used.
 from __future__ import annotations
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
@@ -73,6 +72,7 @@ class BuildingBatch:
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
         self._ground_cache: dict[int, tuple] = {}  # id(load) -> (load, sub-steps, its forcing)
         self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
+        self._load_windows: list[np.ndarray | None] = [None] * size  # and floor forces per step, if any
         self._member_rows = [self.rows] * size  # each member's output rows (its drawn plant's)
         self._members = np.arange(size)
 
@@ -134,9 +134,9 @@ class BuildingBatch:
         forcing[:n_steps, size:] = load_forcing[:, plant.n_state :]
         self._transitions[member] = transition
         if plant.integrator is None:
-            self._windows[member] = None
+            self._windows[member], self._load_windows[member] = None, None
         else:
-            self._windows[member] = sliding_window_view(grid.ground, grid.substeps + 1)[:: grid.substeps]
+            self._windows[member], self._load_windows[member] = grid.step_windows()
         self._stacked = None
         self.floor_forces[member] = grid.forces_at_steps
         ground = grid.ground_at_steps
@@ -248,10 +248,11 @@ class BuildingBatch:
         if hasattr(self.plant.integrator, "step_many") and all(plant is self.plant for plant in self.plants):
             return self._advance_many(clipped, new)
         for member, plant in enumerate(self.plants):
-            n, windows = plant.n_state, self._windows[member]
+            n, windows, loads = plant.n_state, self._windows[member], self._load_windows[member]
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
-            state = plant.integrator.step(self.states[member, :n], clipped[member], windows[k], self.control_dt)
+            arguments = (self.states[member, :n], clipped[member], windows[k], self.control_dt)
+            state = plant.integrator.step(*arguments) if loads is None else plant.integrator.step(*arguments, loads[k])
             rows = self._member_rows[member]
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T
@@ -262,12 +263,18 @@ class BuildingBatch:
         ground sampling (members whose records share it)."""
         plant, size = self.plant, self._state_size
         n, rows = plant.n_state, self.rows
-        groups: dict[int, list[int]] = {}
+        groups: dict[tuple[int, bool], list[int]] = {}
         for member, windows in enumerate(self._windows):
-            groups.setdefault(windows.shape[1], []).append(member)
-        for members in groups.values():
-            grounds = np.stack([self._windows[m][min(self.k[m], self._windows[m].shape[0] - 1)] for m in members])
-            states = plant.integrator.step_many(self.states[members, :n], clipped[members], grounds, self.control_dt)
+            groups.setdefault((windows.shape[1], self._load_windows[member] is not None), []).append(member)
+        for (_, loaded), members in groups.items():
+            at = [min(self.k[m], self._windows[m].shape[0] - 1) for m in members]
+            grounds = np.stack([self._windows[m][k] for m, k in zip(members, at, strict=True)])
+            arguments = (self.states[members, :n], clipped[members], grounds, self.control_dt)
+            if loaded:
+                forces = np.stack([self._load_windows[m][k] for m, k in zip(members, at, strict=True)])
+                states = plant.integrator.step_many(*arguments, forces)
+            else:
+                states = plant.integrator.step_many(*arguments)
             new[members, :n] = states
             new[members, size:] = states @ rows.c.T + clipped[members] @ (rows.d * plant.force_limits).T
         return new

@@ -7,9 +7,10 @@ named by the sha256 of everything they depend on: the model's folder (every .py,
 a model sources its neighbours), the function that builds it, the analysis and control steps, whether member ends
 are read, every motion's samples, and rlc's version. A change to any of them names another file; a file that does
 not read back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
-~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under a ground motion (its peak
-drift under 1 % of its design model's under the same motion: its masses do not feel the ground) is refused before
-anything is kept or judged.
+~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under the ground (its peak drift
+under 1 % of its design model's under the same motion: its masses do not feel the ground) is refused before any
+run (`check_moves`: a unit ground pulse, in this process, a fraction of a second of analysis) and, should a motion
+find what the pulse did not, before anything is kept or judged.
 """
 
 from __future__ import annotations
@@ -62,6 +63,35 @@ def reference_key(plant: Plant, motions: list[Load]) -> str:
     return digest.hexdigest()
 
 
+PULSE_S = 1.0  # the stand-still test: a ground pulse of one control step at 1 m/s^2, then this long at rest
+
+
+def check_moves(plant: Plant) -> float:
+    """The FE plant's peak drift under a unit ground pulse over its design model's (stepped here, in this process:
+    the model is built once more); ModelError, one line, before any run, when it stands still."""
+    steps = max(2, round(PULSE_S / plant.control_dt))
+    ground = np.zeros(steps + 1)
+    ground[1] = 1.0  # m/s^2: up over the first step, down over the second
+    fe, state, peak = plant.fe_model, np.zeros(plant.n_state), 0.0
+    drift = plant.building.drift_matrix()[:, : plant.building.n_floors]
+    for k in range(steps):
+        state = fe.step(state, np.zeros(plant.force_limits.size), ground[k : k + 2], plant.control_dt)
+        peak = max(peak, float(np.max(np.abs(drift @ state[: plant.building.n_floors]))))
+    pulse = Load("a unit ground pulse", plant.control_dt, ground, synthetic=True)
+    expected = float(np.max(np.abs(uncontrolled_responses(plant.design.bare, [pulse])[0].drift)))
+    _refuse_standing_still(plant, "a unit ground pulse", peak, expected)
+    return peak / expected
+
+
+def _refuse_standing_still(plant: Plant, what: str, peak: float, expected: float) -> None:
+    if peak < STANDING_STILL * expected:
+        raise ModelError(
+            f"{plant.fe_model.path}: the model stands still under {what} (peak drift {peak:.1e} m, its design model "
+            f"{expected:.1e} m): its masses do not feel the ground; masses on nodes tied by equalDOF under the "
+            'Transformation handler do not (docs/opensees.md, "A Tcl model"): try constraints: [Plain]'
+        )
+
+
 def uncontrolled(plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None) -> list[Response]:
     """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring); an FE plant's runs are
     reported to `on_motions` as each is done (all at once when kept)."""
@@ -73,17 +103,12 @@ def uncontrolled(plant: Plant, motions: list[Load], on_motions: Callable[[int], 
         if on_motions is not None:
             on_motions(len(motions))
         return kept
+    check_moves(plant)
     responses = uncontrolled_responses(plant, motions, on_motions)
     designed = uncontrolled_responses(plant.design, motions)  # the reduced (or named) design model, in numpy
     for motion, response, design in zip(motions, responses, designed, strict=True):
         peak, expected = np.max(np.abs(response.drift)), np.max(np.abs(design.drift))
-        if peak < STANDING_STILL * expected:
-            raise ModelError(
-                f"{plant.fe_model.path}: the model stands still under {motion.name}'s ground motion (peak drift "
-                f"{peak:.1e} m, its design model {expected:.1e} m): its masses do not feel the ground; masses on nodes "
-                'tied by equalDOF under the Transformation handler do not (docs/opensees.md, "A Tcl model"): try '
-                "constraints: [Plain]"
-            )
+        _refuse_standing_still(plant, f"{motion.name}'s ground motion", peak, expected)
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(path, _packed(responses))
     return responses

@@ -36,6 +36,14 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
         ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
         (
+            {"name": "SAC", "backend": "sbx", "kwargs": {"param_resets": "yes"}},
+            "algorithm.kwargs.param_resets: expected a list of time steps (whole numbers >= 0), got 'yes'",
+        ),
+        (
+            {"name": "SAC", "backend": "sbx", "kwargs": {"param_resets": [1000, True]}},
+            "algorithm.kwargs.param_resets: expected a list of time steps",
+        ),
+        (
             {"name": "RandomSearch", "policy": {"actor_arch": [8], "odd": True}, "vec_env": "dummy"},
             "algorithm.vec_env: not for RandomSearch",
         ),

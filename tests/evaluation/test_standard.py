@@ -97,3 +97,28 @@ def test_a_yielding_plant_s_level_is_the_higher_of_its_transient_and_permanent_d
         [row(0.9, 0.02, 0.03, residual_ratio=0.012, reference_residual_ratio=0.008)] + [quiet] * 319
     )
     assert after_a_larger_peak["higher_level"] == {} and after_a_larger_peak["passed"]
+
+
+@pytest.mark.parametrize(
+    ("figure", "value"),
+    [("ratio", float("nan")), ("drift_ratio", float("nan")), ("J1", -0.5), ("J2", float("inf")), ("ratio", True),
+     ("reference_drift_ratio", "0.01")],
+)  # fmt: skip
+def test_a_figure_no_run_can_give_is_named_and_never_judged(figure, value):
+    with pytest.raises(ValueError, match=rf"m1\.{figure} .* is no possible figure"):
+        figures([row(), row(**({"J1": 0.5} | {figure: value}))])
+
+
+def test_a_suite_that_judged_no_significant_motion_does_not_pass():
+    quiet = figures([{"pga_g": 0.001, "over_bound": 0.2}] * 5)
+    assert quiet["significant_motions"] == 0 and not quiet["passed"] and not quiet["dominates"]
+
+
+def test_a_boolean_is_no_number_in_a_standard(tmp_path):
+    from rlcontroller.config import ConfigError
+
+    text = (REPOSITORY / "configs" / "checks" / "standard.yaml").read_text()
+    path = tmp_path / "standard.yaml"
+    path.write_text(text.replace("risk_bound: 0.05", "risk_bound: no"))
+    with pytest.raises(ConfigError, match="risk_bound: False is a boolean, expected a number"):
+        load_safety_check(path)

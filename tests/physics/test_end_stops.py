@@ -85,27 +85,31 @@ def test_a_free_mass_between_two_stops_loses_the_restitutions_square_at_each_imp
 
 
 def radau_reference(plant: Plant, grid, forces: np.ndarray, steps: int):
-    """The stopped building by Radau on M x'' + C x' + K x = -M 1 a_g + Gamma u + P f, f the stop's force while
-    the stroke is past its limit; each contact's start and end located as an event. Returns the states at the
-    control steps and the number of contacts."""
+    """The stopped building by Radau on M x'' + C x' + K x = -M 1 a_g + F + Gamma u + P f (F the floor forces,
+    if any), f the stop's force while the stroke is past its limit; each contact's start and end located as an
+    event. Returns the states at the control steps and the number of contacts."""
     building, stops = plant.building, plant.end_stops
     n, r, dt = building.n_dofs, grid.substeps, plant.control_dt / grid.substeps
     mass_inverse, contact = np.linalg.inv(building.mass), stops.contact_matrix()[:, 0]
     stroke_row = building.stroke_matrix()[0]
     limit, k, c = stops.limits[0], stops.stiffness[0], stops.damping[0]
+    floors = np.zeros((grid.ground.size, building.n_floors)) if grid.floor_forces is None else grid.floor_forces
+    on_floors = np.eye(n)[:, : building.n_floors]
 
     def rates(t, z, u, start, slope, side):
         s, rate = stroke_row @ z[:n], stroke_row @ z[n:]
         f = -k * (s - side * limit) - c * rate if side else 0.0
         force = building.actuator_matrix @ u + contact * f - building.damping @ z[n:] - building.stiffness @ z[:n]
-        return np.concatenate([z[n:], mass_inverse @ force - (start + slope * t)])
+        force = force + on_floors @ (start[1] + slope[1] * t)
+        return np.concatenate([z[n:], mass_inverse @ force - (start[0] + slope[0] * t)])
 
     z, states, contacts = np.zeros(2 * n), [np.zeros(2 * n)], 0
     for k_step in range(steps):
         for i in range(r):
             t, end = 0.0, dt
-            start = grid.ground[k_step * r + i]
-            slope = (grid.ground[k_step * r + i + 1] - start) / dt
+            sample = k_step * r + i
+            start = (grid.ground[sample], floors[sample])
+            slope = ((grid.ground[sample + 1] - start[0]) / dt, (floors[sample + 1] - start[1]) / dt)
             while t < end:
                 s = stroke_row @ z[:n]
                 side = 0 if abs(s) < limit else int(np.sign(s))
@@ -237,3 +241,35 @@ def test_a_free_mass_says_so_and_has_no_stops():
     stopped = Plant(driver_experiment())
     assert stopped.design.end_stops is None and stopped.elastic.end_stops is None
     assert stopped.design.n_state == stopped.n_linear
+
+
+@pytest.mark.slow
+def test_under_floor_forces_the_stops_see_them_within_the_step():
+    """Wind-like floor forces (linear between their samples) push the roof's driver into its stops: its strokes
+    and contacts are Radau's, the forces taken inside the step as the ground is."""
+    plant = Plant(driver_experiment())
+    rng = np.random.default_rng(7)
+    samples, dt = 401, 0.05  # 20 s
+    gusts = np.cumsum(rng.normal(0.0, 1.0, (samples, 5)), axis=0)
+    forces = 4e4 * np.sin(2 * np.pi * 0.68 * np.arange(samples) * dt)[:, None] + 2e3 * gusts
+    load = Load("gusts", dt, np.zeros(samples), floor_forces=forces)
+    grid = on_control_grid(load, plant.control_dt)
+    ground, loads = grid.step_windows()
+    steps = grid.n_steps
+    actions = np.zeros((steps, 1))
+    states = [np.zeros(plant.n_state)]
+    for k in range(steps):
+        states.append(plant.integrator.step(states[-1], actions[k], ground[k], plant.control_dt, loads[k]))
+    states = np.array(states)
+    reference, contacts = radau_reference(plant, grid, actions * plant.force_limits, steps)
+    n = plant.building.n_dofs
+    stroke_row = plant.building.stroke_matrix()[0]
+    strokes, reference_strokes = states[:, :n] @ stroke_row, reference[:, :n] @ stroke_row
+    assert contacts >= 2 and states[:, -1].sum() == contacts
+    assert np.max(np.abs(strokes)) == pytest.approx(np.max(np.abs(reference_strokes)), rel=1e-3)
+    # the whole stroke history, through 100-odd impacts (a velocity at an instant mid-impact swings too fast to
+    # compare), and the floors' drifts
+    np.testing.assert_allclose(strokes, reference_strokes, atol=2e-3 * np.max(np.abs(reference_strokes)))
+    drifts = plant.building.drift_matrix()
+    reference_drifts = reference[:, :n] @ drifts.T
+    np.testing.assert_allclose(states[:, :n] @ drifts.T, reference_drifts, atol=2e-4 * np.max(np.abs(reference_drifts)))

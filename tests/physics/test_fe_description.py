@@ -35,6 +35,8 @@ def test_the_solver_tolerance_is_si_converted_into_the_model_units(test, units, 
         ({"floors": [[1, True]]}, "floors: floor 1: expected node tags (whole numbers), got [1, True]"),
         ({"floors": "1"}, "floors: expected a list with the nodes of each floor, got '1'"),
         ({"story_heights": [-3.0]}, "story_heights: expected one positive height per floor (1), got [-3.0]"),
+        ({"unit": {"length": "ft", "force": "kip"}}, "unknown key 'unit': did you mean units? expected floors,"),
+        ({"colour": "red"}, "unknown key 'colour': expected floors, direction,"),
     ],
 )
 def test_a_description_that_says_nonsense_is_one_line(change, message):

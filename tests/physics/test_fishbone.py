@@ -86,7 +86,7 @@ def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
     np.testing.assert_allclose(states[:, 2 * n :], independent[:, 4 * n + 2 :], atol=0.02)
 
 
-def fishbone_plant(yield_rotation=0.004, ratio=0.05, collapse_drift=None):
+def fishbone_plant(yield_rotation=0.004, ratio=0.05, collapse_drift=None, column=4e7, beams=6e7):
     """The default experiment's five-story building simulated as a fishbone frame (3 m stories)."""
     from rlcontroller.config import Experiment, HysteresisConfig, PlantConfig
     from rlcontroller.physics.plant import Plant
@@ -94,8 +94,8 @@ def fishbone_plant(yield_rotation=0.004, ratio=0.05, collapse_drift=None):
     experiment = Experiment()
     building = experiment.building.model_copy(update={"story_heights": [3.0] * 5})
     hysteresis = HysteresisConfig(
-        model="fishbone", yield_drift=0.01, yield_rotation=yield_rotation, column_stiffness=[4e7] * 5,
-        beam_stiffness=[6e7] * 5, base_stiffness=1e12, post_yield_ratio=ratio, collapse_drift=collapse_drift,
+        model="fishbone", yield_drift=0.01, yield_rotation=yield_rotation, column_stiffness=[column] * 5,
+        beam_stiffness=[beams] * 5, base_stiffness=1e12, post_yield_ratio=ratio, collapse_drift=collapse_drift,
     )  # fmt: skip
     update = {"building": building, "plant": PlantConfig(hysteresis=hysteresis)}
     return Plant(experiment.model_copy(update=update))
@@ -108,6 +108,18 @@ def test_the_fishbone_is_refused_without_its_values_and_its_values_without_it():
         HysteresisConfig(model="fishbone", yield_drift=0.01)
     with pytest.raises(ValueError, match="base_stiffness: only for model fishbone"):
         HysteresisConfig(yield_drift=0.01, base_stiffness=1e9)
+
+
+def test_a_frame_that_cannot_stand_or_a_collapse_past_the_story_is_refused_at_load():
+    """Column EI of 1 N m^2 (and weak beams): the floors' weight (P-Delta) beats the column line; a collapse drift
+    of 5 m on 3 m stories: a story cannot lean that far. Each one line, before any run."""
+    from rlcontroller.config import ConfigError
+
+    with pytest.raises(ConfigError, match="hysteresis: the frame cannot stand under its own weight"):
+        fishbone_plant(column=1.0, beams=1.0)
+    with pytest.raises(ConfigError, match=r"hysteresis: collapse_drift: 5 m in story 1, beyond its height 3 m"):
+        fishbone_plant(collapse_drift=5.0)
+    assert fishbone_plant(collapse_drift=0.5).yielding is not None  # a frame that stands: as before
 
 
 @pytest.mark.parametrize("collapse_drift", [None, 0.018])

@@ -79,3 +79,32 @@ def test_a_model_the_ground_does_not_move_is_refused_in_one_line(tmp_path, monke
     with pytest.raises(ModelError, match=r"five_story_shear\.py: the model stands still under m0's ground motion"):
         kept.uncontrolled(plant, short_motions())
     assert not (tmp_path / "cache").exists()
+
+
+def test_a_model_that_stands_still_is_refused_before_any_run_and_by_rlc_info(tmp_path, monkeypatch):
+    """A unit ground pulse, stepped in this process, finds the stand-still before a single motion runs (the
+    benchmark frame had run a whole suite and printed 24 OpenSees failures first), and `rlc info` says it too."""
+    from rlcontroller.api.describe import describe
+    from rlcontroller.errors import ModelError
+    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    experiment = api.load(Path("studies/opensees/five_story_opensees.yaml"))
+    moving, true_state = OpenSeesIntegrator.step, {}
+
+    def standing(self, state, *arguments):  # the FE model's floors at 1e-4 of their motion, as the frame's stood
+        state = moving(self, true_state[id(self)] if state.any() else state, *arguments)
+        true_state[id(self)] = state
+        return 1e-4 * state
+
+    monkeypatch.setattr(OpenSeesIntegrator, "step", standing)
+    runs, responses = [], kept.uncontrolled_responses
+    monkeypatch.setattr(
+        kept, "uncontrolled_responses", lambda plant, *a, **k: runs.append(plant) or responses(plant, *a, **k)
+    )
+    message = r"five_story_shear\.py: the model stands still under a unit ground pulse"
+    with pytest.raises(ModelError, match=message):
+        kept.uncontrolled(Plant(experiment).bare, short_motions())
+    with pytest.raises(ModelError, match=message):
+        describe(experiment)
+    assert runs and not any(plant.fe_model is not None for plant in runs)  # the design model's pulse, no FE run
