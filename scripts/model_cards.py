@@ -32,7 +32,6 @@ from rlcontroller.physics.plant import Plant
 REPOSITORY = Path(__file__).resolve().parents[1]
 WIND_SUITES = {  # by model
     "five_story_wind": REPOSITORY / "configs" / "loads" / "wind.yaml",
-    "seventy_six_story_atmd": REPOSITORY / "configs" / "loads" / "wind_76.yaml",
 }
 WIND_COLUMNS = ("J1", "J2", "rms_acceleration_top", "peak_acceleration_top_mg", "stroke_m")
 RECORDS_TITLE = "The seven records (../shared/records: PEER NGA-West2, as recorded)"
@@ -67,21 +66,6 @@ ABOUT = {
         "studies/mpc/five_story_yielding_ship_dagger.yaml",
         "7 min (417 k steps, the best at 314 k)",
     ),
-    "five_story_amd_triggered": (
-        "The five-story building with an active mass driver on its roof (a tuned mass with an actuator to its floor), "
-        "controlled by LQG + ground model (classical, no training) with the driver's force weighted 30 times the "
-        "experiment's, behind a trigger on the ground reading that keeps it off below 2 m/s^2 and gives it full "
-        "authority from 5 m/s^2: it acts only in strong shaking. Chosen on a suite of the check's family with "
-        "another seed (777: the fewest motions worse among triggers and force weights; none passes there, the chosen "
-        "one leaves 10 of 311 worse), then judged on the check suite, where it passes under round 6's stated risk: "
-        "5 of 301 worse than the driver switched off (bound 3.5 %), mean J1 0.973, J2 0.980. Target J1 <= 0.85: "
-        "missed by far. Never being worse than the tuned mass leaves a linear law about 1-2 % of the drift (a "
-        "linear programme, docs/safety_check.md), and LQG without the trigger is worse on 25 motions; a linear "
-        "law learned from the driver switched off on the standard's objective left 8-12 of 128 validation motions "
-        "worse, so the standard selected the driver off.",
-        "studies/devices/five_story_amd_triggered.yaml --law lqg_ground_model",
-        "",
-    ),
     "five_story_mr_standard": (
         "MR dampers (100 kN, Spencer et al.'s model) on stories 1, 3 and 5 of the five-story building, their voltages "
         "commanded by a learned affine law on the floors' accelerations and the dampers' measured forces: random "
@@ -111,21 +95,6 @@ ABOUT = {
         "stories keep most of their drift (docs/safety_check.md).",
         "studies/mpc/five_story_paper_layout_dagger.yaml",
         "4 min (417 k steps, the best at 417 k)",
-    ),
-    "seventy_six_story_atmd": (
-        "The 76-story wind benchmark building with its active tuned mass damper on floor 75 (500 t, 500 kN), "
-        "controlled by LQG + wind model with the damper's stroke weighted 10 times the benchmark experiment's and "
-        "its Kalman filter robustified by loop transfer recovery (sensors.input_noise 0.1), behind the wind "
-        "supervisor's trigger on the floors' accelerations (0.3-1.0 m/s^2): classical, no training. Retired in "
-        "round 5 (without the trigger it is worse than the tuned mass on 9 of 277 significant ground motions, bound "
-        "5.6 %); the trigger chosen on suites with another seed (777), the fewest loads and motions worse (there one "
-        "wind load worse by 3 %, which the wind suite's strict rule fails, and 2 ground motions), it passes the check "
-        "suite: no wind load worse (mean J1 0.960, J2 0.929), 2 of 277 ground motions (bound 2.3 %). It acts little "
-        "under wind: its trigger keeps it off in moderate winds. Its peak stroke under wind (7.85 m against the "
-        "tuned mass's 5.41 m on the check's loads) is over the 1 m the experiment gives the driver: the simulation "
-        "does not stop the mass.",
-        "studies/safety_check/seventy_six_story_atmd_triggered.yaml --law lqg_wind_model",
-        "",
     ),
     "five_story_wind": (
         "The five-story building with an actuator on every story (100 kN each), controlled against wind for "

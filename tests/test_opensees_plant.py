@@ -300,3 +300,45 @@ def test_the_frame_reports_ductility_and_residual_drift_where_it_yields():
     assert strong.loc["ductility"].max() > 1.5 and np.max(strong.loc["residual_drift_m"] / height) > 1e-3
     peak_drift = np.max(np.abs(result.responses["uncontrolled", "strong"].drift), axis=0)
     np.testing.assert_allclose(strong.loc["ductility"], peak_drift / plant.yield_drift, rtol=1e-12)
+
+
+@pytest.mark.slow
+def test_what_the_model_prints_during_its_runs_goes_to_a_log_in_the_output_folder(tmp_path, capfd, monkeypatch):
+    """A model that prints (as OpenSees' FAILURE lines do, from C, on descriptor 2) in every run: the terminal gets
+    one line counting them, the output folder the lines themselves (opensees.log)."""
+    import os
+
+    folder = tmp_path / "model"
+    folder.mkdir()
+    source = (CONFIGS / "opensees" / "five_story_shear.py").read_text()
+    noisy = source.replace(
+        '    ops.model("basic", "-ndm", 1, "-ndf", 1)',
+        '    import os\n    if os.getpid() != int(os.environ["RLC_TEST_PARENT"]):\n'
+        '        os.write(2, b"WARNING the model speaks in a run\\n")\n'
+        '    ops.model("basic", "-ndm", 1, "-ndf", 1)',
+    )
+    (folder / "five_story_shear.py").write_text(noisy)
+    text = FIVE_STORY.read_text().replace("../../configs/opensees/", f"{folder}/")
+    (tmp_path / "experiment.yaml").write_text(text.replace("../../configs/", f"{CONFIGS}/"))
+    monkeypatch.setenv("RLC_TEST_PARENT", str(os.getpid()))
+    monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
+    time = np.arange(0.0, 2.0, 0.01)
+    records = tmp_path / "records"
+    records.mkdir()
+    for i in range(3):
+        rows = "\n".join(f"{t:.2f},{0.5 * np.sin(2 * np.pi * (1 + i) * t):.6f}" for t in time)
+        (records / f"r{i}.csv").write_text("time [s],acceleration [m/s2]\n" + rows + "\n")
+    from rlcontroller.api.common import Report
+
+    lines: list[str] = []
+
+    class Listening(Report):
+        def note(self, text: str) -> None:
+            lines.append(text)
+
+    experiment = tmp_path / "experiment.yaml"
+    _, out = api.evaluate(config=experiment, records=records, out=tmp_path / "out", report=Listening())
+    log = out / "opensees.log"
+    assert log.is_file() and log.read_text().count("the model speaks in a run") >= 3  # once per run at least
+    assert "the model speaks" not in capfd.readouterr().err  # not on the terminal
+    assert any("the FE model printed" in line and "opensees.log" in line for line in lines)

@@ -136,3 +136,12 @@ def safety_standard(experiment: Experiment) -> Path:
 
 def motions_text(count: int) -> str:
     return f"{count} motion{'s' if count != 1 else ''}"
+
+
+def keep_model_messages(messages, folder: Path, report: Report) -> None:
+    """What the model printed during the runs (`simulation.fanout.model_messages`), kept in the command's output
+    `folder` and counted in one line; nothing when it printed nothing."""
+    count = messages.lines
+    kept = messages.keep(folder)
+    if kept is not None:
+        report.note(f"note: the FE model printed {count} lines during the runs (OpenSees' own words): {kept}")

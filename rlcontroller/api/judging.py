@@ -14,6 +14,7 @@ from rlcontroller.api.common import (
     QUIET,
     Report,
     folder_experiment,
+    keep_model_messages,
     load,
     model_folder,
     motions_text,
@@ -24,6 +25,7 @@ from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.bounds import MAX_HORIZON
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.files import check_new_folder, new_folder
+from rlcontroller.simulation.fanout import model_messages
 
 CRITERIA = ("paper", "benchmark")  # J1-J4 always; "benchmark" adds Ohtori et al.'s J1-J17 (evaluation.benchmark)
 
@@ -96,13 +98,14 @@ def evaluate(
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
-    with drawing() as plots:  # matplotlib's import and the plots on the other core
+    with drawing() as plots, model_messages() as messages:  # matplotlib's import and the plots on the other core
         plant, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report, criteria=criteria)
         report.note(unchecked_note(folder, model))  # once the records are read (a bad one is its only line)
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
             if criteria == "benchmark":
                 write_benchmark(evaluation, plant.building, staging)
+            keep_model_messages(messages, staging, report)
     return evaluation, out
 
 
@@ -176,32 +179,34 @@ def compare_lqg(
         raise ConfigError("--preview: the preview bound needs a plant without semi-active dampers")
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
-    plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc, criteria)
-    label = evaluation.label
-    with new_folder(out) as staging:
-        write_report(evaluation, staging)
-        if criteria == "benchmark":
-            write_benchmark(evaluation, plant.building, staging)
-        if sweep and experiment.has_dampers:
-            levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
-            with report.progress("dampers' trade-off", len(motions)) as advance:
-                table = damper_sweep(plant, motions, label, levels, multipliers, advance)
-            names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
-            points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
-            write_damper_sweep(table, staging, label, points)
-        elif sweep:
-            multipliers = np.logspace(-2, 2, 9)
-            with report.progress("LQG trade-off", multipliers.size) as advance:
-                table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
-            names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
-            points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
-            write_sweep(table, staging, label, points)
-        if preview:
-            names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
-            references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
-            with report.progress("preview horizons", len(PREVIEW_SECONDS)) as advance:
-                study = preview_study(plant, motions, on_horizon=lambda: advance())
-            write_preview(study, staging, label, references)
+    with model_messages() as messages:  # what an FE model prints goes to opensees.log
+        plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc, criteria)
+        label = evaluation.label
+        with new_folder(out) as staging:
+            write_report(evaluation, staging)
+            if criteria == "benchmark":
+                write_benchmark(evaluation, plant.building, staging)
+            if sweep and experiment.has_dampers:
+                levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
+                with report.progress("dampers' trade-off", len(motions)) as advance:
+                    table = damper_sweep(plant, motions, label, levels, multipliers, advance)
+                names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
+                points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
+                write_damper_sweep(table, staging, label, points)
+            elif sweep:
+                multipliers = np.logspace(-2, 2, 9)
+                with report.progress("LQG trade-off", multipliers.size) as advance:
+                    table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
+                names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
+                points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
+                write_sweep(table, staging, label, points)
+            if preview:
+                names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
+                references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
+                with report.progress("preview horizons", len(PREVIEW_SECONDS)) as advance:
+                    study = preview_study(plant, motions, on_horizon=lambda: advance())
+                write_preview(study, staging, label, references)
+            keep_model_messages(messages, staging, report)
     sweep_file = "damper_sweep.md" if experiment.has_dampers else "lqg_sweep.md"
     return LQGComparison(
         evaluation,

@@ -5,7 +5,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, load, output_folder, safety_standard
+from rlcontroller.api.common import (
+    QUIET,
+    Report,
+    folder_experiment,
+    keep_model_messages,
+    load,
+    output_folder,
+    safety_standard,
+)
 from rlcontroller.api.common import standard_scenarios as default_scenarios
 from rlcontroller.assets import MODELS
 from rlcontroller.config import ConfigError
@@ -26,16 +34,19 @@ def check(
     own (another plant for the same design, e.g. an OpenSees model); its verdict goes to a new folder under
     results/, as it judges the policy on a plant its folder does not name."""
     from rlcontroller.evaluation.verdict import write_verdict
+    from rlcontroller.simulation.fanout import model_messages
 
     experiment = folder_experiment(folder) if config is None else load(config)
     own = safety_standard(experiment)
     standard = standard or own
-    verdict = judged(folder, model, experiment, standard, scenarios, report)
-    target = folder
-    if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
-        on = "" if config is None else f"-on-{experiment.name}"
-        target = output_folder(None, f"check-{folder.resolve().name}{on}")
-        target.mkdir(parents=True)
+    with model_messages() as messages:  # what an FE model prints goes to opensees.log beside the verdict
+        verdict = judged(folder, model, experiment, standard, scenarios, report)
+        target = folder
+        if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
+            on = "" if config is None else f"-on-{experiment.name}"
+            target = output_folder(None, f"check-{folder.resolve().name}{on}")
+            target.mkdir(parents=True)
+        keep_model_messages(messages, target, report)
     other = "" if standard.resolve() == own.resolve() else standard.stem  # keeps the standard's verdict
     return verdict, write_verdict(verdict, target, model, other)
 

@@ -47,7 +47,13 @@ class StepOutputs:
             change = np.tile(action - previous_action, repeats) * self.change_factor
             weighted = np.concatenate([weighted, change], axis=-1)
         values = weighted * weighted if self.quadratic else np.abs(weighted) ** self.row_power
-        return np.add.reduceat(values, self.reward_starts, axis=-1)
+        starts, rows = self.reward_starts, values.shape[-1]
+        if starts.size and starts[-1] < rows and np.all(np.diff(starts) > 0):
+            return np.add.reduceat(values, starts, axis=-1)
+        # a term without rows (the force of a building with nothing to command) is 0; reduceat would not say so
+        ends = np.append(starts[1:], rows)
+        padded = np.concatenate([values, np.zeros(values.shape[:-1] + (1,))], axis=-1)
+        return np.where(ends > starts, np.add.reduceat(padded, np.minimum(starts, rows), axis=-1), 0.0)
 
     def term_factors(self, ground: np.ndarray) -> np.ndarray:
         """Each term's factor for an episode whose ground acceleration at the control steps is
