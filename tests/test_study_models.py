@@ -12,7 +12,7 @@ from rlcontroller.cli import app
 STUDY = Path(__file__).resolve().parents[1] / "docs" / "results" / "models"
 FOLDERS = sorted(folder for folder in STUDY.iterdir() if folder.is_dir())
 RECORDS_J1 = {  # the learned controller's mean J1 on the seven records, as the study's README states
-    "five_story_amd": 0.606,
+    "five_story_amd": 0.785,  # with its end-stops (round 7); 0.606 as a free mass
     "five_story_mr": 0.400,
 }
 

@@ -136,8 +136,9 @@ def test_without_a_wind_generator_there_is_no_wind_model():
 @pytest.mark.slow
 def test_compare_lqg_runs_on_the_76_story_benchmark(tmp_path):
     """The command that ended in a Riccati traceback (scipy's Schur reordering on modes that die within one
-    0.1 s step): LQG and LQG + wind model design, and under a short generated wind both beat the passive
-    damper's RMS acceleration, which beats the bare building's."""
+    0.1 s step): LQG and LQG + wind model design and run; under a short generated wind the passive damper's RMS
+    acceleration beats the bare building's, and the drivers the laws command meet their 1 m end-stops, counted
+    (a free mass let both laws beat the passive damper; on its stops the 500 t mass slams: docs/wind.md)."""
     import pandas as pd
     from typer.testing import CliRunner
 
@@ -150,6 +151,8 @@ def test_compare_lqg_runs_on_the_76_story_benchmark(tmp_path):
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["compare", "lqg", "--config", config, "--records", str(wind), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    summary = pd.read_csv(out / "summary.csv", index_col=0)["rms_acceleration"]
-    assert summary["LQG + wind model"] < summary["passive devices"] < summary["uncontrolled"] == 1.0
-    assert summary["LQG"] < summary["passive devices"]
+    table = pd.read_csv(out / "summary.csv", index_col=0)
+    summary = table["rms_acceleration"]
+    assert summary["passive devices"] < summary["uncontrolled"] == 1.0
+    assert table.loc["LQG + wind model", "contacts"] > 0 and table.loc["LQG", "contacts"] > 0
+    assert table.loc["LQG + wind model", "stroke_over_limit"] < 1.2  # on its stops, not through them
