@@ -145,7 +145,7 @@ class Plant:
                 n_linear=self.n_state,
                 time_constant=self.time_constant,
                 delay_steps=self.delay_steps,
-                linear_step=lambda substeps: self.sampled(substeps).step,
+                linear_step=self._linear_step,
             )
         self.n_state += self.end_stops.size if self.end_stops is not None else 0
         self.integrator = self.fe_model or self.yielding or self.semi_active or self.end_stops  # when not linear
@@ -235,6 +235,10 @@ class Plant:
             floors = (self.building.mass[:n, :n], self.building.stiffness[:n, :n])
             self._pushover = pushover(self.fe_model.path, self.fe_model.function, *floors)
         return self._pushover.yield_drift
+
+    def _linear_step(self, substeps: int):
+        """This plant's own linear control-step map, what its end-stops superpose on (a method: it pickles)."""
+        return self.sampled(substeps).step
 
     @property
     def n_linear(self) -> int:
