@@ -25,9 +25,9 @@ env, the batch and evaluation all step the same numbers through one compiled ker
 (`integrators.stop_step_many`). Without a contact the step is the linear plant's to rounding.
 
 The plant's state is [x; per stopped device (f at the step's end, the largest |f| over the step, contacts
-begun in the step)]: the first is a register through which every output stays linear in the state (the
-floor accelerations and story shears feel it), the others are what the tables report (peak contact force,
-number of contacts) and feed back into nothing.
+begun in the step)]: the first is a register through which every output stays linear in the state (the floor
+accelerations feel it at once; a story shear, which counts the mass's inertia with its floor's, through the
+motion), the others are what the tables report (peak contact force, number of contacts) and feed back into nothing.
 """
 
 from __future__ import annotations

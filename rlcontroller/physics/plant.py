@@ -257,7 +257,8 @@ class Plant:
 
     def _stopped_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
         """The linear plant's outputs with the stops' force registers: a stop pushes its mass with f and its floor
-        with -f, felt by the floor accelerations and story shears (`physics.end_stops`)."""
+        with -f, which the floor's acceleration feels at once (`physics.end_stops`); a story shear counts the mass's
+        inertia with its floor's, to which the stop's force is internal: it feels the impact through the motion."""
         c, d = self._linear_outputs(quantity)
         stops = self.end_stops
         full = np.zeros((c.shape[0], self.n_state))
