@@ -108,6 +108,8 @@ def evaluate(
     seeds = [content_seed(motion) for motion in motions]
     bare = kept.uncontrolled(plant.bare, simulated, on_motions)  # an FE model's kept between commands
     devices = plant.building.devices
+    damping = np.array([device.damping for device in devices])
+    stroke_limits = np.array([np.nan if d.stroke_limit is None else d.stroke_limit for d in devices])
     passive = uncontrolled_responses(plant, simulated) if devices else []
     # the optimum on the other core while the controllers run here (`background`): the same numbers
     optimum = in_background(optimal_responses, plant, simulated) if include_optimal else None
@@ -130,7 +132,7 @@ def evaluate(
             if motion.floor_forces is not None:
                 metrics |= wind_metrics(result, bare[number])
             if (devices or plant.building.dampers) and name != "uncontrolled":
-                metrics |= device_metrics(result, np.array([device.damping for device in devices]))
+                metrics |= device_metrics(result, damping=damping, stroke_limits=stroke_limits)
             for metric, values in metrics.items():
                 rows.extend(
                     {"controller": name, "record": motion.name, "metric": metric, "index": i + 1, "value": float(v)}

@@ -186,30 +186,30 @@ def judge_suite(
             for key, run in (("residual_ratio", controlled), ("reference_residual_ratio", reference_run)):
                 row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
         rows[motion.name] = row
-    devices = device_figures(evaluation, judged, reference, motions)
+    devices = device_figures(evaluation, judged, reference, motions, plant)
     criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices)
     return criterion | {"per_motion": rows}
 
 
-def device_figures(evaluation, judged: str, reference: str, motions: list[Load]) -> dict[str, list] | None:
-    """Per mass device over the motions, under the controller `judged` and the `reference`: the largest stroke
-    (m); with end-stops also their limits (m), the contacts and the largest contact force (N). None without mass
-    devices."""
+def device_figures(evaluation, judged: str, reference: str, motions: list[Load], plant: Plant) -> dict | None:
+    """Per mass device of `plant` over the motions, under the controller `judged` and the `reference`: the largest
+    stroke (m); with end-stops also their limits (m), the contacts and the largest contact force (N). None without
+    mass devices."""
     figures: dict[str, list] = {}
     for name, prefix in ((judged, ""), (reference, "reference_")):
         runs = [evaluation.responses[name, motion.name] for motion in motions]
-        if runs[0].stroke is None or runs[0].stroke.shape[1] == 0:
-            return None
+        if runs[0].stroke is None or runs[0].stroke.shape[1] == 0:  # no mass devices (a passive verdict's reference)
+            continue
         strokes = np.max([np.max(np.abs(run.stroke), axis=0) for run in runs], axis=0)
         figures[f"{prefix}peak_stroke_m"] = [round(float(value), 4) for value in strokes]
         if runs[0].stop_contacts is None:
             continue
-        figures["stroke_limit_m"] = [float(value) for value in runs[0].stroke_limit]
+        figures["stroke_limit_m"] = [float(d.stroke_limit or np.nan) for d in plant.building.devices]
         contacts = np.sum([np.sum(run.stop_contacts, axis=0) for run in runs], axis=0)
         forces = np.max([np.max(run.stop_force, axis=0) for run in runs], axis=0)
         figures[f"{prefix}contacts"] = [int(value) for value in contacts]
         figures[f"{prefix}peak_contact_force_N"] = [round(float(value), 1) for value in forces]
-    return figures
+    return figures or None
 
 
 def strength(motion: Load) -> dict:

@@ -330,7 +330,6 @@ class Response:
     connections: np.ndarray | None = None  # FE member ends, when recorded (`physics.fe_connections`)
     stop_force: np.ndarray | None = None  # end-stops, per mass device: the largest |force| over each step (N)
     stop_contacts: np.ndarray | None = None  # end-stops, per mass device: the contacts begun in each step
-    stroke_limit: np.ndarray | None = None  # end-stops, per mass device (m; nan: a free mass)
 
     def quantity(self, name: str) -> np.ndarray:
         return getattr(self, name)

@@ -90,8 +90,8 @@ def wind_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.n
     }
 
 
-def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarray]:
-    """Per mass device (dashpot coefficients `damping`, N*s/m): peak and RMS stroke (m) and the
+def device_metrics(result: Response, *, damping: np.ndarray, stroke_limits: np.ndarray) -> dict[str, np.ndarray]:
+    """Per mass device (dashpot coefficients `damping`, N*s/m; `stroke_limits`, m): peak and RMS stroke (m) and the
     energy its dashpot dissipated (J); per commanded device: peak and RMS power (W), force times
     the velocity across it, at the control steps (the force held over the step ending there), and
     the energy it took out of the building (J; negative: it put energy in)."""
@@ -105,16 +105,17 @@ def device_metrics(result: Response, damping: np.ndarray) -> dict[str, np.ndarra
         "power_peak_W": peak(power),
         "power_rms_W": np.sqrt(energy(power, dt) / duration),
         "dissipated_energy_J": -np.sum(power[1:], axis=0) * dt,
-    } | stop_metrics(result)
+    } | stop_metrics(result, stroke_limits)
 
 
-def stop_metrics(result: Response) -> dict[str, np.ndarray]:
-    """Per mass device meeting end-stops (`physics.end_stops`): its peak stroke over its limit, the contacts with
-    its stops and the largest force one put on it (N); none without stops (nan for a free mass among them)."""
+def stop_metrics(result: Response, stroke_limits: np.ndarray) -> dict[str, np.ndarray]:
+    """Per mass device meeting end-stops (`physics.end_stops`) at `stroke_limits` (m; nan: a free mass): its peak
+    stroke over its limit, the contacts with its stops and the largest force one put on it (N); none without
+    stops."""
     if result.stop_contacts is None:
         return {}
     return {
-        "stroke_over_limit": peak(result.stroke) / result.stroke_limit,
+        "stroke_over_limit": peak(result.stroke) / stroke_limits,
         "contacts": np.sum(result.stop_contacts, axis=0),
         "contact_force_N": np.max(result.stop_force, axis=0),
     }

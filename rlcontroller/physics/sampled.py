@@ -231,9 +231,7 @@ class SampledPlant:
         registers = states[:, plant.n_linear :]
         peaks[:, stops.devices] = registers[:, stopped : 2 * stopped]
         contacts[:, stops.devices] = registers[:, 2 * stopped :]
-        limits = np.full(count, np.nan)
-        limits[stops.devices] = stops.limits
-        return replace(result, stop_force=peaks, stop_contacts=contacts, stroke_limit=limits)
+        return replace(result, stop_force=peaks, stop_contacts=contacts)
 
 
 def _delayed(core: StepMap, delay: int, m: int, size: int, lagged: bool) -> StepMap:

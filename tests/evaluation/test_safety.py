@@ -14,6 +14,7 @@ from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.networks import Actor, Layer
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.safety import energy_near, judge_suite, passive_verdict, safety_check
+from rlcontroller.evaluation.standard import DEVICE_FIGURES, suite_figures
 from rlcontroller.evaluation.verdict import VerdictState, judged_digests, write_verdict
 from rlcontroller.evaluation.verdict import read_verdict as read_verdict_of
 from rlcontroller.physics.excitation import Load
@@ -385,6 +386,12 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     rows = verdicts[0]["per_motion"]
     failing = np.median([rows[name]["ground_energy_near_first_mode"] for name in verdicts[0]["failures"]])
     assert f"median {failing:.1%} of their ground energy" in verdicts[0]["summary"]
+    # the masses meet their 1 m end-stops on the strong motions: the verdict's figures say so, and re-derive
+    assert verdicts[0]["stroke_limit_m"] == [1.0] and verdicts[0]["contacts"][0] > 0
+    assert verdicts[0]["peak_stroke_m"][0] < 1.25 and "on end-stops at 1 m:" in verdicts[0]["summary"]  # was 12 m
+    devices = {key: verdicts[0][key] for key in DEVICE_FIGURES if key in verdicts[0]}
+    again = suite_figures(rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices)
+    assert again["summary"] == verdicts[0]["summary"].split("; the motions it fails")[0]
 
 
 WIND_STANDARD = REPOSITORY / "configs" / "checks" / "wind.yaml"
