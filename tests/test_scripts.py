@@ -235,3 +235,19 @@ def test_the_strong_suites_draw_every_motion_strong_and_never_the_check_suite_s_
     with pytest.raises(SystemExit):
         module.main()
     assert "the check suite's" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_trigger_is_chosen_on_other_suites_and_a_margin_at_rest(capsys, monkeypatch):
+    """The trigger selection never reads the check suite's seed; behind a trigger that switches nothing on (it
+    never reaches full authority below 100 m/s^2), the shipped default is the building failed safe: each suite's
+    mean J1 is 1, and at rest it drifts nothing, so no margin refuses it."""
+    module = load_script("trigger_selection")
+    default = SCRIPTS.parent / "models" / "five_story_every_story"
+    monkeypatch.setattr("sys.argv", ["trigger_selection.py", str(default / "config.yaml"), "--triggers", "0.1,0.3",
+                                     "--seed", "777", "31337"])  # fmt: skip
+    with pytest.raises(SystemExit):
+        module.main()
+    assert "seed 31337 is the check suite's" in capsys.readouterr().err
+    *suites, rest = module.judged(default / "config.yaml", "", (50.0, 100.0), 777, model=default)
+    assert suites[0]["mean_J1"] == pytest.approx(1.0, abs=1e-3) and rest["peak_drift_over_bound"] == 0.0

@@ -95,6 +95,7 @@ from rlcontroller.config.excitation import (  # noqa: F401
     MixtureConfig,
     NearFaultConfig,
     NoiseImpulsesConfig,
+    SiteBasedConfig,
     SourceConfig,
     WindGeneratorConfig,
     WindSuiteConfig,

@@ -86,7 +86,7 @@ def unique(values: list[int]) -> list[int]:
 Factor = Annotated[float, Field(ge=0.05, le=20.0)]
 
 
-GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "near_fault", "mixture", "wind")
+GENERATOR_KINDS = ("noise_impulses", "kanai_tajimi", "near_fault", "site_based", "mixture", "wind")
 
 
 MAX_NESTING = 50  # levels of YAML nesting; deeper is not a configuration

@@ -34,6 +34,12 @@ def check_cross_references(experiment: Experiment) -> None:
         if asked and key in ("assurance", "twin") and experiment.has_dampers:
             raise ConfigError(f"{location(*experiment.origin(part), key)}: not with semi-active dampers (a command "
                               "is not a force: the twin cannot take its response out)")  # fmt: skip
+        stopped = any(getattr(device, "stroke_limit", None) is not None for device in experiment.devices)
+        if asked and key in ("assurance", "twin") and stopped:
+            raise ConfigError(
+                f"{location(*experiment.origin(part), key)}: not with a mass device on end-stops (its stroke_limit): "
+                "the stops make the building nonlinear and the twin is superposition"
+            )
     if (cutoff := sensors.integration_cutoff) is not None:
         where = location(*experiment.origin("sensors"), "integration_cutoff")
         if sensors.state_estimate:
@@ -202,6 +208,8 @@ def _check_time_steps(experiment: Experiment) -> None:
                 f"{where}: {control_dt:g} s is not a whole multiple of the {source.kind} generator's "
                 f"dt = {source.dt:g} s; choose control_dt = r * dt"
             )
+        if source.kind == "site_based":  # lasts to 99.9 % of its Arias intensity: seconds at least
+            continue
         duration, field = (
             (source.duration, "duration")
             if source.kind != "near_fault"

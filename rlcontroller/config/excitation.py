@@ -1,4 +1,4 @@
-"""Loads: the ground-motion generators (noise + impulses, Kanai-Tajimi, near-fault, mixtures) and the
+"""Loads: the ground-motion generators (noise + impulses, Kanai-Tajimi, near-fault, site-based, mixtures) and the
 suites they draw; suites of generated wind loads."""
 
 from __future__ import annotations
@@ -81,7 +81,33 @@ class NearFaultConfig(StrictModel):
         return self
 
 
-SourceConfig = Annotated[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig, Field(discriminator="kind")]
+class SiteBasedConfig(StrictModel):
+    """Motions of Rezaeian & Der Kiureghian's (2010) site-based stochastic model (`physics.site_motions`) for
+    scenarios drawn uniformly in moment `magnitude`, log-uniformly in rupture `distance` (km), uniformly in `vs30`
+    (m/s), reverse faulting with probability `reverse_share` (else strike-slip), a high-pass corner drawn
+    log-uniformly in `corner_frequency` (Hz); each scaled to a random PGA (m/s^2). The defaults stay inside the
+    records the model was fitted to: far-field (R >= 10 km) strong motions of M 6-7.5 on firm ground."""
+
+    kind: Literal["site_based"] = "site_based"
+    dt: TimeStep = 0.02
+    magnitude: bounded_range(5.0, 8.0) = (6.0, 7.5)
+    distance: bounded_range(1.0, 300.0) = (10.0, 100.0)  # km
+    vs30: bounded_range(150.0, 2000.0) = (360.0, 1000.0)  # m/s: NEHRP site classes C and B
+    reverse_share: Annotated[float, Field(ge=0.0, le=1.0)] = 0.5
+    corner_frequency: bounded_range(0.0, 1.0, low_open=True) = (0.05, 0.2)  # Hz
+    pga: AccelerationRange = (1.0, 6.0)
+    pga_log: bool = False
+
+    @model_validator(mode="after")
+    def _positive_for_log(self) -> SiteBasedConfig:
+        if self.pga_log and self.pga[0] <= 0.0:
+            raise ValueError("pga_log needs pga low > 0")
+        return self
+
+
+SourceConfig = Annotated[
+    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | SiteBasedConfig, Field(discriminator="kind")
+]
 
 
 class MixtureComponent(StrictModel):
@@ -138,7 +164,7 @@ class WindGeneratorConfig(WindSiteConfig):
 
 
 GeneratorConfig = Annotated[
-    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | MixtureConfig | WindGeneratorConfig,
+    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | SiteBasedConfig | MixtureConfig | WindGeneratorConfig,
     Field(discriminator="kind"),
 ]
 
@@ -157,7 +183,7 @@ class ExcitationConfig(StrictModel):
         """The generator of the validation motions."""
         return self.validation_generator or self.generator
 
-    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig]:
+    def sources(self) -> list[NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | SiteBasedConfig]:
         """The generators motions can come from (the components of mixtures), validation included."""
         sources = []
         for generator in (self.generator, self.validation_generator):

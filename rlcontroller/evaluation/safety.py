@@ -35,12 +35,13 @@ from rlcontroller.config import SafetyCheckConfig, Scenario, check_generator
 from rlcontroller.control.controllers import Controller, fail_safe_controller
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
-from rlcontroller.evaluation.standard import rest_figures, stability_figures, suite_figures
+from rlcontroller.evaluation.standard import SHAPE_DAMPING, SHAPE_MODES, rest_figures, stability_figures, suite_figures
 from rlcontroller.evaluation.verdict import Verdict, also_criterion
 from rlcontroller.physics.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
 from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import ratio_to_reference, residual_drift
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.spectra import spectral_shape
 from rlcontroller.simulation.linearised import spectral_radius
 from rlcontroller.simulation.rollout import batch_rollout
 
@@ -166,12 +167,16 @@ def judge_suite(
     derived from them (`evaluation.standard.suite_figures`) under `standard` for `plant`'s lateral system."""
     heights = bounds / standard.insignificant_drift_ratio  # m, each story's
     yields = plant.yielding is not None or plant.fe_model is not None
+    ground = motions[0].kind != FLOOR_FORCES
+    periods = [round(float(p), 4) for p in plant.bare.building.periods()[:SHAPE_MODES]] if ground else None
     rows = {}
     for motion in motions:
         reference_run = evaluation.responses[reference, motion.name]
         controlled = evaluation.responses[judged, motion.name]
         reference_peak, peak = np.max(np.abs(reference_run.drift), axis=0), np.max(np.abs(controlled.drift), axis=0)
         row = strength(motion)
+        if ground:  # what the motion is made of at the building's own periods
+            row["sa_over_pga"] = [round(float(v), 4) for v in spectral_shape(motion, np.array(periods), SHAPE_DAMPING)]
         if np.max(reference_peak / bounds) < 1.0:  # insignificant: stay below the bound
             rows[motion.name] = row | {"over_bound": round(float(np.max(peak / bounds)), 4)}
             continue
@@ -187,7 +192,7 @@ def judge_suite(
                 row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
         rows[motion.name] = row
     devices = device_figures(evaluation, judged, reference, motions, plant)
-    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices)
+    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices, periods)
     return criterion | {"per_motion": rows}
 
 

@@ -76,6 +76,11 @@ DEVICE_FIGURES = (  # per mass device over a suite, the controlled building's th
 )
 
 
+SHAPE_MODES = 3  # a ground-motion suite states its spectral shape at the building's first periods
+SHAPE_DAMPING = 0.02  # of the oscillators it is measured with (Sa / PGA)
+SHAPE_QUANTILES = {"p16": 16.0, "median": 50.0, "p84": 84.0}
+
+
 POSSIBLE = {  # a per-motion figure and its possible range: ratios and drift ratios are finite and not negative
     "J1": (0.0, np.inf),
     "J2": (0.0, np.inf),
@@ -93,20 +98,26 @@ def check_possible(rows: dict[str, dict]) -> None:
     (NaN, a boolean, text), infinite or negative. A verdict with one counts as none (`verdict.contradictions`)."""
     for name, row in rows.items():
         for key, (low, high) in POSSIBLE.items():
-            if key not in row:
-                continue
-            value = row[key]
-            number = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if not number or not low <= value < high:
-                raise ValueError(f"{name}.{key} {value!r} is no possible figure (a finite number >= {low:g})")
+            if key in row and not possible(row[key], low, high):
+                raise ValueError(f"{name}.{key} {row[key]!r} is no possible figure (a finite number >= {low:g})")
+        shape = row.get("sa_over_pga", [])
+        if not isinstance(shape, list) or not all(possible(value, 0.0, np.inf) for value in shape):
+            raise ValueError(f"{name}.sa_over_pga {shape!r} is no possible figure (a list of finite numbers >= 0)")
 
 
-def suite_figures(rows: dict[str, dict], words: str, system: str, standard, devices: dict | None = None) -> dict:
+def possible(value, low: float, high: float) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and low <= value < high
+
+
+def suite_figures(
+    rows: dict[str, dict], words: str, system: str, standard, devices: dict | None = None, periods: list | None = None
+) -> dict:
     """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
     insignificant: over_bound) against the reference `words` describes, under `standard`
     (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`; with mass
     devices their figures over the suite (`DEVICE_FIGURES`: peak strokes, m; with end-stops the limits, the
-    contacts and the largest contact force, N)."""
+    contacts and the largest contact force, N); for ground motions measured at the building's `periods` (s), the
+    suite's spread of spectral shapes there (each row's `sa_over_pga`: quantiles over every motion)."""
     check_possible(rows)
     tolerance = standard.tolerance
     significant = {name: row for name, row in rows.items() if "ratio" in row}
@@ -146,6 +157,12 @@ def suite_figures(rows: dict[str, dict], words: str, system: str, standard, devi
     }
     if devices is not None:
         figures |= {key: devices[key] for key in DEVICE_FIGURES if key in devices}
+    if periods is not None:
+        shapes = np.array([row["sa_over_pga"] for row in rows.values()], dtype=float).reshape(len(rows), len(periods))
+        spread = {
+            key: [round(float(v), 3) for v in np.percentile(shapes, q, axis=0)] for key, q in SHAPE_QUANTILES.items()
+        }
+        figures |= {"spectral_periods_s": periods, "spectral_shape": spread}
     return {"summary": suite_summary(figures, rows, standard)} | figures
 
 
@@ -183,6 +200,13 @@ def suite_summary(figures: dict, rows: dict[str, dict], standard) -> str:
         if "reference_contacts" in figures:  # a passive verdict's reference, the bare building, has no stops
             reference = (sum(figures["reference_contacts"]), max(figures["reference_peak_contact_force_N"]) / 1e3)
             text += f" ({reference[0]:g}, {reference[1]:.0f} kN for the reference)"
+    if "spectral_shape" in figures:
+        shape, periods = figures["spectral_shape"], figures["spectral_periods_s"]
+        at = ", ".join(
+            f"{median:.2f} ({low:.2f}-{high:.2f}) at {period:.3g} s"
+            for period, low, median, high in zip(periods, shape["p16"], shape["median"], shape["p84"], strict=True)
+        )
+        text += f"; the suite's Sa/PGA ({SHAPE_DAMPING:.0%} damped, median (16-84 %)) {at}"
     return text
 
 

@@ -1,6 +1,7 @@
 """Ground-motion generators for training and validation (never the records a controller is judged on):
-the paper's white noise with impulses, filtered Kanai-Tajimi motions, near-fault pulses and mixtures of
-them; and the Kanai-Tajimi ground model that LQG + ground model and the ground-model estimate assume."""
+the paper's white noise with impulses, filtered Kanai-Tajimi motions, near-fault pulses, Rezaeian & Der
+Kiureghian's site-based motions (`site_motions`) and mixtures of them; and the Kanai-Tajimi ground model that
+LQG + ground model and the ground-model estimate assume."""
 
 from __future__ import annotations
 
@@ -8,7 +9,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rlcontroller.config import GeneratorConfig, KanaiTajimiConfig, MixtureConfig, NearFaultConfig, NoiseImpulsesConfig
+from rlcontroller.config import (
+    GeneratorConfig,
+    KanaiTajimiConfig,
+    MixtureConfig,
+    NearFaultConfig,
+    NoiseImpulsesConfig,
+    SiteBasedConfig,
+)
 from rlcontroller.physics.excitation import Load, same_on_every_cpu
 
 
@@ -123,6 +131,10 @@ def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None
         motion = kanai_tajimi(config, rng, name or "kanai_tajimi")
     elif isinstance(config, NearFaultConfig):
         motion = near_fault(config, rng, name or "near_fault")
+    elif isinstance(config, SiteBasedConfig):
+        from rlcontroller.physics.site_motions import site_based
+
+        motion = site_based(config, rng, name or "site_based")
     else:
         motion = noise_impulses(config, rng, name or "noise_impulses")
     return replace(motion, acceleration=same_on_every_cpu(motion.acceleration))

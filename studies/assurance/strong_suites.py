@@ -28,8 +28,8 @@ def strong_suite(check: SafetyCheckConfig, seed: int, motions: int, low: float, 
     """The check's standard with its motions drawn from its own generator family, every PGA log-uniform in
     [low, high] (m/s^2), `motions` of them with `seed`."""
     generator = check.generator.model_dump()
-    for component in generator["components"]:
-        component["generator"]["pga"] = [low, high]
+    for source in [part["generator"] for part in generator["components"]] if "components" in generator else [generator]:
+        source["pga"] = [low, high]
     return type(check).model_validate(check.model_dump() | {"generator": generator, "seed": seed, "motions": motions})
 
 

@@ -178,14 +178,17 @@ def test_rlc_info_shows_the_design_model_and_the_simulated_plant(tmp_path):
     assert plant.startswith("simulated plant") and f"{1.444 / 0.7**0.5:.3f}" in plant
 
 
-def test_an_experiment_trains_on_the_check_suite_s_family_near_fault_pulses_included():
-    """The standard's mixture (near-fault component included) is a valid training excitation."""
-    from rlcontroller.config import load_safety_check
+def test_an_experiment_trains_on_the_check_suite_s_family():
+    """The standard's site-based family is a valid training excitation, and check_family.yaml is the standard's."""
+    from rlcontroller.config import ExcitationConfig, load_safety_check
+    from rlcontroller.config.base import read_model
 
     standard = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
     excitation = {"generator": standard.generator.model_dump(), "validation_motions": 4}
     experiment = build_experiment({"excitation": excitation})
-    assert [source.kind for source in experiment.excitation.sources()].count("near_fault") >= 1
+    assert [source.kind for source in experiment.excitation.sources()] == ["site_based"]
+    family = read_model(REPOSITORY / "configs" / "excitations" / "check_family.yaml", ExcitationConfig, "'generator'")
+    assert family.generator == standard.generator == family.validation_generator
 
 
 def test_the_wind_standard_also_judges_the_ground_motion_suite_and_a_bad_also_is_one_line(tmp_path):

@@ -96,6 +96,12 @@ def test_the_observation_stays_the_whole_state_of_a_controller_that_ignores_the_
              "devices": [{"type": "mr_damper", "story": 1, "capacity": 1.0e5}]},
             "<config>: sensors.twin: not with semi-active dampers",
         ),
+        (
+            {"sensors": {"state_estimate": True, "twin": True}, "actuators": [],
+             "devices": [{"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e4,
+                          "stroke_limit": 1.0}]},
+            "<config>: sensors.twin: not with a mass device on end-stops",
+        ),
     ],
 )  # fmt: skip
 def test_a_twin_the_plant_cannot_have_is_one_line(document, message):

@@ -122,7 +122,7 @@ def test_the_default_exports_with_its_faded_supervisor(tmp_path):
     np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
     assert metadata["supervisor"] == (
-        "trigger 0.1-0.3 m/s^2 on the peak ground reading; "
+        "trigger 0.15-0.6 m/s^2 on the peak ground reading; "
         "forces feeding energy in faded out by 0.1 m/s of stroke velocity"
     )
 

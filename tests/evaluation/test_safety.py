@@ -66,7 +66,8 @@ def judged_scaled(scales: tuple[float, ...]) -> dict:
         )  # fmt: skip
     evaluation = SimpleNamespace(responses=responses)
     steel = SimpleNamespace(building=SimpleNamespace(system="steel_moment_frame"))
-    plant = SimpleNamespace(yielding=None, fe_model=None, experiment=steel)
+    periods = SimpleNamespace(building=SimpleNamespace(periods=lambda: np.array([1.0, 0.4, 0.2])))
+    plant = SimpleNamespace(yielding=None, fe_model=None, experiment=steel, bare=periods)
     standard = load_safety_check(STANDARD).model_copy(update={"risk_bound": 0.0})  # three motions: the strict rule
     return judge_suite(evaluation, motions, "judged", "fail-safe", "it", np.full(2, 6e-4), standard, plant)
 

@@ -122,3 +122,22 @@ def test_a_boolean_is_no_number_in_a_standard(tmp_path):
     path.write_text(text.replace("risk_bound: 0.05", "risk_bound: no"))
     with pytest.raises(ConfigError, match="risk_bound: False is a boolean, expected a number"):
         load_safety_check(path)
+
+
+def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_periods():
+    """16 %, median and 84 % of each motion's Sa / PGA at each period, over every motion (quiet ones too: a shape is
+    the same at any scale), in the figures and the summary; a shape no motion can have is refused like any figure."""
+    import numpy as np
+
+    shapes = [[0.2 + 0.1 * index, 1.0 + index, 2.0] for index in range(11)]
+    rows = {f"m{index}": row(sa_over_pga=shape) for index, shape in enumerate(shapes[:10])}
+    rows["quiet"] = {"pga_g": 0.001, "over_bound": 0.2, "sa_over_pga": shapes[10]}
+    derived = suite_figures(rows, "no control", STEEL, STANDARD, None, [1.44, 0.55, 0.35])
+    expected = np.percentile(np.array(shapes), [16, 50, 84], axis=0)
+    assert derived["spectral_periods_s"] == [1.44, 0.55, 0.35]
+    for key, values in zip(("p16", "median", "p84"), expected, strict=True):
+        assert derived["spectral_shape"][key] == pytest.approx(values, abs=1e-3)
+    assert "Sa/PGA (2% damped, median (16-84 %)) 0.70 (0.36-1.04) at 1.44 s" in derived["summary"]
+    rows["m0"]["sa_over_pga"] = [float("nan"), 1.0, 2.0]
+    with pytest.raises(ValueError, match=r"^m0\.sa_over_pga \[nan, 1\.0, 2\.0\] is no possible figure"):
+        suite_figures(rows, "no control", STEEL, STANDARD, None, [1.44, 0.55, 0.35])

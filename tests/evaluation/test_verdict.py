@@ -51,12 +51,17 @@ def mean_lowered(verdict):
     verdict["criteria"]["check suite"]["mean_J1"] = 0.012
 
 
+def shape_softened(verdict):  # a suite made to look gentler at the building's periods than its motions are
+    verdict["criteria"]["check suite"]["spectral_shape"]["median"][0] = 0.1
+
+
 @pytest.mark.parametrize(
     ("source", "edit", "found"),
     [
         (DEFAULT_MODEL, suite_failed, "check suite.passed False, its figures give True"),
         (NETWORK_POLICY, flipped, "check suite.passed True, its figures give False"),
-        (DEFAULT_MODEL, mean_lowered, "check suite.mean_J1 0.012, its figures give 0.2675"),
+        (DEFAULT_MODEL, mean_lowered, "check suite.mean_J1 0.012, its figures give 0.302"),
+        (DEFAULT_MODEL, shape_softened, "its figures give {'p16': [0.301, 0.749, 1.185], 'median': [0.56,"),
     ],
 )
 def test_a_verdict_its_own_figures_contradict_is_refused_everywhere(tmp_path, source, edit, found):
@@ -83,8 +88,9 @@ def test_a_consistent_edit_is_found_by_verify(tmp_path):
         name = next(name for name, row in rows.items() if "J1" in row and row["J1"] > 0.3)
         rows[name]["J1"] = round(rows[name]["J1"] - 0.1, 4)
         significant = [row["J1"] for row in rows.values() if "J1" in row]
+        recorded = f"mean J1 {suite['mean_J1']:.3f}"
         suite["mean_J1"] = round(sum(significant) / len(significant), 4)
-        suite["summary"] = suite["summary"].replace("mean J1 0.268", f"mean J1 {suite['mean_J1']:.3f}")
+        suite["summary"] = suite["summary"].replace(recorded, f"mean J1 {suite['mean_J1']:.3f}")
         return name
 
     edited = []
