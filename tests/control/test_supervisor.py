@@ -116,12 +116,17 @@ def test_dissipative_forces_take_energy_out_of_the_building():
     assert power["free"] > 0.0 or power["dissipative"] < 0.5 * power["free"]
 
 
+FADED = {"trigger": [0.15, 0.6], "dissipative": True, "fade_velocity": 0.1}  # configs/supervisors/faded.yaml
+
+
 @pytest.mark.slow
 def test_supervised_lqg_passes_a_check_it_fails_without_the_supervisor():
+    """Behind the default's faded supervisor; the hard cut (SUPERVISOR) passes the drift criteria on round 7's
+    suite too, but its force steps raise mean J2 above 1 (1.22 on these 40 motions: docs/safety_check.md)."""
     standard = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
     small = {"motions": 40, "rest_runs": 2, "rest_duration": 20.0, "risk_bound": 0.0}  # too few for 5 %: strict
     standard = standard.model_copy(update=small)
-    free, supervised = Plant(experiment(None)), Plant(experiment())
+    free, supervised = Plant(experiment(None)), Plant(experiment(FADED))
     failed = safety_check(free, lqg(free), standard, [])
     passed = safety_check(supervised, lqg(supervised), standard, [])
     assert not failed.criteria["at rest"]["passed"]

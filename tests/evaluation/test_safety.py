@@ -391,7 +391,8 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     assert verdicts[0]["stroke_limit_m"] == [1.0] and verdicts[0]["contacts"][0] > 0
     assert verdicts[0]["peak_stroke_m"][0] < 1.25 and "on end-stops at 1 m:" in verdicts[0]["summary"]  # was 12 m
     devices = {key: verdicts[0][key] for key in DEVICE_FIGURES if key in verdicts[0]}
-    again = suite_figures(rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices)
+    periods = verdicts[0]["spectral_periods_s"]
+    again = suite_figures(rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices, periods)
     assert again["summary"] == verdicts[0]["summary"].split("; the motions it fails")[0]
 
 
