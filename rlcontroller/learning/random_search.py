@@ -25,8 +25,8 @@ The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) w
 stable-baselines3's own `ActorCriticPolicy` (its action layer is W, b), so saving, loading,
 evaluation, validation and ONNX export are those of any run. With hidden layers (`actor_arch: [64, 64]`)
 the searched parameters are every weight and bias of the actor's network, one vector (the hidden layers
-start at stable-baselines3's initialisation, the action layer at zero: the search starts at no action, or
-at the prior), and each candidate runs as the numpy network a saved policy is. `num_timesteps` counts the control
+start at stable-baselines3's initialisation, the action layer at W = 0, b = `initial_bias`: the search starts at
+no action, a constant command, or the prior), and each candidate runs as the numpy network a saved policy is. `num_timesteps` counts the control
 steps simulated. The learner runs on the plant of its training env (a `BatchedVecEnv`), whose
 generator and randomisation it uses; every field needed to resume exactly (W, the search's random
 generator) is saved with the model.
@@ -65,8 +65,8 @@ class RandomSearch(BatchLearner):
     n_motions : training motions per iteration, shared by every candidate.
     delta_std : size of the perturbations of W (action per unit observation).
     learning_rate : step size of W's update, as in the module docstring's formula.
-    initial_bias : b at the start, every action's (an affine policy only): 1 starts dampers at full
-        voltage (passive-on).
+    initial_bias : b at the start, every action's (an affine policy, or an affine network's action layer):
+        1 starts dampers at full voltage (passive-on), -1 at their least (passive-off).
     objective : "return" (the reward) or "standard" (J1 against the building failed safe, every motion
         made worse priced: module docstring).
     """
@@ -105,14 +105,13 @@ class RandomSearch(BatchLearner):
         self._setup_policy_and_plant()
         self.affine = not isinstance(self.policy, OddActorCriticPolicy)
         self.network = bool(self.policy.mlp_extractor.policy_net)  # hidden layers: search every parameter
-        if self.initial_bias != 0.0 and (self.network or not self.affine):
-            what = "a linear actor (policy.actor_arch: [])" if self.network else "an affine policy (policy.odd: false)"
-            raise ValueError(f"initial_bias {self.initial_bias} needs {what}")
+        if self.initial_bias != 0.0 and not self.affine:
+            raise ValueError(f"initial_bias {self.initial_bias} needs an affine policy (policy.odd: false)")
         if not hasattr(self, "weights"):  # a new model (a loaded one brings W and the generator)
-            if self.network:
+            if self.network:  # the action layer starts at the prior's action: W = 0, b = initial_bias
                 with torch.no_grad():
                     self.policy.action_net.weight.zero_()
-                    self.policy.action_net.bias.zero_()
+                    self.policy.action_net.bias.fill_(self.initial_bias)
                 values = [p.detach().cpu().numpy().ravel() for p in self._parameters()]
                 self.weights = np.concatenate(values, dtype=float)
             else:

@@ -111,6 +111,20 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
     assert controller.actor.odd and np.all(controller.act(np.zeros(weights.shape[1], np.float32)) == 0.0)
 
 
+def test_a_network_search_on_dampers_starts_at_its_initial_bias_as_its_saved_policy_acts():
+    dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
+    policy = {"actor_arch": [8], "odd": False}
+    model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": -1.0}))  # passive-off, any hidden layer
+    motions, seeds = synthetic_suite(count=2), [4, 5]
+    passive_off = batch_rollout(model.plant, motions, [ConstantCommand(-1.0, 3, "off")], seeds)[0]
+    start = np.zeros((1, *model.weights.shape))
+    assert model.paired_log_costs(start, motions, seeds)[0][0] == pytest.approx(
+        np.mean([np.log(-total) for _, total in passive_off]), rel=1e-12
+    )
+    observations = np.random.default_rng(5).standard_normal((4, model.observation_space.shape[0]))
+    np.testing.assert_array_equal(model.candidate(model.weights).act(observations.astype(np.float32)), -1.0)
+
+
 @pytest.mark.slow
 def test_an_affine_search_on_dampers_learns_a_bias_and_its_model_acts_as_clip_w_o_plus_b(tmp_path):
     dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
@@ -210,8 +224,6 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("algorithm", "expected"),
     [
-        ("{policy: {actor_arch: [16], odd: false}, kwargs: {initial_bias: 0.5}}",
-         "initial_bias 0.5 needs a linear actor (policy.actor_arch: [])"),
         ("{normalize_rewards: true}", "algorithm.normalize_rewards: not for RandomSearch"),
         ("{vec_env: dummy}", "algorithm.vec_env: not for RandomSearch"),
         ("{kwargs: {delta_std: 0}}", "algorithm.kwargs.delta_std: expected a number in"),
