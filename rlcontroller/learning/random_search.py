@@ -27,9 +27,9 @@ evaluation, validation and ONNX export are those of any run. With hidden layers 
 the searched parameters are every weight and bias of the actor's network, one vector (the hidden layers
 start at stable-baselines3's initialisation, the action layer at W = 0, b = `initial_bias`: the search starts
 at no action, a constant command, or the prior), and each candidate runs as the numpy network a saved policy
-is. `num_timesteps` counts the control steps simulated. The learner runs on the plant of its training env (a `BatchedVecEnv`), whose
-generator and randomisation it uses; every field needed to resume exactly (W, the search's random
-generator) is saved with the model.
+is. `num_timesteps` counts the control steps simulated. The learner runs on the plant of its training env
+(a `BatchedVecEnv`), whose generator and randomisation it uses; every field needed to resume exactly (W,
+the search's random generator) is saved with the model.
 With `residual_lqg` the candidates are residuals on the LQG prior (`LinearFeedback` with a prior),
 and W = 0 starts the search at LQG.
 """
