@@ -26,8 +26,8 @@ import rlcontroller
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import ConstantCommand
-from rlcontroller.physics.excitation import on_control_grid
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.excitation import on_control_grid
+from rlcontroller.physics.motions.generators import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

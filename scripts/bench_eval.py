@@ -28,10 +28,10 @@ from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.evaluation.robustness import robustness
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, Load
+from rlcontroller.physics.motions.generators import generate_suite
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 MODEL = REPOSITORY / "models" / "five_story"

@@ -42,8 +42,8 @@ def one_set(experiment: Path, records: Path, record: str, seconds: float) -> dic
     from numpy.lib.stride_tricks import sliding_window_view
 
     from rlcontroller import api
-    from rlcontroller.physics.excitation import on_control_grid
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.excitation import on_control_grid
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     plant = Plant(api.load(experiment))

@@ -19,8 +19,8 @@ import numpy as np
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.mpc import MPCController, MPCPlanner
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 from rlcontroller.simulation.rollout import batch_rollout
 
 

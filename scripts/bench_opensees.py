@@ -1,4 +1,4 @@
-"""Benchmark: control steps per second of the OpenSees plant (`physics.opensees`) for both shipped
+"""Benchmark: control steps per second of the OpenSees plant (`physics.fe.opensees`) for both shipped
 examples, in one process and fanned out over the cores (`simulation.batch`).
 
 Usage: python scripts/bench_opensees.py [--seconds S]
@@ -22,8 +22,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from rlcontroller import api
 from rlcontroller.assets import CONFIGS
 from rlcontroller.control.controllers import Uncontrolled
-from rlcontroller.physics.excitation import on_control_grid
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.excitation import on_control_grid
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -22,7 +22,7 @@ import numpy as np
 from rlcontroller.config import load_experiment
 from rlcontroller.identification.hysteretic import FIT_SEED, calibration_motions
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import on_control_grid
+from rlcontroller.physics.motions.excitation import on_control_grid
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, episode_generator
 

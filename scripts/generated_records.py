@@ -16,8 +16,8 @@ from pathlib import Path
 
 from rlcontroller.config import ExcitationConfig, read_yaml
 from rlcontroller.files import atomic_write, new_folder
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.motions.generators import generate_suite
 
 REPOSITORY = Path(__file__).resolve().parents[1]
 

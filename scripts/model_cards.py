@@ -26,7 +26,7 @@ from rlcontroller.evaluation.robustness import robustness, summary
 from rlcontroller.evaluation.tables import markdown_table
 from rlcontroller.evaluation.verdict import Verdict
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.loads import load_suite
+from rlcontroller.physics.motions.loads import load_suite
 from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[1]

@@ -31,7 +31,7 @@ from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import classical_controllers, compare
 from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.loads import load_suite
+from rlcontroller.physics.motions.loads import load_suite
 from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[1]

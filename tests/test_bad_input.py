@@ -536,7 +536,7 @@ def test_a_manifest_row_outside_the_records_folder_is_refused(tmp_path, name):
 
 
 def test_a_manifest_may_name_files_in_sub_folders(tmp_path):
-    from rlcontroller.physics.records import load_records
+    from rlcontroller.physics.motions.records import load_records
 
     folder = tmp_path / "records"
     (folder / "sub").mkdir(parents=True)

@@ -34,8 +34,8 @@ def test_generated_records_are_read_back_as_written(tmp_path):
     import subprocess
     import sys
 
-    from rlcontroller.physics.excitation import STANDARD_GRAVITY
-    from rlcontroller.physics.records import load_records
+    from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+    from rlcontroller.physics.motions.records import load_records
 
     out = tmp_path / "suite"
     script = [sys.executable, str(SCRIPTS / "generated_records.py"), str(out), "--count", "4", "--seed", "7"]
@@ -176,8 +176,8 @@ def test_the_supervisor_study_chooses_by_its_rule_on_generated_motions_only():
 def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_s_lqg():
     from rlcontroller.config import load_experiment
     from rlcontroller.control.lqg import design_lqg_ground_model
+    from rlcontroller.physics.motions.records import synthetic_suite
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import synthetic_suite
 
     sweep = load_script("lqg_acceleration_sweep")
     experiment = load_experiment(SCRIPTS.parent / "configs" / "five_story.yaml")
@@ -194,8 +194,8 @@ def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_
 
 def test_the_mass_driver_grid_keeps_every_stroke_in_its_housing():
     from rlcontroller.config import load_experiment
+    from rlcontroller.physics.motions.records import synthetic_suite
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import synthetic_suite
 
     study = load_script("mass_driver_lqg_grid")
     experiment = load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml")

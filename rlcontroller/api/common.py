@@ -45,8 +45,8 @@ QUIET = Report()
 
 def load(config: Path | None) -> Experiment:
     """The experiment of `config`, or of the default model; an OpenSees plant without a building of its own
-    gets its reduced model as its design model (`physics.fe_build.reduced_building`: the file runs, named)."""
-    from rlcontroller.physics.fe_build import reduced_building
+    gets its reduced model as its design model (`physics.fe.build.reduced_building`: the file runs, named)."""
+    from rlcontroller.physics.fe.build import reduced_building
 
     return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config, reduce=reduced_building)
 

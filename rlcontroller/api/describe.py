@@ -24,7 +24,7 @@ def describe(experiment: Experiment, full: bool = False) -> str:
     for title, building in buildings:
         lines += mode_lines(title, building.periods(), building.modal_damping_ratios(), rows=rows)
     if plant.fe_model is not None:
-        from rlcontroller.physics.fe_build import fe_modes
+        from rlcontroller.physics.fe.build import fe_modes
 
         design = plant.design.bare.building.periods()
         fe_periods, ratios = fe_modes(plant.fe_model.path, plant.fe_model.function, len(design))

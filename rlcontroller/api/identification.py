@@ -29,7 +29,7 @@ def simulate_test(
     (m/s^2), or the ground motion `record`; with `shake` > 0 every actuator driven by white noise of that RMS
     (a fraction of its force limit). Written as a recording CSV to the new file `out`. Returns `out`."""
     from rlcontroller.identification.recording import ambient_ground, simulate_test
-    from rlcontroller.physics.excitation import read_motion
+    from rlcontroller.physics.motions.excitation import read_motion
     from rlcontroller.physics.plant import Plant
 
     if out.exists():
@@ -259,7 +259,7 @@ def calibration_report(config: Path, calibration, fit_motions: int, test_motions
     return f"""# Nonlinear reduced model of {config}
 
 Two reduced models on the FE model's condensed stiffness, each started from the FE model's first-mode pushover
-(`physics.pushover`) and fitted by least squares to its story drift histories and residual drifts on
+(`physics.fe.pushover`) and fitted by least squares to its story drift histories and residual drifts on
 {fit_motions} generated Kanai-Tajimi motions of 0.3-1.2 g (seed {FIT_SEED}): Bouc-Wen story springs
 (`physics.hysteresis`) and a fishbone (`physics.fishbone`: an elastic column line, each floor's beams one yielding
 rotational spring, P-Delta from the floors' weights). Every story collapses past {COLLAPSE_DRIFT_RATIO:.0%} of its

@@ -1,5 +1,5 @@
 """Every controller judged on a suite of loads: `rlc evaluate`, `rlc compare lqg`, `rlc compare passive`
-and `rlc robustness` as functions. Each builds the plant once, resolves the suite (`physics.loads`),
+and `rlc robustness` as functions. Each builds the plant once, resolves the suite (`physics.motions.loads`),
 simulates, writes its tables and plots into a new folder and returns what it computed."""
 
 from __future__ import annotations
@@ -42,10 +42,10 @@ def comparison(
 ):
     """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
     horizon of `mpc` control steps if given); with `criteria` "benchmark" an FE plant's member ends are read
-    too (`physics.fe_connections`)."""
+    too (`physics.fe.connections`)."""
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.evaluation import compare, progress_total
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     if criteria not in CRITERIA:
@@ -233,7 +233,7 @@ def compare_passive(
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.evaluation.safety import passive_verdict
     from rlcontroller.evaluation.verdict import Verdict
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     experiment = load(config)
@@ -275,7 +275,7 @@ def robustness(
     from rlcontroller.evaluation.robustness import robustness as run_robustness
     from rlcontroller.evaluation.robustness import summary
     from rlcontroller.evaluation.study_report import write_robustness
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     folder = model_folder(run_dir, report)

@@ -118,7 +118,7 @@ def demo(records: Path | None = None, progress_bar: bool = False, report: Report
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.files import new_folder
     from rlcontroller.learning.training import train as run_training
-    from rlcontroller.physics.records import choose_motions
+    from rlcontroller.physics.motions.records import choose_motions
 
     choose_motions(records)  # a bad --records stops here, before training
     summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=progress_bar)

@@ -82,7 +82,7 @@ class NearFaultConfig(StrictModel):
 
 
 class SiteBasedConfig(StrictModel):
-    """Motions of Rezaeian & Der Kiureghian's (2010) site-based stochastic model (`physics.site_motions`) for
+    """Motions of Rezaeian & Der Kiureghian's (2010) site-based stochastic model (`physics.motions.site_motions`) for
     scenarios drawn uniformly in moment `magnitude`, log-uniformly in rupture `distance` (km), uniformly in `vs30`
     (m/s), reverse faulting with probability `reverse_share` (else strike-slip), a high-pass corner drawn
     log-uniformly in `corner_frequency` (Hz); each scaled to a random PGA (m/s^2). The defaults stay inside the
@@ -152,7 +152,7 @@ class WindSiteConfig(StrictModel):
 
 
 class WindGeneratorConfig(WindSiteConfig):
-    """Generated along-wind loads on the experiment's floors (`physics.wind`), one record per draw: a
+    """Generated along-wind loads on the experiment's floors (`physics.motions.wind`), one record per draw: a
     mean speed drawn in `speed` (m/s at the reference height) and a duration in `duration` (s),
     sampled every `dt` s up to `cutoff` Hz."""
 
@@ -195,7 +195,7 @@ class ExcitationConfig(StrictModel):
 
 
 class WindSuiteConfig(WindSiteConfig):
-    """A suite of generated along-wind load records (`physics.wind`): `records_per_speed` records of
+    """A suite of generated along-wind load records (`physics.motions.wind`): `records_per_speed` records of
     `duration` s at each mean speed (m/s at the reference height), sampled every `dt` s up to
     `cutoff` Hz, from one `seed`. Used as `--records FILE.yaml`."""
 

@@ -49,7 +49,7 @@ def load_experiment(path: str | Path, self_contained: bool = False, reduce: Redu
     `self_contained` (the config.yaml of a run or model folder) every file it names must lie in its
     folder: a folder from someone else never makes us read a file elsewhere. An experiment whose plant is
     an OpenSees model and that gives no building of its own gets `reduce(model, function)` as its design
-    model (`physics.fe_build.reduced_building`, passed in from above: `api.load` does)."""
+    model (`physics.fe.build.reduced_building`, passed in from above: `api.load` does)."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):

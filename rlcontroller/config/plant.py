@@ -126,7 +126,7 @@ class DeviceFactors(StrictModel):
 
 
 class OpenSeesConfig(StrictModel):
-    """An OpenSees finite-element model as the plant (`physics.fe_build`, `physics.fe_integrator`): the Python file
+    """An OpenSees finite-element model as the plant (`physics.fe.build`, `physics.fe.integrator`): the Python file
     that builds it (code: run only when the user names it; absolute once loaded), the function in it, and the longest
     analysis step (s; Newmark average acceleration, on every ground sample: 2.5 ms keeps the five-story
     model within 0.1 % of the exact integration, 10 ms is 0.5 % off). `train_on`: what `rlc train` learns

@@ -21,9 +21,9 @@ import scipy.linalg
 
 from rlcontroller.control.riccati import kalman_gain
 from rlcontroller.physics.dynamics import discrete_noise
+from rlcontroller.physics.motions.wind import WindLoadModel
 from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.wind import WindLoadModel
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import numpy as np
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, quadratic_cost
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import Load, on_control_grid
+from rlcontroller.physics.motions.excitation import Load, on_control_grid
 from rlcontroller.physics.plant import Plant
 
 

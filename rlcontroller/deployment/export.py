@@ -355,7 +355,7 @@ def graph_deviation(
     step, not two closed loops side by side: an LQG controller may be unstable on its own, and a controller
     that saturates may be chaotic in closed loop, so two faithful copies of it drift apart from the last bit."""
     from rlcontroller.learning.env import BuildingEnv
-    from rlcontroller.physics.loads import generate
+    from rlcontroller.physics.motions.loads import generate
 
     load = generate(plant.experiment.excitation.generator, np.random.default_rng(seed), plant.building)
     env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(graph)

@@ -21,7 +21,7 @@ the ground, a absolute ones.
     J14 sum_l 1/t_f int P_l dt / (max_t,i |x'_i of UC| W)      total control power
     J15 control devices    J16 sensors the controller reads    J17 states the controller carries between steps
 
-J7-J10 need an FE plant's member ends (`physics.fe_connections`; other plants: not reported). A connection yields
+J7-J10 need an FE plant's member ends (`physics.fe.connections`; other plants: not reported). A connection yields
 where its tangent stiffness falls below half its value after gravity; its yield moment M_y is its force there and
 its yield curvature phi_y = M_y / that initial tangent (the curvature it would have reached elastically). J7, J8
 and J10 go over the connections that yield in C or UC (the others never reach their yield values, which are then
@@ -41,7 +41,7 @@ import pandas as pd
 from rlcontroller.evaluation.tables import markdown_table
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.structure import Building
 
 CRITERIA = tuple(f"J{i}" for i in range(1, 18))
@@ -83,7 +83,7 @@ def _trapezoids(history: np.ndarray, dt: float) -> np.ndarray:
 
 def connection_criteria(controlled: np.ndarray, uncontrolled: np.ndarray) -> dict[str, float]:
     """J7-J10 of one record from both runs' member ends (steps + 1, connections, 3: deformation, force,
-    tangent; `physics.fe_connections`), module docstring."""
+    tangent; `physics.fe.connections`), module docstring."""
     initial, runs = uncontrolled[0, :, 2], (controlled, uncontrolled)
     usable = initial > 0.0
     yielded_c, yielded_u = (np.any(run[:, :, 2] < YIELDED * initial, axis=0) & usable for run in runs)

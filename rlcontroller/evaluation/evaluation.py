@@ -23,7 +23,6 @@ from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import Load, content_seed, with_settling_tail
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -36,6 +35,7 @@ from rlcontroller.physics.metrics import (
     wind_metrics,
     yielding_metrics,
 )
+from rlcontroller.physics.motions.excitation import Load, content_seed, with_settling_tail
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation import kept
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses

@@ -25,8 +25,8 @@ from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Co
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
-from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import centre_of_ranges
 

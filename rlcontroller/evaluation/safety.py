@@ -37,11 +37,11 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.evaluation.standard import SHAPE_DAMPING, SHAPE_MODES, rest_figures, stability_figures, suite_figures
 from rlcontroller.evaluation.verdict import Verdict, also_criterion
-from rlcontroller.physics.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
-from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import ratio_to_reference, residual_drift
+from rlcontroller.physics.motions.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
+from rlcontroller.physics.motions.loads import generate_suite
+from rlcontroller.physics.motions.spectra import spectral_shape
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.spectra import spectral_shape
 from rlcontroller.simulation.linearised import spectral_radius
 from rlcontroller.simulation.rollout import batch_rollout
 

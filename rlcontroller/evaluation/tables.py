@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 
 from rlcontroller.evaluation.evaluation import LQG_VARIANTS, Evaluation, percent_better
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.metrics import METRICS
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
 
 METRIC_NAMES = {
     "J1": "J1 peak drift",

@@ -17,10 +17,10 @@ import numpy as np
 
 from rlcontroller.config import HysteresisConfig
 from rlcontroller.identification.hysteretic import BOUNDS, FIT_SUBSTEPS, YIELD_RANGE, Fit, least_squares
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.fe.pushover import Pushover
 from rlcontroller.physics.fishbone import ColumnLine
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.pushover import Pushover
 from rlcontroller.physics.structure import Building
 
 

@@ -6,7 +6,7 @@ mode) gets a Bouc-Wen spring in every story (`physics.hysteresis`: per story yie
 ratio a, exponent n and shape beta, gamma = 1 - beta; the rest of the condensed stiffness stays linear), as
 Patsialis & Taflanidis (Engineering Structures 2020) reduced the ASCE 9-story benchmark.
 
-Calibration: a first-mode pushover of the FE model (`physics.pushover`) gives each story's yield drift and
+Calibration: a first-mode pushover of the FE model (`physics.fe.pushover`) gives each story's yield drift and
 post-yield ratio to start from; the FE model runs uncontrolled on generated Kanai-Tajimi motions strong
 enough to yield it (PGA 0.3-1.2 g, soft to firm soil, each followed by the settling tail that leaves the
 residual drift); least squares (scipy's trust region reflective, within bounds: the yield drifts within a
@@ -32,12 +32,12 @@ import pandas as pd
 from rlcontroller.config import HysteresisConfig, KanaiTajimiConfig
 from rlcontroller.errors import ModelError
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, Load, on_control_grid, with_settling_tail
+from rlcontroller.physics.fe.pushover import Pushover
 from rlcontroller.physics.fishbone import hysteretic_model
-from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.metrics import RESIDUAL_WINDOW_S, peak
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, Load, on_control_grid, with_settling_tail
+from rlcontroller.physics.motions.generators import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.pushover import Pushover
 
 CALIBRATION_MOTIONS = KanaiTajimiConfig(
     dt=0.02,

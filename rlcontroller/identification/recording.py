@@ -22,7 +22,7 @@ import numpy as np
 
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.errors import RecordingError
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -19,9 +19,9 @@ import pandas as pd
 from rlcontroller.config import Experiment, HysteresisConfig, PlantConfig, PlantRandomization, RandomRange
 from rlcontroller.errors import ModelError
 from rlcontroller.identification import fishbone, hysteretic
-from rlcontroller.physics.excitation import SETTLING_TAIL_S, Load
+from rlcontroller.physics.fe.pushover import Pushover, pushover
+from rlcontroller.physics.motions.excitation import SETTLING_TAIL_S, Load
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.pushover import Pushover, pushover
 
 MODELS = {"story_springs": "Bouc-Wen story springs", "fishbone": "a fishbone (column line, yielding beams)"}
 

@@ -45,9 +45,9 @@ from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.control.twin import FailSafeTwin
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
-from rlcontroller.physics.fe_build import reduced_building
-from rlcontroller.physics.loads import generate
+from rlcontroller.physics.fe.build import reduced_building
+from rlcontroller.physics.motions.excitation import Load, LoadGrid, on_control_grid
+from rlcontroller.physics.motions.loads import generate
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs

@@ -32,7 +32,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from rlcontroller.control.controllers import residual_action
 from rlcontroller.control.mpc import DEFAULT_HORIZON, mpc_controller
 from rlcontroller.learning.batch_learner import BatchLearner
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 

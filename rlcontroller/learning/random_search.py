@@ -48,9 +48,9 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy
-from rlcontroller.physics.excitation import Load
-from rlcontroller.physics.loads import generate_suite
 from rlcontroller.physics.metrics import peak, ratio_to_reference
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 STANDARD_PENALTY = 10.0  # per unit of the check's ratio above 1 (objective: standard)

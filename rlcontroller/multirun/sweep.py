@@ -165,7 +165,7 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
     from rlcontroller.evaluation.evaluation import compare
     from rlcontroller.evaluation.report import write_report
     from rlcontroller.files import new_folder
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     out = run.folder / "evaluation"
@@ -319,7 +319,7 @@ def sweep(
     combination and the `records` suite are checked before any work. `out` is locked for the sweep: a
     second sweep into it refuses in one line naming this one."""
     from rlcontroller.files import folder_lock
-    from rlcontroller.physics.loads import load_suite
+    from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
     runs = plan(experiment, seeds, settings, out)

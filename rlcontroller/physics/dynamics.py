@@ -28,7 +28,7 @@ import scipy.linalg
 from numpy.lib.stride_tricks import sliding_window_view
 
 from rlcontroller.config import Quantity, SimulationConfig
-from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.motions.generators import GroundModel
 from rlcontroller.physics.state_space import PER_FLOOR, StateSpaceBuilding
 from rlcontroller.physics.structure import Building
 
@@ -180,7 +180,7 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
 
 def wind_model_system(building: Building, time_constant: float, ground: GroundModel | None = None) -> StateSpace:
     """The continuous system of [z; f] (with `ground`, [z; f; x_g; x_g']): the building, a first-order model of
-    the fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.wind.load_model`), and the ground
+    the fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.motions.wind.load_model`), and the ground
     filter shaking its base, driven by the actuator forces (the noises enter through `discrete_noise`)."""
     system = state_space(building)
     size, floors = system.a.shape[0], building.n_floors
@@ -327,7 +327,7 @@ class Response:
     stroke: np.ndarray | None = None  # mass devices: displacement relative to the floor (m)
     stroke_velocity: np.ndarray | None = None  # mass devices (m/s)
     device_velocity: np.ndarray | None = None  # across each commanded device (m/s): power = force x this
-    connections: np.ndarray | None = None  # FE member ends, when recorded (`physics.fe_connections`)
+    connections: np.ndarray | None = None  # FE member ends, when recorded (`physics.fe.connections`)
     stop_force: np.ndarray | None = None  # end-stops, per mass device: the largest |force| over each step (N)
     stop_contacts: np.ndarray | None = None  # end-stops, per mass device: the contacts begun in each step
 

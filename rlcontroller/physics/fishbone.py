@@ -28,8 +28,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import HysteresisConfig
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.hysteresis import BoucWen, drift_matrix, per_story
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.structure import Building
 
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import SensorConfig
-from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.motions.generators import GroundModel
 from rlcontroller.physics.structure import Building
 
 

@@ -44,10 +44,11 @@ from rlcontroller.config import (
 )
 from rlcontroller.physics.dynamics import load_feedthrough, output_matrices
 from rlcontroller.physics.end_stops import EndStops
-from rlcontroller.physics.excitation import FLOOR_FORCES
-from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 from rlcontroller.physics.fishbone import hysteretic_model
-from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.motions.excitation import FLOOR_FORCES
+from rlcontroller.physics.motions.generators import GroundModel
+from rlcontroller.physics.motions.wind import WindLoadModel, floor_field, load_model
 from rlcontroller.physics.observation import observation_layout
 from rlcontroller.physics.sampled import SampledPlant
 from rlcontroller.physics.semi_active import SemiActiveDampers
@@ -55,7 +56,6 @@ from rlcontroller.physics.sensors import sensor_matrices
 from rlcontroller.physics.state_space import StateSpaceBuilding, from_state_space
 from rlcontroller.physics.structure import Building, build, tune_devices, with_dampers, with_devices
 from rlcontroller.physics.variations import true_building
-from rlcontroller.physics.wind import WindLoadModel, floor_field, load_model
 
 
 def design_wind(experiment: Experiment) -> WindLoadModel | None:
@@ -223,13 +223,13 @@ class Plant:
     @property
     def yield_drift(self) -> np.ndarray | None:
         """Each story's yield drift (m): a yielding plant's d_y; an FE plant's from its model's first-mode
-        pushover (`physics.pushover`, run here once, when first asked); None for a linear plant."""
+        pushover (`physics.fe.pushover`, run here once, when first asked); None for a linear plant."""
         if self.yielding is not None:
             return self.yielding.yield_drift
         if self.fe_model is None:
             return None
         if self._pushover is None:
-            from rlcontroller.physics.pushover import pushover
+            from rlcontroller.physics.fe.pushover import pushover
 
             n = self.building.n_floors  # the building is the FE model's reduced one
             floors = (self.building.mass[:n, :n], self.building.stiffness[:n, :n])

@@ -1,7 +1,7 @@
 """The plant protocol: what the closed loop (`learning.env`, `simulation.batch`), evaluation and the
 controllers' designs read of a plant. `physics.plant.Plant` implements it for every plant `rlc` builds
 (linear, with actuator dynamics, yielding stories, semi-active dampers, an OpenSees model as its `fe_model`
-integrator, `physics.opensees`); a model from outside (an identified state-space model) implements the
+integrator, `physics.fe.opensees`); a model from outside (an identified state-space model) implements the
 same and nothing else changes.
 
 Like do-mpc's `model`, compiled once (`Model.setup()`), one object serves the simulator, the estimator and

@@ -46,10 +46,10 @@ from rlcontroller.physics.dynamics import (
     step_map,
     wind_model_system,
 )
-from rlcontroller.physics.excitation import FLOOR_FORCES, LoadGrid
-from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.motions.excitation import FLOOR_FORCES, LoadGrid
+from rlcontroller.physics.motions.generators import GroundModel
+from rlcontroller.physics.motions.wind import WindLoadModel
 from rlcontroller.physics.structure import Building
-from rlcontroller.physics.wind import WindLoadModel
 
 
 class Sampleable(Protocol):

@@ -28,7 +28,7 @@ import numpy as np
 from rlcontroller.errors import ModelError
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import uncontrolled_responses
 

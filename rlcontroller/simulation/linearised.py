@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.control.policy import PolicyController
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch
 

@@ -11,8 +11,8 @@ import numpy as np
 
 from rlcontroller.control.controllers import Controller, LQGBank, LQGController, Uncontrolled
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import Load, LoadGrid, on_control_grid
-from rlcontroller.physics.opensees import NonConvergence
+from rlcontroller.physics.fe.opensees import NonConvergence
+from rlcontroller.physics.motions.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch, episode_generator
 from rlcontroller.simulation.fanout import fanned_map

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.physics.excitation import on_control_grid
-from rlcontroller.physics.records import load_records
+from rlcontroller.physics.motions.excitation import on_control_grid
+from rlcontroller.physics.motions.records import load_records
 
 HISTORY = 20
 HORIZONS = (1, 2, 5, 10)

@@ -21,9 +21,9 @@ from rlcontroller.config import ConfigError, Experiment, RewardConfig, load_expe
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import evaluate, mean_metric
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.records import choose_motions
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import choose_motions
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 

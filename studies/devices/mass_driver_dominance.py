@@ -37,8 +37,8 @@ from rlcontroller.config import load_experiment, load_safety_check
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import LQGDesign, design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check
-from rlcontroller.physics.excitation import Load
-from rlcontroller.physics.generators import GroundModel
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.generators import GroundModel
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -30,9 +30,9 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate, mean_metric, scaled_weights
 from rlcontroller.files import atomic_savefig
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.records import choose_motions
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import choose_motions
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 

@@ -25,9 +25,9 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.evaluation.evaluation import classical_controllers, evaluate
 from rlcontroller.evaluation.tables import markdown_table
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 EXPERIMENT = CONFIGS / "five_story.yaml"
 MASSES = [25e3, 20e3, 20e3, 18e3, 15e3]  # kg, the floor masses an engineer reads from the drawings

@@ -24,10 +24,10 @@ from rlcontroller.control.controllers import LinearFeedback, LQGController
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import MotionError
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.excitation import MotionError
+from rlcontroller.physics.motions.generators import generate_suite
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 

@@ -20,8 +20,8 @@ from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand
 from rlcontroller.control.mpc import SemiActiveMPC
 from rlcontroller.evaluation.evaluation import scaled_weights
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 MULTIPLIERS = (3.0, 1.0, 0.3, 0.1, 0.03, 0.01)
 

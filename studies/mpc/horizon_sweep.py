@@ -20,7 +20,7 @@ from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import MPCController
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 
 HORIZONS = (1, 2, 5, 10, 20, 40, 80)

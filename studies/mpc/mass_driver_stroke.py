@@ -24,8 +24,8 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import MPCController
 from rlcontroller.evaluation.evaluation import scaled_weights
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 MULTIPLIERS = (1, 10, 100, 500, 1000, 2000, 5000, 10000, 20000)
 EXPERIMENT = CONFIGS / "experiments" / "five_story_amd.yaml"

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.control.controllers import Uncontrolled
-from rlcontroller.physics.excitation import Load
 from rlcontroller.physics.metrics import j_metrics
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -18,9 +18,9 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import compare
-from rlcontroller.physics.excitation import SETTLING_TAIL_S, with_settling_tail
+from rlcontroller.physics.motions.excitation import SETTLING_TAIL_S, with_settling_tail
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
 experiment = api.load(CONFIGS / "experiments" / "nine_story_frame.yaml")

@@ -24,8 +24,8 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import evaluate
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 

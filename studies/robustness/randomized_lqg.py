@@ -21,9 +21,9 @@ import numpy as np
 from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.physics.excitation import MotionError
-from rlcontroller.physics.generators import generate_suite
 from rlcontroller.physics.metrics import j_metrics
+from rlcontroller.physics.motions.excitation import MotionError
+from rlcontroller.physics.motions.generators import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.config.scenarios import load_safety_check
-from rlcontroller.physics.excitation import Load
-from rlcontroller.physics.generators import generate_suite
-from rlcontroller.physics.records import load_records
-from rlcontroller.physics.spectra import spectral_shape
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.generators import generate_suite
+from rlcontroller.physics.motions.records import load_records
+from rlcontroller.physics.motions.spectra import spectral_shape
 
 DAMPING = 0.02
 

@@ -40,10 +40,10 @@ from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.motions.generators import generate_suite
+from rlcontroller.physics.motions.records import choose_motions
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import choose_motions
 
 REPOSITORY = Path(__file__).resolve().parents[2]
 EXPERIMENT = REPOSITORY / "configs/experiments/five_story_every_story.yaml"

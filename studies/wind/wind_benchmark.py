@@ -30,9 +30,9 @@ from rlcontroller.control.policy_file import read_policy  # noqa: E402
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate  # noqa: E402
 from rlcontroller.evaluation.tables import markdown_table  # noqa: E402
 from rlcontroller.files import atomic_savefig, atomic_write  # noqa: E402
-from rlcontroller.physics.excitation import STANDARD_GRAVITY  # noqa: E402
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY  # noqa: E402
+from rlcontroller.physics.motions.wind import wind_suite  # noqa: E402
 from rlcontroller.physics.plant import Plant  # noqa: E402
-from rlcontroller.physics.wind import wind_suite  # noqa: E402
 
 EFFORT_MULTIPLIERS = (0.1, 0.3, 1.0, 3.0, 10.0, 30.0)
 CHOSEN = "LQG + wind model"  # the experiment's own weights (multiplier 1)

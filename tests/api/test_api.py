@@ -69,7 +69,7 @@ def test_a_user_mistake_is_the_commands_one_line_error(tmp_path):
     with pytest.raises(ConfigError, match="not a run folder: no config.yaml"):
         api.evaluate(tmp_path)
     with pytest.raises(ConfigError, match="a wind suite is not taken by this command"):
-        from rlcontroller.physics.loads import load_suite
+        from rlcontroller.physics.motions.loads import load_suite
 
         load_suite(REPOSITORY / "configs" / "loads" / "wind.yaml")
 

@@ -14,8 +14,8 @@ from rlcontroller.control.controllers import ConstantCommand, LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
 from rlcontroller.control.policy_file import read_policy
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.linearised import closed_loop_matrix
 from rlcontroller.simulation.rollout import batch_rollout
 

@@ -8,8 +8,8 @@ from rlcontroller.config import Experiment, PlantConfig
 from rlcontroller.control.controllers import LinearFeedback, LQGController, LQGPrior, Uncontrolled, residual_action
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 
 
 def test_uncontrolled_is_zero_for_every_actuator():

@@ -11,7 +11,7 @@ from rlcontroller.config import Experiment, MeasurementConfig, PlantConfig, Sens
 from rlcontroller.config.plant import DeviceFactors
 from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model, integration_filter, kalman_gain
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 
 

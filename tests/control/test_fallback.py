@@ -10,9 +10,9 @@ from rlcontroller.config import ConfigError, Experiment, build_experiment
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 EVERY_STORY = [{"story": story, "force_limit": 1.0e5} for story in range(1, 6)]

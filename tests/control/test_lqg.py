@@ -10,9 +10,9 @@ from rlcontroller.control.optimal import optimal_response
 from rlcontroller.control.policy import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import Response, step_map
-from rlcontroller.physics.excitation import Load, read_at2, scale_to_pga
-from rlcontroller.physics.generators import GroundModel, kanai_tajimi
 from rlcontroller.physics.metrics import j_metrics
+from rlcontroller.physics.motions.excitation import Load, read_at2, scale_to_pga
+from rlcontroller.physics.motions.generators import GroundModel, kanai_tajimi
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import build
 
@@ -153,7 +153,7 @@ def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
 
 
 def read_at2_or_synthetic() -> Load:
-    from rlcontroller.physics.records import synthetic_suite
+    from rlcontroller.physics.motions.records import synthetic_suite
 
     return synthetic_suite(count=1)[0]
 

@@ -11,9 +11,9 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 
 EVERY_STORY = [{"story": story, "force_limit": 1.0e5} for story in range(1, 6)]
 SENSORS = {"state_estimate": True, "ground_model": True}
@@ -72,7 +72,7 @@ def test_under_wind_the_trigger_also_watches_the_floors():
     from rlcontroller.assets import CONFIGS
     from rlcontroller.config import load_experiment
     from rlcontroller.control.lqg import design_lqg_wind_model
-    from rlcontroller.physics.loads import generate_suite
+    from rlcontroller.physics.motions.loads import generate_suite
 
     wind = load_experiment(CONFIGS / "experiments" / "five_story_wind.yaml")
     low = wind.supervisor.model_copy(update={"trigger": (0.1, 0.3)})

@@ -13,8 +13,8 @@ from rlcontroller.control.policy import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate, mean_metric
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import discrete_noise, simulate
-from rlcontroller.physics.excitation import on_control_grid
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.excitation import on_control_grid
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 
 

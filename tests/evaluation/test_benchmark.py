@@ -8,7 +8,7 @@ import pytest
 
 from rlcontroller.evaluation.benchmark import benchmark_criteria, connection_criteria, response_criteria
 from rlcontroller.physics.dynamics import Response
-from rlcontroller.physics.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.structure import Building
 
 DT = 0.1

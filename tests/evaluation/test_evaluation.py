@@ -13,9 +13,9 @@ from rlcontroller.evaluation.evaluation import (
     preview_study,
 )
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import on_control_grid, read_at2
+from rlcontroller.physics.motions.excitation import on_control_grid, read_at2
+from rlcontroller.physics.motions.records import SYNTHETIC_LABEL, load_records, synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import SYNTHETIC_LABEL, load_records, synthetic_suite
 from rlcontroller.simulation.rollout import uncontrolled_responses
 
 
@@ -74,7 +74,7 @@ def test_the_sweep_designs_lqg_on_the_design_model_and_runs_it_on_the_plant():
 def test_a_records_numbers_do_not_depend_on_the_folder_or_order_it_is_evaluated_in(records):
     """The sensor noise is seeded by the record's content: Kobe alone, among the seven and in reverse
     order gives the same LQG metrics."""
-    from rlcontroller.physics.records import load_records
+    from rlcontroller.physics.motions.records import load_records
 
     plant = Plant(Experiment())
     motions, _ = load_records(records)

@@ -242,9 +242,9 @@ def test_j1_and_j2_by_pga_band_count_records_and_flag_controllers_worse_than_non
     from rlcontroller.control.controllers import Uncontrolled
     from rlcontroller.evaluation.evaluation import evaluate
     from rlcontroller.evaluation.tables import by_pga
-    from rlcontroller.physics.excitation import STANDARD_GRAVITY, scale_to_pga
+    from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, scale_to_pga
+    from rlcontroller.physics.motions.records import synthetic_suite
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import synthetic_suite
 
     class Pushing(Uncontrolled):
         name = "pushes"  # full force on every actuator, whatever happens: worse than nothing
@@ -278,8 +278,8 @@ def test_the_drawing_process_draws_the_same_plots_and_reports_its_failures(tmp_p
     """`rlc evaluate`'s plots drawn by the forked drawing process are byte for byte the ones drawn here;
     a job that fails there is an error here, with its traceback, never a missing plot."""
     from rlcontroller.evaluation.evaluation import compare
+    from rlcontroller.physics.motions.records import synthetic_suite
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import synthetic_suite
 
     plant = Plant(Experiment())
     evaluation = compare(plant, synthetic_suite(count=2), "SYNTHETIC test")

@@ -19,8 +19,8 @@ from rlcontroller.evaluation.robustness import (
     stiffness_curve,
     summary,
 )
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 
 
 @pytest.fixture(scope="module")
@@ -134,7 +134,7 @@ def test_under_wind_the_nominal_designs_are_lqg_and_lqg_with_the_wind_model():
 
     from rlcontroller.config import load_experiment
     from rlcontroller.evaluation.robustness import NOMINAL_WIND_MODEL
-    from rlcontroller.physics.loads import generate_suite
+    from rlcontroller.physics.motions.loads import generate_suite
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml")
     plant = Plant(experiment)
@@ -171,7 +171,7 @@ def test_dampers_are_judged_by_their_own_classical_laws_and_no_lqg_is_designed_f
     from conftest import REPOSITORY
 
     from rlcontroller.config import load_experiment
-    from rlcontroller.physics.loads import generate_suite
+    from rlcontroller.physics.motions.loads import generate_suite
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
     plant = Plant(experiment)

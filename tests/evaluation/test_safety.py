@@ -17,7 +17,7 @@ from rlcontroller.evaluation.safety import energy_near, judge_suite, passive_ver
 from rlcontroller.evaluation.standard import DEVICE_FIGURES, suite_figures
 from rlcontroller.evaluation.verdict import VerdictState, judged_digests, write_verdict
 from rlcontroller.evaluation.verdict import read_verdict as read_verdict_of
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.linearised import closed_loop_matrix, spectral_radius
 
@@ -288,7 +288,7 @@ def test_the_check_s_j2_is_each_motion_s_j2_against_the_reference():
     from rlcontroller.control.controllers import LQGController
     from rlcontroller.control.lqg import design_lqg
     from rlcontroller.evaluation.evaluation import evaluate
-    from rlcontroller.physics.generators import generate_suite
+    from rlcontroller.physics.motions.generators import generate_suite
 
     plant = Plant(Experiment())
     lqg = LQGController(design_lqg(plant.design), plant.design, "LQG")
@@ -449,7 +449,7 @@ def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, na
     machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), re-issues the shipped verdict: every
     figure as `rlc check --verify` compares them (`evaluation.verdict.differences`: numbers within 0.1 % plus the
     rounding, counts, levels, motions and outcomes exactly; the check's loads are the same on every CPU:
-    `physics.excitation.same_on_every_cpu`)."""
+    `physics.motions.excitation.same_on_every_cpu`)."""
     import os
     import shutil
     import subprocess

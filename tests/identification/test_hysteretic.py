@@ -11,9 +11,9 @@ from conftest import REPOSITORY
 
 from rlcontroller.config import Experiment, HysteresisConfig
 from rlcontroller.identification.hysteretic import accuracy, calibration_motions, fit, reduced_drifts
-from rlcontroller.physics.excitation import scale_to_pga
+from rlcontroller.physics.fe.pushover import Pushover
+from rlcontroller.physics.motions.excitation import scale_to_pga
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.pushover import Pushover
 
 DESIGN = Plant(Experiment())  # the five-story building: a shear building, its story springs its stiffnesses
 TRUE = HysteresisConfig(

@@ -12,9 +12,9 @@ from rlcontroller.config import Experiment, HysteresisConfig
 from rlcontroller.identification import fishbone
 from rlcontroller.identification.hysteretic import accuracy, reduced_drifts
 from rlcontroller.identification.reduction import fit_both
+from rlcontroller.physics.fe.pushover import Pushover
 from rlcontroller.physics.fishbone import ColumnLine
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.pushover import Pushover
 
 HEIGHTS = [3.0] * 5
 # the "FE" frame: flexible beams (their rotations matter), columns stiffer below, a base spring

@@ -16,7 +16,7 @@ from rlcontroller.evaluation.evaluation import classical_controllers
 from rlcontroller.evaluation.evaluation import evaluate as run_evaluation
 from rlcontroller.identification.recording import ambient_ground, simulate_test
 from rlcontroller.identification.subspace import identify as identify_model
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import natural_modes
 

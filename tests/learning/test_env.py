@@ -10,8 +10,8 @@ from rlcontroller import ENV_ID
 from rlcontroller.config import Experiment, MeasurementConfig, RewardTerm, SensorConfig
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.dynamics import simulate
-from rlcontroller.physics.excitation import Load, read_at2
-from rlcontroller.physics.records import synthetic_suite
+from rlcontroller.physics.motions.excitation import Load, read_at2
+from rlcontroller.physics.motions.records import synthetic_suite
 
 NOISE_FREE = Experiment(
     sensors=SensorConfig(
@@ -75,7 +75,7 @@ def test_steps_match_the_whole_record_simulation(records):
         shears.append(info["base_shear"])
     assert truncated
     forces = np.clip(actions, -1, 1) * 1e5
-    from rlcontroller.physics.excitation import on_control_grid
+    from rlcontroller.physics.motions.excitation import on_control_grid
 
     grid = on_control_grid(motion, 0.02)
     samples, substeps = grid.ground, grid.substeps
@@ -196,7 +196,7 @@ def test_state_estimate_in_the_observation_tracks_the_true_state():
 def test_ground_model_estimate_predicts_the_ground_reading():
     """With `ground_model` the estimate ends with the Kanai-Tajimi filter states; their output
     tracks the measured ground acceleration."""
-    from rlcontroller.physics.generators import GroundModel
+    from rlcontroller.physics.motions.generators import GroundModel
 
     env = BuildingEnv(Experiment(sensors=SensorConfig(state_estimate=True, ground_model=True)))
     observation, _ = env.reset(seed=3)
@@ -225,7 +225,7 @@ RANDOMIZED = {
 @pytest.mark.slow
 def test_randomised_plants_are_drawn_per_episode_from_the_seed_within_the_ranges():
     from rlcontroller.config import build_experiment
-    from rlcontroller.physics.records import synthetic_suite
+    from rlcontroller.physics.motions.records import synthetic_suite
 
     env = BuildingEnv(build_experiment(RANDOMIZED), randomize=True)
     motion = synthetic_suite(count=1)[0]

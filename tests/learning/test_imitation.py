@@ -16,7 +16,7 @@ from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.imitation import DAgger, imitation_loss
 from rlcontroller.learning.training import train
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
 

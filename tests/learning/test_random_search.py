@@ -13,8 +13,8 @@ from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.random_search import STANDARD_PENALTY, RandomSearch, standard_cost
 from rlcontroller.learning.training import train
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 MODEL_FREE = REPOSITORY / "studies" / "model_free" / "five_story_model_free_random_search.yaml"

@@ -11,9 +11,9 @@ import scipy.optimize
 from rlcontroller.config import Experiment
 from rlcontroller.devices.tuned_mass import warburton_optimum
 from rlcontroller.physics.dynamics import simulate
-from rlcontroller.physics.excitation import on_control_grid
+from rlcontroller.physics.motions.excitation import on_control_grid
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 
 
 def primary_with_absorber(mass_ratio: float, frequency_ratio: float, damping_ratio: float):

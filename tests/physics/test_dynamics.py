@@ -12,7 +12,7 @@ from rlcontroller.physics.dynamics import (
     state_space,
     step_map,
 )
-from rlcontroller.physics.excitation import Load, on_control_grid, read_at2
+from rlcontroller.physics.motions.excitation import Load, on_control_grid, read_at2
 
 MASS, STIFFNESS = 2.0e4, 8.0e5  # kg, N/m -> omega = 6.32 rad/s
 

@@ -12,7 +12,7 @@ from rlcontroller.config import Experiment, SimulationConfig
 from rlcontroller.devices.tuned_mass import MassDevice, stop_damping_ratio
 from rlcontroller.physics.dynamics import step_map
 from rlcontroller.physics.end_stops import EndStops
-from rlcontroller.physics.excitation import Load, on_control_grid, read_at2
+from rlcontroller.physics.motions.excitation import Load, on_control_grid, read_at2
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.structure import Building, with_devices
 

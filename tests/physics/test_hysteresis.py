@@ -8,8 +8,8 @@ import scipy.integrate
 from rlcontroller.config import Experiment, HysteresisConfig
 from rlcontroller.physics.hysteresis import BoucWen
 from rlcontroller.physics.integrators import z_rate
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.physics.structure import build
 
 EXPERIMENT = Experiment()

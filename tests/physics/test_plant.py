@@ -7,7 +7,7 @@ from conftest import SAME_PHYSICS
 from rlcontroller.config import Experiment, MeasurementConfig, SensorConfig
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.dynamics import output_matrices
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 
 
@@ -54,7 +54,7 @@ def plant_with(**part) -> Plant:
 
 
 def test_a_plant_part_of_defaults_is_the_design_model_bit_for_bit():
-    from rlcontroller.physics.records import synthetic_suite
+    from rlcontroller.physics.motions.records import synthetic_suite
 
     motion = synthetic_suite(count=1)[0]
     nominal, same = BuildingEnv(Experiment()), BuildingEnv(plant_with())
@@ -113,7 +113,7 @@ def test_an_actuator_lag_follows_the_analytic_step_response():
 
 @pytest.mark.parametrize("lag", [0.0, 0.03])
 def test_a_delay_shifts_the_delivered_force_and_the_response_exactly(lag):
-    from rlcontroller.physics.records import synthetic_suite
+    from rlcontroller.physics.motions.records import synthetic_suite
 
     rng = np.random.default_rng(2)
     commands = rng.uniform(-1, 1, (200, 3))

@@ -14,10 +14,10 @@ from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg
 from rlcontroller.evaluation.evaluation import compare
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.excitation import FLOOR_FORCES, GROUND_ACCELERATION, Load
+from rlcontroller.physics.motions.excitation import FLOOR_FORCES, GROUND_ACCELERATION, Load
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.protocol import Integrator, SimulatedPlant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 

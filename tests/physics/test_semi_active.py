@@ -8,8 +8,8 @@ import scipy.integrate
 
 from rlcontroller.config import Experiment
 from rlcontroller.devices.mr_damper import mr_parameters
+from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import load_records
 from rlcontroller.simulation.rollout import batch_rollout
 
 
@@ -136,7 +136,7 @@ def sinusoid_test(volts_action: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """The paper's test: the prototype damper (capacity alpha(V_max) z_max of Table 1, so unscaled)
     stroked 1.5 cm at 2.5 Hz at a constant voltage, between the ground and a 10^9 kg floor on a 1 N/m
     spring that stays still; returns the damper's force (N), stroke (m) and stroke velocity (m/s)."""
-    from rlcontroller.physics.excitation import Load
+    from rlcontroller.physics.motions.excitation import Load
 
     z_max = np.sqrt(301.0 / (2 * 363.0e4))
     prototype = (140.0e2 + 695.0e2 * 2.25) * z_max

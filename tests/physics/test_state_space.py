@@ -13,7 +13,7 @@ from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.evaluation.evaluation import classical_controllers
 from rlcontroller.evaluation.evaluation import evaluate as run_evaluation
 from rlcontroller.physics.dynamics import state_space_arrays
-from rlcontroller.physics.loads import generate_suite
+from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.state_space import continuous, state_space_outputs
 

@@ -13,8 +13,8 @@ from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.env import BuildingEnv, rollout
+from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.physics.records import synthetic_suite
 from rlcontroller.simulation import rollout as rollout_module
 from rlcontroller.simulation.rollout import batch_rollout
 

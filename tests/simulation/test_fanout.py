@@ -44,8 +44,8 @@ def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
     from rlcontroller.config import load_experiment
     from rlcontroller.control.controllers import LQGController, Uncontrolled
     from rlcontroller.control.lqg import design_lqg_ground_model
+    from rlcontroller.physics.motions.records import load_records
     from rlcontroller.physics.plant import Plant
-    from rlcontroller.physics.records import load_records
     from rlcontroller.simulation.rollout import batch_rollout
 
     plant = Plant(load_experiment(FIVE_STORY_FE))

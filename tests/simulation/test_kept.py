@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
 
 from rlcontroller import api  # noqa: E402
-from rlcontroller.physics.excitation import Load  # noqa: E402
+from rlcontroller.physics.motions.excitation import Load  # noqa: E402
 from rlcontroller.physics.plant import Plant  # noqa: E402
 from rlcontroller.simulation import kept  # noqa: E402
 
@@ -86,7 +86,7 @@ def test_a_model_that_stands_still_is_refused_before_any_run_and_by_rlc_info(tmp
     benchmark frame had run a whole suite and printed 24 OpenSees failures first), and `rlc info` says it too."""
     from rlcontroller.api.describe import describe
     from rlcontroller.errors import ModelError
-    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+    from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 
     monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
     experiment = api.load(Path("studies/opensees/five_story_opensees.yaml"))

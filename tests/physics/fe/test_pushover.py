@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rlcontroller.physics.pushover import bilinear
+from rlcontroller.physics.fe.pushover import bilinear
 
 
 def test_a_bilinear_curve_is_idealised_as_itself():
@@ -35,8 +35,8 @@ def test_equal_energy_holds_for_a_rounded_curve_and_an_elastic_one_never_yields(
 @pytest.mark.slow
 def test_the_frame_pushover_starts_at_its_condensed_story_stiffness_and_yields_every_story():
     pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
-    from rlcontroller.physics.fe_build import reduced_building
-    from rlcontroller.physics.pushover import pushover
+    from rlcontroller.physics.fe.build import reduced_building
+    from rlcontroller.physics.fe.pushover import pushover
 
     model = Path("configs/opensees/nine_story_frame.py")
     reduced = reduced_building(model, "build_model")

@@ -1,4 +1,4 @@
-"""The OpenSees plant (`physics.opensees`): the five-story model against rlc's own integration, the nine-story
+"""The OpenSees plant (`physics.fe.opensees`): the five-story model against rlc's own integration, the nine-story
 frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
 
 import re
@@ -16,13 +16,13 @@ from rlcontroller.errors import ModelError
 
 ops = pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
 
-from rlcontroller.physics.fe_build import fe_modes, reduced_building  # noqa: E402
-from rlcontroller.physics.opensees import NonConvergence  # noqa: E402
+from rlcontroller.physics.fe.build import fe_modes, reduced_building  # noqa: E402
+from rlcontroller.physics.fe.opensees import NonConvergence  # noqa: E402
+from rlcontroller.physics.motions.records import load_records  # noqa: E402
 from rlcontroller.physics.plant import Plant  # noqa: E402
-from rlcontroller.physics.records import load_records  # noqa: E402
 from rlcontroller.simulation.rollout import uncontrolled_responses  # noqa: E402
 
-CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 FIVE_STORY = CONFIGS.parent / "studies" / "opensees" / "five_story_opensees.yaml"
 FRAME_MODEL = CONFIGS / "opensees" / "nine_story_frame.py"
 PUBLISHED_FREQUENCIES = np.array([0.443, 1.18, 2.05])  # Hz, Ohtori et al. (2004), the nine-story building
@@ -138,7 +138,7 @@ def test_a_model_that_does_not_converge_names_the_record(tmp_path, records):
 def test_a_missing_openseespy_is_one_line_naming_the_system_libraries(monkeypatch):
     import sys
 
-    from rlcontroller.physics import opensees
+    from rlcontroller.physics.fe import opensees
 
     monkeypatch.setitem(sys.modules, "openseespy.opensees", None)
     with pytest.raises(ConfigError, match="libblas3 liblapack3"):
@@ -180,7 +180,7 @@ def test_train_on_fe_learns_on_the_fe_model_and_resumes_only_with_it_named(tmp_p
     from rlcontroller import api
     from rlcontroller.api.training import _fe_experiment_of
     from rlcontroller.learning.training import train
-    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+    from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 
     steps = []
     original = OpenSeesIntegrator.step
@@ -226,7 +226,7 @@ def one_story_model(folder: Path, returned: str) -> Path:
     [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
 )
 def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
-    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+    from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 
     model = one_story_model(tmp_path, f"'floors': [[1]], 'direction': 1, {given}")
     with pytest.raises(ModelError, match=re.escape(message)):
@@ -243,7 +243,7 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
 def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, message):
     """What the model function says of its model is checked against the domain it built (OpenSees itself
     would stop later with "OpenSeesError: See stderr output")."""
-    from rlcontroller.physics.fe_build import build_model
+    from rlcontroller.physics.fe.build import build_model
 
     model = one_story_model(tmp_path, returned)
     with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: {message}")):
@@ -251,7 +251,7 @@ def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, 
 
 
 def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
-    from rlcontroller.physics.fe_build import build_model
+    from rlcontroller.physics.fe.build import build_model
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     model.write_text(model.read_text().replace("    return", "    raise SystemExit(0)\n    return"))
@@ -260,7 +260,7 @@ def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
 
 
 def test_a_model_without_elements_is_one_line_without_numpy_warnings(tmp_path):
-    from rlcontroller.physics.fe_build import reduced_building
+    from rlcontroller.physics.fe.build import reduced_building
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     model.write_text(model.read_text().replace("    ops.element('truss', 1, 0, 1, 1.0, 1)\n", ""))
@@ -271,7 +271,7 @@ def test_a_model_without_elements_is_one_line_without_numpy_warnings(tmp_path):
 
 
 def test_a_model_with_other_floors_than_the_building_is_one_line(tmp_path):
-    from rlcontroller.physics.fe_integrator import OpenSeesIntegrator
+    from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     with pytest.raises(ModelError, match=re.escape(f"{model}: the model has 1 floors, the experiment's building 5")):
@@ -285,7 +285,7 @@ def test_the_frame_reports_ductility_and_residual_drift_where_it_yields():
     residual drift beyond the free vibration the tail leaves (under 10 % of the peak at 2 % damping); a
     strong one yields stories (ductility above 1.5) and leaves them leaning (above 0.1 % of a story)."""
     from rlcontroller.evaluation.evaluation import evaluate
-    from rlcontroller.physics.excitation import Load
+    from rlcontroller.physics.motions.excitation import Load
 
     plant = Plant(api.load(CONFIGS / "experiments" / "nine_story_frame.yaml"))
     time = np.arange(0.0, 8.0, 0.01)

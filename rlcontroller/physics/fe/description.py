@@ -1,4 +1,4 @@
-"""What `rlc` must know of a finite-element model that the model itself does not say (`physics.fe_build`).
+"""What `rlc` must know of a finite-element model that the model itself does not say (`physics.fe.build`).
 
 A Python model file's function returns it as a mapping; a Tcl model (a published OpenSees model, run unmodified)
 has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> `benchmark_9st_model.yaml`):

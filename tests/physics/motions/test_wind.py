@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from rlcontroller.physics.wind import WindField, fluctuating_forces, load_model, mean_force, turbulence
+from rlcontroller.physics.motions.wind import WindField, fluctuating_forces, load_model, mean_force, turbulence
 
 FIELD = WindField(heights=np.array([40.0, 80.0, 160.0, 300.0]), speed=25.0, reference_height=10.0, roughness=0.3)
 DT, DURATION, REALISATIONS = 0.25, 1800.0, 24

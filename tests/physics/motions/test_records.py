@@ -9,8 +9,8 @@ import pytest
 from typer.testing import CliRunner
 
 from rlcontroller.cli import app
-from rlcontroller.physics.excitation import STANDARD_GRAVITY, MotionError
-from rlcontroller.physics.records import RECORDS_VARIABLE, SYNTHETIC_LABEL, choose_motions, load_records
+from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, MotionError
+from rlcontroller.physics.motions.records import RECORDS_VARIABLE, SYNTHETIC_LABEL, choose_motions, load_records
 
 HEADER = "PEER NGA STRONG MOTION DATABASE RECORD\n{title}\nACCELERATION TIME SERIES IN UNITS OF G\n"
 

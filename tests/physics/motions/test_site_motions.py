@@ -8,11 +8,11 @@ import pytest
 from scipy import integrate, special
 
 from rlcontroller.config import SiteBasedConfig
-from rlcontroller.physics import site_motions
-from rlcontroller.physics.excitation import Load
-from rlcontroller.physics.generators import generate_suite
-from rlcontroller.physics.site_motions import Scenario, SiteParameters, physical, predicted_normals
-from rlcontroller.physics.spectra import pseudo_acceleration, spectral_shape
+from rlcontroller.physics.motions import site_motions
+from rlcontroller.physics.motions.excitation import Load
+from rlcontroller.physics.motions.generators import generate_suite
+from rlcontroller.physics.motions.site_motions import Scenario, SiteParameters, physical, predicted_normals
+from rlcontroller.physics.motions.spectra import pseudo_acceleration, spectral_shape
 
 DT = 0.01
 

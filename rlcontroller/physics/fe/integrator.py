@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.errors import ModelError
-from rlcontroller.physics.fe_build import build_model
-from rlcontroller.physics.fe_connections import connection_probes, read_connections
-from rlcontroller.physics.fe_description import FEDescription
-from rlcontroller.physics.opensees import (
+from rlcontroller.physics.fe.build import build_model
+from rlcontroller.physics.fe.connections import connection_probes, read_connections
+from rlcontroller.physics.fe.description import FEDescription
+from rlcontroller.physics.fe.opensees import (
     FORCE_PATTERN,
     FORCE_SERIES,
     GROUND_PATTERN,
@@ -56,7 +56,7 @@ class OpenSeesIntegrator:
         return self.__dict__ | {"_last": None, "description": None, "_connections": []}
 
     def connection_history(self) -> np.ndarray | None:
-        """With `record_connections`: the member ends of the run stepped last (`physics.fe_connections`),
+        """With `record_connections`: the member ends of the run stepped last (`physics.fe.connections`),
         (control steps + 1, connections, 3), row 0 the state after gravity; else None."""
         return np.array(self._connections) if self.record_connections else None
 

@@ -17,7 +17,7 @@ from rlcontroller.config import (
     NoiseImpulsesConfig,
     SiteBasedConfig,
 )
-from rlcontroller.physics.excitation import Load, same_on_every_cpu
+from rlcontroller.physics.motions.excitation import Load, same_on_every_cpu
 
 
 @dataclass(frozen=True)
@@ -132,7 +132,7 @@ def generate(config: GeneratorConfig, rng: np.random.Generator, name: str | None
     elif isinstance(config, NearFaultConfig):
         motion = near_fault(config, rng, name or "near_fault")
     elif isinstance(config, SiteBasedConfig):
-        from rlcontroller.physics.site_motions import site_based
+        from rlcontroller.physics.motions.site_motions import site_based
 
         motion = site_based(config, rng, name or "site_based")
     else:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import KanaiTajimiConfig, NearFaultConfig, NoiseImpulsesConfig
-from rlcontroller.physics.excitation import (
+from rlcontroller.physics.motions.excitation import (
     STANDARD_GRAVITY,
     Load,
     MotionError,
@@ -14,7 +14,7 @@ from rlcontroller.physics.excitation import (
     resample,
     scale_to_pga,
 )
-from rlcontroller.physics.generators import GroundModel, generate_suite, kanai_tajimi, noise_impulses
+from rlcontroller.physics.motions.generators import GroundModel, generate_suite, kanai_tajimi, noise_impulses
 
 WEST2 = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\nACCELERATION TIME SERIES IN UNITS OF G\n"
 
@@ -199,7 +199,7 @@ def test_generated_suites_are_reproducible():
 
 def test_a_mixture_draws_from_its_components_by_weight():
     from rlcontroller.config import MixtureConfig
-    from rlcontroller.physics.generators import generate
+    from rlcontroller.physics.motions.generators import generate
 
     mixture = MixtureConfig(
         components=[
@@ -241,7 +241,7 @@ def test_generated_samples_are_the_same_when_the_arithmetic_differs_in_its_last_
     """Two CPUs' BLAS kernels give a generator's float64 samples that differ by about 1e-13 of the peak; after
     `same_on_every_cpu` they are the same bits (so the same noise seed), within 2^-16 of the power of two above
     the peak of the unrounded samples."""
-    from rlcontroller.physics.excitation import SAME_BITS, content_seed, same_on_every_cpu
+    from rlcontroller.physics.motions.excitation import SAME_BITS, content_seed, same_on_every_cpu
 
     samples = np.random.default_rng(3).normal(size=20_000) * 3.7
     other = samples * (1.0 + 1e-13 * np.random.default_rng(4).uniform(-1.0, 1.0, samples.size))
@@ -258,8 +258,8 @@ def test_generated_samples_are_the_same_when_the_arithmetic_differs_in_its_last_
 def test_every_generator_gives_samples_the_same_on_every_cpu():
     """A generated motion is already its own rounding (a fixed point of `same_on_every_cpu`)."""
     from rlcontroller.config import Experiment
-    from rlcontroller.physics.excitation import same_on_every_cpu
-    from rlcontroller.physics.loads import generate
+    from rlcontroller.physics.motions.excitation import same_on_every_cpu
+    from rlcontroller.physics.motions.loads import generate
 
     for generator in (Experiment().excitation.generator, KanaiTajimiConfig(), NearFaultConfig()):
         motion = generate(generator, np.random.default_rng(0), None)

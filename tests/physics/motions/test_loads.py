@@ -62,8 +62,8 @@ def test_with_a_tuned_mass_the_loads_stay_on_the_floors():
 
 
 def wind_record(plant: Plant, seconds: float = 120.0, seed: int = 0):
-    from rlcontroller.physics.excitation import Load
-    from rlcontroller.physics.wind import WindField, fluctuating_forces, mean_force
+    from rlcontroller.physics.motions.excitation import Load
+    from rlcontroller.physics.motions.wind import WindField, fluctuating_forces, mean_force
 
     heights = 3.0 * np.arange(1, 6)
     field = WindField(heights=heights, speed=30.0, reference_height=10.0, roughness=0.3, width=20.0)
@@ -110,7 +110,7 @@ def test_the_floor_loads_need_a_linear_plant():
 
 
 def test_a_measured_floor_force_record_loads_the_floors_in_si(tmp_path):
-    from rlcontroller.physics.excitation import read_motion
+    from rlcontroller.physics.motions.excitation import read_motion
 
     rows = ["time_s,floor 1 [kN],floor 2 [kN],floor 3 [kN],floor 4 [kN],floor 5 [kN]"]
     rows += [f"{0.01 * k:.2f},{k % 7},{-(k % 5)},0,1.5,{k % 3}" for k in range(50)]

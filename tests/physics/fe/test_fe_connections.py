@@ -1,4 +1,4 @@
-"""The member ends read for the benchmark's criteria (`physics.fe_connections`), against beam theory: a fibre
+"""The member ends read for the benchmark's criteria (`physics.fe.connections`), against beam theory: a fibre
 section's curvature and moment in a pushed cantilever, and where it yields; the nine-story frame's hinges
 yielding at their beams' plastic moments Z F_y."""
 
@@ -10,11 +10,11 @@ import pytest
 pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
 
 from rlcontroller.evaluation.benchmark import YIELDED  # noqa: E402
-from rlcontroller.physics.fe_build import build_model  # noqa: E402
-from rlcontroller.physics.fe_connections import connection_probes, read_connections  # noqa: E402
-from rlcontroller.physics.opensees import opensees  # noqa: E402
+from rlcontroller.physics.fe.build import build_model  # noqa: E402
+from rlcontroller.physics.fe.connections import connection_probes, read_connections  # noqa: E402
+from rlcontroller.physics.fe.opensees import opensees  # noqa: E402
 
-CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 E, FY = 200.0e9, 250.0e6  # Pa
 WIDTH, DEPTH, LENGTH = 0.1, 0.2, 2.0  # m
 CANTILEVER = f'''

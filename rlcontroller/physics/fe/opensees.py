@@ -2,8 +2,8 @@
 rlc reads of a model built in its domain: the floors' masses, the periods, the stiffness condensed to the floors
 (the inverse of the flexibility under unit floor loads, about the gravity state) and the damping in each mode.
 
-Building a model is `physics.fe_build` (a model file is code: docs/opensees.md, "The trust boundary"); stepping it
-`physics.fe_integrator`. Everything rlc passes in or reads out is converted between SI and the model's units.
+Building a model is `physics.fe.build` (a model file is code: docs/opensees.md, "The trust boundary"); stepping it
+`physics.fe.integrator`. Everything rlc passes in or reads out is converted between SI and the model's units.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rlcontroller.errors import ConfigError, ModelError
-from rlcontroller.physics.fe_description import LENGTHS, FEDescription
+from rlcontroller.physics.fe.description import LENGTHS, FEDescription
 
 MISSING = (
     'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '

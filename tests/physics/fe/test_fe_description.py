@@ -6,7 +6,7 @@ import re
 import pytest
 
 from rlcontroller.errors import ModelError
-from rlcontroller.physics.fe_description import FEDescription
+from rlcontroller.physics.fe.description import FEDescription
 
 ONE_STORY = {"floors": [[1]], "direction": 1, "story_heights": [3.0], "modal_damping": [0.02]}
 

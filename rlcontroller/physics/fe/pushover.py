@@ -1,6 +1,6 @@
 """A first-mode pushover of an FE model, and each story's bilinear idealisation of it.
 
-The model (a Python or Tcl file, `physics.opensees`) is built at rest under its gravity loads; lateral forces
+The model (a Python or Tcl file, `physics.fe.opensees`) is built at rest under its gravity loads; lateral forces
 in the shape M phi_1 (its reduced model's first mode, at the floors' control nodes) are raised by displacement
 control of the roof, in `steps` equal increments up to `roof_drift` of the building's height (Newton, then the
 fallbacks of a time step; the push stops early where none converges, past the frame's capacity). Each story's
@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.physics.fe_build import build_model
-from rlcontroller.physics.fe_integrator import check_floors, set_solver
+from rlcontroller.physics.fe.build import build_model
+from rlcontroller.physics.fe.integrator import check_floors, set_solver
+from rlcontroller.physics.fe.opensees import NonConvergence, opensees
 from rlcontroller.physics.hysteresis import drift_matrix, story_springs
-from rlcontroller.physics.opensees import NonConvergence, opensees
 
-PUSH_SERIES = PUSH_PATTERN = 103  # beside the plant's own (`physics.opensees`: 101, 102)
+PUSH_SERIES = PUSH_PATTERN = 103  # beside the plant's own (`physics.fe.opensees`: 101, 102)
 ELASTIC_TOLERANCE = 0.05  # a story within 5 % of its initial stiffness at the end of the push never yielded
 
 
@@ -62,7 +62,7 @@ def pushover(
 ) -> Pushover:
     """Push the FE model of `path` in its first mode's shape to `roof_drift` (of its height) and idealise
     each story's curve (module docstring); `mass` (kg) and `stiffness` (N/m) are its reduced model's floor
-    matrices (`physics.fe_build.reduced_building`: the plant's design building), which give the shape."""
+    matrices (`physics.fe.build.reduced_building`: the plant's design building), which give the shape."""
     import scipy.linalg
 
     description = build_model(path, function)  # at rest under its gravity loads, as the push starts

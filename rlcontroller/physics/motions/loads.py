@@ -1,5 +1,5 @@
 """What loads a building: in training and validation a ground motion from a ground-motion generator
-(`physics.excitation`) or wind forces on its floors from a wind generator (`physics.wind`); in
+(`physics.motions.excitation`) or wind forces on its floors from a wind generator (`physics.motions.wind`); in
 evaluation the suite a `--records` value names (`load_suite`), resolved here and nowhere else."""
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
 from rlcontroller.errors import MotionError
-from rlcontroller.physics import generators
-from rlcontroller.physics.excitation import FLOOR_FORCES, Load
-from rlcontroller.physics.records import RECORDS_VARIABLE, choose_motions
+from rlcontroller.physics.motions import generators
+from rlcontroller.physics.motions.excitation import FLOOR_FORCES, Load
+from rlcontroller.physics.motions.records import RECORDS_VARIABLE, choose_motions
+from rlcontroller.physics.motions.wind import generated_wind, suite_label, wind_suite
 from rlcontroller.physics.structure import Building
-from rlcontroller.physics.wind import generated_wind, suite_label, wind_suite
 
 if TYPE_CHECKING:
     from rlcontroller.physics.plant import Plant

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 
 
 def pseudo_acceleration(motion: Load, periods: np.ndarray, damping: float = 0.05) -> np.ndarray:

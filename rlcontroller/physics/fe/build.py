@@ -2,7 +2,7 @@
 
 A model file is code (not data: `docs/opensees.md`, "The trust boundary"), Python or Tcl. A Python file defines
 a function (default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
-(nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe_description`: floors,
+(nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe.description`: floors,
 direction, story heights, damping, units, solver options). A Tcl file (`.tcl`, a published model run
 unmodified) is sourced, from its own folder, in OpenSees' own Tcl interpreter (the `opensees` package, STAIRlab's
 xara build, whose `opensees.openseespy` module drives the same domain), and what `rlc` needs of it is in the YAML
@@ -26,8 +26,8 @@ import numpy as np
 
 from rlcontroller.config.base import read_yaml
 from rlcontroller.errors import ModelError
-from rlcontroller.physics.fe_description import FEDescription
-from rlcontroller.physics.opensees import (
+from rlcontroller.physics.fe.description import FEDescription
+from rlcontroller.physics.fe.opensees import (
     check_in_domain,
     condensed_stiffness,
     damping_ratios,

@@ -1,4 +1,4 @@
-"""A Tcl OpenSees model as the plant (`physics.opensees`, OpenSees' own Tcl interpreter from the `opensees`
+"""A Tcl OpenSees model as the plant (`physics.fe.opensees`, OpenSees' own Tcl interpreter from the `opensees`
 package): the five-story building written in Tcl in kip and foot units reduces to the paper's building in SI and
 moves as rlc's exact integration of it; what a Tcl model lacks or gets wrong is one line naming the file.
 
@@ -19,7 +19,7 @@ from rlcontroller.config import Experiment
 
 pytestmark = pytest.mark.skipif(find_spec("opensees") is None, reason="a Tcl model needs the opensees extra")
 
-REPOSITORY = Path(__file__).resolve().parents[1]
+REPOSITORY = Path(__file__).resolve().parents[3]
 TCL_MODEL = REPOSITORY / "configs" / "opensees" / "five_story_shear_kip_ft.tcl"
 TCL_EXPERIMENT = REPOSITORY / "studies" / "opensees" / "five_story_tcl.yaml"
 
@@ -35,7 +35,7 @@ def model_error_in_own_process(call: str) -> subprocess.CompletedProcess:
     """`call` (build_model, pushover, ...) in a fresh interpreter: the ModelError it raises printed on stdout."""
     code = (
         "import numpy as np; from pathlib import Path; from rlcontroller.errors import ModelError\n"
-        "from rlcontroller.physics.fe_build import build_model; from rlcontroller.physics.pushover import pushover\n"
+        "from rlcontroller.physics.fe.build import build_model; from rlcontroller.physics.fe.pushover import pushover\n"
         f"try: {call}\nexcept ModelError as error: print(error)"
     )
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
@@ -46,7 +46,7 @@ def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
     damping matched mode by mode (1 % in mode 1, 5 % in mode 5): the paper's building, from a Tcl file sourced
     unmodified."""
     reduced = in_own_process(
-        "import json; from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
+        "import json; from pathlib import Path; from rlcontroller.physics.fe.build import reduced_building; "
         f"print(json.dumps(reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')))"
     )
     paper = Experiment().building  # configs/buildings/five_story.yaml
@@ -64,8 +64,8 @@ def test_a_tcl_models_pushover_is_the_linear_building_in_si_and_never_yields():
     paper's (N/m), shear over drift stays there to the end (a linear model), so no story yields."""
     pushed = in_own_process(
         "import json; import numpy as np; from pathlib import Path; "
-        "from rlcontroller.physics.pushover import pushover; "
-        "from rlcontroller.physics.fe_build import reduced_building; "
+        "from rlcontroller.physics.fe.pushover import pushover; "
+        "from rlcontroller.physics.fe.build import reduced_building; "
         f"r = reduced_building(Path({str(TCL_MODEL)!r}), 'build_model'); "
         f"p = pushover(Path({str(TCL_MODEL)!r}), 'build_model', np.array(r['mass_matrix']), "
         "np.array(r['stiffness_matrix'])); "
@@ -97,7 +97,7 @@ def test_a_published_script_runs_unmodified_as_it_stands_after_gravity(tmp_path)
     shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
     (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
     model = tmp_path / TCL_MODEL.name
-    reduce = ("import json; from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
+    reduce = ("import json; from pathlib import Path; from rlcontroller.physics.fe.build import reduced_building; "
               "print(json.dumps(reduced_building(Path({!r}), 'build_model')['stiffness_matrix']))")  # fmt: skip
     published, bare = (in_own_process(reduce.format(str(path))) for path in (model, TCL_MODEL))
     np.testing.assert_allclose(published, bare, rtol=1e-9)
@@ -129,7 +129,7 @@ def test_a_wrong_but_valid_length_unit_warns_with_the_unit(tmp_path):
     (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
     model = tmp_path / TCL_MODEL.name
     done = subprocess.run(
-        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.fe_build import reduced_building; "
+        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.fe.build import reduced_building; "
          f"reduced_building(Path({str(model)!r}), 'build_model')"],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
@@ -159,7 +159,7 @@ def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(record
         "from rlcontroller import api\n"
         "from rlcontroller.control.controllers import ConstantCommand\n"
         "from rlcontroller.physics.plant import Plant\n"
-        "from rlcontroller.physics.records import load_records\n"
+        "from rlcontroller.physics.motions.records import load_records\n"
         "from rlcontroller.simulation.rollout import batch_rollout\n"
         f"plant = Plant(api.load({str(TCL_EXPERIMENT)!r}).model_copy(update={{'supervisor': None}}))\n"
         f"motion = load_records({str(records)!r})[0][3]\n"
@@ -225,7 +225,7 @@ def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
     """The two OpenSees builds abort a process that steps both: the second is refused before it loads."""
     outcome = in_own_process(
         "import json; from pathlib import Path; from rlcontroller.errors import ConfigError\n"
-        "from rlcontroller.physics.fe_build import reduced_building\n"
+        "from rlcontroller.physics.fe.build import reduced_building\n"
         f"reduced_building(Path({str(REPOSITORY / 'configs' / 'opensees' / 'five_story_shear.py')!r}), 'build_model')\n"
         f"try: reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')\n"
         "except ConfigError as error: print(json.dumps({'error': str(error)}))"
@@ -250,8 +250,8 @@ def test_a_script_that_never_holds_its_loads_has_them_held_where_they_stand_and_
     code = (
         "import json, numpy as np\n"
         "from pathlib import Path\n"
-        "from rlcontroller.physics.fe_build import reduced_building\n"
-        "from rlcontroller.physics.fe_integrator import OpenSeesIntegrator\n"
+        "from rlcontroller.physics.fe.build import reduced_building\n"
+        "from rlcontroller.physics.fe.integrator import OpenSeesIntegrator\n"
         f"path = Path({str(model)!r})\n"
         "reduced_building(path, 'build_model')\n"
         "plant = OpenSeesIntegrator(path, 'build_model', 0.005, np.zeros((5, 1)), np.ones(1))\n"

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rlcontroller.config import WindGeneratorConfig, WindSuiteConfig
-from rlcontroller.physics.excitation import Load, same_on_every_cpu
+from rlcontroller.physics.motions.excitation import Load, same_on_every_cpu
 from rlcontroller.physics.structure import Building
 
 KARMAN = 0.4

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import SiteBasedConfig
-from rlcontroller.physics.excitation import Load
+from rlcontroller.physics.motions.excitation import Load
 
 # the predictive equations: u_k = b0 + b1 M + b2 F + b3 R + b4 Vs30 (u1: M / 7, ln(R / 25), ln(Vs30 / 750))
 COEFFICIENTS = np.array(

@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from rlcontroller.config import KanaiTajimiConfig, display_path, inside
-from rlcontroller.physics.excitation import (
+from rlcontroller.physics.motions.excitation import (
     MOTION_SUFFIXES,
     STANDARD_GRAVITY,
     Load,
@@ -23,7 +23,7 @@ from rlcontroller.physics.excitation import (
     read_motion,
     scale_to_pga,
 )
-from rlcontroller.physics.generators import generate_suite
+from rlcontroller.physics.motions.generators import generate_suite
 
 RECORDS_VARIABLE = "RLC_RECORDS"
 MANIFEST = "manifest.csv"
