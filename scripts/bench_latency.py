@@ -22,7 +22,7 @@ import numpy as np
 
 from rlcontroller.config import load_experiment
 from rlcontroller.control.estimation import observation_filter
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.deployment.export import OnnxController, export_onnx
 from rlcontroller.physics.plant import Plant

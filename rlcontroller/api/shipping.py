@@ -111,7 +111,7 @@ def convert(run_dir: Path, trust_pickle: bool = False) -> list[Path]:
     """Write a run's stable-baselines3 models as policy data (best/final_policy.yaml + .npz), the files
     that evaluate, check and export read without unpickling; `trust_pickle` must be given, since opening
     a zip runs whatever code its author put in it. Returns the YAML files written."""
-    from rlcontroller.learning.policy import convert as convert_models
+    from rlcontroller.learning.sb3_models import convert as convert_models
 
     if not trust_pickle:
         raise ConfigError(

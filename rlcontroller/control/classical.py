@@ -12,7 +12,7 @@ from rlcontroller.config import ConfigError
 from rlcontroller.control.controllers import LQGPrior
 from rlcontroller.control.mpc import DEFAULT_HORIZON, STROKE_PRICE, MPCDesign, ObservedMPC, mpc_design
 from rlcontroller.control.networks import Actor, Layer, Normalizer
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.plant import Plant
 
 LAWS = {  # a classical law: its name in tables

@@ -38,7 +38,7 @@ from rlcontroller.config import ConfigError
 from rlcontroller.control.classical import LAWS, MPC_ARRAYS, classical_law, mpc_from_file, prior_kind
 from rlcontroller.control.controllers import LQGPrior
 from rlcontroller.control.networks import ACTIVATIONS, Actor, Layer, Normalizer
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
 from rlcontroller.untrusted import npz_headers, read_npz, safe_yaml

@@ -28,7 +28,7 @@ import numpy as np
 
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.estimation import observation_filter
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.control.supervisor import trigger_readings
 from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured

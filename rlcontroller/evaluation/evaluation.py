@@ -21,7 +21,7 @@ from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, d
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,

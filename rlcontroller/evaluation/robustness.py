@@ -23,7 +23,7 @@ import pandas as pd
 from rlcontroller.config import Experiment, Scenario
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.physics.metrics import METRICS, YIELDING_METRICS
 from rlcontroller.physics.motions.excitation import Load

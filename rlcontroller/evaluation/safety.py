@@ -33,7 +33,7 @@ import numpy as np
 
 from rlcontroller.config import SafetyCheckConfig, Scenario, check_generator
 from rlcontroller.control.controllers import Controller, fail_safe_controller
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
 from rlcontroller.evaluation.standard import SHAPE_DAMPING, SHAPE_MODES, rest_figures, stability_figures, suite_figures
 from rlcontroller.evaluation.verdict import Verdict, also_criterion

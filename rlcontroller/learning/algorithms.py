@@ -15,7 +15,7 @@ import gymnasium as gym
 from rlcontroller.config import ConfigError, Experiment, location
 from rlcontroller.control.controllers import LQGPrior
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.learning.policy import ResidualAction, algorithm_class
+from rlcontroller.learning.sb3_models import ResidualAction, algorithm_class
 from rlcontroller.learning.vec_env import BatchedVecEnv
 from rlcontroller.physics.plant import Plant
 

@@ -44,7 +44,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import Controller, LinearFeedback, fail_safe_controller
 from rlcontroller.control.networks import Actor, Layer
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.learning.odd_policy import OddActorCriticPolicy

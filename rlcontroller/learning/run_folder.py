@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from rlcontroller.config import Experiment, load_experiment
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import write_policy
 from rlcontroller.files import atomic_savefig, atomic_write, check_new_folder
 from rlcontroller.learning.jax_learners import is_jax_model, save_jax_learner

@@ -23,12 +23,12 @@ from typing import Any
 import numpy as np
 
 from rlcontroller.config import ConfigError, Experiment
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.files import check_new_folder, folder_lock
 from rlcontroller.learning.algorithms import algorithm_class, build_model, make_vec_env
 from rlcontroller.learning.jax_learners import UnreadableFile, is_jax_model, jax_device, load_jax_learner
-from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder, TrainingState, default_run_dir, plot_learning_curve
+from rlcontroller.learning.sb3_models import policy_controller
 from rlcontroller.learning.validation import Validator
 from rlcontroller.physics.plant import Plant
 

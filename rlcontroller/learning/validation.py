@@ -19,7 +19,7 @@ import numpy as np
 from rlcontroller.config import SafetyCheckConfig
 from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontrolled, fail_safe_controller
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.metrics import j_metrics, peak, ratio_to_reference
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant

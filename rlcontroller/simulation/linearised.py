@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.batch import BuildingBatch

@@ -16,7 +16,7 @@ from rlcontroller.config.learning import JAX_LEARNER_KWARGS, LEARNER_KWARGS
     ("backend", "name"), [("sb3", name) for name in sorted(LEARNER_KWARGS)] + [("sbx", n) for n in JAX_LEARNER_KWARGS]
 )
 def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
-    from rlcontroller.learning.policy import algorithm_class
+    from rlcontroller.learning.sb3_models import algorithm_class
 
     if backend == "sbx":
         pytest.importorskip("sbx")

@@ -1,4 +1,4 @@
-"""Classical controllers as controller files (control/policy.py): written by `rlc design`, read back as
+"""Classical controllers as controller files (control/policy_controller.py): written by `rlc design`, read back as
 exactly their law — an LQG on the env's estimate acts as the evaluation's own LQG, a passive damper
 setting as the constant command, MPC as the comparisons' MPC — and a file that claims a law it does not hold
 is refused."""

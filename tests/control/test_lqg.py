@@ -7,7 +7,7 @@ from rlcontroller.control.controllers import LQGController, LQGPrior, Uncontroll
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, preview_kernel, quadratic_cost
 from rlcontroller.control.optimal import optimal_response
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import Response, step_map
 from rlcontroller.physics.metrics import j_metrics

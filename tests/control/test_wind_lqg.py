@@ -9,7 +9,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGController, LQGPrior
 from rlcontroller.control.lqg import design_lqg, design_lqg_wind_model
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.evaluation.evaluation import evaluate, mean_metric
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.physics.dynamics import discrete_noise, simulate

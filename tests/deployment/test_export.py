@@ -17,7 +17,7 @@ from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx, graph_deviation
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.learning.policy import algorithm_class, policy_controller
+from rlcontroller.learning.sb3_models import algorithm_class, policy_controller
 from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant

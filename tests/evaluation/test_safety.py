@@ -12,7 +12,7 @@ from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_experiment, load_safety_check
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.networks import Actor, Layer
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.evaluation.safety import energy_near, judge_suite, passive_verdict, safety_check
 from rlcontroller.evaluation.standard import DEVICE_FIGURES, suite_figures
 from rlcontroller.evaluation.verdict import VerdictState, judged_digests, write_verdict

@@ -13,8 +13,8 @@ from rlcontroller.cli import app
 from rlcontroller.config import ConfigError, build_experiment, load_experiment
 from rlcontroller.control.policy_file import read_policy, write_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
-from rlcontroller.learning.policy import policy_controller
 from rlcontroller.learning.run_folder import RunFolder
+from rlcontroller.learning.sb3_models import policy_controller
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
 

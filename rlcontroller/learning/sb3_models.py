@@ -3,7 +3,7 @@ and the conversion of a trained model into the policy data of `control.policy_fi
 
 A residual policy's action is added to its prior's (LQG's) action, both clipped to [-1, 1]:
 `control.controllers.residual_action` is that rule, used in training (the `ResidualAction`
-wrapper) and in evaluation (`control.policy.PolicyController`) alike.
+wrapper) and in evaluation (`control.policy_controller.PolicyController`) alike.
 
 Opening a stable-baselines3 zip unpickles its author's objects (it can run any code): this module
 does it only for one's own runs (training, validation, `--resume`) and for `rlc convert
@@ -19,7 +19,7 @@ import gymnasium as gym
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import LQGPrior, residual_action
 from rlcontroller.control.networks import Normalizer
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import write_policy
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.physics.plant import Plant

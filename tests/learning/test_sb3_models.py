@@ -17,11 +17,11 @@ from typer.testing import CliRunner
 from rlcontroller.cli import app
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.controllers import LQGPrior
-from rlcontroller.control.policy import PolicyController
+from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import read_policy, write_policy
 from rlcontroller.learning.actor import actor_of
 from rlcontroller.learning.env import BuildingEnv
-from rlcontroller.learning.policy import algorithm_class, policy_controller
+from rlcontroller.learning.sb3_models import algorithm_class, policy_controller
 from rlcontroller.physics.plant import Plant
 
 
