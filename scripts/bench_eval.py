@@ -84,11 +84,11 @@ def main() -> None:
     policy = read_policy(MODEL, "best", plant)
     motions, label = load_records(arguments.records)
     warm_up = [replace(motion, acceleration=motion.acceleration[:400]) for motion in motions]
-    compare(plant, warm_up, label, policy)  # imports, the policy's first load, numba compilation
+    compare(plant, warm_up, label, policy=policy)  # imports, the policy's first load, numba compilation
     record_by_record(plant, warm_up)
 
     start = time.perf_counter()
-    evaluation = compare(plant, motions, label, policy)
+    evaluation = compare(plant, motions, label, policy=policy)
     batched = time.perf_counter() - start
     looped = record_by_record(plant, motions)
     count = len(evaluation.controllers)
@@ -100,7 +100,7 @@ def main() -> None:
     large = synthetic_records(arguments.large)
     seconds = sum(motion.duration for motion in large)
     start = time.perf_counter()
-    compare(plant, large, f"{len(large)} synthetic records", policy)
+    compare(plant, large, f"{len(large)} synthetic records", policy=policy)
     print(
         f"{count} controllers x {len(large)} synthetic records ({seconds / 3600:.1f} h of ground motion): "
         f"batched {time.perf_counter() - start:.1f} s"
@@ -108,7 +108,7 @@ def main() -> None:
 
     if not arguments.skip_robustness:
         scenarios = load_scenarios(SCENARIOS, experiment)
-        _, elapsed = robustness(experiment, scenarios, motions, label, policy)
+        _, elapsed = robustness(experiment, scenarios, motions, label, policy=policy)
         print(f"robustness: {len(scenarios)} scenarios x {len(motions)} records x 4 controllers in {elapsed:.1f} s")
 
 

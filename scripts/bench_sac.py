@@ -62,7 +62,7 @@ def learning_curve(name: str, experiment: Experiment, minutes: float, out: Path)
     """Learn from nothing for `minutes` through rlc train's path; the curve to OUT/NAME.csv."""
     run = out / "runs" / name.replace(" ", "_").replace(",", "")
     shutil.rmtree(run, ignore_errors=True)
-    summary = train(experiment, run_dir=run, time_limit_s=60.0 * minutes)
+    summary = train(experiment=experiment, run_dir=run, time_limit_s=60.0 * minutes)
     print(f"{name}: {summary.line()}")
     path = out / f"{run.name}.csv"
     with open(run / "learning_curve.csv", newline="") as source, open(path, "w", newline="") as target:

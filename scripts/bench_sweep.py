@@ -37,8 +37,8 @@ def main() -> None:
                 list(range(arguments.runs)),
                 [],
                 Path(folder),
-                engine,
-                arguments.workers,
+                engine=engine,
+                workers=arguments.workers,
                 echo=lambda _: None,
             )
             wall = time.perf_counter() - start

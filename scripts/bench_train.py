@@ -116,7 +116,7 @@ def throughput(default: Experiment) -> float:
 
 
 def time_to_quality(name: str, experiment: Experiment, minutes: float, folder: Path) -> float | None:
-    summary = train(experiment, run_dir=folder / name, time_limit_s=60.0 * minutes)
+    summary = train(experiment=experiment, run_dir=folder / name, time_limit_s=60.0 * minutes)
     print(f"{name}: {summary.line()}")
     return None if summary.beat_lqg_at is None else summary.beat_lqg_at["wall_time_s"]
 

@@ -171,11 +171,13 @@ def card(folder: Path, records: Path) -> str:
     motions, label = load_suite(wind or records, None, plant)
     label = label.replace(f"{REPOSITORY}/", "")
     extra = (MPCController(plant.design, DEFAULT_HORIZON),) if policy.algorithm == "DAgger" else ()  # what it imitates
-    table = compare(plant, motions, label, policy, extra=extra).summary()
+    table = compare(plant, motions, label, policy=policy, extra=extra).summary()
     scenarios = load_scenarios(standard_scenarios(experiment), experiment)
     if wind:  # yielding stories are not modelled under floor loads (`rlc robustness` skips them alike)
         scenarios = [scenario for scenario in scenarios if scenario.plant is None or scenario.plant.hysteresis is None]
-    per_scenario = summary(robustness(experiment, scenarios, motions, label, policy)[0])["J1"].unstack("controller")
+    per_scenario = summary(robustness(experiment, scenarios, motions, label, policy=policy)[0])["J1"].unstack(
+        "controller"
+    )
     verdict = Verdict.read(yaml.safe_load((folder / "best_check.yaml").read_text()))
     lines = [
         f"# {folder.name}",
@@ -198,7 +200,7 @@ def card(folder: Path, records: Path) -> str:
     title = f"{label}" if wind else RECORDS_TITLE
     lines += ["", f"## {title}", "", markdown_table(table[[c for c in columns if c in table.columns]])]
     if wind:  # a building controlled against wind will also shake
-        records_table = compare(plant, load_suite(records, None, plant)[0], "records", policy).summary()
+        records_table = compare(plant, load_suite(records, None, plant)[0], "records", policy=policy).summary()
         lines += ["", f"## {RECORDS_TITLE}", "", markdown_table(records_table[["J1", "J2", "J3", "J4"]])]
     count = len(scenarios)
     lines += [

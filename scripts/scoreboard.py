@@ -84,7 +84,7 @@ def scores(folder: Path, records: Path) -> dict:
     name, classical = min(passing or judged, key=lambda item: (item[1]["worse"] * (not passing), sum_j(item[1])))
     motions, label = load_suite(records, None, plant)
     mpc = () if name in table_names(plant) else (mpc_controller(plant.design, DEFAULT_HORIZON),)
-    table = compare(plant, motions, label, policy, extra=mpc).summary()
+    table = compare(plant, motions, label, policy=policy, extra=mpc).summary()
     on_records = {
         key: table.loc[row, ["J1", "J2"]].tolist() for key, row in (("shipped", policy.name), ("classical", name))
     }

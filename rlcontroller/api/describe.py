@@ -29,7 +29,7 @@ def describe(experiment: Experiment, full: bool = False) -> str:
         design = plant.design.bare.building.periods()
         fe_periods, ratios = fe_modes(plant.fe_model.path, plant.fe_model.function, len(design))
         title = f"simulated plant (OpenSees model {plant.fe_model.path.name})"
-        lines += mode_lines(title, fe_periods, ratios, design, rows)
+        lines += mode_lines(title, fe_periods, ratios, design=design, rows=rows)
         from rlcontroller.simulation.kept import check_moves
 
         moved = check_moves(plant)  # a model that stands still is one line here, before any run
@@ -50,7 +50,7 @@ def describe(experiment: Experiment, full: bool = False) -> str:
     return "\n".join(lines)
 
 
-def mode_lines(title: str, periods, ratios, design=None, rows: int | None = None) -> list[str]:
+def mode_lines(title: str, periods, ratios, *, design=None, rows: int | None = None) -> list[str]:
     """A table of modes: period (s), frequency (Hz), damping ratio, and with `design` (its periods, s) the
     design model's period error in each; the first `rows` modes and a line counting the others (all: None)."""
     error = "  design model's period error" if design is not None else ""

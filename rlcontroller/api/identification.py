@@ -18,6 +18,7 @@ from rlcontroller.files import atomic_write, check_new_folder, new_folder
 def simulate_test(
     config: Path,
     out: Path,
+    *,
     duration: float = 600.0,
     ambient_rms: float = 0.1,
     record: Path | None = None,
@@ -45,7 +46,7 @@ def simulate_test(
             raise ConfigError("--ambient-rms in (0, 10] m/s^2 and --duration in (0, 36000] s, expected")
         ground = ambient_ground(ambient_rms, duration, plant.control_dt, seed)
         what = f"ambient white-noise ground of {ambient_rms:g} m/s^2 RMS"
-    recording = simulate_test(plant, ground, shake, seed)
+    recording = simulate_test(plant, ground, duration=shake, ambient_rms=seed)
     shaking = f"actuators shaking at {shake:g} of their force limits (RMS)" if shake > 0 else "actuators at rest"
     comment = (
         f"rlc simulate-test {config} (seed {seed}): {what}, {recording.duration:g} s, {shaking}; sensors as "
@@ -59,6 +60,7 @@ def simulate_test(
 def identify(
     recordings: list[Path],
     out: Path,
+    *,
     modes: int | None = None,
     band: float = 20.0,
     masses: list[float] | None = None,
@@ -169,7 +171,7 @@ def identification_report(identified, recordings: list[Path], band: float) -> st
     )
 
 
-def reduce(config: Path, out: Path, fit_motions: int = 8, test_motions: int = 8, report: Report = QUIET) -> Path:
+def reduce(config: Path, out: Path, *, fit_motions: int = 8, test_motions: int = 8, report: Report = QUIET) -> Path:
     """The nonlinear reduced model of the FE plant of the experiment `config`: its design model's stories made
     Bouc-Wen springs, or its floors' beams yielding hinges on a column line (a fishbone), whichever fits the FE
     model's own responses on `fit_motions` generated strong motions better, judged on `test_motions` others

@@ -35,6 +35,7 @@ def comparison(
     run_dir: Path | None,
     model: str,
     records: Path | None,
+    *,
     scale_pga: float | None,
     report: Report = QUIET,
     mpc: int | None = None,
@@ -65,7 +66,7 @@ def comparison(
         extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
     with report.progress(f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)) as advance:
-        evaluation = compare(plant, motions, label, policy, on_motions=advance, extra=extra)
+        evaluation = compare(plant, motions, label, policy=policy, on_motions=advance, extra=extra)
     for controller in extra:
         if controller.fallbacks:
             report.note(
@@ -76,6 +77,7 @@ def comparison(
 
 
 def evaluate(
+    *,
     run_dir: Path | None = None,
     records: Path | None = None,
     out: Path | None = None,
@@ -99,7 +101,9 @@ def evaluate(
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
     with drawing() as plots, model_messages() as messages:  # matplotlib's import and the plots on the other core
-        plant, _, evaluation = comparison(experiment, folder, model, records, scale_pga, report, criteria=criteria)
+        plant, _, evaluation = comparison(
+            experiment, folder, model, records, scale_pga=scale_pga, report=report, criteria=criteria
+        )
         report.note(unchecked_note(folder, model))  # once the records are read (a bad one is its only line)
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
@@ -132,6 +136,7 @@ class LQGComparison:
 
 
 def compare_lqg(
+    *,
     run_dir: Path | None = None,
     config: Path | None = None,
     records: Path | None = None,
@@ -180,7 +185,9 @@ def compare_lqg(
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     with model_messages() as messages:  # what an FE model prints goes to opensees.log
-        plant, motions, evaluation = comparison(experiment, run_dir, model, records, scale_pga, report, mpc, criteria)
+        plant, motions, evaluation = comparison(
+            experiment, run_dir, model, records, scale_pga=scale_pga, report=report, mpc=mpc, criteria=criteria
+        )
         label = evaluation.label
         with new_folder(out) as staging:
             write_report(evaluation, staging)
@@ -189,7 +196,7 @@ def compare_lqg(
             if sweep and experiment.has_dampers:
                 levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
                 with report.progress("dampers' trade-off", len(motions)) as advance:
-                    table = damper_sweep(plant, motions, label, levels, multipliers, advance)
+                    table = damper_sweep(plant, motions, label, levels, multipliers=multipliers, on_motions=advance)
                 names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
                 points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
                 write_damper_sweep(table, staging, label, points)
@@ -218,6 +225,7 @@ def compare_lqg(
 
 def compare_passive(
     config: Path,
+    *,
     records: Path | None = None,
     out: Path | None = None,
     scale_pga: float | None = None,
@@ -260,6 +268,7 @@ def compare_passive(
 
 
 def robustness(
+    *,
     run_dir: Path | None = None,
     records: Path | None = None,
     scenarios: Path | None = None,
@@ -293,9 +302,11 @@ def robustness(
             report.note(f"note: skipped under floor loads (yielding stories are not modelled with them): {skipped}")
         named = linear
     with report.progress(f"{len(named)} scenarios", len(named)) as advance:
-        table, seconds = run_robustness(experiment, named, motions, label, policy, lambda name: advance(1, name))
+        table, seconds = run_robustness(
+            experiment, named, motions, label, policy=policy, on_scenario=lambda name: advance(1, name)
+        )
     with new_folder(out) as staging:
-        write_robustness(table, named, staging, label, seconds)
+        write_robustness(table, named, staging, label, seconds=seconds)
     mean_j1 = summary(table)["J1"].unstack("controller").rename_axis("scenario (mean J1)")
     return mean_j1, label, named, seconds, out
 

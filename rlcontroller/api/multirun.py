@@ -12,6 +12,7 @@ from rlcontroller.config import ConfigError
 def tune(
     config: Path,
     trials: int,
+    *,
     storage: str | None = None,
     study: str | None = None,
     jobs: int = 1,
@@ -24,11 +25,12 @@ def tune(
     experiment = load(config)
     name = study or experiment.name
     folder = out or Path("results") / f"tune-{name}"
-    return run_tuning(experiment, trials, storage, name, folder, jobs), name, folder
+    return run_tuning(experiment, trials, storage, name, out=folder, jobs=jobs), name, folder
 
 
 def sweep(
     config: Path,
+    *,
     seeds: str = "0-2",
     settings: list[str] | None = None,
     engine: str = "local",
@@ -48,7 +50,17 @@ def sweep(
     experiment = load(config)
     folder = out or Path("results") / f"sweep-{experiment.name}"
     chosen, parsed = parse_seeds(seeds), [parse_setting(text) for text in settings or []]
-    results, written = run_sweep(experiment, chosen, parsed, folder, engine, workers, address, records, report.line)
+    results, written = run_sweep(
+        experiment,
+        chosen,
+        parsed,
+        folder,
+        engine=engine,
+        workers=workers,
+        address=address,
+        records=records,
+        echo=report.line,
+    )
     return results, written, folder
 
 

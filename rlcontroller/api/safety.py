@@ -21,6 +21,7 @@ from rlcontroller.config import ConfigError
 
 def check(
     folder: Path,
+    *,
     model: str = "best",
     standard: Path | None = None,
     scenarios: Path | None = None,
@@ -40,7 +41,7 @@ def check(
     own = safety_standard(experiment)
     standard = standard or own
     with model_messages() as messages:  # what an FE model prints goes to opensees.log beside the verdict
-        verdict = judged(folder, model, experiment, standard, scenarios, report)
+        verdict = judged(folder, model, experiment, standard, scenarios=scenarios, report=report)
         target = folder
         if config is not None or folder.resolve().is_relative_to(MODELS.resolve()):
             on = "" if config is None else f"-on-{experiment.name}"
@@ -51,7 +52,7 @@ def check(
     return verdict, write_verdict(verdict, target, model, other)
 
 
-def judged(folder: Path, model: str, experiment, standard: Path, scenarios: Path | None, report: Report):
+def judged(folder: Path, model: str, experiment, standard: Path, *, scenarios: Path | None, report: Report):
     """A folder's policy run through the check of the standard in `standard` on `experiment`'s plant, with the
     digests of what it judged; a progress bar per criterion."""
     from rlcontroller.config import display_path, load_safety_check, load_scenarios
@@ -101,7 +102,7 @@ def verify(folder: Path, model: str = "best", scenarios: Path | None = None, rep
     experiment = folder_experiment(folder)
     standard = safety_standard(experiment)
     report.line(f"verifying {display_path(path)}: re-running its check...")
-    verdict = judged(folder, model, experiment, standard, scenarios, report)
+    verdict = judged(folder, model, experiment, standard, scenarios=scenarios, report=report)
     return differences(recorded, yaml.safe_load(verdict.to_yaml()))
 
 

@@ -26,6 +26,7 @@ class Trained:
 
 
 def train(
+    *,
     config: Path | None = None,
     resume: Path | None = None,
     total_steps: int | None = None,
@@ -56,7 +57,7 @@ def train(
         if (config is not None and experiment is None) or total_steps is not None or seed is not None:
             raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
         report.line(resume_line(resume))
-        summary = run_training(experiment, resume=resume, **options)
+        summary = run_training(experiment=experiment, resume=resume, **options)
     else:
         if config is None:
             raise ConfigError(
@@ -68,13 +69,13 @@ def train(
         given = {key: value for key, value in overrides.items() if value is not None}
         if given:
             experiment = with_overrides(experiment, given, "--total-steps/--seed")
-        summary = run_training(experiment, run_dir=run_dir, **options)
+        summary = run_training(experiment=experiment, run_dir=run_dir, **options)
     report.line(summary.line())
     if summary.interrupted or summary.time_limit_reached:
         return Trained(summary)
     fe_model = experiment.plant.opensees if experiment is not None and experiment.plant is not None else None
     judged_in = config if fe_model is not None and fe_model.train_on == "fe" else None  # the plant it learned on
-    return Trained(summary, *check(summary.run_dir, "best", report=report, config=judged_in))
+    return Trained(summary, *check(summary.run_dir, model="best", report=report, config=judged_in))
 
 
 def _fe_experiment_of(run: Path, config: Path | None) -> Experiment | None:
@@ -121,16 +122,16 @@ def demo(records: Path | None = None, progress_bar: bool = False, report: Report
     from rlcontroller.physics.motions.records import choose_motions
 
     choose_motions(records)  # a bad --records stops here, before training
-    summary = run_training(load_experiment(DEMO_CONFIG), progress_bar=progress_bar)
+    summary = run_training(experiment=load_experiment(DEMO_CONFIG), progress_bar=progress_bar)
     report.line(summary.line())
     report.line(learned_line(summary.run_dir))
     experiment = folder_experiment(summary.run_dir)
-    _, _, evaluation = comparison(experiment, summary.run_dir, "best", records, None, report=report)
+    _, _, evaluation = comparison(experiment, summary.run_dir, "best", records, scale_pga=None, report=report)
     out = summary.run_dir / "evaluation"
     with new_folder(out) as staging:
         write_report(evaluation, staging)
     report.line(summary_text(evaluation, out))
-    return Trained(summary, *check(summary.run_dir, "best", report=report), evaluation, out)
+    return Trained(summary, *check(summary.run_dir, model="best", report=report), evaluation, out)
 
 
 def learned_line(run: Path) -> str:

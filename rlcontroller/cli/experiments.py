@@ -67,7 +67,16 @@ def train(
 
     report = Printed(progress)
     trained = api.train(
-        config, resume, total_steps, seed, run_dir, device, time_limit, report.bars, tensorboard, report
+        config=config,
+        resume=resume,
+        total_steps=total_steps,
+        seed=seed,
+        run_dir=run_dir,
+        device=device,
+        time_limit_minutes=time_limit,
+        progress_bar=report.bars,
+        tensorboard=tensorboard,
+        report=report,
     )
     summary = trained.summary
     if summary.interrupted or summary.time_limit_reached:

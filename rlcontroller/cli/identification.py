@@ -40,7 +40,9 @@ def simulate_test(
     identify`, so the whole loop from measurements to a controller can be run and checked."""
     from rlcontroller import api
 
-    api.simulate_test(config, out, duration, ambient_rms, record, shake, seed, Printed())
+    api.simulate_test(
+        config, out, duration=duration, ambient_rms=ambient_rms, record=record, shake=shake, seed=seed, report=Printed()
+    )
 
 
 @app.command(short_help="A building's state-space model from its test recordings.")
@@ -61,7 +63,7 @@ def identify(
     rlc train, compare lqg and evaluate accept (building: FOLDER/building.yaml)."""
     from rlcontroller import api
 
-    api.identify(recordings, out, modes, band, parsed_list(masses, "--masses"), Printed())
+    api.identify(recordings, out, modes=modes, band=band, masses=parsed_list(masses, "--masses"), report=Printed())
 
 
 @app.command(short_help="A nonlinear reduced model of an FE plant, calibrated from it.")
@@ -79,4 +81,4 @@ def reduce(
     where the FE model takes hours (docs/opensees.md)."""
     from rlcontroller import api
 
-    api.reduce(config, out, fit, test, Printed())
+    api.reduce(config, out, fit_motions=fit, test_motions=test, report=Printed())

@@ -50,7 +50,16 @@ def evaluate(
     from rlcontroller import api
 
     with fan_out(engine.value, address):
-        evaluation, out = api.evaluate(run_dir, records, out, scale_pga, model, Printed(progress), config, criteria)
+        evaluation, out = api.evaluate(
+            run_dir=run_dir,
+            records=records,
+            out=out,
+            scale_pga=scale_pga,
+            model=model,
+            report=Printed(progress),
+            config=config,
+            criteria=criteria,
+        )
     typer.echo(api.summary_text(evaluation, out))
 
 
@@ -99,7 +108,17 @@ def compare_lqg(
 
     with fan_out(engine.value, address):
         compared = api.compare_lqg(
-            run_dir, config, records, out, scale_pga, sweep, preview, model, Printed(progress), mpc, criteria
+            run_dir=run_dir,
+            config=config,
+            records=records,
+            out=out,
+            scale_pga=scale_pga,
+            sweep=sweep,
+            preview=preview,
+            model=model,
+            report=Printed(progress),
+            mpc=mpc,
+            criteria=criteria,
         )
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):
@@ -122,7 +141,9 @@ def compare_passive(
     building without them (passive_check.yaml)."""
     from rlcontroller import api
 
-    evaluation, out, verdict = api.compare_passive(config, records, out, scale_pga, Printed(progress))
+    evaluation, out, verdict = api.compare_passive(
+        config, records=records, out=out, scale_pga=scale_pga, report=Printed(progress)
+    )
     typer.echo(api.summary_text(evaluation, out))
     if verdict is not None:
         typer.echo("\n".join(verdict.lines()).replace("safety check of", "the devices' own verdict:", 1))
@@ -149,7 +170,13 @@ def robustness(
     from rlcontroller.evaluation.tables import markdown_table
 
     mean_j1, label, named, seconds, out = api.robustness(
-        run_dir, records, scenarios, out, scale_pga, model, Printed(progress)
+        run_dir=run_dir,
+        records=records,
+        scenarios=scenarios,
+        out=out,
+        scale_pga=scale_pga,
+        model=model,
+        report=Printed(progress),
     )
     typer.echo(f"# {label}")
     typer.echo(markdown_table(mean_j1))
@@ -210,7 +237,9 @@ def check(
         passed = not differing
     else:
         with fan_out(engine.value, address):
-            verdict, path = api.check(folder, model, standard, scenarios, report, config)
+            verdict, path = api.check(
+                folder, model=model, standard=standard, scenarios=scenarios, report=report, config=config
+            )
         print_verdict(verdict, path)
         passed = verdict.passed
     if not passed:

@@ -29,7 +29,7 @@ def tune(
     command on more machines with one --storage to share the study."""
     from rlcontroller import api
 
-    ran, name, folder = api.tune(config, trials, storage, study, jobs, out)
+    ran, name, folder = api.tune(config, trials, storage=storage, study=study, jobs=jobs, out=out)
     typer.echo(f"{ran} trials run here; study {name!r}: trials.csv, best.yaml and plots in {folder}")
 
 
@@ -56,7 +56,15 @@ def sweep(
 
     try:
         results, written, folder = api.sweep(
-            config, seeds, set_, engine.value, address, workers, records, out, Printed()
+            config,
+            seeds=seeds,
+            settings=set_,
+            engine=engine.value,
+            address=address,
+            workers=workers,
+            records=records,
+            out=out,
+            report=Printed(),
         )
     except KeyboardInterrupt:
         typer.echo("sweep stopped: the runs in progress saved a checkpoint; run the same command again to continue")

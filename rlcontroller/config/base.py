@@ -241,7 +241,7 @@ def check_seed(seed: int, where: str = "--seed") -> int:
     return seed
 
 
-def finite(value: float, where: str, low: float = 0.0, high: float = math.inf, low_open: bool = True) -> float:
+def finite(value: float, where: str, *, low: float = 0.0, high: float = math.inf, low_open: bool = True) -> float:
     """A finite number in (low, high] (or [low, high] with low_open=False), else a ConfigError."""
     ok = math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
     if not ok:

@@ -95,6 +95,7 @@ def update_on_block(
     layout: ObservationLayout,
     estimate: np.ndarray,
     readings: np.ndarray,
+    *,
     held_action: np.ndarray,
     previous_ground: np.ndarray | float,
 ) -> np.ndarray:

@@ -73,7 +73,7 @@ def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tu
     n = cost.state.T @ cost.action
     if np.linalg.matrix_rank(r) < r.shape[0]:
         raise ValueError("the reward does not penalise every actuator force (R is singular); add a force term")
-    return lqr(step.phi, step.force_gain * force_limits, q, r, n)
+    return lqr(step.phi, step.force_gain * force_limits, q, r, n=n)
 
 
 def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, length: int) -> np.ndarray:
@@ -104,7 +104,7 @@ def preview_kernel(cost: QuadraticCost, step: StepMap, force_limits: np.ndarray,
 
 
 def preview_feedforward(
-    cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, ground_terms: np.ndarray, length: int
+    cost: QuadraticCost, step: StepMap, force_limits: np.ndarray, ground_terms: np.ndarray, *, length: int
 ) -> np.ndarray:
     """a_ff,k = sum_{j < length} W_j g_{k+j} for ground terms g (..., K, states), without forming the
     kernels: with W_j = S^-1 B' (Phi_c')^(j-1) X for j >= 1, the tail sum v_k = X g_{k+1} + Phi_c' v_{k+1}

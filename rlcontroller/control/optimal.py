@@ -10,9 +10,9 @@ import numpy as np
 
 from rlcontroller.config import RewardConfig
 from rlcontroller.control.lqr import lqr_gain, preview_feedforward, quadratic_cost
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.motions.excitation import Load, on_control_grid
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 
 
 def optimal_response(
@@ -48,7 +48,7 @@ def optimal_responses(
         for row, t in enumerate(terms):
             ground_terms[row, : t.shape[0]] = t
         length = n_steps if preview is None else min(preview, n_steps)
-        feedforward = preview_feedforward(cost, step, building.force_limits, ground_terms, length)
+        feedforward = preview_feedforward(cost, step, building.force_limits, ground_terms, length=length)
         states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
         actions = np.zeros((n_steps, len(members), building.n_actuators))
         by_step = [np.ascontiguousarray(a.transpose(1, 0, 2)) for a in (feedforward, ground_terms)]  # step first

@@ -59,7 +59,7 @@ def modal_truncation(phi: np.ndarray, smallest: float = QUASI_STATIC) -> ModalTr
 
 
 def solve_dare(
-    a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, s: np.ndarray | None = None, what: str = "LQR"
+    a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, *, s: np.ndarray | None = None, what: str = "LQR"
 ) -> np.ndarray:
     """X of A'XA - X - (A'XB + S)(B'XB + R)^-1 (B'XA + S') + Q = 0, checked: `DesignError` when scipy
     fails or the relative residual exceeds `RESIDUAL_TOLERANCE`; `what` names the design in the message."""
@@ -80,7 +80,9 @@ def solve_dare(
     return x
 
 
-def lqr(phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def lqr(
+    phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, *, n: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(K, P) of the discrete LQR x+ = phi x + b u, cost x'Qx + 2x'Nu + u'Ru; a = -K x. Solved on the
     full model; where that fails (quasi-static modes, above), on the kept modes and lifted back."""
     try:
@@ -89,12 +91,12 @@ def lqr(phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, n: np.ndar
         truncation = modal_truncation(phi)
         if truncation is None:
             raise
-        return lqr_on_kept_modes(phi, b, q, r, n, truncation)
+        return lqr_on_kept_modes(phi, b, q, r, n=n, truncation=truncation)
     return scipy.linalg.solve(b.T @ riccati @ b + r, b.T @ riccati @ phi + n.T), riccati
 
 
 def lqr_on_kept_modes(
-    phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, n: np.ndarray, truncation: ModalTruncation
+    phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, *, n: np.ndarray, truncation: ModalTruncation
 ) -> tuple[np.ndarray, np.ndarray]:
     """`lqr` designed on `truncation`'s modes, K and P lifted back to the full state."""
     basis, projector = truncation.basis, truncation.projector
@@ -113,12 +115,12 @@ def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement
         truncation = modal_truncation(phi)
         if truncation is None:
             raise
-        return kalman_gain_on_kept_modes(phi, c, process, measurement, truncation)
+        return kalman_gain_on_kept_modes(phi, c, process, measurement, truncation=truncation)
     return prior @ c.T @ np.linalg.inv(c @ prior @ c.T + measurement)
 
 
 def kalman_gain_on_kept_modes(
-    phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray, truncation: ModalTruncation
+    phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray, *, truncation: ModalTruncation
 ) -> np.ndarray:
     """`kalman_gain` designed on `truncation`'s modes, which alone the lifted gain corrects."""
     basis, projector = truncation.basis, truncation.projector

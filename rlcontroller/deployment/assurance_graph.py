@@ -19,7 +19,7 @@ def assurance_state_size(plant: Plant) -> int:
     return (layout.estimate.stop - layout.estimate.start) + plant.building.n_floors + 1
 
 
-def assured(g, plant: Plant, stored: str, action: str, start: int) -> tuple[str, list[str]]:
+def assured(g, plant: Plant, stored: str, action: str, *, start: int) -> tuple[str, list[str]]:
     """The action the actuators receive after runtime assurance, and the next state's assurance values;
     the previous ones are the graph's input `state` from column `start` on. `g` is export's graph writer."""
     rule = RuntimeAssurance(plant.experiment.supervisor.assurance, plant, 1)

@@ -131,7 +131,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     if supervisor is not None:
         action, peak, measured = _supervised(g, plant, stored, action, size + 1 + trigger)
         if supervisor.assurance is not None:
-            action, assurance = assured(g, plant, stored, action, size + 1 + trigger + fallback_state_size(plant))
+            action, assurance = assured(g, plant, stored, action, start=size + 1 + trigger + fallback_state_size(plant))
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
@@ -204,7 +204,7 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
     kept = [] if measured is None else [measured]
     if supervisor.fallback is not None:
         m = plant.building.n_actuators
-        action, latched = fallen_back(g, plant, stored, action, measured, column + m)
+        action, latched = fallen_back(g, plant, stored, action, velocity=measured, start=column + m)
         kept.append(latched)
     if supervisor.trigger is None:
         return action, None, kept
@@ -345,7 +345,7 @@ CHECKED_STEPS = 400  # control steps of the generated load the graph is checked 
 
 
 def graph_deviation(
-    plant: Plant, controller: PolicyController, graph: bytes, seed: int = 0, steps: int = CHECKED_STEPS
+    plant: Plant, controller: PolicyController, graph: bytes, *, seed: int = 0, steps: int = CHECKED_STEPS
 ) -> tuple[float, float]:
     """The largest difference between the commands (N) of the serialised `graph` and those of the Python
     controller, over the first `steps` control steps of a load drawn from the experiment's own generator, as a

@@ -41,7 +41,7 @@ def measured_velocity(g, plant: Plant, stored: str, start: int) -> str:
     return g.node("Add", [leaked, increment], "measured_stroke_velocity")
 
 
-def fallen_back(g, plant: Plant, stored: str, action: str, velocity: str, start: int) -> tuple[str, str]:
+def fallen_back(g, plant: Plant, stored: str, action: str, *, velocity: str, start: int) -> tuple[str, str]:
     """The action after the fallback and the next state's latch (1.0 once handed over); the previous latch is
     the graph's input `state` at column `start`."""
     rule = DamperFallback(plant.experiment.supervisor.fallback, plant, 1)

@@ -40,8 +40,8 @@ import pandas as pd
 
 from rlcontroller.evaluation.tables import markdown_table
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.response import Response
 from rlcontroller.physics.structure import Building
 
 CRITERIA = tuple(f"J{i}" for i in range(1, 18))

@@ -22,7 +22,6 @@ from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Co
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy_controller import PolicyController
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.metrics import (
     DEVICE_METRICS,
     METRICS,
@@ -37,6 +36,7 @@ from rlcontroller.physics.metrics import (
 )
 from rlcontroller.physics.motions.excitation import Load, content_seed, with_settling_tail
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 from rlcontroller.simulation import kept
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
@@ -89,6 +89,7 @@ def evaluate(
     motions: list[Load],
     controllers: list[Controller],
     label: str,
+    *,
     include_optimal: bool = True,
     on_motions: Callable[[int], None] | None = None,
     settle: bool = True,
@@ -153,6 +154,7 @@ def compare(
     plant: Plant,
     motions: list[Load],
     label: str,
+    *,
     policy: PolicyController | None = None,
     on_motions: Callable[[int], None] | None = None,
     extra: tuple[Controller, ...] = (),
@@ -226,6 +228,7 @@ def lqg_sweep(
     motions: list[Load],
     label: str,
     multipliers: np.ndarray,
+    *,
     known_ground: bool = False,
     on_point: Callable[[], None] | None = None,
 ) -> pd.DataFrame:
@@ -260,6 +263,7 @@ def damper_sweep(
     motions: list[Load],
     label: str,
     levels: np.ndarray,
+    *,
     multipliers: np.ndarray,
     on_motions: Callable[[int], None] | None = None,
 ) -> pd.DataFrame:

@@ -44,6 +44,7 @@ def robustness(
     scenarios: list[Scenario],
     motions: list[Load],
     label: str,
+    *,
     policy: PolicyController | None = None,
     on_scenario: Callable[[str], None] | None = None,
 ) -> tuple[pd.DataFrame, float]:

@@ -86,6 +86,7 @@ def safety_check(
     controller: Controller,
     standard: SafetyCheckConfig,
     scenarios: list[Scenario],
+    *,
     on_criterion: Callable[[str], None] | None = None,
 ) -> Verdict:
     """The verdict of `controller` (run on `plant`, as in evaluation) under `standard`;
@@ -121,7 +122,9 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
     # a yielding or FE plant settles after each motion: its permanent drift is judged by FEMA 356's limits too
     evaluation = evaluate(plant, motions, controllers, "safety check suite", include_optimal=False)
     key = "uncontrolled" if reference is None else FAIL_SAFE
-    return judge_suite(evaluation, motions, controller.name, key, words, bounds, standard, plant)
+    return judge_suite(
+        evaluation, motions, controller.name, key, words=words, bounds=bounds, standard=standard, plant=plant
+    )
 
 
 def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
@@ -131,7 +134,9 @@ def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
     evaluation = evaluate(plant, motions, [], "safety check suite", include_optimal=False)
     bounds = drift_bounds(plant, standard)
     words = "the building without its devices"
-    verdict = judge_suite(evaluation, motions, PASSIVE, "uncontrolled", words, bounds, standard, plant)
+    verdict = judge_suite(
+        evaluation, motions, PASSIVE, "uncontrolled", words=words, bounds=bounds, standard=standard, plant=plant
+    )
     first = 1.0 / plant.bare.building.periods()[0]
     share = {motion.name: energy_near(motion, first) for motion in motions}
     failing = set(verdict["failures"])
@@ -160,7 +165,15 @@ def energy_near(motion: Load, frequency: float) -> float:
 
 
 def judge_suite(
-    evaluation, motions: list[Load], judged: str, reference: str, words: str, bounds: np.ndarray, standard, plant: Plant
+    evaluation,
+    motions: list[Load],
+    judged: str,
+    reference: str,
+    *,
+    words: str,
+    bounds: np.ndarray,
+    standard,
+    plant: Plant,
 ) -> dict:
     """The check suite's criterion from an evaluation of its `motions`: the responses named `judged` against
     those named `reference` (described by `words`), each motion's figures in `per_motion` and the outcome
@@ -191,12 +204,12 @@ def judge_suite(
             for key, run in (("residual_ratio", controlled), ("reference_residual_ratio", reference_run)):
                 row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
         rows[motion.name] = row
-    devices = device_figures(evaluation, judged, reference, motions, plant)
-    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices, periods)
+    devices = device_figures(evaluation, judged, reference, motions, plant=plant)
+    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices=devices, periods=periods)
     return criterion | {"per_motion": rows}
 
 
-def device_figures(evaluation, judged: str, reference: str, motions: list[Load], plant: Plant) -> dict | None:
+def device_figures(evaluation, judged: str, reference: str, motions: list[Load], *, plant: Plant) -> dict | None:
     """Per mass device of `plant` over the motions, under the controller `judged` and the `reference`: the largest
     stroke (m); with end-stops also their limits (m), the contacts and the largest contact force (N). None without
     mass devices."""

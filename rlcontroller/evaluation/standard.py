@@ -110,7 +110,13 @@ def possible(value, low: float, high: float) -> bool:
 
 
 def suite_figures(
-    rows: dict[str, dict], words: str, system: str, standard, devices: dict | None = None, periods: list | None = None
+    rows: dict[str, dict],
+    words: str,
+    system: str,
+    standard,
+    *,
+    devices: dict | None = None,
+    periods: list | None = None,
 ) -> dict:
     """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
     insignificant: over_bound) against the reference `words` describes, under `standard`

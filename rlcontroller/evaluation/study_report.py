@@ -160,7 +160,7 @@ def write_preview(
     return written
 
 
-def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str, seconds: float) -> list[Path]:
+def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str, *, seconds: float) -> list[Path]:
     """robustness.csv (long form), robustness.md (scenario x controller means, the worst record's
     J1, the mean over scenarios) and robustness.png (J1 against the stiffness factor; J1 and J2 per
     scenario)."""

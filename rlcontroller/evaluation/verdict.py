@@ -105,7 +105,9 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
                 devices = {key: item[key] for key in DEVICE_FIGURES if key in item} or None
                 standard_of = standards[SUITES[name]]
                 periods = item.get("spectral_periods_s")
-                derived = suite_figures(item["per_motion"], item["reference"], system, standard_of, devices, periods)
+                derived = suite_figures(
+                    item["per_motion"], item["reference"], system, standard_of, devices=devices, periods=periods
+                )
             elif name == "at rest":
                 derived = rest_figures(item["peak_drift_over_bound"], standard)
             elif name == "closed-loop stability":

@@ -58,6 +58,7 @@ def fit(
     motions: list[Load],
     targets: list[np.ndarray],
     pushed: Pushover,
+    *,
     substeps: int = FIT_SUBSTEPS,
     collapse: list[float] | None = None,
 ) -> Fit:
@@ -84,4 +85,4 @@ def fit(
             column_stiffness=line.column.tolist(), beam_stiffness=line.beams.tolist(), base_stiffness=line.base,
         )  # fmt: skip
 
-    return least_squares(design, motions, targets, start, (low, high), hysteresis_of)
+    return least_squares(design, motions, targets, start, bounds=(low, high), model_of=hysteresis_of)

@@ -31,13 +31,13 @@ import pandas as pd
 
 from rlcontroller.config import HysteresisConfig, KanaiTajimiConfig
 from rlcontroller.errors import ModelError
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.fe.pushover import Pushover
 from rlcontroller.physics.fishbone import hysteretic_model
 from rlcontroller.physics.metrics import RESIDUAL_WINDOW_S, peak
 from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, Load, on_control_grid, with_settling_tail
 from rlcontroller.physics.motions.generators import generate_suite
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 
 CALIBRATION_MOTIONS = KanaiTajimiConfig(
     dt=0.02,
@@ -121,6 +121,7 @@ def least_squares(
     motions: list[Load],
     targets: list[np.ndarray],
     start: np.ndarray,
+    *,
     bounds: tuple[np.ndarray, np.ndarray],
     model_of: Callable[[np.ndarray], HysteresisConfig],
 ) -> Fit:
@@ -152,6 +153,7 @@ def fit(
     motions: list[Load],
     targets: list[np.ndarray],
     pushed: Pushover,
+    *,
     substeps: int = FIT_SUBSTEPS,
     collapse: list[float] | None = None,
 ) -> Fit:
@@ -164,7 +166,9 @@ def fit(
     start = np.concatenate([np.log(pushed.yield_drift), ratio, np.full(n, 2.0), np.full(n, 0.5)])
     low = np.concatenate([start[:n] - np.log(YIELD_RANGE), *(np.full(n, bound[0]) for bound in bounds.values())])
     high = np.concatenate([start[:n] + np.log(YIELD_RANGE), *(np.full(n, bound[1]) for bound in bounds.values())])
-    return least_squares(design, motions, targets, start, (low, high), lambda p: hysteresis_of(p, substeps, collapse))
+    return least_squares(
+        design, motions, targets, start, bounds=(low, high), model_of=lambda p: hysteresis_of(p, substeps, collapse)
+    )
 
 
 def collapse_drifts(design: Plant) -> list[float]:

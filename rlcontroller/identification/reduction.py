@@ -66,7 +66,7 @@ def calibrate(
     say(f"the FE model on {fit_count + test_count} generated motions of 0.3-1.2 g, then {SETTLING_TAIL_S:g} s of rest")
     targets = [response.drift for response in hysteretic.fe_responses(plant, fitting + testing)]
     collapse = hysteretic.collapse_drifts(design)
-    fits, chosen = fit_both(design, fitting, targets[:fit_count], pushed, collapse, say)
+    fits, chosen = fit_both(design, fitting, targets[:fit_count], pushed, collapse=collapse, on_progress=say)
     say(f"kept {MODELS[chosen]} (the lower cost); judged on the other {test_count}")
     models = {key: fit.hysteresis for key, fit in fits.items()} | {"linear": None}
     table = hysteretic.accuracy(design, models, testing, targets[fit_count:])
@@ -78,6 +78,7 @@ def fit_both(
     motions: list[Load],
     targets: list[np.ndarray],
     pushed: Pushover,
+    *,
     collapse: list[float] | None,
     on_progress: Callable[[str], None] | None = None,
 ) -> tuple[dict[str, hysteretic.Fit], str]:
@@ -87,7 +88,7 @@ def fit_both(
     fits = {}
     for key, fitter in (("story_springs", hysteretic.fit), ("fishbone", fishbone.fit)):
         say(f"fitting {MODELS[key]}: {4 * design.building.n_floors} parameters to {len(motions)} motions")
-        fit = fitter(design, motions, targets, pushed, hysteretic.FIT_SUBSTEPS, collapse)
+        fit = fitter(design, motions, targets, pushed, substeps=hysteretic.FIT_SUBSTEPS, collapse=collapse)
         fit.hysteresis = fit.hysteresis.model_copy(update={"substeps": hysteretic.PLANT_SUBSTEPS})
         fits[key] = fit
         say(f"  cost {fit.cost:.4g} after {fit.evaluations} evaluations")

@@ -66,7 +66,7 @@ def _gamma(experiment: Experiment) -> float:
     return float(gamma)
 
 
-def build_model(experiment: Experiment, vec_env, seed: int, device: str, tensorboard: Path | None):
+def build_model(experiment: Experiment, vec_env, seed: int, device: str, *, tensorboard: Path | None):
     """A new learner on `vec_env`: stable-baselines3's (on `device`), rlc's own, or sbx's (`backend: sbx`)."""
     algorithm = experiment.algorithm
     if algorithm.backend == "sbx":  # JAX's device, not torch's

@@ -44,11 +44,11 @@ from rlcontroller.control.controllers import Controller
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.control.twin import FailSafeTwin
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.fe.build import reduced_building
 from rlcontroller.physics.motions.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.motions.loads import generate
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 from rlcontroller.physics.variations import draw_plant
 from rlcontroller.simulation.outputs import noisy_readings, step_outputs
 
@@ -186,7 +186,12 @@ class BuildingEnv(gym.Env):
     def _update_estimate(self, readings: np.ndarray, held_action: np.ndarray) -> None:
         """The Kalman estimate at the new scaled readings (ground last), into the observation."""
         self._estimate = update_on_block(
-            self._filter_matrices, self.layout, self._estimate, readings, held_action, self._previous_ground
+            self._filter_matrices,
+            self.layout,
+            self._estimate,
+            readings,
+            held_action=held_action,
+            previous_ground=self._previous_ground,
         )
         self._previous_ground = readings[-1]
         self._observation[self.layout.estimate] = self.layout.scaled_estimate(self._estimate)

@@ -114,7 +114,7 @@ class DAgger(BatchLearner):
         motions = generate_suite(generator, self.n_motions, int(rng.integers(2**31)), self.plant.building)
         seeds = [int(s) for s in rng.integers(2**31, size=self.n_motions)]
         collector = _Collector(self, expert_acts)
-        runs = batch_rollout(self.plant, motions, [collector], seeds, randomize=True)
+        runs = batch_rollout(self.plant, motions, [collector], seeds=seeds, randomize=True)
         episodes = [{"r": total, "l": response.drift.shape[0] - 1} for response, total in runs[0]]
         self.ep_info_buffer.extend(episodes)
         new = {key: np.concatenate(rows).astype(np.float32) for key, rows in collector.rows.items()}

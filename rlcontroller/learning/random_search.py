@@ -165,10 +165,12 @@ class RandomSearch(BatchLearner):
         and (with `plant_randomization`) plants drawn from those seeds; and the control steps run."""
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
         controllers = [self.candidate(parameters) for parameters in candidates]
-        runs = batch_rollout(self.plant, motions, controllers, seeds, randomize=True)
+        runs = batch_rollout(self.plant, motions, controllers, seeds=seeds, randomize=True)
         if self.objective == "standard":  # the reference with the control system failed safe: no supervisor
             failed_safe = self.plant.failed_safe
-            reference = batch_rollout(failed_safe, motions, [fail_safe_controller(failed_safe)], seeds, randomize=True)
+            reference = batch_rollout(
+                failed_safe, motions, [fail_safe_controller(failed_safe)], seeds=seeds, randomize=True
+            )
             f = np.array([standard_cost(lane, reference[0]) for lane in runs])
         else:
             f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])

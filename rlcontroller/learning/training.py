@@ -171,6 +171,7 @@ class TrainingSummary:
 
 
 def train(
+    *,
     experiment: Experiment | None = None,
     run_dir: Path | None = None,
     resume: Path | None = None,
@@ -301,7 +302,7 @@ def _start(
         run.truncate_curve(model.num_timesteps)
         return model, state
     state = TrainingState()
-    model = build_model(experiment, vec_env, experiment.seed, device, log)
+    model = build_model(experiment, vec_env, experiment.seed, device, tensorboard=log)
     if resume:
         run.truncate_curve(0)
     else:
@@ -328,7 +329,7 @@ def _load_checkpoint(experiment: Experiment, checkpoints: list[Path], vec_env, d
 
     checkpoint = checkpoints[-1]
     if experiment.algorithm.backend == "sbx":  # arrays into a fresh model of the same config: no pickle
-        model = build_model(experiment, vec_env, experiment.seed, device, None)
+        model = build_model(experiment, vec_env, experiment.seed, device, tensorboard=None)
         try:
             load_jax_learner(model, checkpoint)
         except UnreadableFile as unreadable:

@@ -151,7 +151,7 @@ def _train(run: SweepRun) -> str:
         summary = train(resume=run.folder)
         status = "resumed"
     else:
-        summary = train(experiment, run_dir=run.folder)
+        summary = train(experiment=experiment, run_dir=run.folder)
         status = "trained"
     if summary.interrupted:
         _signalled.set()
@@ -174,13 +174,13 @@ def _evaluate(run: SweepRun, records: str | None) -> None:
     experiment = build_experiment(yaml.safe_load(run.config), {}, str(run.folder / "config.yaml"))
     plant = Plant(experiment)
     motions, label = load_suite(records, None, plant)
-    evaluation = compare(plant, motions, label, read_policy(run.folder, "best", plant))
+    evaluation = compare(plant, motions, label, policy=read_policy(run.folder, "best", plant))
     with new_folder(out) as staging:
         write_report(evaluation, staging)
 
 
 def execute(
-    runs: list[SweepRun], records: str | None, engine: str, workers: int, address: str | None
+    runs: list[SweepRun], records: str | None, engine: str, workers: int, *, address: str | None
 ) -> Iterator[RunResult]:
     """Each run's result as it finishes, from the chosen engine."""
     if engine == "dask":
@@ -308,6 +308,7 @@ def sweep(
     seeds: list[int],
     settings: list[tuple[str, list[Any]]],
     out: Path,
+    *,
     engine: str = "local",
     workers: int = 2,
     address: str | None = None,
@@ -347,7 +348,7 @@ def _sweep(
     combinations = len(runs) // len(seeds)
     echo(f"{len(runs)} run(s): {len(seeds)} seed(s) x {combinations} setting(s), on the {engine} engine")
     results = []
-    for number, result in enumerate(execute(runs, records, engine, workers, address), start=1):
+    for number, result in enumerate(execute(runs, records, engine, workers, address=address), start=1):
         results.append(result)
         detail = f": {result.error}" if result.error else ""
         echo(f"[{number}/{len(runs)}] {result.status} {result.run.folder} ({result.seconds:.0f} s){detail}")

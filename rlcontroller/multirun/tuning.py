@@ -136,7 +136,7 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
 
         try:
             resolved = with_overrides(experiment, suggest(trial, experiment.algorithm.search), f"trial {trial.number}")
-            summary = train(resolved, run_dir=folder, on_validation=report)
+            summary = train(experiment=resolved, run_dir=folder, on_validation=report)
         except Exception as error:  # a failed trial, recorded with its reason; the worker goes on
             trial.set_user_attr("error", f"{type(error).__name__}: {error}"[:300])
             raise
@@ -213,7 +213,7 @@ def _plots(study, out: Path, complete: int) -> list[Path]:
     return written
 
 
-def tune(experiment: Experiment, trials: int, storage_url: str | None, study_name: str, out: Path, jobs: int) -> int:
+def tune(experiment: Experiment, trials: int, storage_url: str | None, study_name: str, *, out: Path, jobs: int) -> int:
     """`jobs` worker processes (or this process for one) on the study; the number of trials run here."""
     if not experiment.algorithm.search:
         file, prefix = experiment.origin("algorithm")

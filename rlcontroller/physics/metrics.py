@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.response import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
 YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J", "collapsed")  # per story, yielding plants

@@ -86,6 +86,7 @@ def observation_layout(
     sensors: SensorConfig,
     n_readings: int,
     reading_scale: np.ndarray,
+    *,
     load_scale: np.ndarray | None = None,
 ) -> ObservationLayout:
     """The layout of the table above for `building`, `sensors` and its n_readings readings; with

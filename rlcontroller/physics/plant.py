@@ -154,7 +154,7 @@ class Plant:
         self.wind = design_wind(experiment)
         load_scale = np.sqrt(np.diag(self.wind.covariance)) if self.wind is not None else None
         self.layout = observation_layout(
-            self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale, load_scale
+            self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale, load_scale=load_scale
         )
         self.ground_model = GroundModel()
         self._sampled: dict[int, SampledPlant] = {}  # sub-steps -> this plant sampled

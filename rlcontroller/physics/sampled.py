@@ -32,7 +32,6 @@ from rlcontroller.config import Experiment
 from rlcontroller.errors import MotionError
 from rlcontroller.physics.dynamics import (
     LoadMap,
-    Response,
     StateSpace,
     StepMap,
     compose,
@@ -41,7 +40,6 @@ from rlcontroller.physics.dynamics import (
     load_feedthrough,
     load_map,
     output_matrices,
-    response,
     state_space,
     step_map,
     wind_model_system,
@@ -49,6 +47,7 @@ from rlcontroller.physics.dynamics import (
 from rlcontroller.physics.motions.excitation import FLOOR_FORCES, LoadGrid
 from rlcontroller.physics.motions.generators import GroundModel
 from rlcontroller.physics.motions.wind import WindLoadModel
+from rlcontroller.physics.response import Response, response
 from rlcontroller.physics.structure import Building
 
 
@@ -205,7 +204,7 @@ class SampledPlant:
         return response(
             lambda quantity: output_matrices(building, quantity),
             lambda quantity: load_feedthrough(building, quantity),
-            states, held, time, ground, floor_forces,
+            states, held, time=time, ground=ground, floor_forces=floor_forces,
         )  # fmt: skip
 
     def response(
@@ -221,8 +220,16 @@ class SampledPlant:
         hysteretic forces (N: (1 - a) k d_y z for story springs)."""
         plant = self.plant
         hysteretic = None if plant.yielding is None else plant.yielding.story_force_map
-        outputs = (plant.outputs, plant.load_outputs)
-        result = response(*outputs, states, held_forces, time, ground, floor_forces, hysteretic)
+        result = response(
+            plant.outputs,
+            plant.load_outputs,
+            states,
+            held_forces,
+            time=time,
+            ground=ground,
+            floor_forces=floor_forces,
+            story_force_map=hysteretic,
+        )
         stops = plant.end_stops
         if stops is None:
             return result

@@ -174,7 +174,12 @@ class BuildingBatch:
     def _update_estimates(self, readings: np.ndarray, held: np.ndarray, members) -> None:
         """The filter's update from `readings` (the newest block, as the observation holds it)."""
         estimates = update_on_block(
-            self._filter_matrices, self.layout, self.estimates[members], readings, held, self.previous_ground[members]
+            self._filter_matrices,
+            self.layout,
+            self.estimates[members],
+            readings,
+            held_action=held,
+            previous_ground=self.previous_ground[members],
         )
         self.estimates[members] = estimates
         self.previous_ground[members] = readings[:, -1]

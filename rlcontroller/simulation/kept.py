@@ -27,9 +27,9 @@ import numpy as np
 
 from rlcontroller.errors import ModelError
 from rlcontroller.files import atomic_write
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 from rlcontroller.simulation.rollout import uncontrolled_responses
 
 MODEL_SUFFIXES = (".py", ".tcl", ".yaml")

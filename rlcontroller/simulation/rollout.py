@@ -10,10 +10,10 @@ from dataclasses import replace
 import numpy as np
 
 from rlcontroller.control.controllers import Controller, LQGBank, LQGController, Uncontrolled
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.fe.opensees import NonConvergence
 from rlcontroller.physics.motions.excitation import Load, LoadGrid, on_control_grid
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 from rlcontroller.simulation.batch import BuildingBatch, episode_generator
 from rlcontroller.simulation.fanout import fanned_map
 
@@ -24,6 +24,7 @@ def batch_rollout(
     plant: Plant,
     motions: list[Load],
     controllers: list[Controller],
+    *,
     seeds: list[int] | None = None,
     randomize: bool = False,
     on_motions: Callable[[int], None] | None = None,

@@ -85,7 +85,9 @@ def main() -> None:
             for seed in SEEDS:
                 run = folder / f"D{budget:.0f}_seed{seed}"
                 run.mkdir()
-                test = api.simulate_test(experiment_file(run, plant_part, None), run / "test.csv", budget, seed=seed)
+                test = api.simulate_test(
+                    experiment_file(run, plant_part, None), run / "test.csv", duration=budget, seed=seed
+                )
                 model = api.identify([test], run / "model", masses=MASSES)
                 building = Plant(load_experiment(experiment_file(run, plant_part, model))).design.building
                 omega, damping = building.poles()

@@ -26,7 +26,7 @@ from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_response
 experiment = api.load(CONFIGS / "experiments" / "nine_story_frame.yaml")
 fe = Plant(experiment)
 records = load_records(Path(sys.argv[1]))[0]
-summary = compare(fe.design, records, "seven records", None).summary()
+summary = compare(fe.design, records, "seven records", policy=None).summary()
 print("reduced model as the plant:")
 print(summary[["J1", "J2"]].round(3).to_string())
 heights = np.asarray(experiment.building.story_heights)

@@ -67,7 +67,7 @@ def test_a_user_mistake_is_the_commands_one_line_error(tmp_path):
     with pytest.raises(ConfigError, match="either a run folder or --config, not both"):
         api.compare_lqg(run_dir=tmp_path, config=SMOKE)
     with pytest.raises(ConfigError, match="not a run folder: no config.yaml"):
-        api.evaluate(tmp_path)
+        api.evaluate(run_dir=tmp_path)
     with pytest.raises(ConfigError, match="a wind suite is not taken by this command"):
         from rlcontroller.physics.motions.loads import load_suite
 

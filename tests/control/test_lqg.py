@@ -9,11 +9,12 @@ from rlcontroller.control.lqr import lqr_gain, preview_feedforward, preview_kern
 from rlcontroller.control.optimal import optimal_response
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.learning.env import BuildingEnv, rollout
-from rlcontroller.physics.dynamics import Response, step_map
+from rlcontroller.physics.dynamics import step_map
 from rlcontroller.physics.metrics import j_metrics
 from rlcontroller.physics.motions.excitation import Load, read_at2, scale_to_pga
 from rlcontroller.physics.motions.generators import GroundModel, kanai_tajimi
 from rlcontroller.physics.plant import Plant
+from rlcontroller.physics.response import Response
 from rlcontroller.physics.structure import build
 
 NOISE_FREE = Experiment(
@@ -269,5 +270,5 @@ def test_the_backward_feedforward_equals_the_kernel_sum(length):
     expected = np.zeros((2, 60, 3))
     for lag, kernel in enumerate(kernels):
         expected[:, : 60 - lag] += terms[:, lag:] @ kernel.T
-    actual = preview_feedforward(cost, step, plant.force_limits, terms, length)
+    actual = preview_feedforward(cost, step, plant.force_limits, terms, length=length)
     np.testing.assert_allclose(actual, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())

@@ -53,11 +53,11 @@ def test_the_lifted_lqr_costs_what_the_full_one_costs():
     phi, b = system_with_a_quasi_static_mode(1e-8)
     h = np.random.default_rng(4).normal(size=(3, 4))
     q, r, n = phi.T @ h.T @ h @ phi, b.T @ h.T @ h @ b + 0.1, phi.T @ h.T @ h @ b
-    full = solve_dare(phi, b, q, r, n)
+    full = solve_dare(phi, b, q, r, s=n)
     full_gain = np.linalg.solve(b.T @ full @ b + r, b.T @ full @ phi + n.T)
-    full_again, _ = lqr(phi, b, q, r, n)
+    full_again, _ = lqr(phi, b, q, r, n=n)
     np.testing.assert_allclose(full_again, full_gain, rtol=1e-10, atol=0.0)  # the full equation solves: the full design
-    lifted_gain, _ = lqr_on_kept_modes(phi, b, q, r, n, modal_truncation(phi))
+    lifted_gain, _ = lqr_on_kept_modes(phi, b, q, r, n=n, truncation=modal_truncation(phi))
 
     def cost(gain):  # trace of the closed loop's cost-to-go from unit initial states
         closed = phi - b @ gain
@@ -71,7 +71,7 @@ def test_the_lifted_lqr_costs_what_the_full_one_costs():
 def test_the_lifted_kalman_gain_leaves_a_stable_error():
     phi, _ = system_with_a_quasi_static_mode(1e-12)
     c = np.array([[1.0, 0.0, 0.5, 0.2]])
-    gain = kalman_gain_on_kept_modes(phi, c, 1e-2 * np.eye(4), np.array([[1e-4]]), modal_truncation(phi))
+    gain = kalman_gain_on_kept_modes(phi, c, 1e-2 * np.eye(4), np.array([[1e-4]]), truncation=modal_truncation(phi))
     assert max(abs(np.linalg.eigvals((np.eye(4) - gain @ c) @ phi))) < 1
 
 

@@ -193,7 +193,7 @@ def test_the_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path):
     folder = api.design(config, "lqg_wind_model", tmp_path / "atmd")
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), 1, 600)
+    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), seed=1, steps=600)
     assert peak > 1e4 and deviation <= 1e-3  # the driver works (N), and as in Python
 
 
@@ -210,7 +210,7 @@ def test_the_shipped_wind_controller_exports_with_its_floor_trigger(tmp_path, mo
     assert folder.name == "five_story_wind"
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), 2, 600)
+    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), seed=2, steps=600)
     assert peak > 1e4 and deviation <= 1e-3
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
     assert metadata["supervisor"] == "trigger 0.3-1 m/s^2 on the peak floor acceleration readings"

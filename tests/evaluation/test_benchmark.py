@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rlcontroller.evaluation.benchmark import benchmark_criteria, connection_criteria, response_criteria
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
+from rlcontroller.physics.response import Response
 from rlcontroller.physics.structure import Building
 
 DT = 0.1

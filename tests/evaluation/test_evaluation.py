@@ -172,7 +172,7 @@ def test_the_damper_sweep_ends_at_passive_off_and_on_and_passes_through_clipped_
 
     plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
     motions = load_records(records)[0][:2]
-    table = damper_sweep(plant, motions, "two records", np.array([0.0, 0.5, 1.0]), np.array([1.0, 100.0]))
+    table = damper_sweep(plant, motions, "two records", np.array([0.0, 0.5, 1.0]), multipliers=np.array([1.0, 100.0]))
     classical = compare(plant, motions, "two records").summary()
     passive = table[table["family"] == "passive"]
     assert passive["J1"].iloc[0] == pytest.approx(classical.loc["passive-off", "J1"], rel=1e-12)

@@ -23,7 +23,9 @@ def smoke_run(tmp_path_factory):
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "smoke.yaml")
     run = tmp_path_factory.mktemp("smoke") / "run"
     train(
-        experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 500})}),
+        experiment=experiment.model_copy(
+            update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 500})}
+        ),
         run_dir=run,
     )
     return run

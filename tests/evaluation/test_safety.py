@@ -69,7 +69,9 @@ def judged_scaled(scales: tuple[float, ...]) -> dict:
     periods = SimpleNamespace(building=SimpleNamespace(periods=lambda: np.array([1.0, 0.4, 0.2])))
     plant = SimpleNamespace(yielding=None, fe_model=None, experiment=steel, bare=periods)
     standard = load_safety_check(STANDARD).model_copy(update={"risk_bound": 0.0})  # three motions: the strict rule
-    return judge_suite(evaluation, motions, "judged", "fail-safe", "it", np.full(2, 6e-4), standard, plant)
+    return judge_suite(
+        evaluation, motions, "judged", "fail-safe", words="it", bounds=np.full(2, 6e-4), standard=standard, plant=plant
+    )
 
 
 @pytest.mark.parametrize(
@@ -218,7 +220,7 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     from rlcontroller.learning.training import train
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "demo.yaml")
-    summary = train(experiment, run_dir=tmp_path / "demo")
+    summary = train(experiment=experiment, run_dir=tmp_path / "demo")
     assert summary.best_steps > 0 and summary.best["eval_J1"] < 0.35
     plant = Plant(experiment)
     policy = read_policy(summary.run_dir, "best", plant)
@@ -392,7 +394,9 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     assert verdicts[0]["peak_stroke_m"][0] < 1.25 and "on end-stops at 1 m:" in verdicts[0]["summary"]  # was 12 m
     devices = {key: verdicts[0][key] for key in DEVICE_FIGURES if key in verdicts[0]}
     periods = verdicts[0]["spectral_periods_s"]
-    again = suite_figures(rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices, periods)
+    again = suite_figures(
+        rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices=devices, periods=periods
+    )
     assert again["summary"] == verdicts[0]["summary"].split("; the motions it fails")[0]
 
 

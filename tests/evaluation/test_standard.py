@@ -132,7 +132,7 @@ def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_peri
     shapes = [[0.2 + 0.1 * index, 1.0 + index, 2.0] for index in range(11)]
     rows = {f"m{index}": row(sa_over_pga=shape) for index, shape in enumerate(shapes[:10])}
     rows["quiet"] = {"pga_g": 0.001, "over_bound": 0.2, "sa_over_pga": shapes[10]}
-    derived = suite_figures(rows, "no control", STEEL, STANDARD, None, [1.44, 0.55, 0.35])
+    derived = suite_figures(rows, "no control", STEEL, STANDARD, devices=None, periods=[1.44, 0.55, 0.35])
     expected = np.percentile(np.array(shapes), [16, 50, 84], axis=0)
     assert derived["spectral_periods_s"] == [1.44, 0.55, 0.35]
     for key, values in zip(("p16", "median", "p84"), expected, strict=True):
@@ -140,4 +140,4 @@ def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_peri
     assert "Sa/PGA (2% damped, median (16-84 %)) 0.70 (0.36-1.04) at 1.44 s" in derived["summary"]
     rows["m0"]["sa_over_pga"] = [float("nan"), 1.0, 2.0]
     with pytest.raises(ValueError, match=r"^m0\.sa_over_pga \[nan, 1\.0, 2\.0\] is no possible figure"):
-        suite_figures(rows, "no control", STEEL, STANDARD, None, [1.44, 0.55, 0.35])
+        suite_figures(rows, "no control", STEEL, STANDARD, devices=None, periods=[1.44, 0.55, 0.35])

@@ -79,7 +79,7 @@ def test_steps_match_the_whole_record_simulation(records):
 
     grid = on_control_grid(motion, 0.02)
     samples, substeps = grid.ground, grid.substeps
-    reference = simulate(env.building, env.plant.sampled(substeps).step, samples, forces)
+    reference = simulate(env.building, env.plant.sampled(substeps).step, samples, forces=forces)
     np.testing.assert_allclose(drifts, reference.drift[1:], rtol=SAME_PHYSICS, atol=1e-12)
     np.testing.assert_allclose(accelerations, reference.absolute_acceleration[1:], rtol=SAME_PHYSICS, atol=1e-9)
     np.testing.assert_allclose(shears, reference.base_shear[1:], rtol=SAME_PHYSICS, atol=1e-6)

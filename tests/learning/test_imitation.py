@@ -62,7 +62,7 @@ def test_iterations_bring_the_policy_to_mpc_on_states_it_visits():
     torch.manual_seed(0)
     experiment = small()
     plant = Plant(experiment)
-    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", None)
+    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", tensorboard=None)
     model.ep_info_buffer = deque(maxlen=100)
     for iteration in range(3):
         model.collect(expert_acts=iteration == 0)
@@ -85,7 +85,7 @@ def test_iterations_bring_the_policy_to_mpc_on_states_it_visits():
             errors["prior"].append(np.mean((lqg.act(observation) - expert) ** 2))
             return action
 
-    batch_rollout(plant, motions, [Judge()], [5, 6, 7])
+    batch_rollout(plant, motions, [Judge()], seeds=[5, 6, 7])
     assert np.mean(errors["prior"]) > 1e-3  # MPC is not the prior here: the limits bind
     assert np.mean(errors["policy"]) < 0.2 * np.mean(errors["prior"])
 
@@ -102,7 +102,7 @@ def test_on_dampers_the_policy_learns_mpcs_commands(tmp_path):
     )
     experiment = experiment.model_validate(experiment.model_dump())
     plant = Plant(experiment)
-    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", None)
+    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", tensorboard=None)
     assert isinstance(model.expert, SemiActiveMPC)
     model.ep_info_buffer = deque(maxlen=100)
     for iteration in range(3):
@@ -121,7 +121,9 @@ def test_on_dampers_the_policy_learns_mpcs_commands(tmp_path):
             pairs.append((model.expert.act(observation), action))
             return action
 
-    batch_rollout(plant, generate_suite(experiment.excitation.generator, 3, 99, plant.building), [Judge()], [5, 6, 7])
+    batch_rollout(
+        plant, generate_suite(experiment.excitation.generator, 3, 99, plant.building), [Judge()], seeds=[5, 6, 7]
+    )
     expert, learned = (np.concatenate(side) for side in zip(*pairs, strict=True))
     on = np.mean(expert > 0.0)
     assert 0.1 < on < 0.9  # MPC switches the dampers
@@ -136,8 +138,8 @@ def test_a_stopped_run_resumes_to_the_same_policy_as_an_uninterrupted_one(tmp_pa
     experiment = experiment.model_copy(
         update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 1500})}
     )
-    whole = train(experiment, run_dir=tmp_path / "whole")
-    stopped = train(experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)
+    whole = train(experiment=experiment, run_dir=tmp_path / "whole")
+    stopped = train(experiment=experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)
     assert stopped.time_limit_reached and stopped.steps < whole.steps
     assert train(resume=tmp_path / "stop").steps == whole.steps
     models = [DAgger.load(tmp_path / run / "final_model.zip", device="cpu") for run in ("whole", "stop")]

@@ -37,7 +37,7 @@ def smoke(name: str = "SAC", **settings):
 def learned(experiment, steps: int = 400):
     """An sbx learner trained `steps` steps on the experiment's env (its updates started at 200)."""
     vec_env = make_vec_env(Plant(experiment), experiment.seed)
-    model = build_model(experiment, vec_env, experiment.seed, "cpu", None)
+    model = build_model(experiment, vec_env, experiment.seed, "cpu", tensorboard=None)
     model.learn(steps)
     return model, vec_env
 
@@ -70,7 +70,9 @@ def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
         if path.suffix == ".npz":
             with np.load(path, allow_pickle=False) as saved:
                 [saved[name] for name in saved.files]
-    fresh = build_model(experiment, make_vec_env(Plant(experiment), experiment.seed), experiment.seed, "cpu", None)
+    fresh = build_model(
+        experiment, make_vec_env(Plant(experiment), experiment.seed), experiment.seed, "cpu", tensorboard=None
+    )
     load_jax_learner(fresh, tmp_path)
     fresh.set_logger(model.logger)
     assert fresh.num_timesteps == model.num_timesteps == 400 and fresh._n_updates == model._n_updates > 0
@@ -95,7 +97,7 @@ def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
 def test_an_sbx_run_resumes_to_its_total_and_holds_no_pickle(tmp_path):
     run = tmp_path / "run"
     experiment = smoke(total_steps=600, checkpoint_every=300, eval_every=300)
-    summary = train(experiment, run_dir=run, time_limit_s=0.0)  # stops at the first step, with a checkpoint
+    summary = train(experiment=experiment, run_dir=run, time_limit_s=0.0)  # stops at the first step, with a checkpoint
     assert summary.time_limit_reached and RunFolder(run).checkpoints()
     assert train(resume=run).steps == 600
     files = [path.name for path in run.rglob("*") if path.is_file()]
@@ -117,7 +119,7 @@ def test_an_sbx_run_resumes_to_its_total_and_holds_no_pickle(tmp_path):
 )
 def test_a_damaged_sbx_checkpoint_stops_resume_with_one_line(tmp_path, damaged, expected):
     run = tmp_path / "run"
-    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run)
+    train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run)
     config = run / "config.yaml"
     config.write_text(config.read_text().replace("total_steps: 600", "total_steps: 900"))
     previous, newest = RunFolder(run).checkpoints()[-2:]
@@ -132,7 +134,7 @@ def test_a_checkpoint_of_another_network_is_refused_naming_the_array(tmp_path):
     model, _ = learned(smoke(policy={"net_arch": [8]}), steps=1)
     save_jax_learner(model, tmp_path)
     other = smoke(policy={"net_arch": [16]})
-    fresh = build_model(other, make_vec_env(Plant(other), 0), 0, "cpu", None)
+    fresh = build_model(other, make_vec_env(Plant(other), 0), 0, "cpu", tensorboard=None)
     with pytest.raises(Exception, match=r"learner.npz: array \d+ is float32\[.*\], expected float32"):
         load_jax_learner(fresh, tmp_path)
     assert zipfile.is_zipfile(tmp_path / "learner.npz")
@@ -161,4 +163,4 @@ def test_without_sbx_installed_the_backend_is_one_line(monkeypatch, tmp_path):
     experiment = smoke()
     needs = r"backend: sbx needs the sbx-rl package \(pip install 'rlcontroller\[fast\]'\)"
     with pytest.raises(ConfigError, match=needs):
-        build_model(experiment, make_vec_env(Plant(experiment), 0), 0, "cpu", None)
+        build_model(experiment, make_vec_env(Plant(experiment), 0), 0, "cpu", tensorboard=None)

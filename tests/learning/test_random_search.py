@@ -34,7 +34,7 @@ def tiny(config=MODEL_FREE, **algorithm):
 
 
 def new_model(experiment, seed: int = 0):
-    model = build_model(experiment, make_vec_env(Plant(experiment), seed), seed, "cpu", None)
+    model = build_model(experiment, make_vec_env(Plant(experiment), seed), seed, "cpu", tensorboard=None)
     model.ep_info_buffer = deque(maxlen=100)
     return model
 
@@ -83,7 +83,7 @@ def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe
     pushing[0, :, 0] = 5.0  # every actuator driven by the first reading: energy in
     plus, minus, _ = model.paired_log_costs(pushing, motions, seeds)
     runs = batch_rollout(model.plant, motions, [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
-                         seeds, randomize=True)  # fmt: skip
+                         seeds=seeds, randomize=True)  # fmt: skip
     assert plus[0] == pytest.approx(standard_cost(runs[0], runs[1]), rel=1e-12)
     assert max(plus[0], minus[0]) > 1.0 + STANDARD_PENALTY * 0.01  # priced beyond its J1
 
@@ -101,7 +101,7 @@ def saved_policy(run, model):
 
 @pytest.mark.slow
 def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
-    summary = train(tiny(total_steps=40000), run_dir=tmp_path / "run")
+    summary = train(experiment=tiny(total_steps=40000), run_dir=tmp_path / "run")
     assert summary.steps >= 40000 and summary.best["eval_J1"] < 0.95  # no control: 1
     controller = saved_policy(tmp_path / "run", "best")
     weights = RandomSearch.load(tmp_path / "run" / "best_model.zip", device="cpu").weights
@@ -116,7 +116,7 @@ def test_a_network_search_on_dampers_starts_at_its_initial_bias_as_its_saved_pol
     policy = {"actor_arch": [8], "odd": False}
     model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": -1.0}))  # passive-off, any hidden layer
     motions, seeds = synthetic_suite(count=2), [4, 5]
-    passive_off = batch_rollout(model.plant, motions, [ConstantCommand(-1.0, 3, "off")], seeds)[0]
+    passive_off = batch_rollout(model.plant, motions, [ConstantCommand(-1.0, 3, "off")], seeds=seeds)[0]
     start = np.zeros((1, *model.weights.shape))
     assert model.paired_log_costs(start, motions, seeds)[0][0] == pytest.approx(
         np.mean([np.log(-total) for _, total in passive_off]), rel=1e-12
@@ -131,12 +131,12 @@ def test_an_affine_search_on_dampers_learns_a_bias_and_its_model_acts_as_clip_w_
     policy = {"actor_arch": [], "odd": False}
     model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": 1.0}))  # starts at full voltage
     motions, seeds = synthetic_suite(count=2), [4, 5]
-    passive_on = batch_rollout(model.plant, motions, [ConstantCommand(1.0, 3, "on")], seeds)[0]
+    passive_on = batch_rollout(model.plant, motions, [ConstantCommand(1.0, 3, "on")], seeds=seeds)[0]
     assert model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)[0][0] == pytest.approx(
         np.mean([np.log(-total) for _, total in passive_on]), rel=1e-12
     )
 
-    train(tiny(dampers, policy=policy, total_steps=8000), run_dir=tmp_path / "run")
+    train(experiment=tiny(dampers, policy=policy, total_steps=8000), run_dir=tmp_path / "run")
     parameters = RandomSearch.load(tmp_path / "run" / "final_model.zip", device="cpu").weights
     weights, bias = parameters[:, :-1], parameters[:, -1]
     assert np.all(bias != 0.0)
@@ -159,11 +159,13 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
     motions, seeds = synthetic_suite(count=2), [4, 5]
     at_zero = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)[0][0]
     lqg = LQGController(design_lqg_ground_model(model.plant.design), model.plant)
-    lqg_runs = batch_rollout(model.plant, motions, [lqg], seeds)[0]
+    lqg_runs = batch_rollout(model.plant, motions, [lqg], seeds=seeds)[0]
     assert at_zero == pytest.approx(np.mean([np.log(-total) for _, total in lqg_runs]), rel=SAME_PHYSICS)
 
     train(
-        experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),
+        experiment=experiment.model_copy(
+            update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}
+        ),
         run_dir=tmp_path / "run",
     )
     controller = saved_policy(tmp_path / "run", "final")
@@ -190,7 +192,9 @@ def test_a_network_search_starts_at_its_prior_and_its_saved_policy_acts_as_its_c
     assert hidden == 16 * model.plant.layout.size + 16 + 16 * 16 + 16
 
     train(
-        experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}),
+        experiment=experiment.model_copy(
+            update={"algorithm": experiment.algorithm.model_copy(update={"total_steps": 8000})}
+        ),
         run_dir=tmp_path / "run",
     )
     searched = RandomSearch.load(tmp_path / "run" / "final_model.zip", device="cpu")
@@ -202,8 +206,8 @@ def test_a_network_search_starts_at_its_prior_and_its_saved_policy_acts_as_its_c
 @pytest.mark.slow
 def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
     experiment = tiny(total_steps=24000)
-    whole = train(experiment, run_dir=tmp_path / "whole")
-    stopped = train(experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)  # stops after one iteration
+    whole = train(experiment=experiment, run_dir=tmp_path / "whole")
+    stopped = train(experiment=experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)  # stops after one iteration
     assert stopped.time_limit_reached and stopped.steps < 24000
     resumed = train(resume=tmp_path / "stop")
     assert resumed.steps == whole.steps
@@ -215,7 +219,7 @@ def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_p
 def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
     import re
 
-    summary = train(tiny(total_steps=8000), run_dir=tmp_path / "run", progress_bar=True)
+    summary = train(experiment=tiny(total_steps=8000), run_dir=tmp_path / "run", progress_bar=True)
     output = capsys.readouterr()
     shown = re.findall(r"([\d,]+)/8,000", output.out + output.err)
     assert shown and int(shown[-1].replace(",", "")) == summary.steps >= 8000  # not one tick per iteration

@@ -39,7 +39,7 @@ def curve(run_dir: Path) -> list[dict[str, str]]:
 
 @pytest.mark.slow
 def test_a_run_folder_has_every_file(tmp_path):
-    summary = train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run")
+    summary = train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run")
     run = tmp_path / "run"
     for name in (
         "config.yaml",
@@ -80,8 +80,8 @@ def test_runs_are_never_overwritten(tmp_path):
 @pytest.mark.slow
 def test_same_seed_gives_identical_parameters(tmp_path):
     settings = {"total_steps": 300, "checkpoint_every": 300, "eval_every": 300}
-    train(smoke(**settings), run_dir=tmp_path / "a")
-    train(smoke(**settings), run_dir=tmp_path / "b")
+    train(experiment=smoke(**settings), run_dir=tmp_path / "a")
+    train(experiment=smoke(**settings), run_dir=tmp_path / "b")
     first, second = (np.load(tmp_path / run / "final_policy.npz") for run in ("a", "b"))
     assert first.files == second.files
     for name in first.files:
@@ -171,7 +171,7 @@ def test_ctrl_c_saves_a_checkpoint_and_resume_finishes(tmp_path):
 )
 def test_other_learners_train(tmp_path, name, kwargs):
     summary = train(
-        smoke(name=name, kwargs=kwargs, n_envs=2, total_steps=256, checkpoint_every=128, eval_every=128),
+        experiment=smoke(name=name, kwargs=kwargs, n_envs=2, total_steps=256, checkpoint_every=128, eval_every=128),
         run_dir=tmp_path / name,
     )
     assert summary.steps >= 256 and (tmp_path / name / "final_model.zip").is_file()
@@ -180,7 +180,7 @@ def test_other_learners_train(tmp_path, name, kwargs):
 @pytest.mark.slow
 def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
     train(
-        smoke(normalize_observations=True, total_steps=300, checkpoint_every=300, eval_every=300),
+        experiment=smoke(normalize_observations=True, total_steps=300, checkpoint_every=300, eval_every=300),
         run_dir=tmp_path / "run",
     )
     assert (RunFolder(tmp_path / "run").checkpoints()[-1] / "vecnormalize.pkl").is_file()
@@ -213,7 +213,9 @@ def test_bad_algorithm_settings_exit_2_naming_the_key(tmp_path, algorithm, expec
 @pytest.mark.slow
 def test_time_limit_stops_cleanly_and_the_run_resumes(tmp_path):
     summary = train(
-        smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run", time_limit_s=0.0
+        experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300),
+        run_dir=tmp_path / "run",
+        time_limit_s=0.0,
     )
     assert summary.time_limit_reached and summary.steps < 600 and "time limit" in summary.line()
     assert (tmp_path / "run" / "final_model.zip").is_file()
@@ -228,7 +230,7 @@ def test_a_residual_policy_trains_and_starts_at_lqg(tmp_path):
     experiment = experiment.model_copy(
         update={"sensors": experiment.sensors.model_copy(update={"state_estimate": True})}
     )
-    summary = train(experiment, run_dir=tmp_path / "run")
+    summary = train(experiment=experiment, run_dir=tmp_path / "run")
     policy = read_policy(tmp_path / "run", "final", Plant(experiment))
     assert policy.prior is not None
     # Barely trained, the residual is close to zero: validation J1 is near LQG + ground's.
@@ -254,14 +256,14 @@ def test_a_run_that_fails_to_start_leaves_no_run_folder(tmp_path, monkeypatch):
 
     monkeypatch.setattr(callbacks.ProgressBarCallback, "__init__", missing)
     with pytest.raises(ImportError):
-        train(smoke(total_steps=300), run_dir=tmp_path / "run", progress_bar=True)
+        train(experiment=smoke(total_steps=300), run_dir=tmp_path / "run", progress_bar=True)
     assert not (tmp_path / "run").exists()
 
 
 @pytest.mark.slow
 def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
     run = tmp_path / "run"
-    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0)
+    train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0)
     state = RunFolder(run).checkpoints()[-1] / "state.json"
     state.write_text(json.dumps({**json.loads(state.read_text()), "wall_time_s": 1.0e6}))  # a long first session
     summary = train(resume=run, time_limit_s=1.0e5)
@@ -280,7 +282,7 @@ def test_a_stop_at_the_time_limit_prints_the_resume_command(tmp_path):
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory):
     run = tmp_path_factory.mktemp("finished") / "run"
-    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run)
+    train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run)
     return run
 
 
@@ -341,7 +343,7 @@ def test_training_on_randomised_plants_validates_on_fixed_draws(tmp_path):
     randomization = PlantRandomization(stiffness={"low": 0.7, "high": 1.3}, delay_steps=(0, 1))
     experiment = experiment.model_copy(update={"plant_randomization": randomization})
     experiment = load_experiment_from(experiment, tmp_path)
-    train(experiment, run_dir=tmp_path / "run")
+    train(experiment=experiment, run_dir=tmp_path / "run")
     rows = curve(tmp_path / "run")
     assert len(rows) == 3 and len({row["lqg_J1"] for row in rows}) == 1  # the same plants at every validation
     nominal = curve_of(smoke(total_steps=300, checkpoint_every=300, eval_every=300), tmp_path / "nominal")
@@ -357,7 +359,7 @@ def load_experiment_from(experiment, folder: Path):
 
 
 def curve_of(experiment, run_dir: Path) -> list[dict[str, str]]:
-    train(experiment, run_dir=run_dir)
+    train(experiment=experiment, run_dir=run_dir)
     return curve(run_dir)
 
 
@@ -396,7 +398,7 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": select_by}
     experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
-    summary = train(experiment, run_dir=tmp_path / "run", device="cpu")
+    summary = train(experiment=experiment, run_dir=tmp_path / "run", device="cpu")
     assert summary.best_steps == best_steps
     best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
     saved = PPO.load(tmp_path / "run" / "checkpoints" / f"step_{best_steps:010d}" / "model.zip", device="cpu")
@@ -422,7 +424,7 @@ def test_a_run_that_only_gets_worse_keeps_its_starting_policy_as_best(tmp_path, 
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": "J1"}
     experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
-    summary = train(experiment, run_dir=tmp_path / "run", device="cpu")
+    summary = train(experiment=experiment, run_dir=tmp_path / "run", device="cpu")
     assert summary.best_steps == 0 and summary.best["eval_J1"] == 0.4
     best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
     final = PPO.load(tmp_path / "run" / "final_model.zip", device="cpu")
@@ -447,7 +449,12 @@ def tensorboard_scalars(run: Path) -> dict[str, list[tuple[int, float]]]:
 def test_tensorboard_gets_the_validation_row_and_a_resume_continues_it(tmp_path):
     pytest.importorskip("tensorboard")
     run = tmp_path / "run"
-    train(smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0, tensorboard=True)
+    train(
+        experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300),
+        run_dir=run,
+        time_limit_s=0.0,
+        tensorboard=True,
+    )
     train(resume=run, tensorboard=True)
     scalars = tensorboard_scalars(run)
     rows = curve(run)
@@ -482,7 +489,7 @@ def test_training_under_generated_wind_validates_on_wind(tmp_path):
     experiment = experiment.model_copy(
         update={"excitation": ExcitationConfig(generator=wind, validation_motions=2, validation_seed=3)}
     )
-    summary = train(experiment, run_dir=tmp_path / "run")
+    summary = train(experiment=experiment, run_dir=tmp_path / "run")
     assert summary.steps >= 400 and np.isfinite(summary.best["eval_J1"])
     from rlcontroller.learning.validation import Validator
 
@@ -509,7 +516,9 @@ def test_auto_takes_the_cpu_for_rlc_s_mlp_policies_even_where_cuda_is_visible(tm
     from rlcontroller.learning.training import training_device
 
     monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
-    train(smoke(total_steps=200, checkpoint_every=200, eval_every=200), run_dir=tmp_path / "run", device="auto")
+    train(
+        experiment=smoke(total_steps=200, checkpoint_every=200, eval_every=200), run_dir=tmp_path / "run", device="auto"
+    )
     assert json.loads((tmp_path / "run" / "run.json").read_text())["device"] == "cpu"
     assert training_device("cuda") == "cuda" and training_device("cpu") == "cpu"
 

@@ -52,7 +52,7 @@ def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(t
     experiment = Experiment.model_validate(TINY)
     settings = [("algorithm.kwargs.learning_rate", [0.0003, -1.0])]  # -1: the learner refuses it when it starts
     lines = []
-    results, written = sweep(experiment, [0, 1], settings, tmp_path, "dask", workers=2, echo=lines.append)
+    results, written = sweep(experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append)
     by_status = sorted((result.run.settings["algorithm.kwargs.learning_rate"], result.status) for result in results)
     assert by_status == [(-1.0, "failed"), (-1.0, "failed"), (0.0003, "trained"), (0.0003, "trained")]
     assert all("Invalid learning rate" in result.error for result in results if result.status == "failed")
@@ -60,7 +60,7 @@ def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(t
     assert "| learning_rate=0.0003 | RL | 2 |" in (tmp_path / "aggregate.md").read_text()
     model = tmp_path / "learning_rate=0.0003" / "seed0" / "final_model.zip"
     stamp = model.stat().st_mtime_ns
-    again, _ = sweep(experiment, [0, 1], settings, tmp_path, "dask", workers=2, echo=lines.append)
+    again, _ = sweep(experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append)
     assert sorted(result.status for result in again) == ["failed", "failed", "finished before", "finished before"]
     assert model.stat().st_mtime_ns == stamp  # nothing retrained
     assert "sweep.csv" in {path.name for path in tmp_path.iterdir()}
@@ -172,7 +172,7 @@ def test_a_second_sweep_into_the_same_folder_and_a_train_of_its_run_are_refused(
         lock = {"host": socket.gethostname(), "pid": holder.pid, "what": "rlc sweep", "started": "now"}
         (tmp_path / LOCK).write_text(json.dumps(lock))
         with pytest.raises(ConfigError, match=f"in use by rlc sweep on .* \\(pid {holder.pid}"):
-            sweep(Experiment.model_validate(TINY), [0], [], tmp_path, "local", workers=1, echo=lambda _: None)
+            sweep(Experiment.model_validate(TINY), [0], [], tmp_path, engine="local", workers=1, echo=lambda _: None)
         assert sorted(p.name for p in tmp_path.iterdir()) == [LOCK]  # no run folder, no sweep.csv
         run = tmp_path / "seed0"
         run.mkdir()

@@ -105,7 +105,7 @@ def test_mass_devices_match_an_independent_integration_of_their_equations(record
     samples = samples[: 400 * substeps + 1]  # the first 8 s
     steps = (samples.size - 1) // substeps
     forces = np.random.default_rng(3).uniform(-1.0, 1.0, (steps, 4)) * building.force_limits
-    result = simulate(building, plant.sampled(substeps).step, samples, forces)
+    result = simulate(building, plant.sampled(substeps).step, samples, forces=forces)
 
     floors = np.asarray(Experiment().building.masses)
     story_k = np.asarray(Experiment().building.stiffnesses)

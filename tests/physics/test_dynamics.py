@@ -184,12 +184,12 @@ def test_held_force_is_the_same_at_both_ends_of_a_newmark_step(paper_building):
     rng = np.random.default_rng(0)
     forces = rng.uniform(-1e5, 1e5, (500, 3))
     ground = np.zeros(501)
-    exact = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02)), ground, forces)
+    exact = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02)), ground, forces=forces)
     newmark = simulate(
         paper_building,
         step_map(paper_building, SimulationConfig(control_dt=0.02, method="newmark"), 16),
         np.zeros(500 * 16 + 1),
-        forces,
+        forces=forces,
     )
     np.testing.assert_allclose(newmark.drift, exact.drift, atol=1e-3 * np.max(np.abs(exact.drift)))
 
@@ -198,7 +198,7 @@ def test_base_shear_is_the_sum_of_floor_mass_times_absolute_acceleration(paper_b
     rng = np.random.default_rng(1)
     ground = rayleigh_motion(dt=0.02)
     forces = rng.uniform(-5e4, 5e4, (ground.size - 1, 3))
-    result = simulate(paper_building, step_map(paper_building, SimulationConfig()), ground, forces)
+    result = simulate(paper_building, step_map(paper_building, SimulationConfig()), ground, forces=forces)
     masses = paper_building.floor_masses
     np.testing.assert_allclose(result.base_shear, result.absolute_acceleration @ masses, rtol=1e-10, atol=1e-6)
     top_story = masses[4] * result.absolute_acceleration[:, 4]
@@ -218,7 +218,10 @@ def test_constant_actuator_force_gives_the_static_drift(paper_building):
     force = np.array([4e4, -2e4, 3e4])
     steps = 60_000  # 1200 s: the 1 % mode has decayed by e^-52
     result = simulate(
-        paper_building, step_map(paper_building, SimulationConfig()), np.zeros(steps + 1), np.tile(force, (steps, 1))
+        paper_building,
+        step_map(paper_building, SimulationConfig()),
+        np.zeros(steps + 1),
+        forces=np.tile(force, (steps, 1)),
     )
     static = np.linalg.solve(paper_building.stiffness, paper_building.actuator_matrix @ force)
     static_drift = static - np.concatenate([[0.0], static[:-1]])

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from rlcontroller.physics.dynamics import Response
 from rlcontroller.physics.metrics import energy, j_metrics, peak, ratio_to_reference
+from rlcontroller.physics.response import Response
 
 
 def response(scale: float, force: float, steps: int = 4) -> Response:
@@ -47,8 +47,8 @@ def test_uncontrolled_against_itself_is_one():
 
 
 def test_wind_metrics_are_rms_about_the_mean_and_peaks_in_milli_g():
-    from rlcontroller.physics.dynamics import Response
     from rlcontroller.physics.metrics import wind_metrics
+    from rlcontroller.physics.response import Response
 
     time = np.linspace(0.0, 10.0, 1001)
 

@@ -84,7 +84,9 @@ def test_an_undeclared_response_is_unavailable_not_invented(tmp_path):
     tables = []
     for case in (experiment, model):
         plant = Plant(case)
-        tables.append(run_evaluation(plant, motions, classical_controllers(plant)[:1], "case", False).summary())
+        tables.append(
+            run_evaluation(plant, motions, classical_controllers(plant)[:1], "case", include_optimal=False).summary()
+        )
     reference, table = tables
     assert table[["J3", "J4"]].isna().all().all() and not reference[["J3", "J4"]].isna().any().any()
     np.testing.assert_allclose(table[["J1", "J2"]], reference[["J1", "J2"]], rtol=1e-12)
@@ -113,7 +115,7 @@ def test_a_learner_trains_on_the_state_space_building_as_on_its_matrices(tmp_pat
     model = as_state_space(experiment, tmp_path)
     curves = []
     for case, name in ((experiment, "mkc"), (model, "ss")):
-        train(case, run_dir=tmp_path / name)
+        train(experiment=case, run_dir=tmp_path / name)
         curves.append((tmp_path / name / "learning_curve.csv").read_text().splitlines())
     columns = curves[0][0].split(",")
     wall = columns.index("wall_time_s")

@@ -58,7 +58,7 @@ def bilinear(drift: np.ndarray, shear: np.ndarray, stiffness: float) -> tuple[fl
 
 
 def pushover(
-    path: Path, function: str, mass: np.ndarray, stiffness: np.ndarray, roof_drift: float = 0.04, steps: int = 200
+    path: Path, function: str, mass: np.ndarray, stiffness: np.ndarray, *, roof_drift: float = 0.04, steps: int = 200
 ) -> Pushover:
     """Push the FE model of `path` in its first mode's shape to `roof_drift` (of its height) and idealise
     each story's curve (module docstring); `mass` (kg) and `stiffness` (N/m) are its reduced model's floor

@@ -92,7 +92,7 @@ class WindField:
 
 
 def turbulence(
-    field: WindField, duration: float, dt: float, rng: np.random.Generator, cutoff: float = 2.0
+    field: WindField, duration: float, dt: float, rng: np.random.Generator, *, cutoff: float = 2.0
 ) -> np.ndarray:
     """One realisation of u(z_j, t) (m/s) at t = 0, dt, ..., shape (samples, heights): the spectral
     representation with frequencies n_l = (l + 1/2) dn, dn = 1 / (samples dt), below `cutoff` Hz
@@ -124,12 +124,12 @@ def force_per_speed(field: WindField) -> np.ndarray:
 
 
 def fluctuating_forces(
-    field: WindField, duration: float, dt: float, rng: np.random.Generator, cutoff: float = 2.0
+    field: WindField, duration: float, dt: float, rng: np.random.Generator, *, cutoff: float = 2.0
 ) -> np.ndarray:
     """The fluctuating along-wind force rho C_D A U u (N) on every loaded point at t = 0, dt, ...,
     shape (samples, heights), the same on every CPU (`excitation.same_on_every_cpu`); the whole force is
     `mean_force` plus this."""
-    return same_on_every_cpu(force_per_speed(field) * turbulence(field, duration, dt, rng, cutoff))
+    return same_on_every_cpu(force_per_speed(field) * turbulence(field, duration, dt, rng, cutoff=cutoff))
 
 
 @dataclass(frozen=True)
@@ -190,7 +190,7 @@ def generated_wind(config: WindGeneratorConfig, building: Building, rng: np.rand
     """One wind load record for training: a mean speed and a duration drawn in the generator's ranges."""
     speed = float(rng.uniform(*config.speed))
     duration = float(rng.uniform(*config.duration))
-    forces = fluctuating_forces(floor_field(config, building, speed), duration, config.dt, rng, config.cutoff)
+    forces = fluctuating_forces(floor_field(config, building, speed), duration, config.dt, rng, cutoff=config.cutoff)
     zero = np.zeros(forces.shape[0])
     return Load(name, config.dt, zero, synthetic=True, description=f"wind {speed:.1f} m/s", floor_forces=forces)
 
@@ -203,7 +203,7 @@ def wind_suite(suite: WindSuiteConfig, building: Building) -> list[Load]:
     for speed in suite.speeds:
         field = floor_field(suite, building, speed)
         for number in range(suite.records_per_speed):
-            forces = fluctuating_forces(field, suite.duration, suite.dt, rng, suite.cutoff)
+            forces = fluctuating_forces(field, suite.duration, suite.dt, rng, cutoff=suite.cutoff)
             name = f"wind_{speed:g}ms_{number + 1}"
             zero = np.zeros(forces.shape[0])
             records.append(Load(name, suite.dt, zero, synthetic=True, floor_forces=forces))

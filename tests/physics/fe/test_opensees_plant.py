@@ -151,8 +151,8 @@ def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_
     from rlcontroller import api
     from rlcontroller.assets import DEFAULT_MODEL
 
-    on_fe, _ = api.evaluate(DEFAULT_MODEL, records, tmp_path / "fe", config=FIVE_STORY)
-    on_rlc, _ = api.evaluate(DEFAULT_MODEL, records, tmp_path / "rlc")
+    on_fe, _ = api.evaluate(run_dir=DEFAULT_MODEL, records=records, out=tmp_path / "fe", config=FIVE_STORY)
+    on_rlc, _ = api.evaluate(run_dir=DEFAULT_MODEL, records=records, out=tmp_path / "rlc")
     fe, exact = on_fe.summary(), on_rlc.summary()
     name = "RL"  # the default model, the learned MPC
     assert fe.loc[name, "J1"] == pytest.approx(exact.loc[name, "J1"], rel=0.02)
@@ -186,7 +186,7 @@ def test_train_on_fe_learns_on_the_fe_model_and_resumes_only_with_it_named(tmp_p
     original = OpenSeesIntegrator.step
     monkeypatch.setattr(OpenSeesIntegrator, "step", lambda self, *args: steps.append(1) or original(self, *args))
     config = _learning_on_fe_model(tmp_path)
-    summary = train(load_experiment(config), run_dir=tmp_path / "run")
+    summary = train(experiment=load_experiment(config), run_dir=tmp_path / "run")
     assert summary.steps == 300 and len(steps) >= 300  # the training env stepped the FE model here
     with pytest.raises(ConfigError, match="learned on an OpenSees model, which a run folder never runs"):
         api.train(resume=summary.run_dir)
