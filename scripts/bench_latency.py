@@ -24,7 +24,8 @@ from rlcontroller.config import load_experiment
 from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import read_policy
-from rlcontroller.deployment.export import OnnxController, export_onnx
+from rlcontroller.deployment.export import export_onnx
+from rlcontroller.deployment.runtime import OnnxController
 from rlcontroller.physics.plant import Plant
 
 REPOSITORY = Path(__file__).resolve().parents[1]

@@ -28,9 +28,11 @@ def assured(g, plant: Plant, stored: str, action: str, *, start: int) -> tuple[s
     difference = g.columns("state", start, start + size, "previous_difference")
     previous_peak = g.columns("state", start + size, start + size + floors, "previous_twin_peak")
     was_released = g.node(  # stored as released (1), so that the zero state is engaged, as at a Python reset
-        "Cast", [g.columns("state", start + size + floors, start + size + floors + 1, "previous_released")],
-        "was_released", to=9,  # bool
-    )  # fmt: skip
+        "Cast",
+        [g.columns("state", start + size + floors, start + size + floors + 1, "previous_released")],
+        "was_released",
+        to=9,  # bool
+    )
     was_engaged = g.node("Not", [was_released], "was_engaged")
     estimate = g.columns(stored, plant.layout.estimate.start, plant.layout.estimate.stop, "assured_estimate")
     controlled = g.node("Mul", [estimate, g.constant("assurance_scale", rule.scale)], "controlled_estimate")
@@ -39,25 +41,42 @@ def assured(g, plant: Plant, stored: str, action: str, *, start: int) -> tuple[s
     def envelope(z: str, name: str) -> str:
         drift = g.node("MatMul", [z, g.constant(f"{name}_drift_map", rule.drift_t)], f"{name}_drift")
         rate = g.node("MatMul", [z, g.constant(f"{name}_rate_map", rule.velocity_t)], f"{name}_rate")
-        square = g.node("Add", [g.node("Mul", [drift, drift], f"{name}_d2"), g.node("Mul", [rate, rate], f"{name}_r2")],
-                        f"{name}_square")  # fmt: skip
+        square = g.node(
+            "Add",
+            [g.node("Mul", [drift, drift], f"{name}_d2"), g.node("Mul", [rate, rate], f"{name}_r2")],
+            f"{name}_square",
+        )
         return g.node("Sqrt", [square], f"{name}_envelope")
 
-    twin_drift = g.node("Abs", [g.node("MatMul", [twin, "twin_drift_map"], "twin_story_drift")], "twin_story_magnitude")
+    twin_drift = g.node(
+        "Abs", [g.node("MatMul", [twin, "twin_drift_map"], "twin_story_drift")], "twin_story_magnitude"
+    )
     peak = g.node("Max", [previous_peak, twin_drift], "twin_peak")
-    reference = g.node("Max", [envelope(twin, "twin"), peak, g.constant("assurance_floor", rule.floor)], "reference")
+    reference = g.node(
+        "Max", [envelope(twin, "twin"), peak, g.constant("assurance_floor", rule.floor)], "reference"
+    )
     ratio = g.node("Div", [envelope(controlled, "controlled"), reference], "risk_per_story")
     risk = g.node("ReduceMax", [ratio], "risk", axes=[1], keepdims=1)
     stays = g.node("LessOrEqual", [risk, g.constant("release", rule.release)], "stays_engaged")
     returns = g.node("Less", [risk, g.constant("engage", rule.engage)], "engages_again")
     engaged = g.node(  # was ? stays : returns, in logic (onnxruntime's Where takes no booleans)
-        "Or", [g.node("And", [was_engaged, stays], "kept_engaged"),
-               g.node("And", [g.node("Not", [was_engaged], "was_off"), returns], "engaged_again")], "engaged",
-    )  # fmt: skip
+        "Or",
+        [
+            g.node("And", [was_engaged, stays], "kept_engaged"),
+            g.node("And", [g.node("Not", [was_engaged], "was_off"), returns], "engaged_again"),
+        ],
+        "engaged",
+    )
     recovery = g.clip(
-        g.node("Neg", [g.node("MatMul", [difference, g.constant("recovery_gain", rule.feedback_t)], "recovery_raw")],
-               "recovery_sum"), -1.0, 1.0, "recovery_action",
-    )  # fmt: skip
+        g.node(
+            "Neg",
+            [g.node("MatMul", [difference, g.constant("recovery_gain", rule.feedback_t)], "recovery_raw")],
+            "recovery_sum",
+        ),
+        -1.0,
+        1.0,
+        "recovery_action",
+    )
     action = g.node("Where", [engaged, action, recovery], "assured_action")
     new_difference = g.node(
         "Add",

@@ -31,49 +31,13 @@ from rlcontroller.control.estimation import observation_filter
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.control.supervisor import trigger_readings
-from rlcontroller.deployment.assurance_graph import assurance_state_size, assurance_values, assured
+from rlcontroller.deployment.assurance_graph import assurance_state_size, assured
 from rlcontroller.deployment.fallback_graph import fallback_state_size, fallen_back, measured_velocity
+from rlcontroller.deployment.graph import DOUBLE, FLOAT, OPSET, Graph, network
+from rlcontroller.deployment.runtime import FAITHFUL, graph_deviation
 from rlcontroller.deployment.twin_graph import twin_block
 from rlcontroller.files import atomic_write
 from rlcontroller.physics.plant import Plant
-
-OPSET = 17
-FLOAT, DOUBLE = 1, 11  # onnx.TensorProto.FLOAT, DOUBLE
-
-
-class _Graph:
-    """A few helpers to write an ONNX graph node by node."""
-
-    def __init__(self) -> None:
-        self.nodes: list = []
-        self.constants: list = []
-
-    def constant(self, name: str, value: np.ndarray | float, dtype=np.float64) -> str:
-        from onnx import numpy_helper
-
-        self.constants.append(numpy_helper.from_array(np.asarray(value, dtype=dtype), name))
-        return name
-
-    def node(self, op: str, inputs: list[str], output: str, **attributes) -> str:
-        from onnx import helper
-
-        self.nodes.append(helper.make_node(op, inputs, [output], name=output, **attributes))
-        return output
-
-    def columns(self, source: str, start: int, stop: int, output: str) -> str:
-        starts = self.constant(f"{output}_start", [start], np.int64)
-        stops = self.constant(f"{output}_stop", [stop], np.int64)
-        axes = self.constant(f"{output}_axis", [1], np.int64)
-        return self.node("Slice", [source, starts, stops, axes], output)
-
-    def affine(self, source: str, matrix: np.ndarray, output: str) -> str:
-        """source @ matrix.T"""
-        return self.node("MatMul", [source, self.constant(f"{output}_matrix", matrix.T)], output)
-
-    def clip(self, source: str, low: float, high: float, output: str, dtype=np.float64) -> str:
-        low_name = self.constant(f"{output}_low", low, dtype)
-        high_name = self.constant(f"{output}_high", high, dtype)
-        return self.node("Clip", [source, low_name, high_name], output)
 
 
 def controller_graph(plant: Plant, controller: PolicyController, source: str = ""):
@@ -85,7 +49,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     p, m = sensors.c.shape[0], plant.building.n_actuators
     block, history = p + 1, experiment.sensors.history
     size = layout.size
-    g = _Graph()
+    g = Graph()
 
     scaled = g.node("Div", ["readings", g.constant("reading_scale", layout.reading_scale)], "scaled_readings")
     ground = g.node("Div", ["ground", g.constant("ground_scale", [layout.ground_scale])], "scaled_ground")
@@ -113,16 +77,20 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         divided = g.node("Div", [centred, g.constant("observation_spread", spread)], "divided")
         network_input = g.clip(divided, -normalizer.clip, normalizer.clip, "normalised")
     x = g.node("Cast", [network_input], "network_input", to=FLOAT)
-    x = _network(g, controller.actor, x, "")
+    x = network(g, controller.actor, x, "")
     if controller.actor.odd:  # (g(o) - g(-o)) / 2
-        mirrored = _network(g, controller.actor, g.node("Neg", ["network_input"], "mirrored_input"), "mirrored_")
+        mirrored = network(
+            g, controller.actor, g.node("Neg", ["network_input"], "mirrored_input"), "mirrored_"
+        )
         difference = g.node("Sub", [x, mirrored], "odd_difference")
         x = g.node("Mul", [difference, g.constant("one_half", 0.5, np.float32)], "odd_action")
     action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, "policy_action")
     if controller.prior is not None:
         estimate = g.columns(stored, layout.estimate.start, layout.estimate.stop, "prior_estimate")
         feedback = g.affine(estimate, controller.prior.feedback, "prior_feedback")
-        feedforward = g.node("Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff")
+        feedforward = g.node(
+            "Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff"
+        )
         prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
         action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
     supervisor = experiment.supervisor
@@ -131,13 +99,17 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     if supervisor is not None:
         action, peak, measured = _supervised(g, plant, stored, action, size + 1 + trigger)
         if supervisor.assurance is not None:
-            action, assurance = assured(g, plant, stored, action, start=size + 1 + trigger + fallback_state_size(plant))
+            action, assurance = assured(
+                g, plant, stored, action, start=size + 1 + trigger + fallback_state_size(plant)
+            )
     force = g.node("Mul", [action, g.constant("force_limits", plant.force_limits[None])], "force")
     observation_before_action = g.columns(observation, 0, layout.action.start, "observation_head")
     kept = [observation_before_action, action]
     if layout.actions.stop > layout.action.stop:  # older actions shift by one
         kept.append(g.columns(observation, layout.action.start, layout.actions.stop - m, "older_actions"))
-    g.node("Concat", [*kept, "ground", *([peak] if trigger else []), *measured, *assurance], "next_state", axis=1)
+    g.node(
+        "Concat", [*kept, "ground", *([peak] if trigger else []), *measured, *assurance], "next_state", axis=1
+    )
 
     state_size = size + 1 + trigger + fallback_state_size(plant) + assurance_state_size(plant)
     graph = helper.make_graph(
@@ -154,7 +126,9 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         ],
         initializer=g.constants,
     )
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="rlcontroller")
+    model = helper.make_model(
+        graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="rlcontroller"
+    )
     model.ir_version = 8
     model.doc_string = __doc__
     metadata = {
@@ -176,7 +150,9 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
     return model
 
 
-def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) -> tuple[str, str | None, list[str]]:
+def _supervised(
+    g: Graph, plant: Plant, stored: str, action: str, column: int
+) -> tuple[str, str | None, list[str]]:
     """The supervisor's action, the new peak ground reading (None without a trigger) and the next state's
     measured stroke velocities and fallback latch (state columns from `column` on), computed as
     `control.supervisor` does from the observation as the env stores it (`stored`: float32)."""
@@ -185,18 +161,30 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
     if supervisor.dissipative == "measured":
         stroke = measured
     elif supervisor.dissipative:
-        velocity = g.columns(stored, layout.estimate.start + n, layout.estimate.start + 2 * n, "velocity_estimate")
+        velocity = g.columns(
+            stored, layout.estimate.start + n, layout.estimate.start + 2 * n, "velocity_estimate"
+        )
         stroke = g.node(
-            "MatMul", [velocity, g.constant("actuator_matrix", plant.building.actuator_matrix)], "stroke_velocity"
+            "MatMul",
+            [velocity, g.constant("actuator_matrix", plant.building.actuator_matrix)],
+            "stroke_velocity",
         )
     if supervisor.dissipative:
         feeds = g.node(
-            "Greater", [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)], "feeds_energy"
+            "Greater",
+            [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)],
+            "feeds_energy",
         )
-        if supervisor.fade_velocity > 0.0:  # m/s measured, scaled as the estimate is, like `control.supervisor`
+        if (
+            supervisor.fade_velocity > 0.0
+        ):  # m/s measured, scaled as the estimate is, like `control.supervisor`
             fade = supervisor.fade_velocity / (1.0 if measured is stroke else layout.estimate_scale[n])
-            speed = g.node("Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio")
-            kept = g.clip(g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor")
+            speed = g.node(
+                "Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio"
+            )
+            kept = g.clip(
+                g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor"
+            )
             blocked = g.node("Mul", [action, kept], "faded_action")
         else:
             blocked = g.constant("no_action", 0.0)
@@ -209,9 +197,14 @@ def _supervised(g: _Graph, plant: Plant, stored: str, action: str, column: int) 
     if supervisor.trigger is None:
         return action, None, kept
     indices, scales = trigger_readings(plant)
-    readings = g.node("Gather", [stored, g.constant("trigger_indices", indices, np.int64)], "trigger_stored", axis=1)
-    magnitude = g.node("Abs", [g.node("Mul", [readings, g.constant("trigger_scales", scales)], "trigger_readings")],
-                       "trigger_magnitude")  # fmt: skip
+    readings = g.node(
+        "Gather", [stored, g.constant("trigger_indices", indices, np.int64)], "trigger_stored", axis=1
+    )
+    magnitude = g.node(
+        "Abs",
+        [g.node("Mul", [readings, g.constant("trigger_scales", scales)], "trigger_readings")],
+        "trigger_magnitude",
+    )
     ground = g.node("ReduceMax", [magnitude], "ground_magnitude", axes=[1], keepdims=1)
     previous_peak = g.columns("state", layout.size + 1, layout.size + 2, "previous_peak_ground")
     peak = g.node("Max", [previous_peak, ground], "peak_ground")
@@ -231,43 +224,44 @@ def _supervisor_text(plant: Plant) -> str:
         return "none"
     parts = []
     if supervisor.trigger is not None:
-        floors = list(trigger_readings(plant)[0]) != [plant.layout.ground]  # what the trigger reads, as it reads it
+        floors = list(trigger_readings(plant)[0]) != [
+            plant.layout.ground
+        ]  # what the trigger reads, as it reads it
         watched = "floor acceleration readings" if floors else "ground reading"
-        parts.append(f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak {watched}")
+        parts.append(
+            f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak {watched}"
+        )
     if (assurance := supervisor.assurance) is not None:
-        parts.append(f"runtime assurance against the fail-safe twin (release {assurance.release:g}, engage "
-                     f"{assurance.engage:g})")  # fmt: skip
+        parts.append(
+            "runtime assurance against the fail-safe twin "
+            f"(release {assurance.release:g}, engage {assurance.engage:g})"
+        )
     velocity = "measured " if supervisor.dissipative == "measured" else ""
     if supervisor.dissipative and (fade := supervisor.fade_velocity) > 0.0:
         parts.append(f"forces feeding energy in faded out by {fade:g} m/s of {velocity}stroke velocity")
     elif supervisor.dissipative:
         parts.append("dissipative forces only" + (" (measured stroke velocity)" if velocity else ""))
     if supervisor.fallback is not None:
-        parts.append(f"past {supervisor.fallback.drift:g} m of estimated story drift, dampers on measured stroke "
-                     f"velocity ({', '.join(f'{c:g}' for c in supervisor.fallback.damping)} N s/m)")  # fmt: skip
+        parts.append(
+            f"past {supervisor.fallback.drift:g} m of estimated story drift, dampers on measured stroke "
+            f"velocity ({', '.join(f'{c:g}' for c in supervisor.fallback.damping)} N s/m)"
+        )
     return "; ".join(parts) or "none"
 
 
-def _network(g: _Graph, actor, x: str, prefix: str) -> str:
-    """The actor's layers on `x` (float32), node names starting with `prefix`."""
-    for index, layer in enumerate(actor.layers):
-        weight = g.constant(f"layer{index}_weight", layer.weight, np.float32) if not prefix else f"layer{index}_weight"
-        bias = g.constant(f"layer{index}_bias", layer.bias, np.float32) if not prefix else f"layer{index}_bias"
-        x = g.node("Gemm", [x, weight, bias], f"{prefix}layer{index}", transB=1)
-        if layer.activation is not None:
-            x = _activation(g, layer.activation, x, f"{prefix}layer{index}_{layer.activation.lower()}")
-    return g.node("Tanh", [x], f"{prefix}squashed") if actor.squash else x
-
-
-def _kalman(g: _Graph, plant: Plant, held: str) -> str:
+def _kalman(g: Graph, plant: Plant, held: str) -> str:
     """The scaled estimate after this step's readings: the env's own filter (Kalman or integration), in the
     folded form the env applies (`KalmanFilter.update_matrices`: prediction and correction in one affine map),
     so that the graph and Python round alike."""
     layout, kalman = plant.layout, observation_filter(plant)
     free, action_gain, measured_gain, ground_gain = kalman.update_matrices
     previous = g.columns("state", layout.estimate.start, layout.estimate.stop, "previous_scaled_estimate")
-    estimate = g.node("Mul", [previous, g.constant("estimate_scale", layout.estimate_scale)], "previous_estimate")
-    measured = g.node("Concat", ["readings", "ground"], "measured", axis=1) if kalman.measures_ground else "readings"
+    estimate = g.node(
+        "Mul", [previous, g.constant("estimate_scale", layout.estimate_scale)], "previous_estimate"
+    )
+    measured = (
+        g.node("Concat", ["readings", "ground"], "measured", axis=1) if kalman.measures_ground else "readings"
+    )
     new = g.node(
         "Add",
         [
@@ -276,31 +270,16 @@ def _kalman(g: _Graph, plant: Plant, held: str) -> str:
         ],
         "predicted_free",
     )
-    new = g.node("Add", [new, g.node("MatMul", [measured, g.constant("filter_measured", measured_gain)], "correction")],
-                 "corrected")  # fmt: skip
+    new = g.node(
+        "Add",
+        [new, g.node("MatMul", [measured, g.constant("filter_measured", measured_gain)], "correction")],
+        "corrected",
+    )
     if kalman.known_ground:
         previous_ground = g.columns("state", layout.size, layout.size + 1, "previous_ground")
         ground_response = g.affine(previous_ground, ground_gain[:, None], "ground_response")
         new = g.node("Add", [new, ground_response], "estimate")
     return g.node("Div", [new, "estimate_scale"], "scaled_estimate")
-
-
-def _activation(g: _Graph, name: str, x: str, output: str) -> str:
-    if name == "ReLU":
-        return g.node("Relu", [x], output)
-    if name == "Tanh":
-        return g.node("Tanh", [x], output)
-    if name == "ELU":
-        return g.node("Elu", [x], output, alpha=1.0)
-    if name == "LeakyReLU":
-        return g.node("LeakyRelu", [x], output, alpha=0.01)
-    half = g.node("Div", [x, g.constant(f"{output}_sqrt2", np.sqrt(2.0), np.float32)], f"{output}_scaled")
-    erf = g.node(
-        "Add", [g.node("Erf", [half], f"{output}_erf"), g.constant(f"{output}_one", 1.0, np.float32)], f"{output}_1erf"
-    )
-    return g.node(
-        "Mul", [g.node("Mul", [x, erf], f"{output}_x1erf"), g.constant(f"{output}_half", 0.5, np.float32)], output
-    )
 
 
 def _reading_names(plant: Plant) -> list[str]:
@@ -327,74 +306,17 @@ def export_onnx(folder: Path, model: str, out: Path) -> Path:
         )
     _, weights = policy_paths(folder, model)
     digest = hashlib.sha256(weights.read_bytes()).hexdigest()
-    graph = controller_graph(plant, controller, source=f"{folder.resolve().name}/{weights.name} (sha256 {digest})")
+    graph = controller_graph(
+        plant, controller, source=f"{folder.resolve().name}/{weights.name} (sha256 {digest})"
+    )
     onnx.checker.check_model(graph, full_check=True)
     serialized = graph.SerializeToString()
     deviation, _ = graph_deviation(plant, controller, serialized)
     if not deviation <= FAITHFUL:
         raise ConfigError(
-            f"{folder}: its ONNX graph's forces differ from the Python controller's by {deviation:.3g} of their peak "
+            f"{folder}: its ONNX graph's forces differ from the Python controller's by {deviation:.3g} "
+            "of their peak "
             f"on a generated load (at most {FAITHFUL:g} accepted): this controller is not exported"
         )
     atomic_write(out, serialized)
     return out
-
-
-FAITHFUL = 1e-3  # an exported graph's largest force difference from Python's, of the peak force
-CHECKED_STEPS = 400  # control steps of the generated load the graph is checked on at export
-
-
-def graph_deviation(
-    plant: Plant, controller: PolicyController, graph: bytes, *, seed: int = 0, steps: int = CHECKED_STEPS
-) -> tuple[float, float]:
-    """The largest difference between the commands (N) of the serialised `graph` and those of the Python
-    controller, over the first `steps` control steps of a load drawn from the experiment's own generator, as a
-    fraction of the peak command (0 when the controller never acts), and that peak. The Python controller
-    drives the building in the env; the graph reads the same sensors and is told, after each step, the command
-    the building received (its held action, as a deployed controller's actuators would report it). Step by
-    step, not two closed loops side by side: an LQG controller may be unstable on its own, and a controller
-    that saturates may be chaotic in closed loop, so two faithful copies of it drift apart from the last bit."""
-    from rlcontroller.learning.env import BuildingEnv
-    from rlcontroller.physics.motions.loads import generate
-
-    load = generate(plant.experiment.excitation.generator, np.random.default_rng(seed), plant.building)
-    env, layout, exported = BuildingEnv(plant), plant.layout, OnnxController(graph)
-    assurance = assurance_state_size(plant)
-    controller.reset()
-    observation, info = env.reset(seed=seed, options={"motion": load})
-    python, onnx_commands = [], []
-    for _ in range(min(info["steps"], steps)):
-        readings = observation[layout.readings].astype(float) * layout.reading_scale
-        ground = np.array([[float(observation[layout.ground]) * layout.ground_scale]])
-        onnx_commands.append(exported.step(readings[None], ground)[0])
-        observation, *_ = env.step(controller.act(observation))
-        python.append(env.command)
-        exported.state[0, layout.action] = env.command / plant.force_limits  # the held action, as applied
-        if assurance:  # and the twin's difference it drove (a last-bit flip of the switch is not a fault)
-            exported.state[0, -assurance:] = assurance_values(env.supervisor)
-    peak = float(np.max(np.abs(python)))
-    deviation = float(np.max(np.abs(np.subtract(onnx_commands, python))))
-    return (deviation / peak if peak > 0.0 else 0.0), peak
-
-
-class OnnxController:
-    """An exported controller run by onnxruntime, one control step per call, for `batch` buildings."""
-
-    def __init__(self, path: Path | bytes, batch: int = 1, threads: int = 1) -> None:
-        import onnxruntime
-
-        options = onnxruntime.SessionOptions()
-        options.intra_op_num_threads = threads
-        options.inter_op_num_threads = 1
-        model = path if isinstance(path, bytes) else str(path)
-        self.session = onnxruntime.InferenceSession(model, options, providers=["CPUExecutionProvider"])
-        self.metadata = self.session.get_modelmeta().custom_metadata_map
-        self.state = np.zeros((batch, int(self.metadata["state_size"])))
-
-    def reset(self) -> None:
-        self.state[:] = 0.0
-
-    def step(self, readings: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """Forces (N) for the readings (SI, (batch, p)) and ground accelerations (m/s^2, (batch, 1))."""
-        force, self.state = self.session.run(None, {"readings": readings, "ground": ground, "state": self.state})
-        return force

@@ -15,7 +15,9 @@ def twin_block(g, plant: Plant, held: str, scaled_estimate: str) -> str:
     layout, model = plant.layout, FailSafeTwin(plant, 1)
     start, size, stop = layout.twin.start, layout.estimate.stop - layout.estimate.start, layout.twin.stop
     estimate_scale = g.constant("twin_estimate_scale", layout.estimate_scale)
-    previous_estimate = g.columns("state", layout.estimate.start, layout.estimate.stop, "twin_previous_estimate")
+    previous_estimate = g.columns(
+        "state", layout.estimate.start, layout.estimate.stop, "twin_previous_estimate"
+    )
     previous_twin = g.columns("state", start, start + size, "twin_previous_twin")
     scaled_difference = g.node("Sub", [previous_estimate, previous_twin], "twin_previous_scaled_difference")
     difference = g.node("Mul", [scaled_difference, estimate_scale], "twin_previous_difference")
@@ -30,14 +32,23 @@ def twin_block(g, plant: Plant, held: str, scaled_estimate: str) -> str:
     estimate = g.node("Mul", [scaled_estimate, estimate_scale], "twin_controlled_estimate")
     twin = g.node("Sub", [estimate, advanced], "twin_estimate")
     peak_scale = g.constant("twin_peak_scale", layout.twin_scale[size:])
-    previous_peak = g.node("Mul", [g.columns("state", start + size, stop, "twin_previous_scaled_peak"), peak_scale],
-                           "twin_previous_peak")  # fmt: skip
-    drift = g.node("Abs", [g.node("MatMul", [twin, g.constant("twin_drift_map", model.drift_t)], "twin_drift")],
-                   "twin_drift_magnitude")  # fmt: skip
+    previous_peak = g.node(
+        "Mul",
+        [g.columns("state", start + size, stop, "twin_previous_scaled_peak"), peak_scale],
+        "twin_previous_peak",
+    )
+    drift = g.node(
+        "Abs",
+        [g.node("MatMul", [twin, g.constant("twin_drift_map", model.drift_t)], "twin_drift")],
+        "twin_drift_magnitude",
+    )
     peak = g.node("Max", [previous_peak, drift], "twin_peak")
     return g.node(
         "Concat",
-        [g.node("Div", [twin, estimate_scale], "twin_scaled"), g.node("Div", [peak, peak_scale], "twin_scaled_peak")],
+        [
+            g.node("Div", [twin, estimate_scale], "twin_scaled"),
+            g.node("Div", [peak, peak_scale], "twin_scaled_peak"),
+        ],
         "twin_block",
         axis=1,
     )

@@ -44,12 +44,14 @@ def level(drift_ratio: float, limits: tuple[float, ...], slack: float = 1.0) -> 
 
 
 def risk_upper_bound(k: int, n: int, confidence: float) -> float:
-    """One-sided Clopper-Pearson upper bound on a probability after k events in n trials."""
-    from scipy.stats import beta
+    """One-sided Clopper-Pearson upper bound on a probability after k events in n trials: the `confidence`
+    quantile of Beta(k + 1, n - k), the inverse of the regularised incomplete beta function (scipy.special:
+    scipy.stats' beta.ppf to the last bit, without its 0.7 s import on every `rlc evaluate`)."""
+    from scipy.special import betaincinv
 
     if n == 0:
         return 1.0
-    return 1.0 if k >= n else float(beta.ppf(confidence, k + 1, n - k))
+    return 1.0 if k >= n else float(betaincinv(k + 1, n - k, confidence))
 
 
 def motion_levels(row: dict, system: str, tolerance: float) -> tuple[str, str]:

@@ -15,7 +15,8 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 from rlcontroller.cli import DEFAULT_MODEL
 from rlcontroller.config import ConfigError, Experiment, load_experiment
 from rlcontroller.control.policy_file import read_policy
-from rlcontroller.deployment.export import OnnxController, controller_graph, export_onnx, graph_deviation
+from rlcontroller.deployment.export import controller_graph, export_onnx
+from rlcontroller.deployment.runtime import OnnxController, graph_deviation
 from rlcontroller.learning.env import BuildingEnv, rollout
 from rlcontroller.learning.sb3_models import algorithm_class, policy_controller
 from rlcontroller.physics.motions.excitation import Load

@@ -53,6 +53,10 @@ def test_the_bound_is_clopper_pearson_s():
         assert risk_upper_bound(0, n, 0.95) == pytest.approx(1.0 - 0.05 ** (1.0 / n), rel=1e-9)
     assert risk_upper_bound(5, 5, 0.95) == 1.0 and risk_upper_bound(0, 0, 0.95) == 1.0
     assert risk_upper_bound(9, 320, 0.95) == pytest.approx(0.04856, abs=1e-5)
+    from scipy.stats import beta  # the textbook's form
+
+    for n, k in ((11, 1), (273, 3), (320, 9), (1000, 40)):
+        assert risk_upper_bound(k, n, 0.95) == pytest.approx(beta.ppf(0.95, k + 1, n - k), rel=1e-12)
 
 
 @pytest.mark.parametrize(("k", "passed"), [(9, True), (10, False)])
