@@ -24,6 +24,7 @@ N m^2, N m/rad, m, kg, s.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -74,6 +75,21 @@ class ColumnLine:
         """The lateral stiffness (N/m, n x n) the floors feel with the beams elastic, rotations condensed out."""
         xx, xt, tt = self.matrices()
         return xx - xt @ np.linalg.solve(tt, xt.T)
+
+
+class FishboneArrays(NamedTuple):
+    """The arrays the fishbone kernels take after their leading arguments, in their order (a test pins it to
+    the kernels' own parameter names: `integrators.fishbone_step`, `fishbone_history`)."""
+
+    mass_inverse: np.ndarray  # (n,) 1/m_j
+    damping: np.ndarray  # C (n, n)
+    linear: np.ndarray  # K_e (n, n)
+    coupling: np.ndarray  # B (n, n): the floors' restoring forces from the hinges' z
+    rotation: np.ndarray  # A (n + 1, n)
+    hinge: np.ndarray  # G (n + 1, n + 1)
+    yield_rotation: np.ndarray  # theta_y,j (rad)
+    exponent: np.ndarray
+    beta: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -154,19 +170,26 @@ class Fishbone:
             elastic_stiffness=line.lateral(),
         )
 
-    def _arrays(self) -> tuple:
-        return (
-            self.mass_inverse, self.damping, self.linear_stiffness, self.hysteretic_matrix, self.rotation_map,
-            self.hinge_map, self.yield_rotation, self.exponent, self.beta,
-        )  # fmt: skip
+    def arrays(self) -> FishboneArrays:
+        return FishboneArrays(
+            mass_inverse=self.mass_inverse,
+            damping=self.damping,
+            linear=self.linear_stiffness,
+            coupling=self.hysteretic_matrix,
+            rotation=self.rotation_map,
+            hinge=self.hinge_map,
+            yield_rotation=self.yield_rotation,
+            exponent=self.exponent,
+            beta=self.beta,
+        )
 
     def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
         """The state [x; v; z] after one control step: the action (forces / force limits) held, `ground` the
         r + 1 ground samples (m/s^2) spanning the step."""
         from rlcontroller.physics.integrators import fishbone_step
 
-        return fishbone_step(state, self.floor_gain @ action, ground, control_dt, self.substeps, self.collapse_drift,
-                             *self._arrays())  # fmt: skip
+        force = self.floor_gain @ action
+        return fishbone_step(state, force, ground, control_dt, self.substeps, self.collapse_drift, *self.arrays())
 
     def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest under `ground`
@@ -174,7 +197,7 @@ class Fishbone:
         from rlcontroller.physics.integrators import fishbone_history
 
         collapse = np.full(self.mass_inverse.size, np.inf) if self.collapse_drift is None else self.collapse_drift
-        return fishbone_history(ground, per_step, control_dt, self.substeps, collapse, *self._arrays())
+        return fishbone_history(ground, per_step, control_dt, self.substeps, collapse, *self.arrays())
 
 
 def hysteretic_model(building: Building, config: HysteresisConfig) -> BoucWen | Fishbone:

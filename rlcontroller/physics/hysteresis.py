@@ -29,6 +29,7 @@ against the same code run by the interpreter). a = 1 is the linear building.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,6 +56,21 @@ def drift_matrix(n: int) -> np.ndarray:
 def per_story(value: float | list[float], n: int) -> np.ndarray:
     """A scalar or a list of one value per story, as an array of n."""
     return np.broadcast_to(np.asarray(value, dtype=float), n).copy()
+
+
+class BoucWenArrays(NamedTuple):
+    """The arrays the Bouc-Wen kernels take after their leading arguments, in their order (a test pins it to
+    the kernels' own parameter names: `integrators.bouc_wen_step`, `bouc_wen_history`)."""
+
+    mass_inverse: np.ndarray  # 1/kg per floor
+    damping: np.ndarray  # N s/m, (n, n)
+    linear: np.ndarray  # N/m, (n, n): the post-yield part of the story springs
+    hysteretic: np.ndarray  # N/m per story: (1 - a) k
+    yield_drift: np.ndarray  # m per story
+    exponent: np.ndarray
+    beta: np.ndarray
+    gamma: np.ndarray
+    collapse: np.ndarray  # m per story (inf: none)
 
 
 @dataclass(frozen=True)
@@ -108,6 +124,19 @@ class BoucWen:
         """D' diag(h) (n, n): the floors' restoring forces from the stories' z (N)."""
         return drift_matrix(self.hysteretic_stiffness.size).T @ np.diag(self.hysteretic_stiffness)
 
+    def arrays(self) -> BoucWenArrays:
+        return BoucWenArrays(
+            mass_inverse=self.mass_inverse,
+            damping=self.damping,
+            linear=self.linear_stiffness,
+            hysteretic=self.hysteretic_stiffness,
+            yield_drift=self.yield_drift,
+            exponent=self.exponent,
+            beta=self.beta,
+            gamma=self.gamma,
+            collapse=self.collapse_drift,
+        )
+
     @property
     def story_force_map(self) -> np.ndarray:
         """diag(h) (n, n): each story's hysteretic force from z (N)."""
@@ -118,22 +147,7 @@ class BoucWen:
         r + 1 ground samples (m/s^2) spanning the step."""
         from rlcontroller.physics.integrators import bouc_wen_step  # numba: imported when first needed
 
-        return bouc_wen_step(
-            state,
-            self.floor_gain @ action,
-            ground,
-            control_dt,
-            self.substeps,
-            self.mass_inverse,
-            self.damping,
-            self.linear_stiffness,
-            self.hysteretic_stiffness,
-            self.yield_drift,
-            self.exponent,
-            self.beta,
-            self.gamma,
-            self.collapse_drift,
-        )
+        return bouc_wen_step(state, self.floor_gain @ action, ground, control_dt, self.substeps, *self.arrays())
 
     def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3n) from rest under `ground`
@@ -142,8 +156,5 @@ class BoucWen:
 
         n = self.mass_inverse.size
         return bouc_wen_history(
-            np.zeros(3 * n), np.zeros(n), ground, per_step, control_dt, self.substeps, self.mass_inverse, self.damping,
-            self.linear_stiffness, self.hysteretic_stiffness, self.yield_drift, self.exponent, self.beta, self.gamma,
-            self.collapse_drift,
-        )  # fmt: skip
-
+            np.zeros(3 * n), np.zeros(n), ground, per_step, control_dt, self.substeps, *self.arrays()
+        )

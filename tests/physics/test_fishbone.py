@@ -170,3 +170,22 @@ def test_the_absolute_acceleration_output_is_the_floors_acceleration():
     absolute = relative + ground[1:-1, None]
     assert np.abs(states[:, 10:]).max() > 0.5  # yielding on the way
     np.testing.assert_allclose(states[1:-1] @ c.T, absolute, atol=2e-3 * np.abs(absolute).max())
+
+
+def test_the_kernels_take_their_arrays_in_the_order_the_named_tuples_give_them():
+    """The numba kernels take their arrays positionally: each model hands them over as a named tuple whose
+    fields are the kernels' own parameter names, in order (a reordered field would swap two arrays silently)."""
+    import inspect
+
+    from rlcontroller.physics import integrators
+    from rlcontroller.physics.fishbone import FishboneArrays
+    from rlcontroller.physics.hysteresis import BoucWenArrays
+
+    for kernel, arrays in (
+        (integrators.fishbone_step, FishboneArrays),
+        (integrators.fishbone_history, FishboneArrays),
+        (integrators.bouc_wen_step, BoucWenArrays),
+        (integrators.bouc_wen_history, BoucWenArrays),
+    ):
+        names = list(inspect.signature(kernel.py_func).parameters)
+        assert names[-len(arrays._fields) :] == list(arrays._fields), kernel.__name__
