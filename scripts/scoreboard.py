@@ -23,9 +23,9 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.api.shipping import unshipped_experiments
 from rlcontroller.config import load_experiment, load_safety_check
+from rlcontroller.config.scenarios import safety_standard
 from rlcontroller.control.mpc import DEFAULT_HORIZON, mpc_controller
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import classical_controllers, compare
@@ -187,20 +187,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--records", type=Path, default=REPOSITORY.parent / "shared" / "records")
     parser.add_argument("--out", type=Path, default=REPOSITORY / "docs" / "scoreboard.md")
-    parser.add_argument("names", nargs="*", help="only these models (default: every shipped one)")
+    parser.add_argument("names", nargs="*", help="only these models, the others' rows kept (default: every one)")
     parser.add_argument("--from-json", action="store_true", help="the page again from the last run's figures")
     arguments = parser.parse_args()
     if arguments.from_json:
         rows = json.loads(arguments.out.with_suffix(".json").read_text(encoding="utf-8"))
         atomic_write(arguments.out, page(rows, list(unshipped_experiments()[0])))
         return
-    rows = {}
+    kept = arguments.out.with_suffix(".json")
+    rows = json.loads(kept.read_text(encoding="utf-8")) if arguments.names and kept.is_file() else {}  # the others'
     for folder in sorted(p for p in (REPOSITORY / "models").iterdir() if (p / "best_check.yaml").is_file()):
         if arguments.names and folder.name not in arguments.names:
             continue
         rows[folder.name] = scores(folder, arguments.records)
         print(folder.name, rows[folder.name], flush=True)
-    atomic_write(arguments.out.with_suffix(".json"), json.dumps(rows, indent=1))  # the page again: --from-json
+    atomic_write(kept, json.dumps(rows, indent=1))  # the page again: --from-json
     atomic_write(arguments.out, page(rows, list(unshipped_experiments()[0])))
     print(f"wrote {arguments.out}")
 

@@ -9,16 +9,10 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from rlcontroller.assets import (
-    DAMPER_SCENARIOS,
     DEFAULT_MODEL,
-    DEVICE_SCENARIOS,
-    MATRIX_SCENARIOS,
     MODELS,
-    SAFETY_STANDARD,
-    STANDARD_SCENARIOS,
-    WIND_STANDARD,
 )
-from rlcontroller.config import ConfigError, Experiment, MatrixBuildingConfig, load_experiment
+from rlcontroller.config import ConfigError, Experiment, load_experiment
 
 Advance = Callable[..., None]
 """`advance(amount=1, label="")`: a long step moved on."""
@@ -115,23 +109,6 @@ def output_folder(out: Path | None, default_name: str) -> Path:
         number += 1
         path = base.with_name(f"{base.name}-{number}")
     return path
-
-
-def standard_scenarios(experiment: Experiment) -> Path:
-    """The standard robustness scenarios, or with devices their own (no yielding stories; devices as built
-    differing from their design; no actuator dynamics with semi-active dampers), or for a building given by
-    matrices theirs (factors on the whole building only)."""
-    if experiment.has_dampers:
-        return DAMPER_SCENARIOS
-    if experiment.devices:
-        return DEVICE_SCENARIOS
-    return MATRIX_SCENARIOS if isinstance(experiment.building, MatrixBuildingConfig) else STANDARD_SCENARIOS
-
-
-def safety_standard(experiment: Experiment) -> Path:
-    """The safety check's standard for an experiment: generated wind for one controlled against wind,
-    generated ground motions otherwise."""
-    return WIND_STANDARD if experiment.load_kind == "wind" else SAFETY_STANDARD
 
 
 def motions_text(count: int) -> str:

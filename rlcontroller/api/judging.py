@@ -19,11 +19,11 @@ from rlcontroller.api.common import (
     model_folder,
     motions_text,
     output_folder,
-    standard_scenarios,
 )
 from rlcontroller.assets import SAFETY_STANDARD
 from rlcontroller.bounds import MAX_HORIZON
 from rlcontroller.config import ConfigError, Experiment
+from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.simulation.fanout import model_messages
 

@@ -5,18 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rlcontroller.api.common import (
-    QUIET,
-    Report,
-    folder_experiment,
-    keep_model_messages,
-    load,
-    output_folder,
-    safety_standard,
-)
-from rlcontroller.api.common import standard_scenarios as default_scenarios
+from rlcontroller.api.common import QUIET, Report, folder_experiment, keep_model_messages, load, output_folder
 from rlcontroller.assets import MODELS
 from rlcontroller.config import ConfigError
+from rlcontroller.config.scenarios import safety_standard
+from rlcontroller.config.scenarios import standard_scenarios as default_scenarios
 
 
 def check(

@@ -7,7 +7,16 @@ from typing import Annotated
 
 from pydantic import AfterValidator, Field, ValidationError
 
+from rlcontroller.assets import (
+    DAMPER_SCENARIOS,
+    DEVICE_SCENARIOS,
+    MATRIX_SCENARIOS,
+    SAFETY_STANDARD,
+    STANDARD_SCENARIOS,
+    WIND_STANDARD,
+)
 from rlcontroller.config.base import ConfigError, Seed, StrictModel, first_error, first_repeat, read_model, read_yaml
+from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.checks import check_plant
 from rlcontroller.config.excitation import GeneratorConfig, WindGeneratorConfig
 from rlcontroller.config.experiment import Experiment
@@ -50,7 +59,8 @@ class SafetyCheckConfig(StrictModel):
     drift ratio (or mean J1) to the reference exceeds 1 + `tolerance`; k such motions of N significant pass
     while the one-sided `confidence` Clopper-Pearson upper bound on their probability is at most `risk_bound`
     (0: none may fail). The reference is the building with its controller failed safe
-    (`evaluation.safety.fail_safe`)."""
+    (`evaluation.safety.fail_safe`). The closed loop must be stable on the design model and on each scenario
+    named in `stable_on`."""
 
     motions: Annotated[int, Field(ge=1, le=100_000)] = 320
     seed: Seed = 31_337
@@ -62,6 +72,9 @@ class SafetyCheckConfig(StrictModel):
     tolerance: Annotated[float, Field(ge=0.0, le=0.05)] = 0.01
     risk_bound: Annotated[float, Field(ge=0.0, le=0.5)] = 0.05
     confidence: Annotated[float, Field(ge=0.5, lt=1.0)] = 0.95
+    # standard scenarios (by name) on which the closed loop linearised at rest must be stable too, where the
+    # experiment's scenario set has them (semi-active dampers have no actuator dynamics)
+    stable_on: Annotated[list[Annotated[str, Field(min_length=1, max_length=60)]], Field(max_length=20)] = []
     also: SafetyCheckConfig | None = None  # in YAML a file beside this one, whose check suite must pass too
 
 
@@ -96,3 +109,20 @@ def load_safety_check(path: str | Path) -> SafetyCheckConfig:
 
 def _mapping(raw: object) -> dict:
     return raw if isinstance(raw, dict) else {}
+
+
+def standard_scenarios(experiment: Experiment) -> Path:
+    """The standard robustness scenarios, or with devices their own (no yielding stories; devices as built
+    differing from their design; no actuator dynamics with semi-active dampers), or for a building given by
+    matrices theirs (factors on the whole building only)."""
+    if experiment.has_dampers:
+        return DAMPER_SCENARIOS
+    if experiment.devices:
+        return DEVICE_SCENARIOS
+    return MATRIX_SCENARIOS if isinstance(experiment.building, MatrixBuildingConfig) else STANDARD_SCENARIOS
+
+
+def safety_standard(experiment: Experiment) -> Path:
+    """The safety check's standard for an experiment: generated wind for one controlled against wind,
+    generated ground motions otherwise."""
+    return WIND_STANDARD if experiment.load_kind == "wind" else SAFETY_STANDARD

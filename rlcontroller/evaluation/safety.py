@@ -19,7 +19,8 @@ for a building controlled against wind `configs/checks/wind.yaml`, whose suite i
    switch the policy off at rest), has spectral radius < 1, or no larger than the building's failed safe
    where that has marginal modes of its own (an MR damper's hysteretic memory:
    `evaluation.standard.stability_figures`); the same number on every linear plant of
-   the standard scenarios is reported (not a pass criterion: the verdict says where it is not stable).
+   the standard scenarios is reported, and judged on those the standard names in `stable_on` (configs/checks/:
+   a 20 ms actuator lag and one control step of delay, what a real installation has).
 
 The verdict is a YAML file beside the policy it judges (`evaluation.verdict`: what it judged, and its figures
 re-derived wherever it is read).
@@ -99,7 +100,7 @@ def safety_check(
     if (also := standard.also) is not None:
         judges[also_criterion(also)] = lambda: suite_criterion(plant, controller, also, drift_bounds(plant, also))
     if isinstance(controller, PolicyController):
-        judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios)
+        judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios, standard.stable_on)
     criteria = {}
     for name, judge in judges.items():
         criteria[name] = judge()
@@ -246,7 +247,9 @@ def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckCo
     return rest_figures(round(worst, 4), standard)
 
 
-def stability_criterion(plant: Plant, controller: PolicyController, scenarios: list[Scenario]) -> dict:
+def stability_criterion(
+    plant: Plant, controller: PolicyController, scenarios: list[Scenario], stable_on: list[str]
+) -> dict:
     design = spectral_radius(plant.design, controller)
     failed_safe = spectral_radius(plant.design, fail_safe_controller(plant.design))
     experiment = plant.experiment
@@ -258,4 +261,4 @@ def stability_criterion(plant: Plant, controller: PolicyController, scenarios: l
         radius = spectral_radius(Plant(experiment.model_copy(update={"plant": scenario.plant})), controller)
         per_scenario[scenario.name] = round(radius, 8)
     supervised = experiment.supervisor is not None
-    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8))
+    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on)

@@ -6,8 +6,9 @@ The deterministic policy runs on `excitation.validation_motions` motions of the 
 and the three LQGs, designed on the design model as deployed, are run once on them as references.
 `eval_worse` is the share of the motions on which the policy is worse than the building failed safe (the
 safety check's measure, `metrics.ratio_to_reference`, above 1 + the standard's default tolerance): what
-`select_by: standard` minimises first, among the policies whose closed loop linearised at rest on the design
-model is stable (`eval_spectral_radius` below 1, the check's stability criterion; measured only then).
+`select_by: standard` minimises first, among the policies whose closed loop linearised at rest is stable on the
+design model and on the scenarios the standard judges (`eval_spectral_radius`, the largest, below 1: the check's
+stability criterion; measured only then).
 With `plant_randomization`, motion i runs on the plant drawn with seed i, the same draw for every
 controller and every validation.
 """
@@ -23,7 +24,7 @@ from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.metrics import j_metrics, peak, ratio_to_reference
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.linearised import spectral_radius
+from rlcontroller.simulation.linearised import judged_plants, robust_spectral_radius
 from rlcontroller.simulation.rollout import batch_rollout
 
 
@@ -32,6 +33,7 @@ class Validator:
 
     def __init__(self, plant: Plant) -> None:
         self.plant = plant
+        self.judged: list[Plant] | None = None  # the standard's stability scenarios (select_by: standard)
         excitation = plant.experiment.excitation
         self.motions = generate_suite(
             excitation.validation, excitation.validation_motions, excitation.validation_seed, plant.building
@@ -60,7 +62,9 @@ class Validator:
         """The validation row of `policy` (a model's `policy_controller`), with the references."""
         row = self.run(policy) | self.reference
         if self.plant.experiment.algorithm.select_by == "standard":
-            row["eval_spectral_radius"] = spectral_radius(self.plant.design, policy)
+            if self.judged is None:  # built at the first checkpoint that asks
+                self.judged = judged_plants(self.plant)
+            row["eval_spectral_radius"] = robust_spectral_radius(self.plant, policy, self.judged)
         return row
 
     def _rollouts(self, controller) -> list:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rlcontroller.config import PlantConfig
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.control.twin import FailSafeTwin
@@ -23,7 +24,9 @@ from rlcontroller.physics.motions.excitation import Load, LoadGrid, on_control_g
 from rlcontroller.physics.motions.loads import generate
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.variations import draw_plant
-from rlcontroller.simulation.outputs import noisy_readings, step_outputs
+from rlcontroller.simulation.outputs import StepOutputs, noisy_readings, step_outputs
+
+DRAWN_KEPT = 64  # drawn plants kept by a batch before it starts afresh (continuous draws never repeat)
 
 
 class BuildingBatch:
@@ -70,6 +73,7 @@ class BuildingBatch:
         self._stacked: np.ndarray | None = None  # the transitions of all members, padded to S
         self._transitions: list[np.ndarray | None] = [None] * size  # each member's own T (unpadded)
         self._cache: dict[int, np.ndarray] = {}  # sub-steps -> T of the base plant
+        self._drawn: dict[str, tuple] = {}  # a drawn plant part's JSON -> `_drawn_plant`
         self._ground_cache: dict[int, tuple] = {}  # id(load) -> (load, sub-steps, its forcing)
         self._windows: list[np.ndarray | None] = [None] * size  # non-linear members: ground per step
         self._load_windows: list[np.ndarray | None] = [None] * size  # and floor forces per step, if any
@@ -91,15 +95,25 @@ class BuildingBatch:
         self._state_size, self.states, self._forcing = state_size, states, forcing
         self._stacked = None
 
+    def _drawn_plant(self, drawn: PlantConfig) -> tuple[Plant, StepOutputs, dict[int, np.ndarray]]:
+        """The plant of a drawn plant part with its output rows and its transitions per sampling, built once per
+        distinct draw (a whole-number draw, such as a delay, repeats; continuous ones are kept up to DRAWN_KEPT)."""
+        key = drawn.model_dump_json()
+        if key not in self._drawn:
+            if len(self._drawn) >= DRAWN_KEPT:
+                self._drawn.clear()
+            plant = Plant(self.plant.experiment.model_copy(update={"plant": drawn}))
+            self._drawn[key] = (plant, step_outputs(plant), {})
+        return self._drawn[key]
+
     def start(
         self, member: int, rng: np.random.Generator, motion: Load | None = None, grid: LoadGrid | None = None
     ) -> None:
         """Start `member` from rest: draw its plant (with randomisation) and motion (unless given, with
         its `grid` when known), then its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
-        plant = self.plant
+        plant, rows, transitions = self.plant, self.rows, self._cache
         if self.randomization is not None:
-            drawn = draw_plant(self.randomization, plant.experiment.plant, rng)
-            plant = Plant(plant.experiment.model_copy(update={"plant": drawn}))
+            plant, rows, transitions = self._drawn_plant(draw_plant(self.randomization, plant.experiment.plant, rng))
         reused = motion is not None or bool(self.motions)  # a motion other members may start with too
         if motion is None:
             if self.motions:
@@ -107,10 +121,9 @@ class BuildingBatch:
             else:
                 motion = generate(plant.experiment.excitation.generator, rng, plant.building)
         grid = on_control_grid(motion, self.control_dt) if grid is None else grid
-        rows = self.rows if plant is self.plant else step_outputs(plant)
         sampled, base = plant.sampled(grid.substeps), plant is self.plant
         # the load's forcing, kept for the members that start with the same load object on the base plant
-        # (every controller's lane does); the transition kept per sampling of the base plant
+        # (every controller's lane does); the transition kept per sampling of each plant
         cached = self._ground_cache.get(id(motion))
         if cached is not None and cached[0] is motion and cached[1] == grid.substeps:
             load_forcing = cached[2]
@@ -119,12 +132,10 @@ class BuildingBatch:
             if reused and base:
                 self._ground_cache[id(motion)] = (motion, grid.substeps, load_forcing)  # its id stays its own
         transition = None
-        if plant.integrator is None and not base:
-            transition = sampled.transition(rows.c, rows.d)
-        elif plant.integrator is None:
-            if grid.substeps not in self._cache:
-                self._cache[grid.substeps] = sampled.transition(rows.c, rows.d)
-            transition = self._cache[grid.substeps]
+        if plant.integrator is None:
+            if grid.substeps not in transitions:
+                transitions[grid.substeps] = sampled.transition(rows.c, rows.d)
+            transition = transitions[grid.substeps]
         n_steps = grid.n_steps
         self._resize(plant.n_state, n_steps + 1)  # the last row stays zero: the forcing after the end
         size = self._state_size

@@ -1,5 +1,6 @@
 """The closed loop linearised at rest: a policy's state-transition matrix on a plant, and its spectral radius
-(the safety check's stability criterion, and what `select_by: standard` asks of a checkpoint)."""
+(the safety check's stability criterion, on the design model and on the scenarios its standard judges, and
+what `select_by: standard` asks of a checkpoint)."""
 
 from __future__ import annotations
 
@@ -44,3 +45,23 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
 
 def spectral_radius(plant: Plant, controller: PolicyController) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(closed_loop_matrix(plant, controller)))))
+
+
+def judged_plants(plant: Plant) -> list[Plant]:
+    """The plants of the standard scenarios the safety check's standard judges stability on (`stable_on`:
+    an actuator lag, one step of delay) that the experiment's scenario set has and that are linear, built as
+    the check builds them."""
+    from rlcontroller.config import load_safety_check, load_scenarios
+    from rlcontroller.config.scenarios import safety_standard, standard_scenarios
+
+    experiment = plant.experiment
+    names = load_safety_check(safety_standard(experiment)).stable_on
+    scenarios = load_scenarios(standard_scenarios(experiment), experiment)
+    linear = [s for s in scenarios if s.name in names and (s.plant is None or s.plant.hysteresis is None)]
+    return [Plant(experiment.model_copy(update={"plant": scenario.plant})) for scenario in linear]
+
+
+def robust_spectral_radius(plant: Plant, controller: PolicyController, judged: list[Plant]) -> float:
+    """The largest spectral radius of the closed loop on the design model and on each of the `judged` plants
+    (`judged_plants`): what the safety check's stability criterion asks to be below 1."""
+    return max([spectral_radius(plant.design, controller)] + [spectral_radius(p, controller) for p in judged])

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import optuna
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.config import SupervisorConfig, load_experiment, load_safety_check
+from rlcontroller.config.scenarios import safety_standard
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
 from rlcontroller.physics.plant import Plant

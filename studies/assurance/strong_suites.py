@@ -13,9 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.config import SafetyCheckConfig, load_experiment
-from rlcontroller.config.scenarios import load_safety_check
+from rlcontroller.config.scenarios import load_safety_check, safety_standard
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
 from rlcontroller.physics.plant import Plant

@@ -17,9 +17,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.config import ConfigError, load_experiment
-from rlcontroller.config.scenarios import load_safety_check
+from rlcontroller.config.scenarios import load_safety_check, safety_standard
 from rlcontroller.control.controllers import ConstantCommand
 from rlcontroller.evaluation.evaluation import classical_controllers
 from rlcontroller.evaluation.safety import Verdict, safety_check

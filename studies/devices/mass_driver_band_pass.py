@@ -16,9 +16,9 @@ import sys
 
 import numpy as np
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
+from rlcontroller.config.scenarios import safety_standard
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check

@@ -31,9 +31,9 @@ import numpy as np
 import scipy.optimize
 import scipy.sparse as sparse
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
+from rlcontroller.config.scenarios import safety_standard
 from rlcontroller.control.controllers import LQGController, Uncontrolled
 from rlcontroller.control.lqg import LQGDesign, design_lqg_ground_model
 from rlcontroller.evaluation.safety import safety_check

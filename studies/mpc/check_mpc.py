@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import sys
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
+from rlcontroller.config.scenarios import safety_standard
 from rlcontroller.control.mpc import mpc_controller
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.physics.plant import Plant

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.api.common import load, safety_standard
-from rlcontroller.config.scenarios import load_safety_check
+from rlcontroller.api.common import load
+from rlcontroller.config.scenarios import load_safety_check, safety_standard
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.evaluation.safety import check_suite

@@ -17,9 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.config import SupervisorConfig, load_experiment
-from rlcontroller.config.scenarios import load_safety_check
+from rlcontroller.config.scenarios import load_safety_check, safety_standard
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.evaluation.evaluation import scaled_weights
 from rlcontroller.evaluation.safety import drift_bounds, suite_criterion

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from rlcontroller.api.common import standard_scenarios
 from rlcontroller.config import load_experiment, load_scenarios
+from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
 from rlcontroller.control.policy_file import read_policy

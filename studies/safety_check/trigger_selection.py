@@ -28,9 +28,8 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.api.common import safety_standard
 from rlcontroller.config import SupervisorConfig, load_experiment, with_overrides
-from rlcontroller.config.scenarios import load_safety_check
+from rlcontroller.config.scenarios import load_safety_check, safety_standard
 from rlcontroller.control.classical import classical_policy
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.safety import drift_bounds, rest_criterion, suite_criterion

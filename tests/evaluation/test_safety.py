@@ -9,7 +9,8 @@ from typer.testing import CliRunner
 
 from rlcontroller.assets import DEFAULT_MODEL
 from rlcontroller.cli import app
-from rlcontroller.config import Experiment, load_experiment, load_safety_check
+from rlcontroller.config import Experiment, load_experiment, load_safety_check, load_scenarios
+from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.networks import Actor, Layer
 from rlcontroller.control.policy_controller import PolicyController
@@ -404,8 +405,8 @@ WIND_STANDARD = REPOSITORY / "configs" / "checks" / "wind.yaml"
 
 
 def test_a_wind_standard_loads_the_experiment_s_own_site_with_its_own_speeds():
-    from rlcontroller.api.common import safety_standard
     from rlcontroller.config import check_generator
+    from rlcontroller.config.scenarios import safety_standard
 
     atmd = load_experiment(REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml")
     wind = load_safety_check(WIND_STANDARD)
@@ -474,3 +475,28 @@ def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, na
     subprocess.run(command, env=environment, capture_output=True, text=True, timeout=1800)
     verdict = yaml.safe_load((folder / "best_check.yaml").read_text())
     assert differences(shipped, verdict) == [], name
+
+
+def test_the_project_s_standard_judges_one_step_of_delay_and_a_20_ms_lag_and_training_selects_on_them():
+    """configs/checks/standard.yaml names the two scenarios a real installation has; the check and the training's
+    selection (`robust_spectral_radius`) both find a policy stable at rest but unstable with one step of delay."""
+    from rlcontroller.simulation.linearised import judged_plants, robust_spectral_radius
+
+    standard = load_safety_check(STANDARD)
+    assert standard.stable_on == ["actuator lag 20 ms", "delay 1 step (20 ms)"]
+    plant = Plant(Experiment())
+    judged = judged_plants(plant)
+    assert [(p.experiment.plant.actuators.time_constant, p.experiment.plant.actuators.delay_steps) for p in judged] == [
+        (0.02, 0),
+        (0.0, 1),
+    ]
+    weights = np.zeros((3, plant.layout.size))
+    weights[range(3), range(3)] = 0.3  # each actuator on one floor's acceleration: stable, but not one step late
+    policy = linear_policy(weights)
+    nominal = spectral_radius(plant.design, policy)
+    delayed = spectral_radius(judged[1], policy)
+    assert nominal < 1.0 < delayed and robust_spectral_radius(plant, policy, judged) == delayed
+    named = load_scenarios(standard_scenarios(plant.experiment), plant.experiment)
+    criterion = safety_check(plant, policy, small_standard(), named)
+    stability = criterion.criteria["closed-loop stability"]
+    assert not stability["passed"] and stability["judged_scenarios"] == standard.stable_on

@@ -145,3 +145,24 @@ def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_peri
     rows["m0"]["sa_over_pga"] = [float("nan"), 1.0, 2.0]
     with pytest.raises(ValueError, match=r"^m0\.sa_over_pga \[nan, 1\.0, 2\.0\] is no possible figure"):
         suite_figures(rows, "no control", STEEL, STANDARD, devices=None, periods=[1.44, 0.55, 0.35])
+
+
+def test_stability_is_judged_on_the_standard_s_scenarios_and_reported_on_the_rest():
+    """The design model and each scenario of `stable_on` must be below 1; another scenario's radius is reported;
+    a named scenario the experiment lacks is said, not judged; a radius no matrix has is refused."""
+    from rlcontroller.evaluation.standard import stability_figures
+
+    radii = {"actuator lag 20 ms": 0.99, "delay 1 step (20 ms)": 1.0018, "delay 2 steps (40 ms)": 1.03}
+    judged = ["actuator lag 20 ms", "delay 1 step (20 ms)"]
+    reported = stability_figures(0.99, radii, False, 0.999)
+    assert reported["passed"] and "unstable on delay 1 step (20 ms), delay 2 steps (40 ms)" in reported["summary"]
+    figures = stability_figures(0.99, radii, False, 0.999, judged)
+    assert not figures["passed"] and figures["judged_scenarios"] == judged
+    assert "judged on actuator lag 20 ms, delay 1 step (20 ms): unstable on delay 1 step (20 ms)" in figures["summary"]
+    stable = stability_figures(0.99, radii | {"delay 1 step (20 ms)": 0.995}, False, 0.999, judged)
+    assert stable["passed"] and stable["summary"].endswith("judged on actuator lag 20 ms, delay 1 step (20 ms): stable")
+    dampers = stability_figures(0.99999998, {"stiffness x 0.7": 0.99999998}, False, 0.99999998, judged)
+    assert dampers["passed"] and dampers["judged_scenarios"] == []
+    assert "delay 1 step (20 ms): not among this experiment's linear scenarios" in dampers["summary"]
+    with pytest.raises(ValueError, match="a spectral radius that no matrix has"):
+        stability_figures(0.99, radii | {"delay 1 step (20 ms)": float("nan")}, False, 0.999, judged)

@@ -28,6 +28,11 @@ CASES = {
             "noise_factor": {"low": 0.5, "high": 2.0},
         },
     },
+    "delays of 0-2 steps only: each drawn plant built once": {
+        "excitation": SHORT_MOTIONS,
+        "sensors": {"action_history": 3},
+        "plant_randomization": {"delay_steps": [0, 2]},
+    },
     "integrated readings, model-free, reward per motion": {
         "excitation": SHORT_MOTIONS,
         "sensors": {"integration_cutoff": 0.1, "action_history": 2},
@@ -73,6 +78,8 @@ def test_the_batched_vec_env_steps_as_a_dummy_vec_env(case):
     assert episodes >= 8  # several restarts were compared
     if plant.experiment.plant_randomization is not None:
         assert delays == {0, 1, 2}  # plant states of three sizes, padded to the largest
+    if case.startswith("delays"):  # a repeated draw reuses its plant, rows and transitions: the same steps
+        assert len(batched.batch._drawn) == 3 and episodes > 3
 
 
 def test_the_algorithm_chooses_the_vec_env():
