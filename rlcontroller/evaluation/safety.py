@@ -261,4 +261,4 @@ def stability_criterion(
         radius = spectral_radius(Plant(experiment.model_copy(update={"plant": scenario.plant})), controller)
         per_scenario[scenario.name] = round(radius, 8)
     supervised = experiment.supervisor is not None
-    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on)
+    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on=stable_on)

@@ -240,6 +240,7 @@ def stability_figures(
     per_scenario: dict[str, float | str],
     supervised: bool,
     failed_safe: float,
+    *,
     stable_on: list[str] | tuple[str, ...] = (),
 ) -> dict:
     """The closed-loop stability criterion from the spectral radius on the design model and on each standard

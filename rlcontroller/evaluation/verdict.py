@@ -117,7 +117,7 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
                     item["spectral_radius_scenarios"],
                     item["supervisor_left_out"],
                     item["spectral_radius_failed_safe"],
-                    standard.stable_on,
+                    stable_on=standard.stable_on,
                 )
             else:
                 found.append(f"{name!r} is no criterion of the standard")

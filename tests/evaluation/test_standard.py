@@ -156,13 +156,13 @@ def test_stability_is_judged_on_the_standard_s_scenarios_and_reported_on_the_res
     judged = ["actuator lag 20 ms", "delay 1 step (20 ms)"]
     reported = stability_figures(0.99, radii, False, 0.999)
     assert reported["passed"] and "unstable on delay 1 step (20 ms), delay 2 steps (40 ms)" in reported["summary"]
-    figures = stability_figures(0.99, radii, False, 0.999, judged)
+    figures = stability_figures(0.99, radii, False, 0.999, stable_on=judged)
     assert not figures["passed"] and figures["judged_scenarios"] == judged
     assert "judged on actuator lag 20 ms, delay 1 step (20 ms): unstable on delay 1 step (20 ms)" in figures["summary"]
-    stable = stability_figures(0.99, radii | {"delay 1 step (20 ms)": 0.995}, False, 0.999, judged)
+    stable = stability_figures(0.99, radii | {"delay 1 step (20 ms)": 0.995}, False, 0.999, stable_on=judged)
     assert stable["passed"] and stable["summary"].endswith("judged on actuator lag 20 ms, delay 1 step (20 ms): stable")
-    dampers = stability_figures(0.99999998, {"stiffness x 0.7": 0.99999998}, False, 0.99999998, judged)
+    dampers = stability_figures(0.99999998, {"stiffness x 0.7": 0.99999998}, False, 0.99999998, stable_on=judged)
     assert dampers["passed"] and dampers["judged_scenarios"] == []
     assert "delay 1 step (20 ms): not among this experiment's linear scenarios" in dampers["summary"]
     with pytest.raises(ValueError, match="a spectral radius that no matrix has"):
-        stability_figures(0.99, radii | {"delay 1 step (20 ms)": float("nan")}, False, 0.999, judged)
+        stability_figures(0.99, radii | {"delay 1 step (20 ms)": float("nan")}, False, 0.999, stable_on=judged)
