@@ -214,15 +214,16 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
 @pytest.mark.slow
 def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     """`rlc demo`'s experiment: every story actuated behind the ground trigger, a model-free linear policy
-    learned from zero gains; training changes it (validation J1 from 1, no control, to below 0.35) and the
-    trained policy passes the whole standard check, its worst significant motion at most 1.005 of no control."""
+    learned from zero gains with one step of delay drawn on half its motions; training changes it (validation J1,
+    the validation plants drawn alike, from 1, no control, to below 0.4) and the trained policy passes the whole
+    standard check (stable one step late), its worst significant motion at most 1.005 of no control."""
     from rlcontroller.config import load_experiment, load_scenarios
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.learning.training import train
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "demo.yaml")
     summary = train(experiment=experiment, run_dir=tmp_path / "demo")
-    assert summary.best_steps > 0 and summary.best["eval_J1"] < 0.35
+    assert summary.best_steps > 0 and summary.best["eval_J1"] < 0.4
     plant = Plant(experiment)
     policy = read_policy(summary.run_dir, "best", plant)
     scenarios = load_scenarios(REPOSITORY / "configs" / "scenarios" / "standard.yaml", experiment)
