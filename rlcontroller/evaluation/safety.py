@@ -43,7 +43,7 @@ from rlcontroller.physics.motions.excitation import FLOOR_FORCES, STANDARD_GRAVI
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.motions.spectra import spectral_shape
 from rlcontroller.physics.plant import Plant
-from rlcontroller.simulation.linearised import spectral_radius
+from rlcontroller.simulation.linearised import scenario_plant, spectral_radius
 from rlcontroller.simulation.rollout import batch_rollout
 
 FAIL_SAFE = "fail-safe"
@@ -255,10 +255,9 @@ def stability_criterion(
     experiment = plant.experiment
     per_scenario: dict[str, float | str] = {}
     for scenario in scenarios:
-        if scenario.plant is not None and scenario.plant.hysteresis is not None:
-            per_scenario[scenario.name] = "not linear: not checked"
-            continue
-        radius = spectral_radius(Plant(experiment.model_copy(update={"plant": scenario.plant})), controller)
-        per_scenario[scenario.name] = round(radius, 8)
+        linear = scenario_plant(plant, scenario)
+        per_scenario[scenario.name] = (
+            "not linear: not checked" if linear is None else round(spectral_radius(linear, controller), 8)
+        )
     supervised = experiment.supervisor is not None
     return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on=stable_on)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rlcontroller.config import Scenario
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
@@ -47,6 +48,14 @@ def spectral_radius(plant: Plant, controller: PolicyController) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(closed_loop_matrix(plant, controller)))))
 
 
+def scenario_plant(plant: Plant, scenario: Scenario) -> Plant | None:
+    """The linear plant of a standard scenario (`plant`'s experiment with the scenario's plant part), or None
+    where the scenario yields (no linearisation at rest speaks for it)."""
+    if scenario.plant is not None and scenario.plant.hysteresis is not None:
+        return None
+    return Plant(plant.experiment.model_copy(update={"plant": scenario.plant}))
+
+
 def judged_plants(plant: Plant) -> list[Plant]:
     """The plants of the standard scenarios the safety check's standard judges stability on (`stable_on`:
     an actuator lag, one step of delay) that the experiment's scenario set has and that are linear, built as
@@ -57,8 +66,8 @@ def judged_plants(plant: Plant) -> list[Plant]:
     experiment = plant.experiment
     names = load_safety_check(safety_standard(experiment)).stable_on
     scenarios = load_scenarios(standard_scenarios(experiment), experiment)
-    linear = [s for s in scenarios if s.name in names and (s.plant is None or s.plant.hysteresis is None)]
-    return [Plant(experiment.model_copy(update={"plant": scenario.plant})) for scenario in linear]
+    judged = [scenario_plant(plant, scenario) for scenario in scenarios if scenario.name in names]
+    return [judged_plant for judged_plant in judged if judged_plant is not None]
 
 
 def robust_spectral_radius(plant: Plant, controller: PolicyController, judged: list[Plant]) -> float:
