@@ -25,6 +25,7 @@ DEMO_CONFIG = CONFIGS / "experiments" / "demo.yaml"
 STANDARD_SCENARIOS = CONFIGS / "scenarios" / "standard.yaml"
 DEVICE_SCENARIOS = CONFIGS / "scenarios" / "devices.yaml"  # the standard's for buildings with mass devices
 DAMPER_SCENARIOS = CONFIGS / "scenarios" / "dampers.yaml"  # and with semi-active dampers
-MATRIX_SCENARIOS = CONFIGS / "scenarios" / "matrices.yaml"  # for a building given by matrices, without devices
+# for a building given by matrices, without devices
+MATRIX_SCENARIOS = CONFIGS / "scenarios" / "matrices.yaml"
 SAFETY_STANDARD = CONFIGS / "checks" / "standard.yaml"
 WIND_STANDARD = CONFIGS / "checks" / "wind.yaml"  # the check's standard for experiments under wind

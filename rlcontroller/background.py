@@ -22,7 +22,8 @@ class Background:
 
         self._value, self._process = None, None
         if (os.cpu_count() or 1) < 2 or not hasattr(os, "fork") or multiprocessing.current_process().daemon:
-            self._value = call()  # no core to spare, or a daemonic process (a Dask worker) may not have children
+            # no core to spare, or a daemonic process (a Dask worker) may not have children
+            self._value = call()
             return
 
         sys.stdout.flush()  # the child must not write its copy of unflushed output again

@@ -18,7 +18,11 @@ from rlcontroller.config import ConfigError
 
 def atomic_write(path: Path, content: str | bytes) -> Path:
     """Write text or bytes to `path` through a temporary beside it."""
-    write = (lambda t: t.write_bytes(content)) if isinstance(content, bytes) else (lambda t: t.write_text(content))
+    write = (
+        (lambda t: t.write_bytes(content))
+        if isinstance(content, bytes)
+        else (lambda t: t.write_text(content))
+    )
     return _replace_with(path, path.with_name(f".{path.name}.{os.getpid()}.tmp"), write)
 
 

@@ -1,5 +1,6 @@
-"""The strict base of every configuration model: unknown keys, changes after validation, non-finite numbers and
-booleans where a number is expected (YAML reads `no` as false, which a number field would take as 0) are refused."""
+"""The strict base of every configuration model: unknown keys, changes after validation, non-finite numbers
+and booleans where a number is expected (YAML reads `no` as false, which a number field would take as 0) are
+refused."""
 
 import types
 import typing
@@ -11,7 +12,8 @@ NUMBERS = (int, float)
 
 
 def numbers_only(annotation) -> bool:
-    """Whether a field's type takes numbers and nothing else (None aside): int, float, their Optional or Annotated."""
+    """Whether a field's type takes numbers and nothing else (None aside): int, float, their Optional or
+    Annotated."""
     origin = get_origin(annotation)
     if origin is Annotated:
         return numbers_only(get_args(annotation)[0])

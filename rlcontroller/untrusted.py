@@ -38,7 +38,9 @@ def npz_headers(path: Path, max_bytes: int = MAX_ARRAY_BYTES) -> dict[str, tuple
                 raise ValueError(f"{name}: dtype {dtype}, expected numbers")
             declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
             if declared != member.file_size - header_size:
-                raise ValueError(f"{name}: its header declares {shape} of {dtype}, the file holds other bytes")
+                raise ValueError(
+                    f"{name}: its header declares {shape} of {dtype}, the file holds other bytes"
+                )
             headers[name] = (tuple(shape), dtype)
     return headers
 

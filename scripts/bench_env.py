@@ -108,7 +108,8 @@ def main() -> None:
         rates["pendulum"].append(steps_per_second(pendulum, arguments.steps))
     building_rate, pendulum_rate = max(rates["building"]), max(rates["pendulum"])
     print(
-        f"machine: {platform.node()} ({platform.processor() or platform.machine()}), python {platform.python_version()}"
+        f"machine: {platform.node()} ({platform.processor() or platform.machine()}), python "
+        f"{platform.python_version()}"
     )
     print(f"rlcontroller/Building-v0 step(): {building_rate:,.0f} steps/s")
     print(f"Pendulum-v1 step():              {pendulum_rate:,.0f} steps/s")
@@ -116,9 +117,13 @@ def main() -> None:
     print(f"whole-record simulation:         {whole_record_rate():,.0f} control steps/s")
     compiled = yielding_rate(arguments.steps)
     command = [sys.executable, __file__, "--yielding-only", "--steps", str(max(arguments.steps // 50, 200))]
-    interpreted = float(subprocess.check_output(command, env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, text=True))
+    interpreted = float(
+        subprocess.check_output(command, env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, text=True)
+    )
     print(f"yielding stories step() (numba):  {compiled:,.0f} steps/s")
-    print(f"yielding stories, interpreted:    {interpreted:,.0f} steps/s ({compiled / interpreted:.0f}x slower)")
+    print(
+        f"yielding stories, interpreted:    {interpreted:,.0f} steps/s ({compiled / interpreted:.0f}x slower)"
+    )
     print(f"3 MR dampers step() (numba):      {mr_rate(arguments.steps):,.0f} steps/s")
     print(f"76-story + ATMD, wind estimate:   {tower_rate(arguments.steps):,.0f} steps/s")
     print(f"yielding stories, batch of 16:    {batch_rate(Experiment(plant=YIELDING)):,.0f} steps/s")

@@ -59,7 +59,9 @@ def record_by_record(plant: Plant, motions: list[Load]) -> float:
 
 def synthetic_records(count: int) -> list[Load]:
     """`count` Kanai-Tajimi records of 10-100 s and PGA 0.003-1.2 g, resampled to three sampling steps."""
-    config = KanaiTajimiConfig(dt=0.005, duration=(10.0, 100.0), pga=(0.003 * STANDARD_GRAVITY, 1.2 * STANDARD_GRAVITY))
+    config = KanaiTajimiConfig(
+        dt=0.005, duration=(10.0, 100.0), pga=(0.003 * STANDARD_GRAVITY, 1.2 * STANDARD_GRAVITY)
+    )
     motions = generate_suite(config, count, seed=207)
     return [
         replace(
@@ -93,8 +95,8 @@ def main() -> None:
     looped = record_by_record(plant, motions)
     count = len(evaluation.controllers)
     print(
-        f"{count} controllers x {len(motions)} records: batched {batched:.2f} s, record by record {looped:.2f} s "
-        f"({looped / batched:.1f}x)"
+        f"{count} controllers x {len(motions)} records: batched {batched:.2f} s, record by record "
+        f"{looped:.2f} s ({looped / batched:.1f}x)"
     )
 
     large = synthetic_records(arguments.large)
@@ -109,7 +111,10 @@ def main() -> None:
     if not arguments.skip_robustness:
         scenarios = load_scenarios(SCENARIOS, experiment)
         _, elapsed = robustness(experiment, scenarios, motions, label, policy=policy)
-        print(f"robustness: {len(scenarios)} scenarios x {len(motions)} records x 4 controllers in {elapsed:.1f} s")
+        print(
+            f"robustness: {len(scenarios)} scenarios x {len(motions)} records x 4 controllers in "
+            f"{elapsed:.1f} s"
+        )
 
 
 if __name__ == "__main__":

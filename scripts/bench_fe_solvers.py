@@ -1,13 +1,14 @@
-"""Benchmark: an FE plant's control steps/s and peak story drifts under other solver settings, each in its own process.
+"""Benchmark: an FE plant's control steps/s and peak story drifts under other solver settings, each in its own
+process.
 
 Usage: python scripts/bench_fe_solvers.py EXPERIMENT [--records DIR] [--record KOBE] [--seconds 12]
 
 EXPERIMENT names an FE plant (plant.opensees) whose model is a Tcl file with its description beside it (e.g.
-studies/opensees/benchmark_9st/benchmark_9st.yaml, once its files are fetched: its README). Each option set below
-copies the model's folder to a scratch folder, changes the description (algorithm, system, test) or the
-experiment's analysis step, and runs the first --seconds of the record uncontrolled, in a fresh process (one OpenSees
-domain per process): control steps/s of the FE model alone, and the largest difference of a story's peak drift
-from the first set's. docs/opensees.md, "Speed", has a run.
+studies/opensees/benchmark_9st/benchmark_9st.yaml, once its files are fetched: its README). Each option set
+below copies the model's folder to a scratch folder, changes the description (algorithm, system, test) or the
+experiment's analysis step, and runs the first --seconds of the record uncontrolled, in a fresh process (one
+OpenSees domain per process): control steps/s of the FE model alone, and the largest difference of a story's
+peak drift from the first set's. docs/opensees.md, "Speed", has a run.
 """
 
 from __future__ import annotations
@@ -90,15 +91,27 @@ def main() -> None:
     parser.add_argument("--one", help=argparse.SUPPRESS)  # internal: run one scratch experiment here
     arguments = parser.parse_args()
     if arguments.one:
-        print(json.dumps(one_set(Path(arguments.one), arguments.records, arguments.record, arguments.seconds)))
+        print(
+            json.dumps(one_set(Path(arguments.one), arguments.records, arguments.record, arguments.seconds))
+        )
         return
     reference = None
     for name, (changes, analysis_dt) in OPTION_SETS.items():
         with tempfile.TemporaryDirectory() as folder:
             path = scratch_experiment(arguments.experiment.resolve(), Path(folder), changes, analysis_dt)
-            command = [sys.executable, __file__, str(arguments.experiment), "--one", str(path), "--records",
-                       str(arguments.records.resolve()), "--record", arguments.record, "--seconds",
-                       str(arguments.seconds)]  # fmt: skip
+            command = [
+                sys.executable,
+                __file__,
+                str(arguments.experiment),
+                "--one",
+                str(path),
+                "--records",
+                str(arguments.records.resolve()),
+                "--record",
+                arguments.record,
+                "--seconds",
+                str(arguments.seconds),
+            ]
             done = subprocess.run(command, capture_output=True, text=True)
         if done.returncode != 0:
             print(f"{name}: failed ({(done.stderr.strip().splitlines() or ['?'])[-1]})")
@@ -106,7 +119,10 @@ def main() -> None:
         result = json.loads(done.stdout.strip().splitlines()[-1])
         reference = reference or result["peaks"]
         difference = max(abs(a - b) / b for a, b in zip(result["peaks"], reference, strict=True))
-        print(f"{name}: {result['rate']:.0f} control steps/s, largest peak-drift difference {100 * difference:.2f} %")
+        print(
+            f"{name}: {result['rate']:.0f} control steps/s, largest peak-drift difference "
+            f"{100 * difference:.2f} %"
+        )
 
 
 if __name__ == "__main__":

@@ -55,7 +55,9 @@ def python_step(plant: Plant, controller: PolicyController):
         observation[block : layout.action.start] = observation[: layout.action.start - block]
         observation[layout.readings] = readings[0] / layout.reading_scale
         observation[layout.ground] = ground[0, 0] / layout.ground_scale
-        memory["estimate"] = kalman.update(memory["estimate"], readings[0], held, ground[0, 0], memory["ground"])
+        memory["estimate"] = kalman.update(
+            memory["estimate"], readings[0], held, ground[0, 0], memory["ground"]
+        )
         memory["ground"] = ground[0, 0]
         observation[layout.estimate] = memory["estimate"] / layout.estimate_scale
         action = controller.act(observation)
@@ -80,13 +82,17 @@ def main() -> None:
     plant = Plant(load_experiment(arguments.model / "config.yaml"))
     rng = np.random.default_rng(0)
     p = plant.sensors.c.shape[0]
-    inputs = [(rng.normal(0.0, 1.0, (1, p)), rng.normal(0.0, 1.0, (1, 1))) for _ in range(arguments.calls + 500)]
+    inputs = [
+        (rng.normal(0.0, 1.0, (1, p)), rng.normal(0.0, 1.0, (1, 1))) for _ in range(arguments.calls + 500)
+    ]
     with tempfile.TemporaryDirectory() as folder:
         path = export_onnx(arguments.model, "best", Path(folder) / "controller.onnx")
         exported = OnnxController(path)
         results = {
             "onnxruntime": latencies(exported.step, inputs),
-            "Python (numpy)": latencies(python_step(plant, read_policy(arguments.model, "best", plant)), inputs),
+            "Python (numpy)": latencies(
+                python_step(plant, read_policy(arguments.model, "best", plant)), inputs
+            ),
         }
     for name, times in results.items():
         print(

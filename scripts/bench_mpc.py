@@ -18,7 +18,8 @@ import numpy as np
 
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
-from rlcontroller.control.mpc import MPCController, MPCPlanner
+from rlcontroller.control.mpc import MPCPlanner
+from rlcontroller.control.mpc_controllers import MPCController
 from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
 from rlcontroller.simulation.rollout import batch_rollout
@@ -43,7 +44,9 @@ def main() -> None:
     arguments = parser.parse_args()
     motions, _ = load_records(arguments.records)
     print(f"{platform.processor() or platform.machine()}, {platform.python_version()}; seven records")
-    print("| experiment | horizon | QP solve median (ms) | p99 (ms) | steps | fallbacks | seven records (s) |")
+    print(
+        "| experiment | horizon | QP solve median (ms) | p99 (ms) | steps | fallbacks | seven records (s) |"
+    )
     print("|---|---|---|---|---|---|---|")
     for config in ("five_story.yaml", "experiments/five_story_amd.yaml"):
         plant = Plant(load_experiment(CONFIGS / config))
@@ -55,7 +58,8 @@ def main() -> None:
             wall = time.perf_counter() - start
             times = 1e3 * np.array(controller.planner.times)
             print(
-                f"| {plant.experiment.name} | {horizon} | {np.median(times):.3f} | {np.percentile(times, 99):.3f} | "
+                f"| {plant.experiment.name} | {horizon} | {np.median(times):.3f} | "
+                f"{np.percentile(times, 99):.3f} | "
                 f"{times.size} | {controller.fallbacks} | {wall:.1f} |",
                 flush=True,
             )

@@ -40,7 +40,9 @@ def motions(plant: Plant, count: int, seconds: float) -> list:
     for motion in suite:
         time_axis = np.arange(motion.acceleration.size) * motion.dt
         fine = np.arange(0.0, min(seconds, time_axis[-1]), 0.005)
-        resampled.append(replace(motion, acceleration=np.interp(fine, time_axis, motion.acceleration), dt=0.005))
+        resampled.append(
+            replace(motion, acceleration=np.interp(fine, time_axis, motion.acceleration), dt=0.005)
+        )
     return resampled
 
 
@@ -60,7 +62,10 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=20.0, help="length of each motion (s)")
     args = parser.parse_args()
     cores = os.cpu_count() or 1
-    print(f"# {platform.processor() or platform.machine()}, {cores} cores; motions of {args.seconds:g} s at 0.005 s")
+    print(
+        f"# {platform.processor() or platform.machine()}, {cores} cores; motions of {args.seconds:g} s at "
+        "0.005 s"
+    )
     for path in EXAMPLES:
         plant, name = Plant(api.load(path)), path.stem
         suite = motions(plant, cores, args.seconds)

@@ -1,5 +1,5 @@
-"""Benchmark: control steps per second of a nonlinear reduced model (`rlc reduce`: Bouc-Wen stories or a fishbone on
-an FE model's condensed stiffness; the FE model's own rate: scripts/bench_opensees.py).
+"""Benchmark: control steps per second of a nonlinear reduced model (`rlc reduce`: Bouc-Wen stories or a
+fishbone on an FE model's condensed stiffness; the FE model's own rate: scripts/bench_opensees.py).
 
 Usage: python scripts/bench_reduced.py [REDUCED_FOLDER] [--seconds S]
 REDUCED_FOLDER is what `rlc reduce configs/experiments/nine_story_frame.yaml --out FOLDER` wrote (default:
@@ -82,8 +82,10 @@ def main() -> None:
     motion = calibration_motions(1, FIT_SEED)[0]
     keep = round(arguments.seconds / motion.dt) + 1
     motion = replace(motion, acceleration=motion.acceleration[:keep])
-    print(f"{platform.node()} ({platform.processor() or platform.machine()}); {plant.building.n_floors} floors, "
-          f"{plant.yielding.substeps} RK4 sub-steps per sample")  # fmt: skip
+    print(
+        f"{platform.node()} ({platform.processor() or platform.machine()}); {plant.building.n_floors} "
+        f"floors, {plant.yielding.substeps} RK4 sub-steps per sample"
+    )
     print(f"whole record, one compiled call: {whole_record(plant, motion):,.0f} control steps/s")
     print(f"the plant's step, a call a step:   {step_by_step(plant, motion):,.0f} control steps/s")
     print(f"env step() (observation, reward): {env_steps(plant, motion):,.0f} control steps/s")

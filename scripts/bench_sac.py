@@ -1,4 +1,5 @@
-"""Benchmark: SAC's environment steps/s, stable-baselines3's against sbx-rl's, and rlc's fast recipe, in one run.
+"""Benchmark: SAC's environment steps/s, stable-baselines3's against sbx-rl's, and rlc's fast recipe, in one
+run.
 
 Usage: python scripts/bench_sac.py [--seconds 60] [--minutes 0] [--out DIR]
 
@@ -36,9 +37,15 @@ REPOSITORY = Path(__file__).resolve().parents[1]
 
 def recipes() -> dict[str, Experiment]:
     paper = load_experiment(REPOSITORY / "configs" / "experiments" / "paper_sac.yaml")
-    torch_paper = paper.model_copy(update={"algorithm": paper.algorithm.model_copy(update={"backend": "sb3"})})
+    torch_paper = paper.model_copy(
+        update={"algorithm": paper.algorithm.model_copy(update={"backend": "sb3"})}
+    )
     fast = load_experiment(REPOSITORY / "studies" / "training" / "paper_sac_fast.yaml")
-    return {"paper recipe, stable-baselines3": torch_paper, "paper recipe, sbx": paper, "fast recipe, sbx": fast}
+    return {
+        "paper recipe, stable-baselines3": torch_paper,
+        "paper recipe, sbx": paper,
+        "fast recipe, sbx": fast,
+    }
 
 
 def steps_per_second(experiment: Experiment, seconds: float) -> float:
@@ -80,14 +87,18 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=0.0, help="learn each recipe from nothing this long")
     parser.add_argument("--out", type=Path, default=Path("bench_sac"), help="folder of the learning curves")
     arguments = parser.parse_args()
-    print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
+    print(
+        f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads "
+        "available)"
+    )
     rates = {}
     for name, experiment in recipes().items():
         rates[name] = steps_per_second(experiment, arguments.seconds)
         print(f"{name}: {rates[name]:,.0f} env steps/s", flush=True)
     base = rates["paper recipe, stable-baselines3"]
     print(
-        f"ratios to stable-baselines3's paper recipe: paper recipe on sbx {rates['paper recipe, sbx'] / base:.2f}x, "
+        "ratios to stable-baselines3's paper recipe: paper recipe on sbx "
+        f"{rates['paper recipe, sbx'] / base:.2f}x, "
         f"fast recipe {rates['fast recipe, sbx'] / base:.1f}x"
     )
     if arguments.minutes > 0:

@@ -129,7 +129,10 @@ def main() -> None:
     arguments = parser.parse_args()
     paper = load_experiment(CONFIGS / "experiments" / "paper_sac.yaml")
     default = load_experiment(CONFIGS / "five_story.yaml")
-    print(f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads available)")
+    print(
+        f"machine: {platform.node()} ({platform.machine()}, {torch.get_num_threads()} torch threads "
+        "available)"
+    )
     vec_env_comparison(default)
     if arguments.vec_env_only:
         return
@@ -141,7 +144,8 @@ def main() -> None:
         default_time = time_to_quality("new default", default, arguments.minutes, Path(folder))
     budget = 60.0 * arguments.minutes
     shown = {
-        k: "not reached" if t is None else f"{t:.0f} s" for k, t in (("paper", paper_time), ("default", default_time))
+        k: "not reached" if t is None else f"{t:.0f} s"
+        for k, t in (("paper", paper_time), ("default", default_time))
     }
     print(f"time to beat LQG's validation J1: paper SAC {shown['paper']}, new default {shown['default']}")
     if default_time is not None:

@@ -1,6 +1,7 @@
 """Write a suite of generated motions as record files, for `rlc evaluate --records DIR`.
 
-Usage: python scripts/generated_records.py OUT [--count 200] [--seed 20000] [--config configs/excitations/broad.yaml]
+Usage: python scripts/generated_records.py OUT [--count 200] [--seed 20000] [--config
+configs/excitations/broad.yaml]
 
 The motions are draws of the excitation part's validation generator (default: the broad suite, PGA
 0.005-1 g log-uniform on soft, medium and firm soil and noise + impulses) with a seed of their own,

@@ -7,11 +7,10 @@ Usage: python scripts/soak.py OUT [--runs 12] [--steps 40000] [--checkpoint-ever
 1. A quiet sweep of `--runs` seeds of a small run (configs/testing/tiny.yaml with `--steps`
    training steps and a checkpoint every `--checkpoint-every`; its PPO, or with `--learner
    random_search` the model-free random search, whose resume is exact) into OUT/quiet.
-2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform; the first after training is
-   first seen running), a kill falls
-   due: the next moment a run is training, the process training a random one (the pid in its run
-   folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times, so that the soak tests
-   resuming, not the sweep's limit of losses per run.
+2. The same sweep into OUT/soak while, every `--kill-every` LOW HIGH seconds (uniform; the first after
+   training is first seen running), a kill falls due: the next moment a run is training, the process training
+   a random one (the pid in its run folder's lock) gets SIGKILL — one run at most WORKER_LOSSES // 2 times, so
+   that the soak tests resuming, not the sweep's limit of losses per run.
 3. The verdict: every run of the soak finished and evaluated, how many kills and resumes, the wall
    times, and whether each run's evaluation metrics and the aggregate equal the quiet sweep's.
 Written to OUT/soak.md and printed.
@@ -75,9 +74,13 @@ def main() -> None:
     out.mkdir(parents=True)
     config = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
     if arguments.learner == "random_search":
-        config["algorithm"] = yaml.safe_load((REPOSITORY / "configs" / "algorithms" / "random_search.yaml").read_text())
+        config["algorithm"] = yaml.safe_load(
+            (REPOSITORY / "configs" / "algorithms" / "random_search.yaml").read_text()
+        )
     every = arguments.checkpoint_every
-    config["algorithm"].update(total_steps=arguments.steps, checkpoint_every=every, eval_every=max(every, 4096))
+    config["algorithm"].update(
+        total_steps=arguments.steps, checkpoint_every=every, eval_every=max(every, 4096)
+    )
     (out / "soak.yaml").write_text(yaml.safe_dump(config))
     chooser = random.Random(arguments.seed)
 
@@ -92,14 +95,21 @@ def main() -> None:
         sys.exit(f"the quiet sweep failed: {quiet.stderr.strip().splitlines()[-1:]}")
 
     start = time.perf_counter()
-    command = sweep_command(out / "soak.yaml", arguments.runs, arguments.workers, arguments.engine, out / "soak")
+    command = sweep_command(
+        out / "soak.yaml", arguments.runs, arguments.workers, arguments.engine, out / "soak"
+    )
     soak = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     kills = []
-    next_kill = None  # the first kill falls LOW-HIGH s after training is first seen running (not after start-up)
+    # the first kill falls LOW-HIGH s after training is first seen running (not after start-up)
+    next_kill = None
     killed_runs: Counter[str] = Counter()
     while soak.poll() is None:
         time.sleep(0.2)
-        pids = {run: pid for run, pid in training_pids(out / "soak").items() if killed_runs[run] < WORKER_LOSSES // 2}
+        pids = {
+            run: pid
+            for run, pid in training_pids(out / "soak").items()
+            if killed_runs[run] < WORKER_LOSSES // 2
+        }
         if next_kill is None and pids:
             next_kill = time.perf_counter() + chooser.uniform(*arguments.kill_every)
         if next_kill is None or time.perf_counter() < next_kill or not pids:
@@ -115,9 +125,15 @@ def main() -> None:
     output = soak.communicate()[0]
     soak_seconds = time.perf_counter() - start
 
-    rows = (out / "soak" / "sweep.csv").read_text().splitlines()[1:] if (out / "soak" / "sweep.csv").is_file() else []
+    rows = (
+        (out / "soak" / "sweep.csv").read_text().splitlines()[1:]
+        if (out / "soak" / "sweep.csv").is_file()
+        else []
+    )
     statuses = [row.split(",")[3] for row in rows]
-    finished = all((out / "soak" / f"seed{s}" / "evaluation" / "metrics.csv").is_file() for s in range(arguments.runs))
+    finished = all(
+        (out / "soak" / f"seed{s}" / "evaluation" / "metrics.csv").is_file() for s in range(arguments.runs)
+    )
     same_runs = [
         same_file(
             out / "quiet" / f"seed{s}" / "evaluation" / "metrics.csv",

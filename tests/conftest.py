@@ -32,8 +32,8 @@ MPC_POLICY = REPOSITORY / "tests" / "data" / "designed_mpc"
 
 @pytest.fixture(autouse=True, scope="session")
 def kept_responses_in_a_folder_of_the_session(tmp_path_factory):
-    """An FE plant's kept uncontrolled responses (`simulation.kept`) in this session's own folder: a test never
-    reads what an earlier run (or the user) kept."""
+    """An FE plant's kept uncontrolled responses (`simulation.kept`) in this session's own folder: a test
+    never reads what an earlier run (or the user) kept."""
     saved = os.environ.get("RLC_CACHE")
     os.environ["RLC_CACHE"] = str(tmp_path_factory.mktemp("kept"))
     yield

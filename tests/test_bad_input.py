@@ -27,28 +27,65 @@ def matrix(change: dict[tuple[int, int], str]) -> str:
 def one_error_line(result) -> str:
     """The result's error line; asserts it is the only line on exit 2 and there is no traceback."""
     assert result.exit_code == 2, result.output
-    assert "Traceback" not in result.output and result.exception is None or isinstance(result.exception, SystemExit)
+    assert (
+        "Traceback" not in result.output
+        and result.exception is None
+        or isinstance(result.exception, SystemExit)
+    )
     lines = result.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: "), result.output
     return lines[0]
 
 
 CONFIG_CASES = {
-    "masses_inf": ("building:\n  masses: [1e4, .inf, 1e4, 1e4, 1e4]\n", "building.masses[1]: Input should be a finite"),
-    "masses_1e308": ("building:\n  masses: [1e4, 1.0e308, 1e4, 1e4, 1e4]\n", "less than or equal to 1000000000"),
-    "stiffness_1e308": ("building:\n  stiffnesses: [1.0e308, 1e6, 1e6, 1e6, 1e6]\n", "building.stiffnesses[0]: Input"),
-    "control_dt_inf": ("simulation: {control_dt: .inf}\n", "simulation.control_dt: Input should be a finite number"),
-    "control_dt_1e308": ("simulation: {control_dt: 1.0e308}\n", "simulation.control_dt: Input should be less than"),
-    "control_dt_1e-12": ("simulation: {control_dt: 1.0e-12}\n", "simulation.control_dt: Input should be greater"),
-    "control_dt_0.013": ("simulation: {control_dt: 0.013}\n", "0.013 s is not a whole multiple of the noise_impulses"),
+    "masses_inf": (
+        "building:\n  masses: [1e4, .inf, 1e4, 1e4, 1e4]\n",
+        "building.masses[1]: Input should be a finite",
+    ),
+    "masses_1e308": (
+        "building:\n  masses: [1e4, 1.0e308, 1e4, 1e4, 1e4]\n",
+        "less than or equal to 1000000000",
+    ),
+    "stiffness_1e308": (
+        "building:\n  stiffnesses: [1.0e308, 1e6, 1e6, 1e6, 1e6]\n",
+        "building.stiffnesses[0]: Input",
+    ),
+    "control_dt_inf": (
+        "simulation: {control_dt: .inf}\n",
+        "simulation.control_dt: Input should be a finite number",
+    ),
+    "control_dt_1e308": (
+        "simulation: {control_dt: 1.0e308}\n",
+        "simulation.control_dt: Input should be less than",
+    ),
+    "control_dt_1e-12": (
+        "simulation: {control_dt: 1.0e-12}\n",
+        "simulation.control_dt: Input should be greater",
+    ),
+    "control_dt_0.013": (
+        "simulation: {control_dt: 0.013}\n",
+        "0.013 s is not a whole multiple of the noise_impulses",
+    ),
     "control_dt_0.03": ("simulation: {control_dt: 0.03}\n", "0.03 s is not a whole multiple"),
     "damping_not_symmetric": (DAMPING.format(matrix=matrix({(0, 1): "5.0"})), "must be symmetric"),
     "damping_not_psd": (DAMPING.format(matrix=matrix({(0, 0): "-5.0"})), "must be positive semi-definite"),
-    "damping_nan": (DAMPING.format(matrix=matrix({(2, 2): ".nan"})), "building.damping.matrix[2][2]: Input should be"),
-    "actuator_twice": ("actuators: [{story: 1}, {story: 3}, {story: 1}]\n", "actuators: story 1 is listed twice"),
-    "force_limit_inf": ("actuators: [{story: 1, force_limit: .inf}]\n", "actuators[0].force_limit: Input should be a"),
+    "damping_nan": (
+        DAMPING.format(matrix=matrix({(2, 2): ".nan"})),
+        "building.damping.matrix[2][2]: Input should be",
+    ),
+    "actuator_twice": (
+        "actuators: [{story: 1}, {story: 3}, {story: 1}]\n",
+        "actuators: story 1 is listed twice",
+    ),
+    "force_limit_inf": (
+        "actuators: [{story: 1, force_limit: .inf}]\n",
+        "actuators[0].force_limit: Input should be a",
+    ),
     "no_actuators": ("actuators: []\n", "actuators: no actuators and no devices: expected at least one"),
-    "history_1e9": ("sensors: {history: 1000000000}\n", "sensors.history: Input should be less than or equal to 500"),
+    "history_1e9": (
+        "sensors: {history: 1000000000}\n",
+        "sensors.history: Input should be less than or equal to 500",
+    ),
     "floors_empty": (
         "sensors:\n  measurements: [{quantity: drift, floors: [], scale: 1}]\n",
         "sensors.measurements[0].floors: List should have at least 1 item",
@@ -58,7 +95,10 @@ CONFIG_CASES = {
         "sensors.measurements[0].floors: each number once",
     ),
     "scale_inf": ("sensors: {ground_scale: .inf}\n", "sensors.ground_scale: Input should be a finite number"),
-    "noise_inf": ("sensors: {ground_noise_std: .inf}\n", "sensors.ground_noise_std: Input should be a finite"),
+    "noise_inf": (
+        "sensors: {ground_noise_std: .inf}\n",
+        "sensors.ground_noise_std: Input should be a finite",
+    ),
     "integration_with_estimate": (
         "sensors: {integration_cutoff: 0.1, state_estimate: true}\n",
         "sensors.integration_cutoff: the observation holds either integrated readings or state_estimate",
@@ -67,13 +107,17 @@ CONFIG_CASES = {
         "sensors: {integration_cutoff: 3.0}\nsimulation: {control_dt: 0.1}\n",
         "sensors.integration_cutoff: 3 Hz, expected below half the Nyquist frequency (2.5 Hz)",
     ),
-    "integration_inf": ("sensors: {integration_cutoff: .inf}\n", "sensors.integration_cutoff: Input should be"),
+    "integration_inf": (
+        "sensors: {integration_cutoff: .inf}\n",
+        "sensors.integration_cutoff: Input should be",
+    ),
     "weight_inf": (
         "reward: {terms: [{quantity: drift, weight: .inf, scale: 0.01}]}\n",
         "reward.terms[0].weight: Input should be a finite number",
     ),
     "weights_all_zero": (
-        "reward: {terms: [{quantity: drift, weight: 0, scale: 0.01}, {quantity: force, weight: 0, scale: 1}]}\n",
+        "reward: {terms: [{quantity: drift, weight: 0, scale: 0.01}, {quantity: force, weight: 0, scale: "
+        "1}]}\n",
         "reward: every weight is zero",
     ),
     "duration_0_0": (
@@ -88,13 +132,23 @@ CONFIG_CASES = {
         "excitation: {generator: {kind: noise_impulses, duration: [0.01, 0.02]}}\n",
         "excitation.generator.duration: 0.01 s is shorter than one control step",
     ),
-    "near_fault_shorter_than_a_step": (  # a near-fault generator lasts as its background (was an internal error)
+    # a near-fault generator lasts as its background (was an internal error)
+    "near_fault_shorter_than_a_step": (
         "excitation: {generator: {kind: near_fault, background: {duration: [0.01, 0.02]}}}\n",
         "excitation.generator.background.duration: 0.01 s is shorter than one control step",
     ),
-    "n_envs_1e6": ("algorithm: {n_envs: 1000000}\n", "algorithm.n_envs: Input should be less than or equal to 256"),
-    "net_arch_empty": ("algorithm: {policy: {net_arch: []}}\n", "algorithm.policy.net_arch: List should have at least"),
-    "log_std_nan": ("algorithm: {policy: {log_std_init: .nan}}\n", "algorithm.policy.log_std_init: Input should be"),
+    "n_envs_1e6": (
+        "algorithm: {n_envs: 1000000}\n",
+        "algorithm.n_envs: Input should be less than or equal to 256",
+    ),
+    "net_arch_empty": (
+        "algorithm: {policy: {net_arch: []}}\n",
+        "algorithm.policy.net_arch: List should have at least",
+    ),
+    "log_std_nan": (
+        "algorithm: {policy: {log_std_init: .nan}}\n",
+        "algorithm.policy.log_std_init: Input should be",
+    ),
     "total_steps_1e30": (
         "algorithm: {total_steps: 1000000000000000000000000000000}\n",
         "algorithm.total_steps: Input should be less than or equal to 1000000000",
@@ -123,7 +177,10 @@ CONFIG_CASES = {
         "devices: [{type: magic, floor: 5, mass_ratio: 0.02}]\n",
         "devices[0]: Input tag 'magic' found using 'type' does not match any of the expected tags",
     ),
-    "device_without_type": ("devices: [{floor: 5, mass_ratio: 0.02}]\n", "devices[0]: Unable to extract tag using"),
+    "device_without_type": (
+        "devices: [{floor: 5, mass_ratio: 0.02}]\n",
+        "devices[0]: Unable to extract tag using",
+    ),
     "driver_stroke_limit_0": (
         "devices: [{type: active_mass, floor: 5, mass_ratio: 0.02, force_limit: 1e4, stroke_limit: 0}]\n",
         "devices[0].active_mass.stroke_limit: Input should be greater than 0",
@@ -134,7 +191,8 @@ CONFIG_CASES = {
     ),
     "devices_not_a_list": ("devices: {type: tuned_mass}\n", "devices: expected a list of devices, got dict"),
     "devices_with_yielding": (
-        "devices: [{type: tuned_mass, floor: 5, mass_ratio: 0.02}]\nplant: {hysteresis: {yield_drift: 0.03}}\n",
+        "devices: [{type: tuned_mass, floor: 5, mass_ratio: 0.02}]\nplant: {hysteresis: {yield_drift: "
+        "0.03}}\n",
         "plant.hysteresis: yielding stories with mass devices are not modelled",
     ),
     "stroke_sensor_without_devices": (
@@ -174,7 +232,10 @@ CONFIG_CASES = {
         "algorithm.residual_lqg: not with semi-active dampers",
     ),
     "seed_negative": ("seed: -1\n", "seed: Input should be greater than or equal to 0"),
-    "seed_1e30": ("seed: 1000000000000000000000000000000\n", "seed: Input should be less than or equal to 4294967295"),
+    "seed_1e30": (
+        "seed: 1000000000000000000000000000000\n",
+        "seed: Input should be less than or equal to 4294967295",
+    ),
     "name_with_path": ("name: ../../elsewhere\n", "name: String should match pattern"),
     "empty_file": ("", "the file is empty, expected YAML keys"),
     "deep_nesting": ("seed: " + "[" * 5000 + "]" * 5000 + "\n", "nested"),
@@ -212,7 +273,10 @@ def test_an_empty_actuator_list_in_its_own_file_blames_that_file(tmp_path):
     (tmp_path / "actuators.yaml").write_text("[]\n")
     (tmp_path / "bad.yaml").write_text("actuators: actuators.yaml\n")
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
-    assert "actuators.yaml: no actuators and no devices: expected at least one" in line and "bad.yaml" not in line
+    assert (
+        "actuators.yaml: no actuators and no devices: expected at least one" in line
+        and "bad.yaml" not in line
+    )
 
 
 @pytest.mark.parametrize(
@@ -259,8 +323,14 @@ def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
     [
         ("plant: {stiffness: [1, 2]}\n", "plant.stiffness: 2 factors, expected 1 or 5"),
         ("plant: {damage: [{story: 9, stiffness: -0.4}]}\n", "plant.damage[0].story: 9 does not exist"),
-        ("plant: {damage: [{story: 1, stiffness: -1.5}]}\n", "plant.damage[0].stiffness: Input should be greater"),
-        ("plant: {actuators: {delay_steps: 1000}}\n", "plant.actuators.delay_steps: Input should be less than"),
+        (
+            "plant: {damage: [{story: 1, stiffness: -1.5}]}\n",
+            "plant.damage[0].stiffness: Input should be greater",
+        ),
+        (
+            "plant: {actuators: {delay_steps: 1000}}\n",
+            "plant.actuators.delay_steps: Input should be less than",
+        ),
         (
             "plant: {actuators: {time_constant: 0.02}}\nsimulation: {method: newmark}\n",
             "plant.actuators.time_constant: an actuator lag needs method: exact",
@@ -269,7 +339,10 @@ def test_a_record_path_that_is_a_folder_of_other_things(tmp_path, monkeypatch):
         ("plant_randomization: {stiffness: {low: 1.3, high: 0.7}}\n", "expected low <= high"),
         ("plant_randomization: {stiffness: {low: 0.01, high: 1.0}}\n", "0.01 gives no valid plant"),
         ("plant_randomization: {mass: {low: 0, high: 1, log: true}}\n", "a log-uniform range needs low > 0"),
-        ("plant_randomization: {delay_steps: [0, 99]}\n", "plant_randomization.delay_steps: 99 gives no valid plant"),
+        (
+            "plant_randomization: {delay_steps: [0, 99]}\n",
+            "plant_randomization.delay_steps: 99 gives no valid plant",
+        ),
         (
             "plant_randomization: {device_frequency: {low: 0.9, high: 1.1}}\n",
             "plant_randomization.device_frequency: the experiment has no tuned or active mass to detune",
@@ -297,20 +370,30 @@ def test_a_bad_scenario_file_stops_robustness_before_any_work(tmp_path, monkeypa
     line = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "s.yaml"]))
     assert line == (
         "error: s.yaml: scenarios[0].plant.colour: unknown key; "
-        "expected one of: building, stiffness, mass, damping, damage, actuators, sensors, hysteresis, devices, opensees"
+        "expected one of: building, stiffness, mass, damping, damage, actuators, sensors, hysteresis, "
+        "devices, opensees"
     )
     missing = one_error_line(CliRunner().invoke(app, ["robustness", "--scenarios", "nowhere.yaml"]))
     assert "nowhere.yaml: cannot read the file" in missing and not (tmp_path / "results").exists()
 
 
 STUDY_CASES = {
-    "seeds_backwards": (["sweep", str(SMOKE), "--seeds", "5-2"], "--seeds '5-2': the range 5-2 runs backwards"),
+    "seeds_backwards": (
+        ["sweep", str(SMOKE), "--seeds", "5-2"],
+        "--seeds '5-2': the range 5-2 runs backwards",
+    ),
     "set_without_value": (["sweep", str(SMOKE), "--set", "algorithm.kwargs.gamma"], "expected KEY=VALUE"),
     "set_unknown_path": (["sweep", str(SMOKE), "--set", "foo.bar=1"], "foo.bar: no setting 'foo'"),
     "set_bad_value": (["sweep", str(SMOKE), "--set", "algorithm.kwargs.gamma=oops"], "got 'oops'"),
     "set_twice": (["sweep", str(SMOKE), "--set", "seed=1", "--set", "seed=2"], "a key is set twice"),
-    "address_without_dask": (["sweep", str(SMOKE), "--address", "tcp://h:1"], "--address: only with --engine dask"),
-    "evaluate_address_without_dask": (["evaluate", "--address", "tcp://h:1"], "--address: only with --engine dask"),
+    "address_without_dask": (
+        ["sweep", str(SMOKE), "--address", "tcp://h:1"],
+        "--address: only with --engine dask",
+    ),
+    "evaluate_address_without_dask": (
+        ["evaluate", "--address", "tcp://h:1"],
+        "--address: only with --engine dask",
+    ),
     "tune_without_space": (["tune", str(SMOKE), "--trials", "2"], "search: empty"),
     "tune_bad_storage": (
         [
@@ -342,7 +425,10 @@ def test_bad_study_and_export_arguments_stop_before_any_work(tmp_path, arguments
     ("text", "expected"),
     [
         ("building: {mases: [1.0e4]}\n", "building.mases: unknown key; did you mean 'masses'?"),
-        ("actuators: [{story: 1, limit: 3}]\n", "actuators[0].limit: unknown key; did you mean 'force_limit'?"),
+        (
+            "actuators: [{story: 1, limit: 3}]\n",
+            "actuators[0].limit: unknown key; did you mean 'force_limit'?",
+        ),
         (
             "excitation: {generator: {kind: kanai_tajimi, pgaa: [1, 2]}}\n",
             "generator.pgaa: unknown key; did you mean 'pga'?",
@@ -378,7 +464,10 @@ def chain(n: int = 3, fixed: bool = True) -> np.ndarray:
 MATRIX_CASES = {
     "not_symmetric": ({"K": chain() + np.triu(np.ones((3, 3)), 1)}, "stiffness_matrix must be symmetric"),
     "ground_not_fixed": ({"K": chain(fixed=False)}, "stiffness_matrix must be positive definite"),
-    "mass_nan": ({"M": np.diag([1.0, np.nan, 1.0])}, "building.mass_matrix[1][1]: Input should be a finite number"),
+    "mass_nan": (
+        {"M": np.diag([1.0, np.nan, 1.0])},
+        "building.mass_matrix[1][1]: Input should be a finite number",
+    ),
     "wrong_size": ({"K": chain(4)}, "stiffness_matrix is 4 x 4, expected 3 x 3 like mass_matrix"),
     "no_stiffness": ({"K": None}, "no array 'K'; expected M, K and C or modal_damping"),
     "unknown_array": ({"X": np.eye(3)}, "unknown arrays ['X'], expected M, K, C, modal_damping"),
@@ -402,10 +491,16 @@ def test_bad_building_matrices_give_one_line(tmp_path, arrays, expected):
 @pytest.mark.parametrize(
     ("building", "expected"),
     [
-        ("{matrices: m.npz, units: {mass: lb, force: kN, length: m}, story_heights: [3, 3, 3]}", "units.mass: 'lb'"),
+        (
+            "{matrices: m.npz, units: {mass: lb, force: kN, length: m}, story_heights: [3, 3, 3]}",
+            "units.mass: 'lb'",
+        ),
         ("{matrices: m.npz, story_heights: [3, 3, 3]}", "units: expected {mass, force, length}"),
         ("{matrices: text.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "cannot read"),
-        ("{matrices: m.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "'story_heights' has 1"),
+        (
+            "{matrices: m.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}",
+            "'story_heights' has 1",
+        ),
         ("{matrices: gone.npz, units: {mass: t, force: kN, length: m}, story_heights: [3]}", "cannot read"),
     ],
 )
@@ -430,7 +525,10 @@ def test_a_plant_part_with_stories_is_refused_for_a_matrix_building(tmp_path):
 WIND_CASES = {
     "no_speeds": ("kind: wind\nspeeds: []\n", "speeds: List should have at least 1 item"),
     "negative_speed": ("kind: wind\nspeeds: [-3]\n", "speeds[0]: Input should be greater than 0"),
-    "infinite_duration": ("kind: wind\nspeeds: [20]\nduration: .inf\n", "duration: Input should be a finite number"),
+    "infinite_duration": (
+        "kind: wind\nspeeds: [20]\nduration: .inf\n",
+        "duration: Input should be a finite number",
+    ),
     "rough_above_reference": (
         "kind: wind\nspeeds: [20]\nroughness: 4\nreference_height: 2\n",
         "roughness must be below reference_height",
@@ -448,7 +546,16 @@ WIND_CASES = {
 def test_bad_wind_suites_give_one_line_before_any_work(tmp_path, text, expected):
     (tmp_path / "wind.yaml").write_text(text)
     out = tmp_path / "out"
-    arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    arguments = [
+        "compare",
+        "lqg",
+        "--config",
+        str(SMOKE),
+        "--records",
+        str(tmp_path / "wind.yaml"),
+        "--out",
+        str(out),
+    ]
     line = one_error_line(CliRunner().invoke(app, arguments))
     assert expected in line and "wind.yaml" in line and not out.exists()
 
@@ -469,7 +576,9 @@ def test_a_wind_suite_cannot_be_scaled_to_a_pga(tmp_path):
     assert "--scale-pga: a wind suite has no ground acceleration to scale" in line
 
 
-def force_csv(path, header="time,floor 1 [kN],floor 2 [kN],floor 3 [kN],floor 4 [kN],floor 5 [kN]", rows=None):
+def force_csv(
+    path, header="time,floor 1 [kN],floor 2 [kN],floor 3 [kN],floor 4 [kN],floor 5 [kN]", rows=None
+):
     rows = rows or [
         f"{0.05 * k:.2f}," + ",".join(f"{10 * np.sin(k / 7 + f):.3f}" for f in range(5)) for k in range(400)
     ]
@@ -481,7 +590,11 @@ FORCE_CASES = {
     "mixed_units": ("time,f1 [kN],f2 [N],f3 [kN],f4 [kN],f5 [kN]", None, "need one unit"),
     "no_unit": ("time,f1,f2,f3,f4,f5", None, "need one unit"),
     "short_row": (None, ["0,1,2,3,4,5", "0.05,1,2,3"], "expected 6 columns (time and 5 floors), got 4"),
-    "nan": (None, ["0,1,2,3,4,5", "0.05,1,nan,3,4,5", "0.1,1,2,3,4,5"], ":3: every value must be a finite number"),
+    "nan": (
+        None,
+        ["0,1,2,3,4,5", "0.05,1,nan,3,4,5", "0.1,1,2,3,4,5"],
+        ":3: every value must be a finite number",
+    ),
     "uneven_times": (None, ["0,1,2,3,4,5", "0.05,1,2,3,4,5", "0.2,1,2,3,4,5"], "must be evenly spaced"),
     "all_zero": (None, ["0,0,0,0,0,0", "0.05,0,0,0,0,0", "0.1,0,0,0,0,0"], "every force is zero"),
     "four_floors": (
@@ -497,7 +610,16 @@ FORCE_CASES = {
 def test_bad_floor_force_records_give_one_line(tmp_path, header, rows, expected):
     kwargs = {key: value for key, value in (("header", header), ("rows", rows)) if value is not None}
     path = force_csv(tmp_path / "wind.csv", **kwargs)
-    arguments = ["compare", "lqg", "--config", str(SMOKE), "--records", str(path), "--out", str(tmp_path / "out")]
+    arguments = [
+        "compare",
+        "lqg",
+        "--config",
+        str(SMOKE),
+        "--records",
+        str(path),
+        "--out",
+        str(tmp_path / "out"),
+    ]
     line = one_error_line(CliRunner().invoke(app, arguments))
     assert expected in line and "wind" in line and not (tmp_path / "out").exists()
 
@@ -518,7 +640,9 @@ def test_wind_training_loads_on_a_yielding_plant_are_refused(tmp_path):
 
 
 def test_a_ground_model_without_the_state_estimate_under_wind_is_refused(tmp_path):
-    (tmp_path / "bad.yaml").write_text("excitation: {generator: {kind: wind}}\nsensors: {ground_model: true}\n")
+    (tmp_path / "bad.yaml").write_text(
+        "excitation: {generator: {kind: wind}}\nsensors: {ground_model: true}\n"
+    )
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
     assert "ground_model: needs sensors.state_estimate: true (its states join the estimate)" in line
 
@@ -545,7 +669,9 @@ def test_a_manifest_may_name_files_in_sub_folders(tmp_path):
     assert len(load_records(folder)[0]) == 1
 
 
-@pytest.mark.parametrize("part", ["building: ../../configs/buildings/five_story.yaml", "reward: /etc/hostname"])
+@pytest.mark.parametrize(
+    "part", ["building: ../../configs/buildings/five_story.yaml", "reward: /etc/hostname"]
+)
 def test_a_model_folder_naming_files_outside_itself_is_refused(tmp_path, part):
     import shutil
 
@@ -566,9 +692,21 @@ def test_wind_on_a_building_with_dampers_is_refused_in_one_line(tmp_path):
     (tmp_path / "wind.yaml").write_text("kind: wind\nspeeds: [20]\nduration: 10\n")
     config = str(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml")
     out = tmp_path / "out"
-    arguments = ["compare", "lqg", "--config", config, "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    arguments = [
+        "compare",
+        "lqg",
+        "--config",
+        config,
+        "--records",
+        str(tmp_path / "wind.yaml"),
+        "--out",
+        str(out),
+    ]
     line = one_error_line(CliRunner().invoke(app, arguments))
-    assert "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled" in line
+    assert (
+        "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled"
+        in line
+    )
     assert not out.exists()
 
 
@@ -576,17 +714,34 @@ def test_wind_on_a_building_with_dampers_is_refused_in_one_line(tmp_path):
     ("arguments", "expected"),
     [
         (["identify", "missing.csv", "--out", "model"], "error: missing.csv: cannot read the file"),
-        (["identify", "t.csv", "--out", "model", "--masses", "25e3,x"], "error: --masses '25e3,x': expected comma-"),
-        (["identify", "t.csv", "--out", "model", "--masses", "1,2,3"], "error: --masses: expected 2 floor masses"),
-        (["identify", "t.csv", "--out", "model", "--modes", "9"], "error: --modes 9: expected 1..4 for 2 floors"),
-        (["simulate-test", "e.yaml", "--out", "t.csv"], "error: --out t.csv: exists; a recording is never overwritten"),
-        (["simulate-test", "e.yaml", "--out", "u.csv", "--shake", "2"], "error: --shake 2: expected a fraction"),
+        (
+            ["identify", "t.csv", "--out", "model", "--masses", "25e3,x"],
+            "error: --masses '25e3,x': expected comma-",
+        ),
+        (
+            ["identify", "t.csv", "--out", "model", "--masses", "1,2,3"],
+            "error: --masses: expected 2 floor masses",
+        ),
+        (
+            ["identify", "t.csv", "--out", "model", "--modes", "9"],
+            "error: --modes 9: expected 1..4 for 2 floors",
+        ),
+        (
+            ["simulate-test", "e.yaml", "--out", "t.csv"],
+            "error: --out t.csv: exists; a recording is never overwritten",
+        ),
+        (
+            ["simulate-test", "e.yaml", "--out", "u.csv", "--shake", "2"],
+            "error: --shake 2: expected a fraction",
+        ),
     ],
 )
 def test_identification_mistakes_are_one_line(tmp_path, monkeypatch, arguments, expected):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "e.yaml").write_text("name: e\n")
-    (tmp_path / "t.csv").write_text("time,ground,absolute_acceleration_1,absolute_acceleration_2\n0,0,0,0\n0.1,1,1,1\n")
+    (tmp_path / "t.csv").write_text(
+        "time,ground,absolute_acceleration_1,absolute_acceleration_2\n0,0,0,0\n0.1,1,1,1\n"
+    )
     assert one_error_line(CliRunner().invoke(app, arguments)).startswith(expected)
 
 
@@ -612,4 +767,6 @@ def test_yielding_stories_that_hold_more_than_the_stiffness_matrix_are_one_line(
         "actuators: [{story: 1}]\nplant: {hysteresis: {yield_drift: 0.01, post_yield_ratio: 0.0}}\n"
     )
     line = one_error_line(CliRunner().invoke(app, ["info", str(tmp_path / "bad.yaml")]))
-    assert line.startswith(f"error: {tmp_path / 'bad.yaml'}: plant.hysteresis: the yielded building's stiffness")
+    assert line.startswith(
+        f"error: {tmp_path / 'bad.yaml'}: plant.hysteresis: the yielded building's stiffness"
+    )

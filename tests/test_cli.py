@@ -30,7 +30,11 @@ def test_the_readme_main_command_works_at_a_terminal(tmp_path, monkeypatch):
     (run,) = (tmp_path / "runs").iterdir()
     assert (run / "evaluation" / "summary.md").is_file() and (run / "best_check.yaml").is_file()
     metrics = pd.read_csv(run / "evaluation" / "metrics.csv")  # on every record shown: better than no control
-    rl = metrics[(metrics["controller"] == "RL") & (metrics["metric"] == "J1")].groupby("record")["value"].mean()
+    rl = (
+        metrics[(metrics["controller"] == "RL") & (metrics["metric"] == "J1")]
+        .groupby("record")["value"]
+        .mean()
+    )
     assert len(rl) > 0 and (rl < 1.0).all()
 
 
@@ -123,11 +127,14 @@ def test_a_long_command_shows_its_progress_at_a_terminal_and_nothing_when_captur
 
 
 def test_progress_asked_for_into_a_file_is_a_line_per_step(tmp_path, records):
-    """`--progress` into a log (nohup): a live bar draws nothing there, so each finished step is a line on stderr."""
+    """`--progress` into a log (nohup): a live bar draws nothing there, so each finished step is a line on
+    stderr."""
     kobe = str(records / "RSN1106_KOBE_KJM000.AT2")
     arguments = ["evaluate", "--records", kobe, "--out", str(tmp_path / "out")]
     asked = CliRunner().invoke(app, [*arguments, "--progress"])
-    assert asked.exit_code == 0 and re.search(r"^evaluating 1 motion: 1/1, \d+ s$", asked.stderr, re.M), asked.stderr
+    assert asked.exit_code == 0 and re.search(r"^evaluating 1 motion: 1/1, \d+ s$", asked.stderr, re.M), (
+        asked.stderr
+    )
     quiet = CliRunner().invoke(app, [*arguments[:-1], str(tmp_path / "quiet")])
     assert quiet.exit_code == 0 and "1/1" not in quiet.stderr
 
@@ -151,7 +158,11 @@ def test_an_experiment_yaml_without_a_shipped_controller_says_what_to_do(tmp_pat
 @pytest.mark.slow
 def test_output_cut_short_by_the_reader_is_no_error():
     head = subprocess.run(
-        f"{sys.executable} -m rlcontroller info | head -1", shell=True, capture_output=True, text=True, check=False
+        f"{sys.executable} -m rlcontroller info | head -1",
+        shell=True,
+        capture_output=True,
+        text=True,
+        check=False,
     )
     assert head.stdout == "# resolved configuration\n" and "error" not in head.stderr
 
@@ -161,9 +172,14 @@ def test_info_lists_each_device_as_built(name):
     result = CliRunner().invoke(app, ["info", str(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")])
     assert result.exit_code == 0, result.output
     devices = result.output.split("# devices")[1].strip().splitlines()[1:]
-    expected = {"five_story_tmd": ["tuned_mass on floor 5, 0.9195 t"], "five_story_amd": ["active_mass on floor 5"]}
+    expected = {
+        "five_story_tmd": ["tuned_mass on floor 5, 0.9195 t"],
+        "five_story_amd": ["active_mass on floor 5"],
+    }
     expected["five_story_mr"] = [f"mr_damper on story {s}, capacity 100 kN" for s in (1, 3, 5)]
-    assert [line.split(": ", 1)[1][: len(e)] for line, e in zip(devices, expected[name], strict=True)] == expected[name]
+    assert [
+        line.split(": ", 1)[1][: len(e)] for line, e in zip(devices, expected[name], strict=True)
+    ] == expected[name]
 
 
 @pytest.mark.slow
@@ -200,10 +216,16 @@ def test_the_specifications_commands_run_as_written(tmp_path, monkeypatch):
     assert (run / "config.yaml").is_file() and (run / "best_policy.npz").is_file()
     missing = rlc("evaluate --records records/")
     assert missing.returncode == 2 and missing.stdout == ""
-    assert missing.stderr.startswith("error: records: 7 of 7 records of manifest.csv missing: RSN753_LOMAP_CLS000.AT2")
+    assert missing.stderr.startswith(
+        "error: records: 7 of 7 records of manifest.csv missing: RSN753_LOMAP_CLS000.AT2"
+    )
     assert len(missing.stderr.splitlines()) == 1
     compared = rlc("compare lqg")
-    assert compared.returncode == 0 and "| LQG + ground model |" in compared.stdout and "SYNTHETIC" in compared.stdout
+    assert (
+        compared.returncode == 0
+        and "| LQG + ground model |" in compared.stdout
+        and "SYNTHETIC" in compared.stdout
+    )
     shared = records_folder()
     if not (shared / "manifest.csv").is_file():
         pytest.skip(f"no PEER records at {shared}: the table on the seven records is not run")
@@ -262,13 +284,17 @@ def test_the_env_is_registered_by_the_learning_package_in_a_fresh_process():
 def test_compare_passive_states_the_devices_own_verdict(records, tmp_path):
     config = REPOSITORY / "configs" / "experiments" / "five_story_tmd.yaml"
     out = tmp_path / "passive"
-    result = CliRunner().invoke(app, ["compare", "passive", str(config), "--records", str(records), "--out", str(out)])
+    result = CliRunner().invoke(
+        app, ["compare", "passive", str(config), "--records", str(records), "--out", str(out)]
+    )
     assert result.exit_code == 0, result.output
     verdict = yaml.safe_load((out / "passive_check.yaml").read_text())
     assert verdict["controller"] == "passive devices" and verdict["passed"] is False
     suite = verdict["criteria"]["check suite"]
     significant = suite["significant_motions"]
-    words = f"{suite['failure_count']} of {significant} significant worse than the building without its devices"
+    words = (
+        f"{suite['failure_count']} of {significant} significant worse than the building without its devices"
+    )
     assert words in result.output
     assert len(suite["failures"]) == suite["failure_count"]  # every failing motion listed
     assert (out / "metrics_per_story.png").is_file()
@@ -276,8 +302,20 @@ def test_compare_passive_states_the_devices_own_verdict(records, tmp_path):
 
 def test_criteria_other_than_the_papers_and_the_benchmarks_or_without_story_heights_are_one_line(tmp_path):
     config = str(REPOSITORY / "configs" / "five_story.yaml")
-    for criteria, message in (("ohtori", "expected one of paper, benchmark"), ("benchmark", "no story_heights")):
-        arguments = ["compare", "lqg", "--config", config, "--criteria", criteria, "--out", str(tmp_path / criteria)]
+    for criteria, message in (
+        ("ohtori", "expected one of paper, benchmark"),
+        ("benchmark", "no story_heights"),
+    ):
+        arguments = [
+            "compare",
+            "lqg",
+            "--config",
+            config,
+            "--criteria",
+            criteria,
+            "--out",
+            str(tmp_path / criteria),
+        ]
         result = CliRunner().invoke(app, arguments)
         assert result.exit_code == 2 and message in result.output and len(result.output.splitlines()) == 1
         assert not (tmp_path / criteria).exists()
@@ -285,7 +323,8 @@ def test_criteria_other_than_the_papers_and_the_benchmarks_or_without_story_heig
 
 @pytest.mark.slow
 def test_the_frames_benchmark_criteria_on_a_record(tmp_path, records, monkeypatch):
-    """The FE frame's J1-J17 (`evaluation.benchmark`): its member ends read, the uncontrolled run kept with them."""
+    """The FE frame's J1-J17 (`evaluation.benchmark`): its member ends read, the uncontrolled run kept with
+    them."""
     monkeypatch.setenv("RLC_CACHE", str(tmp_path / "cache"))
     config = str(REPOSITORY / "configs" / "experiments" / "nine_story_frame.yaml")
     out = tmp_path / "out"
@@ -296,6 +335,7 @@ def test_the_frames_benchmark_criteria_on_a_record(tmp_path, records, monkeypatc
     table = pd.read_csv(out / "benchmark_criteria.csv").set_index(["controller", "criterion"])["value"]
     assert table.loc["uncontrolled"].loc[[f"J{i}" for i in range(1, 11)]].tolist() == [1.0] * 10
     lqg = table.loc["LQG"]
-    assert 0.5 < lqg["J1"] < 1.0 and 0.5 < lqg["J7"] < 1.0 and 0.0 < lqg["J8"] < 1.0  # it yields, less than bare
+    # it yields, less than bare
+    assert 0.5 < lqg["J1"] < 1.0 and 0.5 < lqg["J7"] < 1.0 and 0.0 < lqg["J8"] < 1.0
     assert (lqg["J15"], lqg["J16"]) == (9, 10) and lqg["J11"] > 0.0
     assert all(np.isfinite(lqg.loc[[f"J{i}" for i in range(1, 18)]]))

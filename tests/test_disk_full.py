@@ -69,7 +69,9 @@ def test_aggregate_into_a_read_only_or_forbidden_folder(tmp_path, monkeypatch, e
     out = tmp_path / "aggregate"
     before = files_under(tmp_path)
     fill_disk_at(monkeypatch, 1, error)
-    line = one_filesystem_line(CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]), os.strerror(error))
+    line = one_filesystem_line(
+        CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]), os.strerror(error)
+    )
     assert "aggregate" in line and files_under(tmp_path) == before
     monkeypatch.undo()
     assert CliRunner().invoke(app, ["aggregate", *runs, "--out", str(out)]).exit_code == 0
@@ -85,7 +87,9 @@ def test_export_on_a_full_disk(tmp_path, monkeypatch):
     line = one_filesystem_line(CliRunner().invoke(app, ["export", str(folder), "--out", str(out)]))
     assert "controller.onnx" in line and files_under(tmp_path) == before
     monkeypatch.undo()
-    assert CliRunner().invoke(app, ["export", str(folder), "--out", str(out)]).exit_code == 0 and out.is_file()
+    assert (
+        CliRunner().invoke(app, ["export", str(folder), "--out", str(out)]).exit_code == 0 and out.is_file()
+    )
 
 
 @pytest.mark.slow
@@ -118,14 +122,18 @@ def test_a_sweep_whose_disk_fills_at_its_table_resumes_without_retraining(tmp_pa
     config.write_text((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
     out = tmp_path / "sweep"
     fill_disk_at(monkeypatch, 1)  # the workers (other processes) write their runs; the sweep's table fails
-    line = one_filesystem_line(CliRunner().invoke(app, ["sweep", str(config), "--seeds", "0", "--out", str(out)]))
+    line = one_filesystem_line(
+        CliRunner().invoke(app, ["sweep", str(config), "--seeds", "0", "--out", str(out)])
+    )
     assert "sweep.csv" in line and not (out / ".lock").exists() and not (out / "sweep.csv").exists()
     model = out / "seed0" / "final_model.zip"
     stamp = model.stat().st_mtime_ns
     monkeypatch.undo()
     again = CliRunner().invoke(app, ["sweep", str(config), "--seeds", "0", "--out", str(out)])
     assert again.exit_code == 0 and "finished before" in again.output, again.output
-    assert model.stat().st_mtime_ns == stamp and yaml.safe_load((out / "sweep.csv").read_text().splitlines()[0])
+    assert model.stat().st_mtime_ns == stamp and yaml.safe_load(
+        (out / "sweep.csv").read_text().splitlines()[0]
+    )
 
 
 @pytest.mark.slow

@@ -44,7 +44,12 @@ def test_a_folder_that_fails_to_fill_leaves_nothing_and_a_full_one_is_never_over
 
 
 def write_lock(folder, pid, host=None):
-    holder = {"host": host or socket.gethostname(), "pid": pid, "what": "rlc sweep", "started": "2026-11-23T00:00:00"}
+    holder = {
+        "host": host or socket.gethostname(),
+        "pid": pid,
+        "what": "rlc sweep",
+        "started": "2026-11-23T00:00:00",
+    }
     (folder / LOCK).write_text(json.dumps(holder))
 
 
@@ -55,7 +60,9 @@ def test_a_live_holder_keeps_the_folder_and_is_named(tmp_path):
         with pytest.raises(ConfigError) as error, folder_lock(tmp_path, "rlc train"):
             pass
         message = str(error.value)
-        assert f"in use by rlc sweep on {socket.gethostname()} (pid {sleeper.pid}, since 2026-11-23" in message
+        assert (
+            f"in use by rlc sweep on {socket.gethostname()} (pid {sleeper.pid}, since 2026-11-23" in message
+        )
         assert "\n" not in message and active_holder(tmp_path) is not None
     finally:
         sleeper.kill()
@@ -77,13 +84,19 @@ def test_a_lock_left_by_a_dead_process_is_taken_over_and_released(tmp_path):
 
 def test_a_lock_on_another_host_is_respected(tmp_path):
     write_lock(tmp_path, 1, host="some-other-machine")
-    with pytest.raises(ConfigError, match="on some-other-machine \\(pid 1"), folder_lock(tmp_path, "rlc train"):
+    with (
+        pytest.raises(ConfigError, match="on some-other-machine \\(pid 1"),
+        folder_lock(tmp_path, "rlc train"),
+    ):
         pass
 
 
 def test_an_unreadable_lock_is_stale_only_after_a_grace_period(tmp_path):
     (tmp_path / LOCK).write_text("")  # a holder killed between creating and writing it, or still writing
-    with pytest.raises(ConfigError, match="a process still writing its lock"), folder_lock(tmp_path, "rlc train"):
+    with (
+        pytest.raises(ConfigError, match="a process still writing its lock"),
+        folder_lock(tmp_path, "rlc train"),
+    ):
         pass
     old = time.time() - 60
     os.utime(tmp_path / LOCK, (old, old))

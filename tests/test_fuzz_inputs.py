@@ -26,7 +26,13 @@ BASES = {
     "variable_damper": {
         "actuators": [],
         "devices": [
-            {"type": "variable_damper", "story": 2, "damping_min": 0.0, "damping_max": 1.0e6, "capacity": 1.0e5}
+            {
+                "type": "variable_damper",
+                "story": 2,
+                "damping_min": 0.0,
+                "damping_max": 1.0e6,
+                "capacity": 1.0e5,
+            }
         ],
     },
     "amd": {
@@ -42,7 +48,11 @@ BASES = {
         ],
         "sensors": {"measurements": [{"quantity": "stroke", "scale": 1.0, "noise_std": 0.001}]},
     },
-    "tmd": {"devices": [{"type": "tuned_mass", "floor": 3, "mode": 2, "mass_ratio": 0.05, "frequency_ratio": 0.97}]},
+    "tmd": {
+        "devices": [
+            {"type": "tuned_mass", "floor": 3, "mode": 2, "mass_ratio": 0.05, "frequency_ratio": 0.97}
+        ]
+    },
     "wind_generator": {
         "excitation": {
             "generator": {
@@ -178,7 +188,14 @@ def test_a_fuzzed_matrix_file_is_refused_in_one_line(tmp_path, array, change):
     assert "building" in lines[0], lines[0]
 
 
-WIND_SUITE = {"kind": "wind", "speeds": [20.0], "records_per_speed": 1, "duration": 10.0, "dt": 0.1, "cutoff": 1.0}
+WIND_SUITE = {
+    "kind": "wind",
+    "speeds": [20.0],
+    "records_per_speed": 1,
+    "duration": 10.0,
+    "dt": 0.1,
+    "cutoff": 1.0,
+}
 WIND_CASES = [
     (f"{key}={bad}", key, bad)
     for key in ("speeds", "records_per_speed", "duration", "dt", "cutoff", "roughness", "width", "seed")
@@ -193,7 +210,16 @@ def test_a_fuzzed_wind_suite_is_accepted_or_refused_in_one_line(tmp_path, key, b
     (tmp_path / "wind.yaml").write_text(yaml.safe_dump(suite))
     out = tmp_path / "out"
     smoke = Path(__file__).resolve().parents[1] / "configs" / "testing" / "smoke.yaml"
-    arguments = ["compare", "lqg", "--config", str(smoke), "--records", str(tmp_path / "wind.yaml"), "--out", str(out)]
+    arguments = [
+        "compare",
+        "lqg",
+        "--config",
+        str(smoke),
+        "--records",
+        str(tmp_path / "wind.yaml"),
+        "--out",
+        str(out),
+    ]
     result = CliRunner().invoke(app, arguments)
     assert "Traceback" not in result.output
     if result.exit_code == 0:
@@ -212,7 +238,9 @@ def _policy_cases():
     for folder in (NETWORK_POLICY, MPC_POLICY):  # a learned file, a classical one (MPC: its own section too)
         description = yaml.safe_load((folder / "best_policy.yaml").read_text())
         for path, _ in leaves(description):
-            cases += [(f"{folder.name}:{'.'.join(map(str, path))}={bad}", folder, path, bad) for bad in BAD_VALUES]
+            cases += [
+                (f"{folder.name}:{'.'.join(map(str, path))}={bad}", folder, path, bad) for bad in BAD_VALUES
+            ]
     return cases
 
 
@@ -220,7 +248,9 @@ POLICY_CASES = _policy_cases()
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("folder", "path", "bad"), [c[1:] for c in POLICY_CASES], ids=[c[0] for c in POLICY_CASES])
+@pytest.mark.parametrize(
+    ("folder", "path", "bad"), [c[1:] for c in POLICY_CASES], ids=[c[0] for c in POLICY_CASES]
+)
 def test_a_fuzzed_controller_file_is_read_or_refused_naming_it(tmp_path, folder, path, bad):
     """A controller file from someone else: any field changed, it is read as data or refused with a
     `ConfigError` naming the file (a one-line error at the command line) — never another exception."""
@@ -316,7 +346,9 @@ def test_a_fuzzed_search_space_is_accepted_or_refused_in_one_line(tmp_path, path
     assert "Traceback" not in result.output
     if result.exit_code != 0:
         lines = result.output.strip().splitlines()
-        assert result.exit_code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {config}"), result.output
+        assert result.exit_code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {config}"), (
+            result.output
+        )
 
 
 SET_VALUES = (
@@ -375,7 +407,11 @@ def _members(folder):
 
 POLICY_DAMAGE = {
     # a 200-byte file whose header declares 745 GiB: refused from the header, nothing allocated
-    "a header declaring 10^11 values": ("npz", {"layer0_weight.npy": _npy("(100000000000,)")}, "header declares"),
+    "a header declaring 10^11 values": (
+        "npz",
+        {"layer0_weight.npy": _npy("(100000000000,)")},
+        "header declares",
+    ),
     "an array of another shape": (
         "npz",
         {"layer0_weight.npy": _npy("(5, 56)", "<f4", bytes(5 * 56 * 4))},
@@ -387,14 +423,18 @@ POLICY_DAMAGE = {
     "a member that is no array": ("npz", {"notes.txt": b"hello"}, "notes.txt: not an array"),
     "an unknown key": ("yaml", "bogus_key: 1\n", "unknown key bogus_key"),
     "an unknown network key": ("yaml", None, "unknown key network.width"),
-    "an anchor and an alias": ("yaml", "extra: &big [1, 2]\nmore: *big\n", "anchors and aliases are not accepted"),
+    "an anchor and an alias": (
+        "yaml",
+        "extra: &big [1, 2]\nmore: *big\n",
+        "anchors and aliases are not accepted",
+    ),
 }
 
 
 @pytest.mark.parametrize("case", list(POLICY_DAMAGE))
 def test_a_controller_file_is_checked_before_its_data_is_read(tmp_path, case):
-    """The policy YAML is read with no anchors, aliases or unknown keys; each array's shape and dtype come from
-    its .npy header and must be what the YAML declares before any data is read."""
+    """The policy YAML is read with no anchors, aliases or unknown keys; each array's shape and dtype come
+    from its .npy header and must be what the YAML declares before any data is read."""
     import shutil
     import zipfile
 

@@ -15,7 +15,8 @@ def test_every_subpackage_is_installed_with_the_package():
     text = (REPOSITORY / "pyproject.toml").read_text()
     listed = set(re.findall(r'"(rlcontroller[a-z_.]*)"', text.split("packages = [", 1)[1].split("]", 1)[0]))
     folders = {
-        "rlcontroller" + "".join(f".{part}" for part in init.parent.relative_to(REPOSITORY / "rlcontroller").parts)
+        "rlcontroller"
+        + "".join(f".{part}" for part in init.parent.relative_to(REPOSITORY / "rlcontroller").parts)
         for init in (REPOSITORY / "rlcontroller").rglob("__init__.py")
     }
     assert folders <= listed, sorted(folders - listed)

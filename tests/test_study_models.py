@@ -23,7 +23,8 @@ def test_every_study_model_is_described_and_none_is_listed_by_rlc_models():
     assert [folder.name for folder in FOLDERS] == sorted(RECORDS_J1)
     for folder in FOLDERS:
         assert f"`{folder.name}`" in readme and f"{RECORDS_J1[folder.name]:.3f}" in readme
-        assert f"  {folder.name}:" not in listed and f"  {folder.name} (default):" not in listed  # not shipped
+        # not shipped
+        assert f"  {folder.name}:" not in listed and f"  {folder.name} (default):" not in listed
 
 
 @pytest.mark.slow

@@ -42,7 +42,9 @@ def load(config: Path | None) -> Experiment:
     gets its reduced model as its design model (`physics.fe.build.reduced_building`: the file runs, named)."""
     from rlcontroller.physics.fe.build import reduced_building
 
-    return load_experiment(DEFAULT_MODEL / "config.yaml" if config is None else config, reduce=reduced_building)
+    return load_experiment(
+        DEFAULT_MODEL / "config.yaml" if config is None else config, reduce=reduced_building
+    )
 
 
 def folder_experiment(folder: Path) -> Experiment:
@@ -71,7 +73,9 @@ def model_folder(run_dir: Path | None, report: Report = QUIET) -> Path:
         folder = _shipped_for_config(folder, report)
     if not (folder / "config.yaml").is_file():
         hint = "" if run_dir else " (no RUN_DIR given and no committed default model)"
-        raise ConfigError(f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'")
+        raise ConfigError(
+            f"{folder}: not a run folder: no config.yaml{hint}; train one with 'rlc train CONFIG'"
+        )
     from rlcontroller.files import active_holder
 
     holder = active_holder(folder)
@@ -116,8 +120,8 @@ def motions_text(count: int) -> str:
 
 
 def keep_model_messages(messages, folder: Path, report: Report) -> None:
-    """What the model printed during the runs (`simulation.fanout.model_messages`), kept in the command's output
-    `folder` and counted in one line; nothing when it printed nothing."""
+    """What the model printed during the runs (`simulation.fanout.model_messages`), kept in the command's
+    output `folder` and counted in one line; nothing when it printed nothing."""
     count = messages.lines
     kept = messages.keep(folder)
     if kept is not None:

@@ -20,7 +20,9 @@ def describe(experiment: Experiment, full: bool = False) -> str:
     floors_only = " (floors only, without the devices)" if experiment.devices else ""
     buildings = [(f"design model{floors_only}", plant.design.bare.building)]
     if plant.fe_model is None and experiment.plant is not None:
-        buildings.append((f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building))
+        buildings.append(
+            (f"simulated plant (the plant part, elastic){floors_only}", plant.elastic.bare.building)
+        )
     for title, building in buildings:
         lines += mode_lines(title, building.periods(), building.modal_damping_ratios(), rows=rows)
     if plant.fe_model is not None:
@@ -33,7 +35,9 @@ def describe(experiment: Experiment, full: bool = False) -> str:
         from rlcontroller.simulation.kept import check_moves
 
         moved = check_moves(plant)  # a model that stands still is one line here, before any run
-        lines.append(f"under a unit ground pulse its peak drift is {moved:.3f} of its design model's: it moves")
+        lines.append(
+            f"under a unit ground pulse its peak drift is {moved:.3f} of its design model's: it moves"
+        )
     lines.append("\n# actuators")
     for index, actuator in enumerate(experiment.actuators):
         floors = f"floor {actuator.story}"
@@ -42,11 +46,15 @@ def describe(experiment: Experiment, full: bool = False) -> str:
                 f"floor {actuator.story - 1}" if actuator.story > 1 else "the ground"
             )
         lines.append(
-            f"{index + 1}: story {actuator.story}, {actuator.mount}, limit {actuator.force_limit / 1e3:g} kN ({floors})"
+            f"{index + 1}: story {actuator.story}, {actuator.mount}, limit {actuator.force_limit / 1e3:g} kN "
+            f"({floors})"
         )
     if experiment.devices:
         lines.append("\n# devices (mass devices tuned on the design model)")
-        lines += [f"{index}: {line}" for index, line in enumerate(device_lines(experiment, plant.design.building), 1)]
+        lines += [
+            f"{index}: {line}"
+            for index, line in enumerate(device_lines(experiment, plant.design.building), 1)
+        ]
     return "\n".join(lines)
 
 
@@ -64,19 +72,24 @@ def mode_lines(title: str, periods, ratios, *, design=None, rows: int | None = N
             line += f"  {design[mode - 1] / period - 1.0:>+27.2%}"
         lines.append(line)
     if rows is not None and len(lines) > rows + 2:
-        lines = lines[: rows + 2] + [f"   ... {len(lines) - rows - 2} more modes (rlc info --full lists them)"]
+        lines = lines[: rows + 2] + [
+            f"   ... {len(lines) - rows - 2} more modes (rlc info --full lists them)"
+        ]
     return lines
 
 
 def hardware_label(experiment: Experiment) -> str:
     """What a controller is made for, in a few words: "paper five-story under ground motion, actuators on
-    stories 1, 2, 3, 4, 5", "... mr_damper on stories 1, 3, 5", "... active_mass on floor 5" (`Experiment.hardware`)."""
+    stories 1, 2, 3, 4, 5", "... mr_damper on stories 1, 3, 5", "... active_mass on floor 5"
+    (`Experiment.hardware`)."""
     where: dict[str, list[int]] = {}
     if experiment.actuators:
         where["actuators on story"] = [actuator.story for actuator in experiment.actuators]
     for device in experiment.devices:
         story = getattr(device, "story", None)
-        where.setdefault(f"{device.type} on {'floor' if story is None else 'story'}", []).append(story or device.floor)
+        where.setdefault(f"{device.type} on {'floor' if story is None else 'story'}", []).append(
+            story or device.floor
+        )
     parts = [
         f"{key.replace('story', 'stories') if len(places) > 1 else key} {', '.join(map(str, places))}"
         for key, places in where.items()
@@ -114,8 +127,11 @@ def resolved_text(experiment: Experiment, full: bool = False) -> str:
         return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flat(data))
 
     def mapping(dumper, data):
-        short = not any(isinstance(item, str) and len(item) > 40 for item in data.values())  # a matrix: a line each
-        return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=flat(data.values()) and short)
+        # a matrix: a line each
+        short = not any(isinstance(item, str) and len(item) > 40 for item in data.values())
+        return dumper.represent_mapping(
+            "tag:yaml.org,2002:map", data, flow_style=flat(data.values()) and short
+        )
 
     Dumper.add_representer(list, sequence)
     Dumper.add_representer(dict, mapping)

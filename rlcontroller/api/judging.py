@@ -27,7 +27,11 @@ from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.simulation.fanout import model_messages
 
-CRITERIA = ("paper", "benchmark")  # J1-J4 always; "benchmark" adds Ohtori et al.'s J1-J17 (evaluation.benchmark)
+# J1-J4 always; "benchmark" adds Ohtori et al.'s J1-J17 (evaluation.benchmark)
+CRITERIA = (
+    "paper",
+    "benchmark",
+)
 
 
 def comparison(
@@ -54,18 +58,24 @@ def comparison(
     plant = Plant(experiment)
     if criteria == "benchmark" and plant.building.story_heights is None:
         name = experiment.building.name
-        raise ConfigError(f"--criteria benchmark: the building {name} has no story_heights (J1, J4: drift ratios)")
+        raise ConfigError(
+            f"--criteria benchmark: the building {name} has no story_heights (J1, J4: drift ratios)"
+        )
     if plant.fe_model is not None:
-        report.note(f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})")
+        report.note(
+            f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})"
+        )
         plant.fe_model.record_connections = plant.bare.fe_model.record_connections = criteria == "benchmark"
     policy = read_policy(run_dir, model, plant) if run_dir is not None else None
     extra = ()
     if mpc is not None:
-        from rlcontroller.control.mpc import mpc_controller
+        from rlcontroller.control.mpc_controllers import mpc_controller
 
         extra = (mpc_controller(plant.design, mpc),)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    with report.progress(f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)) as advance:
+    with report.progress(
+        f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)
+    ) as advance:
         evaluation = compare(plant, motions, label, policy=policy, on_motions=advance, extra=extra)
     for controller in extra:
         if controller.fallbacks:
@@ -100,7 +110,11 @@ def evaluate(
     out = output_folder(out, f"evaluate-{folder.resolve().name}")
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
-    with drawing() as plots, model_messages() as messages:  # matplotlib's import and the plots on the other core
+    # matplotlib's import and the plots on the other core
+    with (
+        drawing() as plots,
+        model_messages() as messages,
+    ):
         plant, _, evaluation = comparison(
             experiment, folder, model, records, scale_pga=scale_pga, report=report, criteria=criteria
         )
@@ -115,7 +129,8 @@ def evaluate(
 
 @contextmanager
 def drawing() -> Iterator:
-    """A drawing process for `write_report` where there is a second core to run it on (and fork), else None."""
+    """A drawing process for `write_report` where there is a second core to run it on (and fork), else
+    None."""
     if (os.cpu_count() or 1) < 2 or not hasattr(os, "fork"):
         yield None
         return
@@ -177,7 +192,9 @@ def compare_lqg(
     else:
         experiment = load(config)
     if not experiment.command_labels():
-        raise ConfigError(f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive")
+        raise ConfigError(
+            f"{config}: nothing to command (no actuators, no active devices): try rlc compare passive"
+        )
     if mpc is not None and not 1 <= mpc <= MAX_HORIZON:
         raise ConfigError(f"--mpc {mpc}: expected a horizon of 1..{MAX_HORIZON} control steps")
     if experiment.has_dampers and preview:
@@ -186,7 +203,14 @@ def compare_lqg(
     check_new_folder(out)
     with model_messages() as messages:  # what an FE model prints goes to opensees.log
         plant, motions, evaluation = comparison(
-            experiment, run_dir, model, records, scale_pga=scale_pga, report=report, mpc=mpc, criteria=criteria
+            experiment,
+            run_dir,
+            model,
+            records,
+            scale_pga=scale_pga,
+            report=report,
+            mpc=mpc,
+            criteria=criteria,
         )
         label = evaluation.label
         with new_folder(out) as staging:
@@ -196,7 +220,9 @@ def compare_lqg(
             if sweep and experiment.has_dampers:
                 levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)
                 with report.progress("dampers' trade-off", len(motions)) as advance:
-                    table = damper_sweep(plant, motions, label, levels, multipliers=multipliers, on_motions=advance)
+                    table = damper_sweep(
+                        plant, motions, label, levels, multipliers=multipliers, on_motions=advance
+                    )
                 names = [name for name in evaluation.controllers if name not in ("uncontrolled",)]
                 points = {n: tuple(mean_metric(evaluation, n, m) for m in ("J1", "J2", "J3")) for n in names}
                 write_damper_sweep(table, staging, label, points)
@@ -204,12 +230,18 @@ def compare_lqg(
                 multipliers = np.logspace(-2, 2, 9)
                 with report.progress("LQG trade-off", multipliers.size) as advance:
                     table = lqg_sweep(plant, motions, label, multipliers, on_point=lambda: advance())
-                names = [name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers]
-                points = {n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names}
+                names = [
+                    name for name in ("RL", *LQG_VARIANTS[1:], OPTIMAL) if name in evaluation.controllers
+                ]
+                points = {
+                    n: (mean_metric(evaluation, n, "J3"), mean_metric(evaluation, n, "J1")) for n in names
+                }
                 write_sweep(table, staging, label, points)
             if preview:
                 names = [name for name in evaluation.controllers if name not in ("uncontrolled", OPTIMAL)]
-                references = {n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names}
+                references = {
+                    n: (mean_metric(evaluation, n, "J1"), mean_metric(evaluation, n, "J2")) for n in names
+                }
                 with report.progress("preview horizons", len(PREVIEW_SECONDS)) as advance:
                     study = preview_study(plant, motions, on_horizon=lambda: advance())
                 write_preview(study, staging, label, references)
@@ -234,7 +266,8 @@ def compare_passive(
     """The building without its devices (uncontrolled) and with them passive: tuned masses as tuned,
     active mass drivers as the tuned masses they are without a command; under ground motion also the
     devices' own verdict: the safety check's suite criterion, the passive devices against the building
-    without them (passive_check.yaml). Returns the evaluation, its folder and the verdict (None under wind)."""
+    without them (passive_check.yaml). Returns the evaluation, its folder and the verdict (None under
+    wind)."""
     from rlcontroller.config import load_safety_check
     from rlcontroller.evaluation.evaluation import PASSIVE, progress_total
     from rlcontroller.evaluation.evaluation import evaluate as evaluate_controllers
@@ -251,15 +284,19 @@ def compare_passive(
     check_new_folder(out)
     plant = Plant(experiment)
     motions, label = load_suite(records, scale_pga, plant, report.note)
-    with report.progress(f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)) as advance:
-        evaluation = evaluate_controllers(plant, motions, [], label, include_optimal=False, on_motions=advance)
+    with report.progress(
+        f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)
+    ) as advance:
+        evaluation = evaluate_controllers(
+            plant, motions, [], label, include_optimal=False, on_motions=advance
+        )
     verdict = None
     if experiment.load_kind == "ground motion":
         standard = load_safety_check(SAFETY_STANDARD)
         with report.progress(f"devices' verdict, {standard.motions} motions", 1) as advance:
             criterion = passive_verdict(plant, standard)
             advance(1)
-        verdict = Verdict(PASSIVE, criterion["passed"], {"check suite": criterion})
+        verdict = Verdict(PASSIVE, criterion.passed, {"check suite": criterion})
     with new_folder(out) as staging:
         write_report(evaluation, staging)
         if verdict is not None:
@@ -296,10 +333,14 @@ def robustness(
     check_new_folder(out)
     motions, label = load_suite(records, scale_pga, plant, report.note)
     if any(motion.floor_forces is not None for motion in motions):
-        linear = [scenario for scenario in named if scenario.plant is None or scenario.plant.hysteresis is None]
+        linear = [
+            scenario for scenario in named if scenario.plant is None or scenario.plant.hysteresis is None
+        ]
         if len(linear) < len(named):
             skipped = ", ".join(s.name for s in named if s not in linear)
-            report.note(f"note: skipped under floor loads (yielding stories are not modelled with them): {skipped}")
+            report.note(
+                f"note: skipped under floor loads (yielding stories are not modelled with them): {skipped}"
+            )
         named = linear
     with report.progress(f"{len(named)} scenarios", len(named)) as advance:
         table, seconds = run_robustness(
@@ -314,7 +355,13 @@ def robustness(
 def summary_text(evaluation, out: Path) -> str:
     """The tables a command prints after an evaluation: J1-J4 per controller, the improvement over LQG,
     J1 and J2 by PGA band, and where the files are."""
-    from rlcontroller.evaluation.tables import LEGEND, by_pga, improvement_table, markdown_table, summary_table
+    from rlcontroller.evaluation.tables import (
+        LEGEND,
+        by_pga,
+        improvement_table,
+        markdown_table,
+        summary_table,
+    )
 
     lines = [f"# {evaluation.label}"]
     lines += [f"{name}: {source}" for name, source in evaluation.sources.items()]

@@ -59,7 +59,8 @@ def judged(folder: Path, model: str, experiment, standard: Path, *, scenarios: P
     checking = load_safety_check(standard)
     loads = "wind loads" if checking.generator.kind == "wind" else "motions"
     if (also := checking.also) is not None:
-        also = f", {also.motions} generated {'wind loads' if also.generator.kind == 'wind' else 'ground motions'}"
+        generated = "wind loads" if also.generator.kind == "wind" else "ground motions"
+        also = f", {also.motions} generated {generated}"
     report.line(
         f"checking {display_path(folder)}'s {model} policy: {checking.motions} generated {loads}, "
         f"{checking.rest_runs} runs at rest{also or ''}, closed-loop stability..."
@@ -67,14 +68,18 @@ def judged(folder: Path, model: str, experiment, standard: Path, *, scenarios: P
     named = load_scenarios(scenarios or default_scenarios(experiment), experiment)
     with report.progress("safety check", 3 + (checking.also is not None)) as advance:
         try:
-            verdict = safety_check(plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done"))
+            verdict = safety_check(
+                plant, policy, checking, named, on_criterion=lambda name: advance(1, f"{name} done")
+            )
         except ConfigError as error:  # the standard asks for what this building has not
             raise ConfigError(f"{display_path(standard)}: {error}") from None
     verdict.judged = judged_digests(folder, model, checking)
     return verdict
 
 
-def verify(folder: Path, model: str = "best", scenarios: Path | None = None, report: Report = QUIET) -> list[str]:
+def verify(
+    folder: Path, model: str = "best", scenarios: Path | None = None, report: Report = QUIET
+) -> list[str]:
     """`rlc check FOLDER --verify`: re-run the check of a folder's verdict under the project's standard and
     return each recorded figure the re-run does not reproduce (`evaluation.verdict.differences`; empty:
     they agree). The recorded verdict must exist; whether it judged these files is one of the figures."""
@@ -85,13 +90,19 @@ def verify(folder: Path, model: str = "best", scenarios: Path | None = None, rep
 
     path = verdict_path(folder, model)
     if not path.is_file():
-        raise ConfigError(f"{display_path(path)}: no verdict to verify; run 'rlc check {display_path(folder)}'")
+        raise ConfigError(
+            f"{display_path(path)}: no verdict to verify; run 'rlc check {display_path(folder)}'"
+        )
     try:
         recorded = yaml.safe_load(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise ConfigError(f"{display_path(path)}: unreadable ({type(error).__name__}); nothing to verify") from None
+        raise ConfigError(
+            f"{display_path(path)}: unreadable ({type(error).__name__}); nothing to verify"
+        ) from None
     if not isinstance(recorded, dict):
-        raise ConfigError(f"{display_path(path)}: expected a verdict (a mapping), got {type(recorded).__name__}")
+        raise ConfigError(
+            f"{display_path(path)}: expected a verdict (a mapping), got {type(recorded).__name__}"
+        )
     experiment = folder_experiment(folder)
     standard = safety_standard(experiment)
     report.line(f"verifying {display_path(path)}: re-running its check...")
@@ -125,7 +136,9 @@ def unchecked_note(folder: Path, model: str) -> str:
     state = verdict_state(folder, model)
     if state.passed is None:
         why = "" if state.reason == "never safety-checked" else f" ({state.reason})"
-        return f"note: {folder}'s {model} policy counts as never safety-checked{why}; run 'rlc check {folder}'"
+        return (
+            f"note: {folder}'s {model} policy counts as never safety-checked{why}; run 'rlc check {folder}'"
+        )
     if not state.passed:
         return (
             f"warning: {folder}'s {model} policy FAILED the safety check (it can be worse than no control): "

@@ -28,9 +28,10 @@ def shipped_models() -> list[str]:
         verdict = {True: passed, False: "safety check FAILED"}.get(state.passed)
         mark = " (default)" if folder == DEFAULT_MODEL else ""
         made = (
-            f"classical, {policy['law']}" if policy.get("kind") == "classical"
+            f"classical, {policy['law']}"
+            if policy.get("kind") == "classical"
             else f"{policy['algorithm']}, {policy['training_steps']:,} steps"
-        )  # fmt: skip
+        )
         line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}"
         groups.setdefault(hardware_label(experiment), []).append(line)
     lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
@@ -48,8 +49,8 @@ def shipped_models() -> list[str]:
 
 
 def unshipped_experiments() -> tuple[dict[str, Experiment], list[str]]:
-    """The experiments under configs/experiments (by name) with something to command that no shipped controller
-    is made for, and the names of those with nothing to command."""
+    """The experiments under configs/experiments (by name) with something to command that no shipped
+    controller is made for, and the names of those with nothing to command."""
     served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
     unshipped: dict[str, Experiment] = {}
     passive: list[str] = []
@@ -64,8 +65,8 @@ def unshipped_experiments() -> tuple[dict[str, Experiment], list[str]]:
 
 def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
     """A classical controller as a controller folder: `law` (a key of `control.classical.LAWS`: the
-    experiment's LQG on its Kalman estimate, MPC on the same, or passive-on / passive-off dampers) designed for the
-    experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
+    experiment's LQG on its Kalman estimate, MPC on the same, or passive-on / passive-off dampers) designed
+    for the experiment of `config`, written with its resolved config.yaml to the new folder `out` (never over
     an existing one). evaluate, check and export then treat it like a trained policy. Returns `out`."""
     from rlcontroller.control.classical import LAWS, classical_policy
     from rlcontroller.control.policy_file import write_policy
@@ -73,7 +74,9 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
     from rlcontroller.physics.plant import Plant
 
     if out.exists():
-        raise ConfigError(f"--out {out}: exists; a controller folder is never overwritten (choose another --out)")
+        raise ConfigError(
+            f"--out {out}: exists; a controller folder is never overwritten (choose another --out)"
+        )
     if law not in LAWS:
         raise ConfigError(f"--law {law}: expected one of {', '.join(LAWS)}")
     experiment = load(config)
@@ -86,7 +89,9 @@ def design(config: Path, law: str, out: Path, report: Report = QUIET) -> Path:
     return out
 
 
-def export(run_dir: Path | None = None, out: Path | None = None, model: str = "best", report: Report = QUIET) -> Path:
+def export(
+    run_dir: Path | None = None, out: Path | None = None, model: str = "best", report: Report = QUIET
+) -> Path:
     """A folder's policy (default: the default model's) as one ONNX file: sensor readings (SI) and its own
     state in, forces (N) out; `out` defaults to results/FOLDER_MODEL_controller.onnx and is never
     overwritten. Returns the file written."""

@@ -49,19 +49,29 @@ def train(
         import torch
 
         if not torch.cuda.is_available():
-            raise ConfigError("--device cuda: no CUDA GPU is visible to torch here; use --device cpu (or auto)")
+            raise ConfigError(
+                "--device cuda: no CUDA GPU is visible to torch here; use --device cpu (or auto)"
+            )
     limit = None if time_limit_minutes is None else 60.0 * time_limit_minutes
-    options = {"device": device, "progress_bar": progress_bar, "time_limit_s": limit, "tensorboard": tensorboard}
+    options = {
+        "device": device,
+        "progress_bar": progress_bar,
+        "time_limit_s": limit,
+        "tensorboard": tensorboard,
+    }
     if resume is not None:
         experiment = _fe_experiment_of(resume, config)
         if (config is not None and experiment is None) or total_steps is not None or seed is not None:
-            raise ConfigError("--resume: continues the run's own config; drop CONFIG, --total-steps and --seed")
+            raise ConfigError(
+                "--resume: continues the run's own config; drop CONFIG, --total-steps and --seed"
+            )
         report.line(resume_line(resume))
         summary = run_training(experiment=experiment, resume=resume, **options)
     else:
         if config is None:
             raise ConfigError(
-                "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; configs/README.md "
+                "rlc train: expected an experiment YAML (e.g. configs/experiments/demo.yaml; "
+                "configs/README.md "
                 "lists them) or --resume RUN"
             )
         experiment = load(config)
@@ -74,13 +84,15 @@ def train(
     if summary.interrupted or summary.time_limit_reached:
         return Trained(summary)
     fe_model = experiment.plant.opensees if experiment is not None and experiment.plant is not None else None
-    judged_in = config if fe_model is not None and fe_model.train_on == "fe" else None  # the plant it learned on
+    # the plant it learned on
+    judged_in = config if fe_model is not None and fe_model.train_on == "fe" else None
     return Trained(summary, *check(summary.run_dir, model="best", report=report, config=judged_in))
 
 
 def _fe_experiment_of(run: Path, config: Path | None) -> Experiment | None:
     """The experiment of a run that learned on an OpenSees model, which its folder does not keep: the
-    folder's own, with the plant of `config` (named again, naming the same model file); None for any other run."""
+    folder's own, with the plant of `config` (named again, naming the same model file); None for any other
+    run."""
     kept = run / "config.yaml"
     lines = kept.read_text().splitlines()[:2] if kept.is_file() else []
     if not any(line.startswith(LEARNED_ON_FE_MODEL) for line in lines):
@@ -93,7 +105,9 @@ def _fe_experiment_of(run: Path, config: Path | None) -> Experiment | None:
     named = load(config)
     fe_model = named.plant.opensees if named.plant is not None else None
     if fe_model is None or f" {fe_model.model} " not in lines[0]:
-        raise ConfigError(f"{config}: does not name the OpenSees model {run} learned on ({lines[0].lstrip('# ')})")
+        raise ConfigError(
+            f"{config}: does not name the OpenSees model {run} learned on ({lines[0].lstrip('# ')})"
+        )
     return folder_experiment(run).model_copy(update={"plant": named.plant})
 
 
@@ -143,8 +157,8 @@ def learned_line(run: Path) -> str:
         rows = list(csv.DictReader(file))
     start, best = rows[0], min(rows, key=lambda row: float(row["eval_J1"]))
     return (
-        f"learned: validation J1 {float(start['eval_J1']):.3f} at step 0 -> {float(best['eval_J1']):.3f} at step "
-        f"{int(best['steps']):,} ({float(best['wall_time_s']):.0f} s); LQG with the same cost and sensors, designed "
-        f"on the building's matrices: {float(best['lqg_J1']):.3f} (LQG + ground model "
+        f"learned: validation J1 {float(start['eval_J1']):.3f} at step 0 -> {float(best['eval_J1']):.3f} at "
+        f"step {int(best['steps']):,} ({float(best['wall_time_s']):.0f} s); LQG with the same cost and "
+        f"sensors, designed on the building's matrices: {float(best['lqg_J1']):.3f} (LQG + ground model "
         f"{float(best['lqg_ground_model_J1']):.3f}), on the same generated validation motions"
     )

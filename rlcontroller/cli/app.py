@@ -28,15 +28,17 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     rich_markup_mode=None,
-    help="Reinforcement-learning active control of buildings under earthquakes. New here? Start with 'rlc demo'.",
+    help="Reinforcement-learning active control of buildings under earthquakes. New here? Start with 'rlc "
+    "demo'.",
 )
 
+# a design that cannot be made on a model is a ConfigError too
 USER_ERRORS = (
     ConfigError,
     MotionError,
     ModelError,
     RecordingError,
-)  # a design that cannot be made on a model is a ConfigError too
+)
 INTERNAL_ERROR = 3  # exit code of a failure that is not the user's (user mistakes: 2, file system: 1)
 DEBUG_VARIABLE = "RLC_DEBUG"  # set to 1: tracebacks on screen, as with --debug
 debugging = False  # set for each invocation by the --debug option or the variable
@@ -56,7 +58,10 @@ def _commands(
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
     debug: Annotated[
-        bool, typer.Option("--debug", help=f"Show an internal error's traceback on screen (or set {DEBUG_VARIABLE}=1).")
+        bool,
+        typer.Option(
+            "--debug", help=f"Show an internal error's traceback on screen (or set {DEBUG_VARIABLE}=1)."
+        ),
     ] = False,
 ) -> None:
     """Reinforcement-learning active control of buildings under earthquakes."""
@@ -133,8 +138,8 @@ ModelOption = Annotated[str, typer.Option(help="Which saved model of the run: be
 CriteriaOption = Annotated[
     str,
     typer.Option(
-        help="paper: J1-J4; benchmark: also the nonlinear benchmark's J1-J17 (Ohtori et al. 2004; member ends "
-        "of an FE plant), benchmark_criteria.md"
+        help="paper: J1-J4; benchmark: also the nonlinear benchmark's J1-J17 (Ohtori et al. 2004; member "
+        "ends of an FE plant), benchmark_criteria.md"
     ),
 ]
 RUN_HELP = (
@@ -147,10 +152,14 @@ OutOption = Annotated[
 ProgressOption = Annotated[
     bool | None,
     typer.Option(
-        "--progress/--no-progress", show_default="on a terminal", help="Show a progress bar with steps/s and ETA."
+        "--progress/--no-progress",
+        show_default="on a terminal",
+        help="Show a progress bar with steps/s and ETA.",
     ),
 ]
-SCENARIOS_DEFAULT = "configs/scenarios/standard.yaml; devices.yaml with mass devices, dampers.yaml with dampers"
+SCENARIOS_DEFAULT = (
+    "configs/scenarios/standard.yaml; devices.yaml with mass devices, dampers.yaml with dampers"
+)
 
 
 class Engine(str, Enum):
@@ -160,7 +169,9 @@ class Engine(str, Enum):
 
 EngineOption = Annotated[
     Engine,
-    typer.Option(help="Where runs on a one-model-per-process plant (OpenSees) fan out: local processes, or Dask."),
+    typer.Option(
+        help="Where runs on a one-model-per-process plant (OpenSees) fan out: local processes, or Dask."
+    ),
 ]
 AddressOption = Annotated[
     str | None, typer.Option(help="An existing Dask scheduler (tcp://HOST:8786); default: a local cluster.")
@@ -173,7 +184,8 @@ def show_progress(progress: bool | None) -> bool:
 
 
 def counted_lines(description: str, total: int) -> Callable[..., None]:
-    """Progress as plain lines on stderr (done/total, seconds since the start): for `--progress` into a file."""
+    """Progress as plain lines on stderr (done/total, seconds since the start): for `--progress` into a
+    file."""
     started, done = time.monotonic(), 0
 
     def advance(amount: int = 1, label: str = "") -> None:
@@ -219,10 +231,14 @@ class Printed:
             yield counted_lines(description, total)
             return
         columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-        with Progress(*columns, TextColumn("left"), TimeRemainingColumn(), console=console, transient=True) as bar:
+        with Progress(
+            *columns, TextColumn("left"), TimeRemainingColumn(), console=console, transient=True
+        ) as bar:
             task = bar.add_task(description, total=total)
 
             def advance(amount: int = 1, label: str = "") -> None:
-                bar.update(task, advance=amount, description=f"{description}: {label}" if label else description)
+                bar.update(
+                    task, advance=amount, description=f"{description}: {label}" if label else description
+                )
 
             yield advance

@@ -14,7 +14,9 @@ from rlcontroller.cli.app import Printed, ProgressOption, RecordsOption, app, po
 @app.command(short_help="An experiment resolved: building, periods, actuators.")
 @user_errors
 def info(
-    config: Annotated[Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")] = None,
+    config: Annotated[
+        Path | None, typer.Argument(help="Experiment YAML; the default model's if omitted.")
+    ] = None,
     full: Annotated[
         bool, typer.Option("--full", help="Every matrix entry, list value and mode (default: summarised).")
     ] = False,
@@ -33,22 +35,30 @@ def train(
     config: Annotated[
         Path | None,
         typer.Argument(
-            help="Experiment YAML (see configs/README.md; with --resume: only for a run learned on an OpenSees model)."
+            help="Experiment YAML (see configs/README.md; with --resume: only for a run learned on an "
+            "OpenSees model)."
         ),
     ] = None,
     total_steps: Annotated[
         int | None, typer.Option(min=1, max=MAX_TOTAL_STEPS, help="Override algorithm.total_steps.")
     ] = None,
-    seed: Annotated[int | None, typer.Option(min=0, max=MAX_SEED, help="Override the experiment's seed.")] = None,
-    run_dir: Annotated[Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")] = None,
-    resume: Annotated[Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")] = None,
+    seed: Annotated[
+        int | None, typer.Option(min=0, max=MAX_SEED, help="Override the experiment's seed.")
+    ] = None,
+    run_dir: Annotated[
+        Path | None, typer.Option(help="Run folder to create (default runs/NAME-seedS-TIME).")
+    ] = None,
+    resume: Annotated[
+        Path | None, typer.Option(help="Continue this run folder from its newest checkpoint.")
+    ] = None,
     device: Annotated[
         str, typer.Option(help="cpu, cuda or auto (the CPU: rlc's MLP policies step slower on a GPU).")
     ] = "auto",
     time_limit: Annotated[
         float | None,
         typer.Option(
-            callback=positive_finite(1.0e6), help="Stop after this many minutes of this invocation (resumable)."
+            callback=positive_finite(1.0e6),
+            help="Stop after this many minutes of this invocation (resumable).",
         ),
     ] = None,
     progress: ProgressOption = None,
@@ -56,8 +66,8 @@ def train(
         bool,
         typer.Option(
             "--tensorboard",
-            help="Also log to RUN/tensorboard (stable-baselines3's logger and the validation J1/J2 with the LQG "
-            "references); follow with 'tensorboard --logdir runs'. Needs rlcontroller[tensorboard].",
+            help="Also log to RUN/tensorboard (stable-baselines3's logger and the validation J1/J2 with the "
+            "LQG references); follow with 'tensorboard --logdir runs'. Needs rlcontroller[tensorboard].",
         ),
     ] = False,
 ) -> None:

@@ -25,13 +25,20 @@ def parsed_list(text: str | None, option: str) -> list[float] | None:
 @app.command("simulate-test", short_help="A vibration test on an experiment's plant, recorded as a CSV.")
 @user_errors
 def simulate_test(
-    config: Annotated[Path, typer.Argument(help="Experiment YAML whose plant is tested (its plant part included).")],
+    config: Annotated[
+        Path, typer.Argument(help="Experiment YAML whose plant is tested (its plant part included).")
+    ],
     out: Annotated[Path, typer.Option(help="New recording CSV; never overwritten.")],
     duration: Annotated[float, typer.Option(help="Length of an ambient test (s).")] = 600.0,
     ambient_rms: Annotated[float, typer.Option(help="RMS of the ambient white-noise ground (m/s^2).")] = 0.1,
-    record: Annotated[Path | None, typer.Option(help="A ground-motion file to test with instead of ambient.")] = None,
+    record: Annotated[
+        Path | None, typer.Option(help="A ground-motion file to test with instead of ambient.")
+    ] = None,
     shake: Annotated[
-        float, typer.Option(help="RMS of each actuator's white-noise force, a fraction of its force limit (0: none).")
+        float,
+        typer.Option(
+            help="RMS of each actuator's white-noise force, a fraction of its force limit (0: none)."
+        ),
     ] = 0.05,
     seed: Annotated[int, typer.Option(help="Fixes the ground, the shaking and the sensor noise.")] = 0,
 ) -> None:
@@ -41,14 +48,23 @@ def simulate_test(
     from rlcontroller import api
 
     api.simulate_test(
-        config, out, duration=duration, ambient_rms=ambient_rms, record=record, shake=shake, seed=seed, report=Printed()
+        config,
+        out,
+        duration=duration,
+        ambient_rms=ambient_rms,
+        record=record,
+        shake=shake,
+        seed=seed,
+        report=Printed(),
     )
 
 
 @app.command(short_help="A building's state-space model from its test recordings.")
 @user_errors
 def identify(
-    recordings: Annotated[list[Path], typer.Argument(help="Recording CSVs of one set of sensors (rlc simulate-test).")],
+    recordings: Annotated[
+        list[Path], typer.Argument(help="Recording CSVs of one set of sensors (rlc simulate-test).")
+    ],
     out: Annotated[Path, typer.Option(help="New folder for building.yaml, model.npz and identification.md.")],
     modes: Annotated[int | None, typer.Option(help="Modes to identify (default: one per floor).")] = None,
     band: Annotated[
@@ -63,22 +79,26 @@ def identify(
     rlc train, compare lqg and evaluate accept (building: FOLDER/building.yaml)."""
     from rlcontroller import api
 
-    api.identify(recordings, out, modes=modes, band=band, masses=parsed_list(masses, "--masses"), report=Printed())
+    api.identify(
+        recordings, out, modes=modes, band=band, masses=parsed_list(masses, "--masses"), report=Printed()
+    )
 
 
 @app.command(short_help="A nonlinear reduced model of an FE plant, calibrated from it.")
 @user_errors
 def reduce(
-    config: Annotated[Path, typer.Argument(help="Experiment YAML with an FE plant (plant.opensees; its model runs).")],
+    config: Annotated[
+        Path, typer.Argument(help="Experiment YAML with an FE plant (plant.opensees; its model runs).")
+    ],
     out: Annotated[Path, typer.Option(help="New folder for config.yaml, accuracy.csv and calibration.md.")],
     fit: Annotated[int, typer.Option(help="Generated strong motions the FE model runs to fit.")] = 8,
     test: Annotated[int, typer.Option(help="Other motions the fit is judged on.")] = 8,
 ) -> None:
-    """Run the FE model on generated motions strong enough to yield it, fit two reduced models on its condensed
-    stiffness to its drift histories (Bouc-Wen story springs; a fishbone: a column line whose floors' beams yield),
-    keep the one with the lower cost there, and print per story how well both hold on other motions beside the
-    linear reduced model. config.yaml is the experiment with the kept model as its plant: train on it in seconds
-    where the FE model takes hours (docs/opensees.md)."""
+    """Run the FE model on generated motions strong enough to yield it, fit two reduced models on its
+    condensed stiffness to its drift histories (Bouc-Wen story springs; a fishbone: a column line whose
+    floors' beams yield), keep the one with the lower cost there, and print per story how well both hold on
+    other motions beside the linear reduced model. config.yaml is the experiment with the kept model as its
+    plant: train on it in seconds where the FE model takes hours (docs/opensees.md)."""
     from rlcontroller import api
 
     api.reduce(config, out, fit_motions=fit, test_motions=test, report=Printed())

@@ -1,4 +1,5 @@
-"""Commands that judge controllers: `rlc evaluate`, `compare lqg`, `compare passive`, `robustness`, `check`."""
+"""Commands that judge controllers: `rlc evaluate`, `compare lqg`, `compare passive`, `robustness`,
+`check`."""
 
 from __future__ import annotations
 
@@ -40,7 +41,9 @@ def evaluate(
     progress: ProgressOption = None,
     config: Annotated[
         Path | None,
-        typer.Option(help="Experiment YAML to judge the controller in (e.g. an OpenSees plant); default its own."),
+        typer.Option(
+            help="Experiment YAML to judge the controller in (e.g. an OpenSees plant); default its own."
+        ),
     ] = None,
     engine: EngineOption = Engine.local,
     address: AddressOption = None,
@@ -66,7 +69,8 @@ def evaluate(
 compare_app = typer.Typer(
     no_args_is_help=True,
     short_help="The classical answers: LQG, passive devices.",
-    help="The classical answers: LQG with the same cost (rlc compare lqg), passive devices (rlc compare passive).",
+    help="The classical answers: LQG with the same cost (rlc compare lqg), passive devices (rlc compare "
+    "passive).",
 )
 app.add_typer(compare_app, name="compare")
 
@@ -84,7 +88,8 @@ def compare_lqg(
     sweep: Annotated[
         bool,
         typer.Option(
-            help="Trace LQG's J1-J3 trade-off over force weights (dampers: passive levels and clipped-optimal weights)."
+            help="Trace LQG's J1-J3 trade-off over force weights (dampers: passive levels and "
+            "clipped-optimal weights)."
         ),
     ] = False,
     preview: Annotated[
@@ -93,8 +98,8 @@ def compare_lqg(
     mpc: Annotated[
         int | None,
         typer.Option(
-            help="Add MPC over this many control steps (20: 0.4 s): force limits, strokes (soft) and dampers' "
-            "passivity as constraints."
+            help="Add MPC over this many control steps (20: 0.4 s): force limits, strokes (soft) and "
+            "dampers' passivity as constraints."
         ),
     ] = None,
     model: ModelOption = "best",
@@ -103,7 +108,8 @@ def compare_lqg(
     address: AddressOption = None,
     criteria: CriteriaOption = "paper",
 ) -> None:
-    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run; MPC too with --mpc."""
+    """LQG (same cost) against the uncontrolled building, and against the RL policy of a run; MPC too with
+    --mpc."""
     from rlcontroller import api
 
     with fan_out(engine.value, address):
@@ -157,7 +163,8 @@ def robustness(
     scenarios: Annotated[
         Path | None,
         typer.Option(
-            help="Scenario YAML: named plants that differ from the design model.", show_default=SCENARIOS_DEFAULT
+            help="Scenario YAML: named plants that differ from the design model.",
+            show_default=SCENARIOS_DEFAULT,
         ),
     ] = None,
     out: OutOption = None,
@@ -200,15 +207,22 @@ def check(
     ] = None,
     progress: ProgressOption = None,
     show: Annotated[
-        bool, typer.Option("--show", help="Print the folder's verdict and whether it judged these files; no check.")
+        bool,
+        typer.Option(
+            "--show", help="Print the folder's verdict and whether it judged these files; no check."
+        ),
     ] = False,
     verify: Annotated[
         bool,
-        typer.Option("--verify", help="Re-run the check and compare it with the folder's verdict, figure by figure."),
+        typer.Option(
+            "--verify", help="Re-run the check and compare it with the folder's verdict, figure by figure."
+        ),
     ] = False,
     config: Annotated[
         Path | None,
-        typer.Option(help="Experiment YAML to check the controller in (e.g. an OpenSees plant); default its own."),
+        typer.Option(
+            help="Experiment YAML to check the controller in (e.g. an OpenSees plant); default its own."
+        ),
     ] = None,
     engine: EngineOption = Engine.local,
     address: AddressOption = None,
@@ -233,7 +247,9 @@ def check(
             raise ConfigError("--verify re-runs the folder's own verdict: leave out --standard and --config")
         with fan_out(engine.value, address):
             differing = api.verify(folder, model, scenarios, report)
-        typer.echo("\n".join(differing) or "verified: the re-run reproduces every figure of the recorded verdict")
+        typer.echo(
+            "\n".join(differing) or "verified: the re-run reproduces every figure of the recorded verdict"
+        )
         passed = not differing
     else:
         with fan_out(engine.value, address):

@@ -30,9 +30,9 @@ def design(
     law: Annotated[
         str,
         typer.Option(
-            help="lqg_ground_model, lqg_ground or lqg_wind_model (the experiment's LQG on its Kalman estimate, "
-            "as its sensors give), mpc (MPC over 20 steps on LQG + ground model's estimate; not exportable), "
-            "passive-on or passive-off (dampers)."
+            help="lqg_ground_model, lqg_ground or lqg_wind_model (the experiment's LQG on its Kalman "
+            "estimate, as its sensors give), mpc (MPC over 20 steps on LQG + ground model's estimate; not "
+            "exportable), passive-on or passive-off (dampers)."
         ),
     ] = "lqg_ground_model",
 ) -> None:
@@ -54,7 +54,9 @@ def export(
     format: Annotated[ExportFormat, typer.Option("--format", help="File format.")] = ExportFormat.onnx,
     out: Annotated[
         Path | None,
-        typer.Option(help="New output file (default: results/FOLDER_MODEL_controller.onnx); never overwritten."),
+        typer.Option(
+            help="New output file (default: results/FOLDER_MODEL_controller.onnx); never overwritten."
+        ),
     ] = None,
     model: ModelOption = "best",
 ) -> None:
@@ -72,8 +74,9 @@ def convert(
         bool,
         typer.Option(
             "--trust-pickle",
-            help="Required. Opening a stable-baselines3 zip or .pkl unpickles it, which runs any code its author "
-            "put in it with your permissions: only for folders you made yourself or whose author you trust.",
+            help="Required. Opening a stable-baselines3 zip or .pkl unpickles it, which runs any code its "
+            "author put in it with your permissions: only for folders you made yourself or whose author you "
+            "trust.",
         ),
     ] = False,
 ) -> None:

@@ -53,7 +53,8 @@ DurationRange = bounded_range(0.0, MAX_DURATION, low_open=True)  # s
 
 
 IntRange = Annotated[
-    tuple[Annotated[int, Field(ge=0, le=1000)], Annotated[int, Field(ge=0, le=1000)]], AfterValidator(_ordered_range)
+    tuple[Annotated[int, Field(ge=0, le=1000)], Annotated[int, Field(ge=0, le=1000)]],
+    AfterValidator(_ordered_range),
 ]
 
 
@@ -120,7 +121,9 @@ def first_error(error: ValidationError, file: str, prefix: str, model: Any = Non
     key = format_location(tuple(detail["loc"]), prefix)
     message = detail["msg"].removeprefix("Value error, ")
     if detail["type"] == "extra_forbidden":
-        message = "unknown key" + _known_keys_hint(str(detail["loc"][-1]), _keys_at(model, tuple(detail["loc"][:-1])))
+        message = "unknown key" + _known_keys_hint(
+            str(detail["loc"][-1]), _keys_at(model, tuple(detail["loc"][:-1]))
+        )
     elif detail["type"] != "value_error" and not isinstance(detail.get("input"), dict | type(None)):
         message += f" (got {_short(detail['input'])})"
     return ConfigError(f"{file}: {key}: {message}")
@@ -151,7 +154,11 @@ def _keys_at(model: Any, location: tuple[Any, ...]) -> list[str]:
         if get_origin(current) is list and isinstance(item, int):
             current = get_args(current)[0]
         elif get_origin(current) in (Union, UnionType):  # a generator: the location names its kind
-            kinds = [m for m in get_args(current) if isinstance(m, type) and "kind" in getattr(m, "model_fields", {})]
+            kinds = [
+                m
+                for m in get_args(current)
+                if isinstance(m, type) and "kind" in getattr(m, "model_fields", {})
+            ]
             chosen = [m for m in kinds if m.model_fields["kind"].default == item]
             current = chosen[0] if chosen else None
         elif isinstance(current, type) and issubclass(current, BaseModel) and item in current.model_fields:
@@ -170,7 +177,9 @@ def _depth(value: Any) -> int:
         if isinstance(item, dict | list):
             deepest = max(deepest, level)
             if level <= MAX_NESTING:
-                stack.extend((child, level + 1) for child in (item.values() if isinstance(item, dict) else item))
+                stack.extend(
+                    (child, level + 1) for child in (item.values() if isinstance(item, dict) else item)
+                )
     return deepest
 
 
@@ -188,7 +197,9 @@ def read_yaml(path: Path) -> Any:
     except OSError as error:
         raise ConfigError(f"{path}: cannot read the file ({error.strerror})") from None
     except UnicodeDecodeError as error:
-        raise ConfigError(f"{path}: not a text (UTF-8) file: byte {error.start} is {text_byte(error)}") from None
+        raise ConfigError(
+            f"{path}: not a text (UTF-8) file: byte {error.start} is {text_byte(error)}"
+        ) from None
     try:
         value = yaml.load(text, Loader=SAFE_LOADER)
     except yaml.YAMLError as error:
@@ -241,7 +252,9 @@ def check_seed(seed: int, where: str = "--seed") -> int:
     return seed
 
 
-def finite(value: float, where: str, *, low: float = 0.0, high: float = math.inf, low_open: bool = True) -> float:
+def finite(
+    value: float, where: str, *, low: float = 0.0, high: float = math.inf, low_open: bool = True
+) -> float:
     """A finite number in (low, high] (or [low, high] with low_open=False), else a ConfigError."""
     ok = math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
     if not ok:

@@ -90,7 +90,9 @@ def _check_damping_matrix(matrix: np.ndarray) -> None:
     """A damping matrix (N*s/m) must be symmetric and positive semi-definite (it dissipates energy)."""
     size = float(np.max(np.abs(matrix))) if matrix.size else 0.0
     if size > MAX_STIFFNESS:
-        raise ValueError(f"damping 'matrix' has entries up to {size:g} N*s/m, expected at most {MAX_STIFFNESS:g}")
+        raise ValueError(
+            f"damping 'matrix' has entries up to {size:g} N*s/m, expected at most {MAX_STIFFNESS:g}"
+        )
     if not np.allclose(matrix, matrix.T, rtol=1e-9, atol=1e-12 * max(size, 1.0)):
         raise ValueError("damping 'matrix' must be symmetric")
     lowest = float(np.min(np.linalg.eigvalsh(matrix)))
@@ -165,7 +167,9 @@ def _square(rows, name: str, size: int | None = None) -> np.ndarray:
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         raise ValueError(f"{name} must be a square matrix, got shape {matrix.shape}")
     if size is not None and matrix.shape[0] != size:
-        raise ValueError(f"{name} is {matrix.shape[0]} x {matrix.shape[0]}, expected {size} x {size} like mass_matrix")
+        raise ValueError(
+            f"{name} is {matrix.shape[0]} x {matrix.shape[0]}, expected {size} x {size} like mass_matrix"
+        )
     if not np.all(np.isfinite(matrix)):
         raise ValueError(f"{name} has a value that is not finite")
     return matrix
@@ -187,7 +191,8 @@ def _one_per_story(actuators: list[ActuatorConfig]) -> list[ActuatorConfig]:
     return actuators
 
 
-Actuators = Annotated[list[ActuatorConfig], AfterValidator(_one_per_story)]  # may be empty when there are devices
+# may be empty when there are devices
+Actuators = Annotated[list[ActuatorConfig], AfterValidator(_one_per_story)]
 
 
 Devices = Annotated[list[DeviceConfig], Field(max_length=MAX_FLOORS)]
@@ -238,7 +243,9 @@ class SensorConfig(StrictModel):
     history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 5
     action_history: Annotated[int, Field(ge=1, le=MAX_HISTORY)] = 1
     measurements: list[MeasurementConfig] = Field(
-        default_factory=lambda: [MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.05)],
+        default_factory=lambda: [
+            MeasurementConfig(quantity="absolute_acceleration", scale=5.0, noise_std=0.05)
+        ],
         min_length=1,
         max_length=50,
     )

@@ -55,7 +55,9 @@ class RewardConfig(StrictModel):
     @model_validator(mode="after")
     def _something_to_learn(self) -> RewardConfig:
         if all(term.weight == 0.0 for term in self.terms):
-            raise ValueError("every weight is zero: the reward would be constant; give one term a positive weight")
+            raise ValueError(
+                "every weight is zero: the reward would be constant; give one term a positive weight"
+            )
         return self
 
 
@@ -65,7 +67,8 @@ class AssuranceConfig(StrictModel):
 
     release: Annotated[float, Field(gt=0.0, le=2.0)] = 1.0  # hand the devices back above this risk
     engage: Annotated[float, Field(gt=0.0, le=2.0)] = 0.9  # hand control back below this risk
-    floor: Annotated[float, Field(ge=0.0, le=0.05)] = 1.0e-5  # drift ratio: the smallest reference peak counted
+    # drift ratio: the smallest reference peak counted
+    floor: Annotated[float, Field(ge=0.0, le=0.05)] = 1.0e-5
 
     @model_validator(mode="after")
     def _hysteresis(self) -> AssuranceConfig:
@@ -87,20 +90,29 @@ class SupervisorConfig(StrictModel):
     """The control system's supervisory layer: what stands between every controller's action and
     the actuators (`control.supervisor`). The same for every controller of the experiment."""
 
-    trigger: AccelerationRange | None = None  # m/s^2: [off below, full authority from], on the peak ground reading
+    # m/s^2: [off below, full authority from], on the peak ground reading
+
+    trigger: AccelerationRange | None = None
     # pass only forces that take energy out of the building: true judges by the Kalman estimate's velocities,
-    # measured by each stroke's velocity integrated from the floor accelerations (no model: control/fallback.py)
+    # measured by each stroke's velocity integrated from the floor accelerations (no model:
+    # control/fallback.py)
     dissipative: bool | Literal["measured"] = False
     # m/s: with `dissipative`, a force that would feed its story is faded out as the estimated stroke velocity
     # grows to this (passing near a velocity reversal: no force step); 0: blocked at once (the hard clip)
     fade_velocity: Annotated[float, Field(ge=0.0, le=10.0)] = 0.0
-    fallback: FallbackConfig | None = None  # measured dampers past the design model's range (control/fallback.py)
-    assurance: AssuranceConfig | None = None  # runtime assurance against the fail-safe twin (control/assurance.py)
+    # measured dampers past the design model's range (control/fallback.py)
+    fallback: FallbackConfig | None = None
+    # runtime assurance against the fail-safe twin (control/assurance.py)
+    assurance: AssuranceConfig | None = None
 
     @field_validator("dissipative", mode="before")
     @classmethod
     def _dissipative_kind(cls, value: object) -> object:
-        if value not in (True, False, "measured") or isinstance(value, int | float) and not isinstance(value, bool):
+        if (
+            value not in (True, False, "measured")
+            or isinstance(value, int | float)
+            and not isinstance(value, bool)
+        ):
             raise ValueError(f"{value!r}: expected true, false or measured")
         return value
 
@@ -112,5 +124,7 @@ class SupervisorConfig(StrictModel):
     @model_validator(mode="after")
     def _fade_needs_dissipative(self) -> SupervisorConfig:
         if self.fade_velocity > 0.0 and not self.dissipative:
-            raise ValueError("fade_velocity fades the dissipative rule: set dissipative: true, or leave it out")
+            raise ValueError(
+                "fade_velocity fades the dissipative rule: set dissipative: true, or leave it out"
+            )
         return self

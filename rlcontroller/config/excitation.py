@@ -1,5 +1,5 @@
-"""Loads: the ground-motion generators (noise + impulses, Kanai-Tajimi, near-fault, site-based, mixtures) and the
-suites they draw; suites of generated wind loads."""
+"""Loads: the ground-motion generators (noise + impulses, Kanai-Tajimi, near-fault, site-based, mixtures) and
+the suites they draw; suites of generated wind loads."""
 
 from __future__ import annotations
 
@@ -82,11 +82,12 @@ class NearFaultConfig(StrictModel):
 
 
 class SiteBasedConfig(StrictModel):
-    """Motions of Rezaeian & Der Kiureghian's (2010) site-based stochastic model (`physics.motions.site_motions`) for
-    scenarios drawn uniformly in moment `magnitude`, log-uniformly in rupture `distance` (km), uniformly in `vs30`
-    (m/s), reverse faulting with probability `reverse_share` (else strike-slip), a high-pass corner drawn
-    log-uniformly in `corner_frequency` (Hz); each scaled to a random PGA (m/s^2). The defaults stay inside the
-    records the model was fitted to: far-field (R >= 10 km) strong motions of M 6-7.5 on firm ground."""
+    """Motions of Rezaeian & Der Kiureghian's (2010) site-based stochastic model
+    (`physics.motions.site_motions`) for scenarios drawn uniformly in moment `magnitude`, log-uniformly in
+    rupture `distance` (km), uniformly in `vs30` (m/s), reverse faulting with probability `reverse_share`
+    (else strike-slip), a high-pass corner drawn log-uniformly in `corner_frequency` (Hz); each scaled to a
+    random PGA (m/s^2). The defaults stay inside the records the model was fitted to: far-field (R >= 10 km)
+    strong motions of M 6-7.5 on firm ground."""
 
     kind: Literal["site_based"] = "site_based"
     dt: TimeStep = 0.02
@@ -136,7 +137,9 @@ class WindSiteConfig(StrictModel):
     @model_validator(mode="after")
     def _rough_below_reference(self) -> WindSiteConfig:
         if self.roughness >= self.reference_height:
-            raise ValueError("roughness must be below reference_height (the log law's zero is at the roughness length)")
+            raise ValueError(
+                "roughness must be below reference_height (the log law's zero is at the roughness length)"
+            )
         return self
 
     @model_validator(mode="after")
@@ -164,7 +167,12 @@ class WindGeneratorConfig(WindSiteConfig):
 
 
 GeneratorConfig = Annotated[
-    NoiseImpulsesConfig | KanaiTajimiConfig | NearFaultConfig | SiteBasedConfig | MixtureConfig | WindGeneratorConfig,
+    NoiseImpulsesConfig
+    | KanaiTajimiConfig
+    | NearFaultConfig
+    | SiteBasedConfig
+    | MixtureConfig
+    | WindGeneratorConfig,
     Field(discriminator="kind"),
 ]
 

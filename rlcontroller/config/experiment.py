@@ -48,7 +48,9 @@ PARTS: dict[str, Any] = {
 }
 
 
-LEARNED_ON_FE_MODEL = "# learned on the OpenSees model"  # a run folder's config.yaml: resumed only with it named
+LEARNED_ON_FE_MODEL = (
+    "# learned on the OpenSees model"  # a run folder's config.yaml: resumed only with it named
+)
 OPTIONAL_PARTS = ("plant", "plant_randomization", "supervisor")  # may be null: see the fields of Experiment
 
 
@@ -89,7 +91,9 @@ class Experiment(StrictModel):
         simulated for it), its actuators and devices, and the load: experiments that agree here can share one.
         Where a building's matrices were read from (`source`) is not what it is."""
         parts = {"building", "plant", "actuators", "devices"}
-        return self.model_dump(mode="json", include=parts, exclude={"building": {"source"}}) | {"load": self.load_kind}
+        return self.model_dump(mode="json", include=parts, exclude={"building": {"source"}}) | {
+            "load": self.load_kind
+        }
 
     def commanded_devices(self) -> list:
         """The devices that take a command, in the action's order after the actuators: the mass
@@ -111,10 +115,13 @@ class Experiment(StrictModel):
 
     def to_yaml(self) -> str:
         """The resolved experiment as a folder keeps it. An OpenSees plant is left out (a folder never runs
-        code, `config.loading.UNTRUSTED_MODEL`): a comment names its file; the building is its reduced model."""
+        code, `config.loading.UNTRUSTED_MODEL`): a comment names its file; the building is its reduced
+        model."""
         if self.plant is None or self.plant.opensees is None:
             return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
-        note = f"# plant: the OpenSees model {self.plant.opensees.model} (not kept: a folder never runs code)\n"
+        note = (
+            f"# plant: the OpenSees model {self.plant.opensees.model} (not kept: a folder never runs code)\n"
+        )
         if self.plant.opensees.train_on == "fe":
             note += f"{LEARNED_ON_FE_MODEL}: resume with rlc train EXPERIMENT --resume RUN\n"
         return note + yaml.safe_dump(self.model_dump(mode="json") | {"plant": None}, sort_keys=False)

@@ -1,5 +1,6 @@
-"""The learner's settings against the learner: keyword arguments each learner's constructor takes, their ranges
-and choices, and what RandomSearch, DAgger and the sbx backend refuse (without importing torch or JAX)."""
+"""The learner's settings against the learner: keyword arguments each learner's constructor takes, their
+ranges and choices, and what RandomSearch, DAgger and the sbx backend refuse (without importing torch or
+JAX)."""
 
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ def check_algorithm(experiment: Experiment) -> None:
     file, prefix = experiment.origin("algorithm")
     if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C", "RandomSearch"):
         raise ConfigError(
-            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not {algorithm.name}"
+            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not "
+            f"{algorithm.name}"
         )
     if algorithm.name == "RandomSearch":
         _check_random_search(experiment)
@@ -64,14 +66,17 @@ def check_algorithm(experiment: Experiment) -> None:
 
 
 def _check_jax_backend(experiment: Experiment) -> None:
-    """sbx-rl learns SAC, TQC and TD3 with squashed MLP actors, which save as data; it has no initial log std."""
+    """sbx-rl learns SAC, TQC and TD3 with squashed MLP actors, which save as data; it has no initial log
+    std."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
     if algorithm.name not in JAX_LEARNER_KWARGS:
         expected = ", ".join(JAX_LEARNER_KWARGS)
         raise ConfigError(f"{location(file, prefix, 'backend')}: sbx learns {expected}, not {algorithm.name}")
     if algorithm.policy.log_std_init is not None:
-        raise ConfigError(f"{location(file, prefix, 'policy.log_std_init')}: not with backend: sbx (its SAC has none)")
+        raise ConfigError(
+            f"{location(file, prefix, 'policy.log_std_init')}: not with backend: sbx (its SAC has none)"
+        )
 
 
 def _check_random_search(experiment: Experiment) -> None:
@@ -80,7 +85,10 @@ def _check_random_search(experiment: Experiment) -> None:
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
     refused = {
-        "normalize_rewards": (algorithm.normalize_rewards, "its objective, the log of the return, is scale-free"),
+        "normalize_rewards": (
+            algorithm.normalize_rewards,
+            "its objective, the log of the return, is scale-free",
+        ),
         "vec_env": (algorithm.vec_env != "batched", "it runs on the batched env's plant; expected batched"),
     }
     for key, (wrong, why) in refused.items():

@@ -77,8 +77,8 @@ class AlgorithmConfig(StrictModel):
     compiled by JAX; the `fast` extra), about 2x the steps/s of stable-baselines3's torch learners on the
     paper's small networks (docs/training.md); its run folders hold no pickle (`learning.jax_learners`).
     `search` is `rlc tune`'s
-    search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`, `algorithm.policy.net_arch`,
-    `reward.terms.0.weight`, ...) and their ranges; training ignores it.
+    search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`,
+    `algorithm.policy.net_arch`, `reward.terms.0.weight`, ...) and their ranges; training ignores it.
     """
 
     name: Literal["SAC", "PPO", "TD3", "DDPG", "A2C", "TQC", "RandomSearch", "DAgger"] = "SAC"
@@ -136,16 +136,27 @@ LEARNER_KWARGS = {
     "PPO": _ON_POLICY | {"batch_size", "n_epochs", "clip_range", "clip_range_vf", "target_kl"},
     "A2C": _ON_POLICY | {"rms_prop_eps", "use_rms_prop"},
     "SAC": _OFF_POLICY
-    | {"ent_coef", "target_update_interval", "target_entropy", "use_sde", "sde_sample_freq", "use_sde_at_warmup"}
+    | {
+        "ent_coef",
+        "target_update_interval",
+        "target_entropy",
+        "use_sde",
+        "sde_sample_freq",
+        "use_sde_at_warmup",
+    }
     | {"stats_window_size"},
     "TD3": _OFF_POLICY | {"policy_delay", "target_policy_noise", "target_noise_clip", "stats_window_size"},
     "DDPG": _OFF_POLICY,
     "RandomSearch": _COMMON | {"n_delta", "n_motions", "delta_std", "initial_bias", "objective"},
     "DAgger": _COMMON | {"horizon", "n_motions", "epochs", "batch_size", "max_samples"},
 }
-# sbx-rl 0.28's learners (`backend: sbx`): SB3's off-policy arguments less optimize_memory_usage, plus a critic
-# learning rate, delayed actor updates and parameter resets.
-_JAX_OFF_POLICY = (_OFF_POLICY - {"optimize_memory_usage"}) | {"qf_learning_rate", "policy_delay", "param_resets"}
+# sbx-rl 0.28's learners (`backend: sbx`): SB3's off-policy arguments less optimize_memory_usage, plus a
+# critic learning rate, delayed actor updates and parameter resets.
+_JAX_OFF_POLICY = (_OFF_POLICY - {"optimize_memory_usage"}) | {
+    "qf_learning_rate",
+    "policy_delay",
+    "param_resets",
+}
 _JAX_OFF_POLICY |= {"stats_window_size"}
 _JAX_ENTROPY = {"ent_coef", "target_entropy", "use_sde", "sde_sample_freq", "use_sde_at_warmup"}
 JAX_LEARNER_KWARGS = {
@@ -164,7 +175,8 @@ RESERVED_KWARGS = {
     "_init_setup_model",
 }
 CHOICE_KWARGS = {"objective": ("return", "standard")}  # RandomSearch: what f is (its module docstring)
-STEP_LIST_KWARGS = {"param_resets"}  # sbx: the time steps (whole numbers >= 0) after which its networks are reset
+# sbx: the time steps (whole numbers >= 0) after which its networks are reset
+STEP_LIST_KWARGS = {"param_resets"}
 # (low, high, integer) for the learners' common numeric keyword arguments.
 NUMERIC_KWARGS = {
     "gamma": (0.0, 1.0, False),

@@ -41,10 +41,13 @@ def _relative(target: Path, folder: Path) -> str:
     return os.path.relpath(target.resolve(), folder.resolve())
 
 
-Reduction = Callable[[Path, str], dict[str, Any]]  # an FE model file and its function -> its design building part
+# an FE model file and its function -> its design building part
+Reduction = Callable[[Path, str], dict[str, Any]]
 
 
-def load_experiment(path: str | Path, self_contained: bool = False, reduce: Reduction | None = None) -> Experiment:
+def load_experiment(
+    path: str | Path, self_contained: bool = False, reduce: Reduction | None = None
+) -> Experiment:
     """Load an experiment YAML and the part files it names; raise ConfigError on any problem. With
     `self_contained` (the config.yaml of a run or model folder) every file it names must lie in its
     folder: a folder from someone else never makes us read a file elsewhere. An experiment whose plant is
@@ -76,13 +79,19 @@ def load_experiment(path: str | Path, self_contained: bool = False, reduce: Redu
                 _check_part_type(part, value, f"{path}: {part}")
             folder, where = path.parent, f"{path}: {part}"
         if part == "building" and isinstance(raw.get(part), dict):
-            raw[part] = _read_building_files(raw[part], folder, where, path.parent if self_contained else None)
+            raw[part] = _read_building_files(
+                raw[part], folder, where, path.parent if self_contained else None
+            )
         if part == "plant" and isinstance(raw.get(part), dict) and "building" in raw[part]:
             raw[part] = dict(raw[part])
             raw[part]["building"] = _plant_building(
                 raw[part]["building"], folder, f"{where}.building", path, self_contained
             )
-        if part == "plant" and isinstance(raw.get(part), dict) and isinstance(raw[part].get("opensees"), dict):
+        if (
+            part == "plant"
+            and isinstance(raw.get(part), dict)
+            and isinstance(raw[part].get("opensees"), dict)
+        ):
             if self_contained:
                 raise ConfigError(f"{where}.opensees: {UNTRUSTED_MODEL}")
             _resolve_fe_model(raw, folder, where, reduce)
@@ -133,15 +142,17 @@ def _resolve_fe_model(raw: dict[str, Any], folder: Path, where: str, reduce: Red
     model = fe.get("model")
     if not isinstance(model, str) or not (folder / model).is_file():
         raise ConfigError(
-            f"{where}.opensees.model: expected the path of a Python or Tcl file (relative to {folder}), got {model!r}"
+            f"{where}.opensees.model: expected the path of a Python or Tcl file (relative to {folder}), got "
+            f"{model!r}"
         )
     fe["model"] = str((folder / model).resolve())
     if "building" in raw:
         return
     if reduce is None:
         raise ConfigError(
-            f"{where}.opensees: no building: its design model is reduced from the model when the experiment is "
-            "loaded with a reduction (rlcontroller.api.load, or load_experiment(..., reduce=reduced_building))"
+            f"{where}.opensees: no building: its design model is reduced from the model when the experiment "
+            "is loaded with a reduction (rlcontroller.api.load, or load_experiment(..., "
+            "reduce=reduced_building))"
         )
     raw["building"] = reduce(Path(fe["model"]), fe.get("function", "build_model"))
     if "system" in fe:  # the FE model's lateral system is its design model's

@@ -27,7 +27,9 @@ def read_matrix_part(raw: dict[str, Any], folder: Path, where: str) -> dict[str,
     if not isinstance(name, str):
         raise ConfigError(f"{where}.matrices: expected the path of an .npz file, got {type(name).__name__}")
     if not isinstance(units, dict) or set(units) != {"mass", "force", "length"}:
-        raise ConfigError(f"{where}.units: expected {{mass, force, length}}, e.g. {{mass: t, force: kN, length: m}}")
+        raise ConfigError(
+            f"{where}.units: expected {{mass, force, length}}, e.g. {{mass: t, force: kN, length: m}}"
+        )
     for key, table in (("mass", MASS_UNITS), ("force", FORCE_UNITS), ("length", LENGTH_UNITS)):
         if units[key] not in table:
             raise ConfigError(f"{where}.units.{key}: {units[key]!r}, expected one of {', '.join(table)}")
@@ -56,12 +58,16 @@ def read_state_space_part(raw: dict[str, Any], folder: Path, where: str) -> dict
     raw = dict(raw)
     name = raw.pop("state_space")
     if not isinstance(name, str):
-        raise ConfigError(f"{where}.state_space: expected the path of an .npz file, got {type(name).__name__}")
+        raise ConfigError(
+            f"{where}.state_space: expected the path of an .npz file, got {type(name).__name__}"
+        )
     path = folder / name
     arrays = _read_arrays(path, STATE_SPACE_ARRAYS)
     for key in ("A", "B", "C", "D"):
         if key not in arrays:
-            raise ConfigError(f"{display_path(path)}: no array {key!r}; expected A, B, C, D (and dt if discrete)")
+            raise ConfigError(
+                f"{display_path(path)}: no array {key!r}; expected A, B, C, D (and dt if discrete)"
+            )
     for key, field in (
         ("A", "state_matrix"),
         ("B", "input_matrix"),
@@ -85,7 +91,9 @@ def _read_arrays(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     except ValueError as error:
         raise ConfigError(f"{display_path(path)}: {error}") from None
     except (OSError, zipfile.BadZipFile) as error:
-        raise ConfigError(f"{display_path(path)}: cannot read the matrices ({type(error).__name__})") from None
+        raise ConfigError(
+            f"{display_path(path)}: cannot read the matrices ({type(error).__name__})"
+        ) from None
     unknown = sorted(set(headers) - set(names))
     if unknown:
         raise ConfigError(f"{display_path(path)}: unknown arrays {unknown}, expected {', '.join(names)}")

@@ -65,19 +65,21 @@ class HysteresisConfig(StrictModel):
     z' = (d'/d_y) [1 - |z|^n (beta sgn(d' z) + gamma)], beta + gamma = 1 (|z| -> 1 at yield).
     `yield_drift` d_y (m), `post_yield_ratio` a (1: linear; negative: the story loses strength past yield, as
     gravity's P-Delta makes a frame do), `exponent` n (sharper yielding for larger n), `beta` and `gamma` the
-    loop's shape: each a scalar or one value per story. `collapse_drift` (m, per story or one): a story past it
-    has collapsed, and the building stays as it lies for the rest of the motion (needed with a negative a,
+    loop's shape: each a scalar or one value per story. `collapse_drift` (m, per story or one): a story past
+    it has collapsed, and the building stays as it lies for the rest of the motion (needed with a negative a,
     whose drift would otherwise run away). `substeps` RK4 steps per ground-sample interval.
 
-    `model: fishbone` (`physics.fishbone`) makes each floor's beams yield instead of each story: an elastic column
-    line (`column_stiffness` EI per story, N m^2), the beams' rotational springs (`beam_stiffness` per floor, N m/rad)
-    and the base's (`base_stiffness`, N m/rad), the floors' weights on a leaning column; the per-story lists then
-    give each floor's beam hinge (its `yield_rotation`, rad, in place of a yield drift), and `yield_drift` stays
-    the stories' (m: ductility, collapse)."""
+    `model: fishbone` (`physics.fishbone`) makes each floor's beams yield instead of each story: an elastic
+    column line (`column_stiffness` EI per story, N m^2), the beams' rotational springs (`beam_stiffness` per
+    floor, N m/rad) and the base's (`base_stiffness`, N m/rad), the floors' weights on a leaning column; the
+    per-story lists then give each floor's beam hinge (its `yield_rotation`, rad, in place of a yield drift),
+    and `yield_drift` stays the stories' (m: ductility, collapse)."""
 
     model: Literal["bouc_wen", "fishbone"] = "bouc_wen"
     yield_drift: Annotated[float, Field(gt=0.0, le=1.0)] | list[Annotated[float, Field(gt=0.0, le=1.0)]]
-    post_yield_ratio: Annotated[float, Field(ge=-0.5, le=1.0)] | list[Annotated[float, Field(ge=-0.5, le=1.0)]] = 0.1
+    post_yield_ratio: (
+        Annotated[float, Field(ge=-0.5, le=1.0)] | list[Annotated[float, Field(ge=-0.5, le=1.0)]]
+    ) = 0.1
     exponent: Annotated[float, Field(ge=1.0, le=20.0)] | list[Annotated[float, Field(ge=1.0, le=20.0)]] = 2.0
     beta: Annotated[float, Field(ge=0.0, le=1.0)] | list[Annotated[float, Field(ge=0.0, le=1.0)]] = 0.5
     gamma: Annotated[float, Field(ge=-1.0, le=1.0)] | list[Annotated[float, Field(ge=-1.0, le=1.0)]] = 0.5
@@ -88,11 +90,23 @@ class HysteresisConfig(StrictModel):
     beam_stiffness: list[Annotated[float, Field(ge=0.0)]] | None = None
     base_stiffness: Annotated[float, Field(gt=0.0)] | None = None
 
-    FISHBONE: ClassVar[tuple[str, ...]] = ("yield_rotation", "column_stiffness", "beam_stiffness", "base_stiffness")
+    FISHBONE: ClassVar[tuple[str, ...]] = (
+        "yield_rotation",
+        "column_stiffness",
+        "beam_stiffness",
+        "base_stiffness",
+    )
     PER_STORY: ClassVar[tuple[str, ...]] = (
-        "yield_drift", "post_yield_ratio", "exponent", "beta", "gamma", "collapse_drift", "yield_rotation",
-        "column_stiffness", "beam_stiffness",
-    )  # fmt: skip
+        "yield_drift",
+        "post_yield_ratio",
+        "exponent",
+        "beta",
+        "gamma",
+        "collapse_drift",
+        "yield_rotation",
+        "column_stiffness",
+        "beam_stiffness",
+    )
 
     @model_validator(mode="after")
     def _yields_at_one(self) -> HysteresisConfig:
@@ -100,18 +114,26 @@ class HysteresisConfig(StrictModel):
         if len(lengths) > 1:
             raise ValueError(f"the per-story lists must be of one length, got {sorted(lengths)}")
         if np.min(self.post_yield_ratio) < 0.0 and self.collapse_drift is None:
-            raise ValueError("a negative post_yield_ratio (a story losing strength) needs a collapse_drift (m)")
-        if self.collapse_drift is not None and np.any(np.asarray(self.collapse_drift) <= np.asarray(self.yield_drift)):
+            raise ValueError(
+                "a negative post_yield_ratio (a story losing strength) needs a collapse_drift (m)"
+            )
+        if self.collapse_drift is not None and np.any(
+            np.asarray(self.collapse_drift) <= np.asarray(self.yield_drift)
+        ):
             raise ValueError("collapse_drift must exceed yield_drift in every story")
         given = [key for key in self.FISHBONE if getattr(self, key) is not None]
         if self.model == "fishbone" and len(given) < len(self.FISHBONE):
             missing = ", ".join(key for key in self.FISHBONE if key not in given)
             raise ValueError(f"model fishbone needs {missing}")
         if self.model == "bouc_wen" and given:
-            raise ValueError(f"{', '.join(given)}: only for model fishbone (yielding beams), not bouc_wen (stories)")
+            raise ValueError(
+                f"{', '.join(given)}: only for model fishbone (yielding beams), not bouc_wen (stories)"
+            )
         total = np.asarray(self.beta, dtype=float) + np.asarray(self.gamma, dtype=float)
         if np.max(np.abs(total - 1.0)) > 1e-9:
-            raise ValueError(f"beta + gamma must be 1 (so |z| -> 1 at yield), got {np.round(total, 12).tolist()}")
+            raise ValueError(
+                f"beta + gamma must be 1 (so |z| -> 1 at yield), got {np.round(total, 12).tolist()}"
+            )
         return self
 
 
@@ -126,12 +148,12 @@ class DeviceFactors(StrictModel):
 
 
 class OpenSeesConfig(StrictModel):
-    """An OpenSees finite-element model as the plant (`physics.fe.build`, `physics.fe.integrator`): the Python file
-    that builds it (code: run only when the user names it; absolute once loaded), the function in it, and the longest
-    analysis step (s; Newmark average acceleration, on every ground sample: 2.5 ms keeps the five-story
-    model within 0.1 % of the exact integration, 10 ms is 0.5 % off). `train_on`: what `rlc train` learns
-    on — the reduced design model (the default: fast) or the FE model itself (slow: one model per process).
-    `system`: the frame's lateral system (the safety check's performance levels)."""
+    """An OpenSees finite-element model as the plant (`physics.fe.build`, `physics.fe.integrator`): the Python
+    file that builds it (code: run only when the user names it; absolute once loaded), the function in it, and
+    the longest analysis step (s; Newmark average acceleration, on every ground sample: 2.5 ms keeps the
+    five-story model within 0.1 % of the exact integration, 10 ms is 0.5 % off). `train_on`: what `rlc train`
+    learns on — the reduced design model (the default: fast) or the FE model itself (slow: one model per
+    process). `system`: the frame's lateral system (the safety check's performance levels)."""
 
     model: str = Field(min_length=1)
     function: str = Field("build_model", pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -163,14 +185,18 @@ class PlantConfig(StrictModel):
     def _fe_model_alone(self) -> PlantConfig:
         if self.opensees is not None:
             defaults = {
-                key: info.get_default(call_default_factory=True) for key, info in type(self).model_fields.items()
+                key: info.get_default(call_default_factory=True)
+                for key, info in type(self).model_fields.items()
             }
             changed = [
-                key for key in defaults if key not in ("opensees", "sensors") and getattr(self, key) != defaults[key]
+                key
+                for key in defaults
+                if key not in ("opensees", "sensors") and getattr(self, key) != defaults[key]
             ]
             if changed:
                 raise ValueError(
-                    f"opensees: an FE model is the plant as it is: model {', '.join(changed)} in its file instead"
+                    f"opensees: an FE model is the plant as it is: model {', '.join(changed)} in its file "
+                    "instead"
                 )
         return self
 
@@ -204,7 +230,8 @@ class PlantRandomization(StrictModel):
     delay_steps: IntRange | None = None
     noise_factor: RandomRange | None = None
     device_frequency: RandomRange | None = None  # every mass device's frequency factor (detuning)
-    yield_drift: RandomRange | None = None  # a factor on every yielding story's yield drift (plant.hysteresis)
+    # a factor on every yielding story's yield drift (plant.hysteresis)
+    yield_drift: RandomRange | None = None
 
 
 RANDOMIZED_FIELDS = {
@@ -232,7 +259,9 @@ def randomized_plant(base: PlantConfig | None, values: dict[str, float]) -> Plan
         if key in FACTORS_ON_THE_PLANT:
             target[leaf] = (np.asarray(target[leaf], dtype=float) * value).tolist()
             if key == "yield_drift" and target["model"] == "fishbone":  # its beams yield: their rotations too
-                target["yield_rotation"] = (np.asarray(target["yield_rotation"], dtype=float) * value).tolist()
+                target["yield_rotation"] = (
+                    np.asarray(target["yield_rotation"], dtype=float) * value
+                ).tolist()
         else:
             target[leaf] = value
     return PlantConfig.model_validate(plant)

@@ -15,7 +15,15 @@ from rlcontroller.assets import (
     STANDARD_SCENARIOS,
     WIND_STANDARD,
 )
-from rlcontroller.config.base import ConfigError, Seed, StrictModel, first_error, first_repeat, read_model, read_yaml
+from rlcontroller.config.base import (
+    ConfigError,
+    Seed,
+    StrictModel,
+    first_error,
+    first_repeat,
+    read_model,
+    read_yaml,
+)
 from rlcontroller.config.building import MatrixBuildingConfig
 from rlcontroller.config.checks import check_plant
 from rlcontroller.config.excitation import GeneratorConfig, WindGeneratorConfig
@@ -98,8 +106,9 @@ def load_safety_check(path: str | Path) -> SafetyCheckConfig:
     also = raw["also"]
     other = path.parent / also if isinstance(also, str) else None
     if other is None or not other.is_file() or "also" in _mapping(read_yaml(other)):
-        raise ConfigError(f"{path}: also: expected the file name of a standard beside it that names no other, "
-                          f"got {also!r}")  # fmt: skip
+        raise ConfigError(
+            f"{path}: also: expected the file name of a standard beside it that names no other, got {also!r}"
+        )
     other = read_model(other, SafetyCheckConfig, "'generator'")
     try:
         return SafetyCheckConfig.model_validate(raw | {"also": other})

@@ -9,9 +9,9 @@ columns of B (`inputs`); the outputs y are the responses named by their rows of 
 displacements and velocities relative to the ground (m, m/s), story drifts (m), absolute floor accelerations
 (m/s^2), story shears (N), floor 1 first, each as many rows as the building has floors. Drift is required (J1
 and the safety check are taken on it); a criterion whose response is not declared is reported as unavailable.
-With `state: physical` the state is [floor displacements; floor velocities] (what a Kalman state estimate in the
-observation and a dissipative supervisor read); any other realisation is `abstract`. Written in a building part
-as `state_space: FILE.npz` (arrays A, B, C, D, and dt for a discrete model) with `inputs` and `outputs`;
+With `state: physical` the state is [floor displacements; floor velocities] (what a Kalman state estimate in
+the observation and a dissipative supervisor read); any other realisation is `abstract`. Written in a building
+part as `state_space: FILE.npz` (arrays A, B, C, D, and dt for a discrete model) with `inputs` and `outputs`;
 `rlc info` prints it resolved.
 """
 
@@ -100,15 +100,20 @@ class StateSpaceBuildingConfig(StrictModel):
         n = self.n_floors
         for name, rows in declared.items():
             if len(rows) != n:
-                raise ValueError(f"outputs.{name}: {len(rows)} rows, expected {n} (one per floor, like drift)")
+                raise ValueError(
+                    f"outputs.{name}: {len(rows)} rows, expected {n} (one per floor, like drift)"
+                )
             ground_feedthrough = float(np.max(np.abs(d[rows, self.inputs.ground])))
             if ground_feedthrough != 0.0:
                 raise ValueError(
-                    f"outputs.{name}: D's ground column is {ground_feedthrough:g}, expected 0 (responses relative "
-                    "to the ground and absolute accelerations of a structure do not feel the ground directly)"
+                    f"outputs.{name}: D's ground column is {ground_feedthrough:g}, expected 0 (responses "
+                    "relative to the ground and absolute accelerations of a structure do not feel the "
+                    "ground directly)"
                 )
         if self.state == "physical" and n_states != 2 * n:
-            raise ValueError(f"state: physical needs 2 x {n} states ([displacements; velocities]), got {n_states}")
+            raise ValueError(
+                f"state: physical needs 2 x {n} states ([displacements; velocities]), got {n_states}"
+            )
         if self.story_heights is not None and len(self.story_heights) != n:
             raise ValueError(f"'story_heights' has {len(self.story_heights)} values, expected {n}")
         _check_stable(a, self.sample_time)
@@ -148,7 +153,8 @@ def _check_stable(a: np.ndarray, sample_time: float | None) -> None:
         raise ValueError(f"state_matrix (A) has an unstable discrete pole (|z| = {worst:g} >= 1)")
     if np.any((np.abs(poles.imag) < 1e-12) & (poles.real <= 0.0)):
         raise ValueError(
-            "state_matrix (A) has a pole on the negative real axis: no continuous model holds it between samples"
+            "state_matrix (A) has a pole on the negative real axis: no continuous model holds it between "
+            "samples"
         )
 
 

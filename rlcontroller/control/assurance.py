@@ -58,7 +58,9 @@ class RuntimeAssurance:
     def _recovery_gain(design: Plant, size: int) -> np.ndarray:
         """K (m, size): the design's LQR on the experiment's cost, padded to the filter's state."""
         step = design.sampled().step
-        gain, _ = lqr_gain(step, quadratic_cost(design, design.experiment.reward, step), design.building.force_limits)
+        gain, _ = lqr_gain(
+            step, quadratic_cost(design, design.experiment.reward, step), design.building.force_limits
+        )
         padded = np.zeros((gain.shape[0], size))
         padded[:, : gain.shape[1]] = gain
         return padded
@@ -89,5 +91,7 @@ class RuntimeAssurance:
         self.engaged = np.where(self.engaged, risk <= self.release, risk < self.engage)
         recovering = ~self.engaged
         if recovering.any():
-            actions[recovering] = np.clip(-self.twin_model.difference[recovering] @ self.feedback_t, -1.0, 1.0)
+            actions[recovering] = np.clip(
+                -self.twin_model.difference[recovering] @ self.feedback_t, -1.0, 1.0
+            )
         self.twin_model.advance(actions)

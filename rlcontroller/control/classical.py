@@ -10,7 +10,8 @@ import numpy as np
 
 from rlcontroller.config import ConfigError
 from rlcontroller.control.controllers import LQGPrior
-from rlcontroller.control.mpc import DEFAULT_HORIZON, STROKE_PRICE, MPCDesign, ObservedMPC, mpc_design
+from rlcontroller.control.mpc import DEFAULT_HORIZON, STROKE_PRICE, MPCDesign, mpc_design
+from rlcontroller.control.mpc_controllers import ObservedMPC
 from rlcontroller.control.networks import Actor, Layer, Normalizer
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.physics.plant import Plant
@@ -24,9 +25,18 @@ LAWS = {  # a classical law: its name in tables
     "passive-off": "passive-off",
 }
 PASSIVE_COMMANDS = {"passive-on": 1.0, "passive-off": -1.0}  # a passive law's held action
-MPC_ARRAYS = ("phi", "action_gain", "cost_state", "cost_action", "terminal", "strokes")  # MPCDesign's, as mpc_*
+# MPCDesign's, as mpc_*
+MPC_ARRAYS = (
+    "phi",
+    "action_gain",
+    "cost_state",
+    "cost_action",
+    "terminal",
+    "strokes",
+)
 MAX_HORIZON = 200  # control steps of a file's MPC (the experiment's kwargs.horizon range)
-MODEL_TOLERANCE = 1e-6  # an MPC file's model against its design model's, of the largest entry (any CPU's arithmetic)
+# an MPC file's model against its design model's, of the largest entry (any CPU's arithmetic)
+MODEL_TOLERANCE = 1e-6
 
 
 def classical_policy(plant: Plant, law: str) -> PolicyController:
@@ -38,40 +48,50 @@ def classical_policy(plant: Plant, law: str) -> PolicyController:
         raise ConfigError(f"law {law!r}: expected one of {', '.join(LAWS)}")
     if law == "mpc" and (plant.semi_active is not None or prior_kind(plant) != "lqg_ground_model"):
         raise ConfigError(
-            "law mpc: MPC as a controller file runs on the env's Kalman estimate of LQG + ground model: actuators "
-            "or mass drivers under ground motion with sensors.ground_model: true (dampers: rlc compare lqg --mpc)"
+            "law mpc: MPC as a controller file runs on the env's Kalman estimate of LQG + ground model: "
+            "actuators or mass drivers under ground motion with sensors.ground_model: true (dampers: rlc "
+            "compare lqg --mpc)"
         )
     prior, bias, mpc = None, np.zeros(m, dtype=np.float32), None
     if law in PASSIVE_COMMANDS:
         bias[:] = PASSIVE_COMMANDS[law]
     else:
         if not plant.experiment.sensors.state_estimate or law not in ("mpc", prior_kind(plant)):
-            raise ConfigError(f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
-                              " (needs sensors.state_estimate: true)")  # fmt: skip
+            raise ConfigError(
+                f"law {law}: this experiment's LQG on its estimate is {prior_kind(plant)}"
+                " (needs sensors.state_estimate: true)"
+            )
         prior = LQGPrior.design(plant)
         if law == "mpc":
             mpc = ObservedMPC(mpc_design(plant.design, DEFAULT_HORIZON), prior, plant.layout)
     actor = Actor((Layer(np.zeros((m, size), dtype=np.float32), bias, None),), squash=False)
     designed = design_note(plant, law)
-    return PolicyController(actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed, mpc=mpc)
+    return PolicyController(
+        actor, None, prior, LAWS[law], algorithm="classical", law=law, designed=designed, mpc=mpc
+    )
 
 
 def design_note(plant: Plant, law: str) -> str:
     """How the classical `law` for `plant` was designed, in a sentence (a controller file's `designed`)."""
     if law in PASSIVE_COMMANDS:
-        return f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
+        return (
+            f"every damper held at its {'largest' if law == 'passive-on' else 'least'} command; no training"
+        )
     terms = ", ".join(
-        f"{t.quantity} ({t.weight:g}, scale {t.scale:g})" for t in plant.experiment.reward.terms if t.quadratic
+        f"{t.quantity} ({t.weight:g}, scale {t.scale:g})"
+        for t in plant.experiment.reward.terms
+        if t.quadratic
     )
     robust = plant.experiment.sensors.input_noise
     recovery = f" and loop transfer recovery's input noise ({robust:g} of the force limits)" if robust else ""
     if law == "mpc":
         return (
-            f"MPC over {DEFAULT_HORIZON} control steps ({DEFAULT_HORIZON * plant.control_dt:g} s): the experiment's "
-            f"quadratic cost ({terms}) with the Riccati solution as terminal weight, the force limits hard, the "
-            f"strokes soft (priced {STROKE_PRICE[0]:g} and {STROKE_PRICE[1]:g} per unit excess), solved by OSQP every "
-            f"step on the estimate of LQG + ground model's Kalman filter (its sensors and their noise{recovery}, on "
-            "the design model), LQR's clipped action where no plan is left; no training"
+            f"MPC over {DEFAULT_HORIZON} control steps ({DEFAULT_HORIZON * plant.control_dt:g} s): the "
+            f"experiment's quadratic cost ({terms}) with the Riccati solution as terminal weight, the force "
+            f"limits hard, the strokes soft (priced {STROKE_PRICE[0]:g} and {STROKE_PRICE[1]:g} per unit "
+            "excess), solved by OSQP every step on the estimate of LQG + ground model's Kalman filter (its "
+            f"sensors and their noise{recovery}, on the design model), LQR's clipped action where no plan is "
+            "left; no training"
         )
     return (
         f"{LAWS[law]}: the Riccati gains of the experiment's quadratic cost ({terms}) and its Kalman filter "
@@ -85,22 +105,26 @@ def prior_kind(plant: Plant) -> str:
     return "lqg_ground_model" if plant.experiment.sensors.ground_model else "lqg_ground"
 
 
-def mpc_from_file(section: dict, weights: dict[str, np.ndarray], plant: Plant, prior: LQGPrior) -> ObservedMPC:
-    """A file's MPC law on the env's estimate (`prior` its fallback) once its horizon is a whole number of steps
-    within `MAX_HORIZON`, its model the control-step map of the folder's design model (with its ground model),
-    its terminal weight symmetric and positive semi-definite and its QP finite: a convex QP on the model it
-    claims, so no forged matrix reaches the solver (ValueError otherwise)."""
+def mpc_from_file(
+    section: dict, weights: dict[str, np.ndarray], plant: Plant, prior: LQGPrior
+) -> ObservedMPC:
+    """A file's MPC law on the env's estimate (`prior` its fallback) once its horizon is a whole number of
+    steps within `MAX_HORIZON`, its model the control-step map of the folder's design model (with its ground
+    model), its terminal weight symmetric and positive semi-definite and its QP finite: a convex QP on the
+    model it claims, so no forged matrix reaches the solver (ValueError otherwise)."""
     horizon = section.get("horizon") if isinstance(section, dict) else None
     if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON:
-        raise ValueError(f"mpc.horizon {horizon!r}: expected a whole number of control steps in [1, {MAX_HORIZON}]")
+        raise ValueError(
+            f"mpc.horizon {horizon!r}: expected a whole number of control steps in [1, {MAX_HORIZON}]"
+        )
     step = plant.design.sampled().ground_model
     model = {"mpc_phi": step.phi, "mpc_action_gain": step.force_gain * plant.force_limits}
     for key, expected in model.items():
         difference = np.max(np.abs(weights[key] - expected)) / max(float(np.max(np.abs(expected))), 1e-300)
         if not difference <= MODEL_TOLERANCE:
             raise ValueError(
-                f"{key}: not the control-step map of the folder's config.yaml design model "
-                f"(largest difference {difference:.3g} of its largest entry, at most {MODEL_TOLERANCE:g} accepted)"
+                f"{key}: not the control-step map of the folder's config.yaml design model (largest "
+                f"difference {difference:.3g} of its largest entry, at most {MODEL_TOLERANCE:g} accepted)"
             )
     terminal = weights["mpc_terminal"]
     scale = max(1.0, float(np.max(np.abs(terminal))))
@@ -113,8 +137,12 @@ def mpc_from_file(section: dict, weights: dict[str, np.ndarray], plant: Plant, p
     with np.errstate(over="ignore", invalid="ignore"):  # a forged cost's overflow is refused just below
         mpc = ObservedMPC(design, prior, plant.layout)  # its QP built here, once; OSQP set up on first use
     problem = mpc.planner.problem
-    if not all(np.all(np.isfinite(array)) for array in (problem.hessian, problem.linear, problem.constraints)):
-        raise ValueError("mpc_cost_state, mpc_cost_action, mpc_terminal: their QP overflows (entries too large)")
+    if not all(
+        np.all(np.isfinite(array)) for array in (problem.hessian, problem.linear, problem.constraints)
+    ):
+        raise ValueError(
+            "mpc_cost_state, mpc_cost_action, mpc_terminal: their QP overflows (entries too large)"
+        )
     return mpc
 
 

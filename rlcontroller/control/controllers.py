@@ -73,7 +73,9 @@ class LinearFeedback:
         action = observation @ self.weights.T
         if self.bias is not None:
             action += self.bias
-        return action.clip(-1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
+        return (
+            action.clip(-1.0, 1.0) if self.prior is None else residual_action(action, self.prior(observation))
+        )
 
 
 class LQGController:
@@ -198,7 +200,9 @@ class ClippedOptimal:
     (+1) when (f_desired - f_measured) f_measured > 0, else off (-1). Needs every damper's force
     among the sensors (`quantity: force`). `reward`: another cost for the LQG (trade-off sweeps)."""
 
-    def __init__(self, plant: Plant, name: str = "clipped-optimal", reward: RewardConfig | None = None) -> None:
+    def __init__(
+        self, plant: Plant, name: str = "clipped-optimal", reward: RewardConfig | None = None
+    ) -> None:
         self.name = name
         equivalent = plant.active_equivalent
         self.design = design_lqg_ground_model(equivalent, reward=reward)
@@ -254,5 +258,7 @@ def _force_rows(plant: Plant) -> np.ndarray:
         start += len(chosen)
     missing = [k + 1 for k in range(plant.building.n_actuators) if k not in rows]
     if missing:
-        raise ValueError(f"clipped-optimal control needs the force of every damper measured; not of {missing}")
+        raise ValueError(
+            f"clipped-optimal control needs the force of every damper measured; not of {missing}"
+        )
     return np.array([rows[k] for k in range(plant.building.n_actuators)])

@@ -10,7 +10,9 @@ from rlcontroller.config import RewardTerm
 from rlcontroller.physics.plant import Plant
 
 
-def reward_matrices(plant: Plant, terms: list[RewardTerm]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
+def reward_matrices(
+    plant: Plant, terms: list[RewardTerm]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[slice]]:
     """(C, D, weight^(1/power)/scale per row, one slice of rows per term) for terms on linear outputs,
     so that a term's value is the sum over its rows of |factor * (C x + D u)|^power."""
     building = plant.building

@@ -152,10 +152,13 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
     )
     intensity = ground_std**2 / float(model.output @ stationary @ model.output)
     sensors = plant.sensors
-    sensor_c = np.vstack([np.pad(sensors.c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), model.output])])
+    sensor_c = np.vstack(
+        [np.pad(sensors.c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size), model.output])]
+    )
     sensor_d = np.vstack([sensors.d * building.force_limits, np.zeros((1, building.n_actuators))])
     noise = np.maximum(
-        np.append(sensors.noise_std, config.ground_noise_std), 1e-3 * np.append(sensors.scale, config.ground_scale)
+        np.append(sensors.noise_std, config.ground_noise_std),
+        1e-3 * np.append(sensors.scale, config.ground_scale),
     )
     action_gain = step.force_gain * building.force_limits
     process = intensity * np.outer(noise_gain, noise_gain) + 1e-12 * np.eye(size + 2)
@@ -173,11 +176,11 @@ def design_kalman_ground_model(plant: Plant, ground_std: float = 1.0) -> KalmanF
 
 
 def design_kalman_wind_model(plant: Plant, model: WindLoadModel, ground_std: float = 1.0) -> KalmanFilter:
-    """Filter of [z; f] (the fluctuating floor forces of `model`, a first-order process each) from the sensors,
-    which feel f directly where they read absolute accelerations; with `sensors.ground_model`, of [z; f; x_g;
-    x_g'] from the sensors and the ground reading, the Kanai-Tajimi filter's white noise scaled so that its
-    ground acceleration has a stationary std of `ground_std` (m/s^2), as in `design_kalman_ground_model`. The
-    process noise is discretised exactly (`dynamics.discrete_noise`)."""
+    """Filter of [z; f] (the fluctuating floor forces of `model`, a first-order process each) from the
+    sensors, which feel f directly where they read absolute accelerations; with `sensors.ground_model`, of [z;
+    f; x_g; x_g'] from the sensors and the ground reading, the Kanai-Tajimi filter's white noise scaled so
+    that its ground acceleration has a stationary std of `ground_std` (m/s^2), as in
+    `design_kalman_ground_model`. The process noise is discretised exactly (`dynamics.discrete_noise`)."""
     building, sensors, config = plant.building, plant.sensors, plant.experiment.sensors
     sampled = plant.sampled()
     system, step = sampled.wind_system, sampled.wind_model
@@ -190,12 +193,16 @@ def design_kalman_wind_model(plant: Plant, model: WindLoadModel, ground_std: flo
         ground = plant.ground_model.output
         unit = scipy.linalg.solve_continuous_lyapunov(system.a[-2:, -2:], -np.diag([0.0, 1.0]))
         intensity[-1, -1] = ground_std**2 / float(ground @ unit @ ground)
-        sensor_c = np.vstack([np.pad(sensor_c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size + floors), ground])])
+        sensor_c = np.vstack(
+            [np.pad(sensor_c, ((0, 0), (0, 2))), np.concatenate([np.zeros(size + floors), ground])]
+        )
         noise = np.append(noise, max(config.ground_noise_std, 1e-3 * config.ground_scale))
     action_gain = step.force_gain * building.force_limits
     process = discrete_noise(system.a, intensity, step.phi) + 1e-12 * np.eye(step.phi.shape[0])
     process += input_noise(plant, action_gain)
-    sensor_d = np.pad(sensors.d * building.force_limits, ((0, sensor_c.shape[0] - sensors.d.shape[0]), (0, 0)))
+    sensor_d = np.pad(
+        sensors.d * building.force_limits, ((0, sensor_c.shape[0] - sensors.d.shape[0]), (0, 0))
+    )
     return KalmanFilter(
         phi=step.phi,
         action_gain=action_gain,
@@ -248,10 +255,16 @@ def observation_filter(plant: Plant) -> KalmanFilter | None:
     sensors = plant.experiment.sensors
     if sensors.integration_cutoff is not None:
         channels = plant.sensors.c.shape[0] + 1
-        return integration_filter(sensors.integration_cutoff, plant.control_dt, channels, plant.building.n_actuators)
+        return integration_filter(
+            sensors.integration_cutoff, plant.control_dt, channels, plant.building.n_actuators
+        )
     if not sensors.state_estimate:
         return None
     design = plant.design
     if design.wind is not None:
         return design_kalman_wind_model(design, design.wind)
-    return design_kalman_ground_model(design) if sensors.ground_model else design_kalman(design, known_ground=True)
+    return (
+        design_kalman_ground_model(design)
+        if sensors.ground_model
+        else design_kalman(design, known_ground=True)
+    )

@@ -27,7 +27,9 @@ import numpy as np
 from rlcontroller.config import FallbackConfig
 from rlcontroller.physics.plant import Plant
 
-INTEGRATION_CUTOFF = 0.1  # Hz: the leak's corner (the integrated sensors' default, sensors.integration_cutoff)
+# Hz: the leak's corner (the integrated sensors' default, sensors.integration_cutoff)
+
+INTEGRATION_CUTOFF = 0.1
 
 
 class MeasuredStrokeVelocity:
@@ -48,7 +50,8 @@ class MeasuredStrokeVelocity:
         self.velocity[members] = 0.0
 
     def update(self, observations: np.ndarray) -> np.ndarray:
-        """Take in the newest readings of `observations` (size, observation size); the velocities (size, m)."""
+        """Take in the newest readings of `observations` (size, observation size); the velocities (size,
+        m)."""
         floors = observations[:, self.readings] * self.reading_scale
         relative = floors - observations[:, self.ground, None] * self.ground_scale
         self.velocity = self.leak * self.velocity + self.dt * (relative @ self.stroke_map)
@@ -67,7 +70,8 @@ class DamperFallback:
         self.threshold = config.drift
         self.gain = np.asarray(config.damping) / plant.force_limits  # action per m/s of stroke velocity
         strongest = float(self.gain.max())
-        self.saturation = 1.0 / strongest if strongest > 0.0 else np.inf  # m/s: the first damper's limit reached
+        # m/s: the first damper's limit reached
+        self.saturation = 1.0 / strongest if strongest > 0.0 else np.inf
         self.deadband = config.deadband
         self.latched = np.zeros(size, dtype=bool)
 
@@ -75,7 +79,8 @@ class DamperFallback:
         self.latched[members] = False
 
     def damper_actions(self, velocity: np.ndarray) -> np.ndarray:
-        """The dampers' actions for stroke velocities (..., m) in m/s, their velocity clipped at `saturation`."""
+        """The dampers' actions for stroke velocities (..., m) in m/s, their velocity clipped at
+        `saturation`."""
         beyond = np.sign(velocity) * np.clip(np.abs(velocity) - self.deadband, 0.0, self.saturation)
         return -self.gain * beyond
 

@@ -57,7 +57,9 @@ def design_lqg(
     return LQGDesign(feedback=feedback, feedforward=feedforward, filter=kalman)
 
 
-def design_lqg_ground_model(plant: Plant, ground_std: float = 1.0, reward: RewardConfig | None = None) -> LQGDesign:
+def design_lqg_ground_model(
+    plant: Plant, ground_std: float = 1.0, reward: RewardConfig | None = None
+) -> LQGDesign:
     """LQG whose model includes a Kanai-Tajimi filter for the (measured) ground acceleration.
 
     The Kalman filter estimates the building and filter states from the floor sensors plus the

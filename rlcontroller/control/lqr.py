@@ -35,7 +35,9 @@ class QuadraticCost:
     ground: np.ndarray  # F C_r, applied to the ground term g_k
 
 
-def quadratic_cost(plant: Plant, reward: RewardConfig, step: StepMap, floor_loads: bool = False) -> QuadraticCost:
+def quadratic_cost(
+    plant: Plant, reward: RewardConfig, step: StepMap, floor_loads: bool = False
+) -> QuadraticCost:
     """The reward's quadratic terms as a cost on the plant's state and action, through `step`.
 
     States beyond the plant's (a disturbance model's) reach the outputs only through the dynamics,
@@ -72,7 +74,9 @@ def lqr_gain(step: StepMap, cost: QuadraticCost, force_limits: np.ndarray) -> tu
     r = cost.action.T @ cost.action
     n = cost.state.T @ cost.action
     if np.linalg.matrix_rank(r) < r.shape[0]:
-        raise ValueError("the reward does not penalise every actuator force (R is singular); add a force term")
+        raise ValueError(
+            "the reward does not penalise every actuator force (R is singular); add a force term"
+        )
     return lqr(step.phi, step.force_gain * force_limits, q, r, n=n)
 
 

@@ -1,14 +1,13 @@
-"""Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps, subject
-to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of LQG +
-ground model, or under wind of LQG + wind model (`MPCController`; `ObservedMPC` takes the estimate an observation
-holds, as a controller file's MPC does); for semi-active dampers with passivity as bounds (`SemiActiveMPC`).
-`MPCDesign` is what it is made of (model, cost, terminal weight, stroke rows, horizon), as a controller file holds
-it; `MPCDesign.problem()` the QP.
+"""Model predictive control: the experiment's quadratic cost minimised over a horizon of N control steps,
+subject to the actuators' force limits and (soft) the mass devices' stroke limits, from the Kalman estimate of
+LQG + ground model, or under wind of LQG + wind model; for semi-active dampers with passivity as bounds (the
+controllers are in `control.mpc_controllers`). `MPCDesign` is what it is made of (model, cost, terminal
+weight, stroke rows, horizon), as a controller file holds it; `MPCDesign.problem()` the QP.
 
-With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the coming
-ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation; under wind the wind model's,
-whose states are the floor forces) and the reward's cost
-rows (`lqr.quadratic_cost`), each step solves
+With the ground model's control-step map z_{k+1} = Phi z_k + B a_k (action units a = u / force limit; the
+coming ground is what the Kanai-Tajimi states predict, its unknown part zero in expectation; under wind the
+wind model's, whose states are the floor forces) and the reward's cost rows (`lqr.quadratic_cost`), each step
+solves
 
     min over a, s   sum_k |H_z z_k + H_u a_k|^2 + z_N' P z_N + sum_k,j (rho_1 s_kj + rho_2 s_kj^2 / 2)
     subject to      -1 <= a_k <= 1,   |stroke_j(z_k)| <= limit_j (1 + s_kj),   s_kj >= 0   (k = 1..N),
@@ -31,17 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from rlcontroller.config import RewardConfig
-from rlcontroller.control.controllers import ClippedOptimal, LQGController, LQGPrior
-from rlcontroller.control.lqg import design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
-from rlcontroller.physics.observation import ObservationLayout
 from rlcontroller.physics.plant import Plant
 
 DEFAULT_HORIZON = 20  # control steps (0.4 s at 20 ms): studies/mpc/horizon_sweep.py, docs/mpc.md
 TOLERANCE = 1e-6  # OSQP's absolute and relative tolerances, per unit action
 SOLVED = (1, 2)  # OSQP's status values of a solution: solved, solved to a lower accuracy
-REACH_TOLERANCE = 1e-3  # a planned damper force this close to its reach (action units) is at the reach
-ALL_IT_GIVES = 1e30  # N: the demand of a force planned at a damper's reach
 STROKE_PRICE = (1e3, 1e4)  # rho_1, rho_2: the cost of a stroke's excess s (fraction of its limit) per step
 
 
@@ -66,7 +60,9 @@ class MPCProblem:
         return self.lower + self.lower_gain @ estimate, self.upper + self.upper_gain @ estimate
 
 
-def _predictions(phi: np.ndarray, action_gain: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+def condensed_predictions(
+    phi: np.ndarray, action_gain: np.ndarray, horizon: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(T, S) with [z_0; ...; z_N] = T z_0 + S [a_0; ...; a_(N-1)]."""
     n, m = action_gain.shape
     free = np.zeros(((horizon + 1) * n, n))
@@ -111,10 +107,14 @@ class MPCDesign:
     def problem(self) -> MPCProblem:
         """The condensed QP (module docstring)."""
         horizon, phi, action_gain, cost_state, cost_action = (
-            self.horizon, self.phi, self.action_gain, self.cost_state, self.cost_action
-        )  # fmt: skip
+            self.horizon,
+            self.phi,
+            self.action_gain,
+            self.cost_state,
+            self.cost_action,
+        )
         n, m = action_gain.shape
-        free, forced = _predictions(phi, action_gain, horizon)
+        free, forced = condensed_predictions(phi, action_gain, horizon)
         stage_state = np.kron(np.eye(horizon), cost_state)  # H_z on z_0..z_{N-1}
         stage_action = np.kron(np.eye(horizon), cost_action)  # H_u on a_0..a_{N-1}
         stage = stage_state @ forced[: horizon * n] + stage_action
@@ -143,7 +143,9 @@ class MPCDesign:
         )
         inf, actions = np.inf, horizon * m
         lower = np.concatenate([-np.ones(actions), np.full(slacks, -inf), -np.ones(slacks), np.zeros(slacks)])
-        upper = np.concatenate([np.ones(actions), np.ones(slacks), np.full(slacks, inf), np.full(slacks, inf)])
+        upper = np.concatenate(
+            [np.ones(actions), np.ones(slacks), np.full(slacks, inf), np.full(slacks, inf)]
+        )
         gain = np.vstack([np.zeros((actions, n)), -stroke_free, -stroke_free, np.zeros((slacks, n))])
         return MPCProblem(
             hessian=hessian,
@@ -160,8 +162,8 @@ class MPCDesign:
 
 
 def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfig | None = None) -> MPCDesign:
-    """MPC on `plant`'s ground-model map (under wind its wind-model map) with the experiment's cost (or `reward`'s),
-    its terminal weight the stationary Riccati solution."""
+    """MPC on `plant`'s ground-model map (under wind its wind-model map) with the experiment's cost (or
+    `reward`'s), its terminal weight the stationary Riccati solution."""
     step = plant.sampled().ground_model if plant.wind is None else plant.sampled().wind_model
     cost = quadratic_cost(plant, reward or plant.experiment.reward, step, floor_loads=plant.wind is not None)
     _, riccati = lqr_gain(step, cost, plant.force_limits)
@@ -178,9 +180,9 @@ def mpc_design(plant: Plant, horizon: int = DEFAULT_HORIZON, reward: RewardConfi
 
 
 class MPCPlanner:
-    """The QP of `problem` solved for each building of a batch (one warm-started OSQP solver per row), with the
-    last plan of each kept: `first_actions` returns each row's first planned action, or on a step OSQP did not
-    solve (counted in `fallbacks`) the last plan's next action, or the given fallback action."""
+    """The QP of `problem` solved for each building of a batch (one warm-started OSQP solver per row), with
+    the last plan of each kept: `first_actions` returns each row's first planned action, or on a step OSQP did
+    not solve (counted in `fallbacks`) the last plan's next action, or the given fallback action."""
 
     def __init__(self, problem: MPCProblem) -> None:
         self.problem = problem
@@ -219,8 +221,8 @@ class MPCPlanner:
 
     def plan(self, row: int, estimate: np.ndarray, action_bounds: tuple | None = None) -> np.ndarray | None:
         """The solution [a; s] of the QP from `estimate` for the batch's `row`-th building (the actions within
-        `action_bounds`, (lower, upper) per planned action, instead of [-1, 1] if given), or None when OSQP did
-        not solve it."""
+        `action_bounds`, (lower, upper) per planned action, instead of [-1, 1] if given), or None when OSQP
+        did not solve it."""
         solver = self._solver(row)
         lower, upper = self.problem.bounds(estimate)
         if action_bounds is not None:
@@ -259,138 +261,3 @@ class MPCPlanner:
             previous, since = self._plans[row]
             actions[row] = previous[since]
         return actions
-
-
-class _Planned:
-    """A controller of a planner and the filter that gives it estimates (anything with `reset`)."""
-
-    planner: MPCPlanner
-    estimator: LQGController | ClippedOptimal | None
-
-    @property
-    def fallbacks(self) -> int:
-        """Steps whose QP OSQP did not solve."""
-        return self.planner.fallbacks
-
-    def reset(self) -> None:
-        if self.estimator is not None:
-            self.estimator.reset()
-        self.planner.reset()
-
-
-class MPCController(_Planned):
-    """MPC on the estimate of LQG + ground model's Kalman filter (under wind LQG + wind model's; the QP in place of
-    its gain): `horizon` control steps; `fallbacks` counts the steps whose QP OSQP did not solve (the last plan's next
-    action taken instead, or LQR's clipped action)."""
-
-    def __init__(self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None) -> None:
-        self.name = name or f"MPC (N = {horizon})"
-        lqg = design_lqg_ground_model(plant) if plant.wind is None else design_lqg_wind_model(plant)
-        self.estimator = LQGController(lqg, plant, self.name)  # and LQR's fallback
-        self.planner = MPCPlanner(mpc_design(plant, horizon).problem())
-        self.problem = self.planner.problem
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        lqg = self.estimator
-        fallback = lqg.act(observation)  # the filter steps here; LQR's clipped action
-        estimates = lqg.estimate.reshape(-1, lqg.estimate.shape[-1])
-        actions = self.planner.first_actions(estimates, fallback.reshape(-1, self.problem.actions))
-        return actions.reshape(fallback.shape)
-
-
-class ObservedMPC(_Planned):
-    """MPC of `design` on the Kalman estimate the observation holds (the env's own filter, designed on the
-    design model as LQG + ground model's: `sensors.state_estimate` and `ground_model`), as a controller file
-    holds it; `prior` (LQR's action on that estimate) clipped is the fallback. Maps observations (..., size)
-    to actions (..., m)."""
-
-    estimator = None
-
-    def __init__(self, design: MPCDesign, prior: LQGPrior, layout: ObservationLayout) -> None:
-        self.design, self.prior, self.layout = design, prior, layout
-        self.planner = MPCPlanner(design.problem())
-
-    def __call__(self, observation: np.ndarray) -> np.ndarray:
-        observation = np.asarray(observation, dtype=float)
-        rows = observation.reshape(-1, observation.shape[-1])
-        estimates = rows[:, self.layout.estimate] * self.layout.estimate_scale
-        actions = self.planner.first_actions(estimates, np.clip(self.prior(rows), -1.0, 1.0))
-        return actions.reshape(*observation.shape[:-1], actions.shape[-1])
-
-
-class SemiActiveMPC(_Planned):
-    """MPC for semi-active dampers: the QP of the active equivalent (each damper an ideal actuator of its
-    capacity, as clipped-optimal control designs on) with passivity as bounds, on clipped-optimal control's
-    Kalman estimate (which takes the measured damper forces as applied); each damper is then switched by
-    clipped-optimal control's rule towards the first planned force.
-
-    Passivity (force u opposing the damper's velocity v, u v <= 0, and |u| within its reach) is bilinear in the
-    plan, since v depends on the forces; it is approximated by fixing the sign of each step's velocity at its
-    prediction from the last plan shifted by a step (from no force at a record's start): u_k in [-reach_k, 0]
-    where that velocity is positive, [0, reach_k] where not. The reach is the capacity for an MR damper (its
-    yield-like force) and c_max |v| for a variable damper (at most its capacity). A force planned at the reach
-    asks for all the damper gives (switched on where the measured force has its sign): an MR damper's force
-    exceeds its capacity by its viscous part at speed, and the plain rule would switch it off there. `reward`:
-    another cost (trade-off sweeps)."""
-
-    def __init__(
-        self, plant: Plant, horizon: int = DEFAULT_HORIZON, name: str | None = None, reward: RewardConfig | None = None
-    ) -> None:
-        self.name = name or f"MPC (N = {horizon})"
-        self.estimator = ClippedOptimal(plant, self.name, reward)  # the filter and the switching law
-        equivalent = plant.active_equivalent
-        design = mpc_design(equivalent, horizon, reward)
-        self.planner = MPCPlanner(design.problem())
-        self.problem = self.planner.problem
-        n, m = design.action_gain.shape
-        dampers = [device for device in plant.experiment.devices if device.semi_active]
-        self.first_damper = m - len(dampers)
-        free, forced = _predictions(design.phi, design.action_gain, horizon)
-        c = equivalent.outputs("device_velocity")[0][:, : equivalent.building.n_states]
-        velocity = np.kron(np.eye(horizon), np.pad(c[self.first_damper :], ((0, 0), (0, n - c.shape[1]))))
-        self.velocity_free = velocity @ free[: horizon * n]  # v_0..v_(N-1), by step and damper
-        self.velocity_forced = velocity @ forced[: horizon * n]
-        # reach per unit velocity / capacity (variable dampers), or None (MR dampers: the capacity)
-        self.reach_slope = [
-            getattr(device, "damping_max", None) and device.damping_max / device.capacity for device in dampers
-        ]
-
-    def action_bounds(self, row: int, estimate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Each planned action's bounds: [-1, 1] for actuators, passivity's for dampers."""
-        horizon, m = self.problem.horizon, self.problem.actions
-        coming = self.planner.planned(row)
-        shifted = np.zeros((horizon, m))
-        if coming is not None:
-            shifted[: len(coming)] = coming
-        velocity = (self.velocity_free @ estimate + self.velocity_forced @ shifted.ravel()).reshape(horizon, -1)
-        reach = np.ones_like(velocity)
-        for j, slope in enumerate(self.reach_slope):
-            if slope is not None:
-                reach[:, j] = np.minimum(1.0, slope * np.abs(velocity[:, j]))
-        lower, upper = -np.ones((horizon, m)), np.ones((horizon, m))
-        lower[:, self.first_damper :] = np.where(velocity > 0.0, -reach, 0.0)
-        upper[:, self.first_damper :] = np.where(velocity > 0.0, 0.0, reach)
-        return lower.ravel(), upper.ravel()
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        clipped = self.estimator
-        measured = clipped.update(observation)
-        estimates = clipped.estimate.reshape(-1, clipped.estimate.shape[-1])
-        lqr = np.clip(-(estimates @ clipped.design.feedback.T), -1.0, 1.0)
-        bounds = [self.action_bounds(row, estimate) for row, estimate in enumerate(estimates)]
-        planned = self.planner.first_actions(estimates, lqr, bounds)
-        m = self.problem.actions
-        lower, upper = (np.array([bound[side][:m] for bound in bounds]) for side in (0, 1))
-        # a force planned at the reach asks for all the damper gives (an MR damper's exceeds its capacity
-        # by its viscous part at speed): switched on wherever the measured force has the planned sign
-        at_reach = ((planned >= upper - REACH_TOLERANCE) & (upper > 0)) | (
-            (planned <= lower + REACH_TOLERANCE) & (lower < 0)
-        )
-        desired = np.where(at_reach, np.sign(planned) * ALL_IT_GIVES, planned * clipped.capacity)
-        return clipped.switch(desired.reshape(measured.shape), measured)
-
-
-def mpc_controller(plant: Plant, horizon: int = DEFAULT_HORIZON) -> MPCController | SemiActiveMPC:
-    """MPC for the devices of `plant` (its design model): `SemiActiveMPC` for semi-active dampers, else
-    `MPCController`."""
-    return (SemiActiveMPC if plant.semi_active is not None else MPCController)(plant, horizon)

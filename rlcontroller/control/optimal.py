@@ -51,7 +51,8 @@ def optimal_responses(
         feedforward = preview_feedforward(cost, step, building.force_limits, ground_terms, length=length)
         states = np.zeros((n_steps + 1, len(members), step.phi.shape[0]))
         actions = np.zeros((n_steps, len(members), building.n_actuators))
-        by_step = [np.ascontiguousarray(a.transpose(1, 0, 2)) for a in (feedforward, ground_terms)]  # step first
+        # step first
+        by_step = [np.ascontiguousarray(a.transpose(1, 0, 2)) for a in (feedforward, ground_terms)]
         gain, transition, input_gain = -feedback.T, step.phi.T, action_gain.T  # formed once, not every step
         for k, (step_feedforward, step_ground) in enumerate(zip(*by_step, strict=True)):
             (states[k] @ gain - step_feedforward).clip(-1.0, 1.0, out=actions[k])

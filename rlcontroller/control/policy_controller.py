@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from rlcontroller.control.controllers import LQGPrior, residual_action
-from rlcontroller.control.mpc import ObservedMPC
+from rlcontroller.control.mpc_controllers import ObservedMPC
 from rlcontroller.control.networks import Actor, Normalizer
 
 

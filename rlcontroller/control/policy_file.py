@@ -5,12 +5,12 @@ A run or model folder holds, for NAME = best or final, beside the experiment's `
     NAME_policy.yaml   format and format_version, the learner and its training steps, the network
                        (each layer's activation, tanh squashing, odd symmetry), the observation's
                        size and normalisation (epsilon, clip), the residual prior (none,
-                       lqg_ground, lqg_ground_model or lqg_wind_model), the actuators' force limits (N) and the
-                       control step (s) it was trained with
-    NAME_policy.npz    layer{i}_weight (out, in) and layer{i}_bias (float32); observation_mean and
-                       observation_var (normalised observations); prior_feedback (m, estimate) and
-                       prior_feedforward (m,) on the scaled observation (residual policies); an MPC law's
-                       mpc_phi, mpc_action_gain, mpc_cost_state, mpc_cost_action, mpc_terminal, mpc_strokes
+                       lqg_ground, lqg_ground_model or lqg_wind_model), the actuators' force limits (N) and
+                       the control step (s) it was trained with NAME_policy.npz layer{i}_weight (out, in) and
+                       layer{i}_bias (float32); observation_mean and observation_var (normalised
+                       observations); prior_feedback (m, estimate) and prior_feedforward (m,) on the scaled
+                       observation (residual policies); an MPC law's mpc_phi, mpc_action_gain, mpc_cost_state,
+                       mpc_cost_action, mpc_terminal, mpc_strokes
 
 A classical controller is the same data (`kind: classical`, its `law` and how it was `designed`): a
 network of one layer with zero weights whose bias is the action — zero for an LQG law, which is then
@@ -77,7 +77,11 @@ def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[
     description = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        **({"kind": "classical", "law": controller.law, "designed": controller.designed} if controller.law else {}),
+        **(
+            {"kind": "classical", "law": controller.law, "designed": controller.designed}
+            if controller.law
+            else {}
+        ),
         "algorithm": controller.algorithm,
         "training_steps": int(controller.steps),
         "network": {
@@ -93,9 +97,15 @@ def policy_data(controller: PolicyController, plant: Plant) -> tuple[dict, dict[
     }
     if normalizer is not None:
         description["observation"] |= {"epsilon": float(normalizer.epsilon), "clip": float(normalizer.clip)}
-        weights |= {"observation_mean": np.asarray(normalizer.mean), "observation_var": np.asarray(normalizer.var)}
+        weights |= {
+            "observation_mean": np.asarray(normalizer.mean),
+            "observation_var": np.asarray(normalizer.var),
+        }
     if controller.prior is not None:
-        weights |= {"prior_feedback": controller.prior.feedback, "prior_feedforward": controller.prior.feedforward}
+        weights |= {
+            "prior_feedback": controller.prior.feedback,
+            "prior_feedforward": controller.prior.feedforward,
+        }
     if controller.mpc is not None:
         design = controller.mpc.design
         description["mpc"] = {"horizon": design.horizon}
@@ -167,14 +177,17 @@ def _read_yaml(path: Path) -> dict:
         raise ConfigError(f"{path}: not an rlcontroller policy (expected 'format: {FORMAT}')")
     if description.get("format_version") != FORMAT_VERSION:
         raise ConfigError(
-            f"{path}: format_version {description.get('format_version')!r}; this rlc reads version {FORMAT_VERSION}"
+            f"{path}: format_version {description.get('format_version')!r}; this rlc reads version "
+            f"{FORMAT_VERSION}"
         )
     for section, known in KEYS.items():
         mapping = description.get(section) if section else description
         unknown = sorted(map(str, set(mapping) - known)) if isinstance(mapping, dict) else []
         if unknown:
             where = f"{section}." if section else ""
-            raise ConfigError(f"{path}: unknown key {where}{unknown[0]} (expected {', '.join(sorted(known))})")
+            raise ConfigError(
+                f"{path}: unknown key {where}{unknown[0]} (expected {', '.join(sorted(known))})"
+            )
     return description
 
 
@@ -199,7 +212,9 @@ def _read_npz(path: Path, description: dict, plant: Plant) -> dict[str, np.ndarr
             raise ConfigError(f"{path}: no array {key} (the policy declares it)")
         if headers[key][0] != shape or headers[key][1].kind != "f":
             found = f"{headers[key][0]} of {headers[key][1]}"
-            raise ConfigError(f"{path}: {key} is {found}, the policy declares {shape} of floating-point numbers")
+            raise ConfigError(
+                f"{path}: {key} is {found}, the policy declares {shape} of floating-point numbers"
+            )
     try:
         weights = read_npz(path)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
@@ -243,8 +258,10 @@ def _declared_arrays(
     if description.get("mpc") is not None:
         costs, strokes = leading("mpc_cost_state"), leading("mpc_strokes")
         if not 1 <= costs <= 10 * (estimate + m) or strokes > m:
-            raise ValueError(f"mpc: {costs} cost rows and {strokes} stroke rows; expected 1 to "
-                             f"{10 * (estimate + m)} and at most {m}")  # fmt: skip
+            raise ValueError(
+                f"mpc: {costs} cost rows and {strokes} stroke rows; expected 1 to "
+                f"{10 * (estimate + m)} and at most {m}"
+            )
         expected |= {
             "mpc_phi": (estimate, estimate),
             "mpc_action_gain": (estimate, m),
@@ -256,7 +273,9 @@ def _declared_arrays(
     return expected
 
 
-def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant, name: str) -> PolicyController:
+def _controller(
+    description: dict, weights: dict[str, np.ndarray], plant: Plant, name: str
+) -> PolicyController:
     network, observation = description["network"], description["observation"]
     size, m = plant.layout.size, plant.building.n_actuators
     if observation["size"] != size or description["actions"] != m:
@@ -268,7 +287,8 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
         raise ValueError("force_limits_N differ from the folder's config.yaml")
     if not np.isclose(float(description["control_dt_s"]), plant.control_dt, rtol=1e-9, atol=0.0):
         raise ValueError(
-            f"control_dt_s {description['control_dt_s']!r}: the folder's config.yaml steps every {plant.control_dt:g} s"
+            f"control_dt_s {description['control_dt_s']!r}: the folder's config.yaml steps every "
+            f"{plant.control_dt:g} s"
         )
     layers = []
     for index, activation in enumerate(network["activations"]):
@@ -284,14 +304,18 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
             raise ValueError("observation_var: expected values >= 0")
         epsilon, clip = float(observation["epsilon"]), float(observation["clip"])
         if not (np.isfinite(epsilon) and np.isfinite(clip) and epsilon > 0.0 and clip > 0.0):
-            raise ValueError(f"observation epsilon {epsilon!r} and clip {clip!r}: expected finite positive numbers")
+            raise ValueError(
+                f"observation epsilon {epsilon!r} and clip {clip!r}: expected finite positive numbers"
+            )
         normalizer = Normalizer(mean, var, epsilon, clip)
     prior = None
     if description["prior"] not in PRIORS:
         raise ValueError(f"prior: expected one of {', '.join(PRIORS)}")
     if description["prior"] != "none":
         if not plant.experiment.sensors.state_estimate or description["prior"] != prior_kind(plant):
-            raise ValueError(f"prior {description['prior']!r} does not match the folder's config.yaml sensors")
+            raise ValueError(
+                f"prior {description['prior']!r} does not match the folder's config.yaml sensors"
+            )
         feedback, feedforward = weights["prior_feedback"], weights["prior_feedforward"]
         prior = LQGPrior(feedback, feedforward, plant.layout)
     steps = description["training_steps"]
@@ -300,6 +324,13 @@ def _controller(description: dict, weights: dict[str, np.ndarray], plant: Plant,
     law = classical_law(description, actor, normalizer, prior)
     mpc = None if law != "mpc" else mpc_from_file(description["mpc"], weights, plant, prior)
     return PolicyController(
-        actor, normalizer, prior, name, steps=steps,
-        algorithm=str(description["algorithm"]), law=law, designed=str(description.get("designed", "")), mpc=mpc,
-    )  # fmt: skip
+        actor,
+        normalizer,
+        prior,
+        name,
+        steps=steps,
+        algorithm=str(description["algorithm"]),
+        law=law,
+        designed=str(description.get("designed", "")),
+        mpc=mpc,
+    )

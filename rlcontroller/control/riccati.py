@@ -50,16 +50,28 @@ def modal_truncation(phi: np.ndarray, smallest: float = QUASI_STATIC) -> ModalTr
     moduli = np.abs(np.linalg.eigvals(phi))
     if moduli.min() >= smallest:
         return None
-    schur, vectors, kept = scipy.linalg.schur(phi, output="real", sort=lambda re, im: np.hypot(re, im) >= smallest)
+    schur, vectors, kept = scipy.linalg.schur(
+        phi, output="real", sort=lambda re, im: np.hypot(re, im) >= smallest
+    )
     if kept == 0:
-        raise DesignError(f"every mode decays within one control step (largest |eigenvalue| {moduli.max():.2g})")
+        raise DesignError(
+            f"every mode decays within one control step (largest |eigenvalue| {moduli.max():.2g})"
+        )
     # T = [[T11, T12], [0, T22]]: X with T11 X - X T22 = -T12 decouples the blocks
     coupling = scipy.linalg.solve_sylvester(schur[:kept, :kept], -schur[kept:, kept:], -schur[:kept, kept:])
-    return ModalTruncation(basis=vectors[:, :kept], projector=vectors[:, :kept].T - coupling @ vectors[:, kept:].T)
+    return ModalTruncation(
+        basis=vectors[:, :kept], projector=vectors[:, :kept].T - coupling @ vectors[:, kept:].T
+    )
 
 
 def solve_dare(
-    a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, *, s: np.ndarray | None = None, what: str = "LQR"
+    a: np.ndarray,
+    b: np.ndarray,
+    q: np.ndarray,
+    r: np.ndarray,
+    *,
+    s: np.ndarray | None = None,
+    what: str = "LQR",
 ) -> np.ndarray:
     """X of A'XA - X - (A'XB + S)(B'XB + R)^-1 (B'XA + S') + Q = 0, checked: `DesignError` when scipy
     fails or the relative residual exceeds `RESIDUAL_TOLERANCE`; `what` names the design in the message."""
@@ -67,7 +79,9 @@ def solve_dare(
     try:
         x = scipy.linalg.solve_discrete_are(a, b, q, r, s=s)
     except (ValueError, np.linalg.LinAlgError) as error:
-        raise DesignError(f"{what}: the Riccati equation has no stabilising solution here ({error})") from None
+        raise DesignError(
+            f"{what}: the Riccati equation has no stabilising solution here ({error})"
+        ) from None
     coupling = a.T @ x @ b + cross
     residual = a.T @ x @ a - x - coupling @ np.linalg.solve(b.T @ x @ b + r, coupling.T) + q
     scale = max(np.linalg.norm(x), np.linalg.norm(q), np.linalg.norm(a.T @ x @ a))
@@ -96,13 +110,21 @@ def lqr(
 
 
 def lqr_on_kept_modes(
-    phi: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray, *, n: np.ndarray, truncation: ModalTruncation
+    phi: np.ndarray,
+    b: np.ndarray,
+    q: np.ndarray,
+    r: np.ndarray,
+    *,
+    n: np.ndarray,
+    truncation: ModalTruncation,
 ) -> tuple[np.ndarray, np.ndarray]:
     """`lqr` designed on `truncation`'s modes, K and P lifted back to the full state."""
     basis, projector = truncation.basis, truncation.projector
     reduced_phi, reduced_b = projector @ phi @ basis, projector @ b
     riccati = solve_dare(reduced_phi, reduced_b, basis.T @ q @ basis, r, s=basis.T @ n, what="LQR")
-    gain = scipy.linalg.solve(reduced_b.T @ riccati @ reduced_b + r, reduced_b.T @ riccati @ reduced_phi + n.T @ basis)
+    gain = scipy.linalg.solve(
+        reduced_b.T @ riccati @ reduced_b + r, reduced_b.T @ riccati @ reduced_phi + n.T @ basis
+    )
     return gain @ projector, projector.T @ riccati @ projector
 
 
@@ -120,10 +142,17 @@ def kalman_gain(phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement
 
 
 def kalman_gain_on_kept_modes(
-    phi: np.ndarray, c: np.ndarray, process: np.ndarray, measurement: np.ndarray, *, truncation: ModalTruncation
+    phi: np.ndarray,
+    c: np.ndarray,
+    process: np.ndarray,
+    measurement: np.ndarray,
+    *,
+    truncation: ModalTruncation,
 ) -> np.ndarray:
     """`kalman_gain` designed on `truncation`'s modes, which alone the lifted gain corrects."""
     basis, projector = truncation.basis, truncation.projector
     reduced_phi, reduced_c = projector @ phi @ basis, c @ basis
-    prior = solve_dare(reduced_phi.T, reduced_c.T, projector @ process @ projector.T, measurement, what="Kalman filter")
+    prior = solve_dare(
+        reduced_phi.T, reduced_c.T, projector @ process @ projector.T, measurement, what="Kalman filter"
+    )
     return basis @ prior @ reduced_c.T @ np.linalg.inv(reduced_c @ prior @ reduced_c.T + measurement)

@@ -51,7 +51,8 @@ class Supervisor:
         if config.dissipative is True:
             start = layout.estimate.start + n  # the estimate is [x; v (; ground filter)], scaled
             self.velocity = slice(start, start + n)
-            self.actuator_matrix = plant.building.actuator_matrix  # Γ: v @ Γ is each actuator's stroke velocity
+            # Γ: v @ Γ is each actuator's stroke velocity
+            self.actuator_matrix = plant.building.actuator_matrix
             self.fade = config.fade_velocity / layout.estimate_scale[n]
         self.measured = MeasuredStrokeVelocity(plant, size) if config.measured else None
         self.fallback = None if config.fallback is None else DamperFallback(config.fallback, plant, size)
@@ -79,7 +80,8 @@ class Supervisor:
         measured = None if self.measured is None else self.measured.update(observations)
         if self.dissipative:
             if self.velocity is not None:
-                stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix  # scaled (one scale for all)
+                # scaled (one scale for all)
+                stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix
             else:
                 stroke_velocity = measured
             feeding = actions * stroke_velocity > 0.0

@@ -175,9 +175,8 @@ def _supervised(
             [g.node("Mul", [action, stroke], "stroke_power"), g.constant("zero", 0.0)],
             "feeds_energy",
         )
-        if (
-            supervisor.fade_velocity > 0.0
-        ):  # m/s measured, scaled as the estimate is, like `control.supervisor`
+        # m/s measured, scaled as the estimate is, like `control.supervisor`
+        if supervisor.fade_velocity > 0.0:
             fade = supervisor.fade_velocity / (1.0 if measured is stroke else layout.estimate_scale[n])
             speed = g.node(
                 "Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio"
@@ -224,9 +223,8 @@ def _supervisor_text(plant: Plant) -> str:
         return "none"
     parts = []
     if supervisor.trigger is not None:
-        floors = list(trigger_readings(plant)[0]) != [
-            plant.layout.ground
-        ]  # what the trigger reads, as it reads it
+        # what the trigger reads, as it reads it
+        floors = list(trigger_readings(plant)[0]) != [plant.layout.ground]
         watched = "floor acceleration readings" if floors else "ground reading"
         parts.append(
             f"trigger {supervisor.trigger[0]:g}-{supervisor.trigger[1]:g} m/s^2 on the peak {watched}"
@@ -314,9 +312,9 @@ def export_onnx(folder: Path, model: str, out: Path) -> Path:
     deviation, _ = graph_deviation(plant, controller, serialized)
     if not deviation <= FAITHFUL:
         raise ConfigError(
-            f"{folder}: its ONNX graph's forces differ from the Python controller's by {deviation:.3g} "
-            "of their peak "
-            f"on a generated load (at most {FAITHFUL:g} accepted): this controller is not exported"
+            f"{folder}: its ONNX graph's forces differ from the Python controller's by {deviation:.3g} of "
+            f"their peak on a generated load (at most {FAITHFUL:g} accepted): this controller is not "
+            "exported"
         )
     atomic_write(out, serialized)
     return out

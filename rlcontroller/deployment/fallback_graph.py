@@ -51,9 +51,8 @@ def fallen_back(g, plant: Plant, stored: str, action: str, *, velocity: str, sta
     """The action after the fallback and the next state's latch (1.0 once handed over); the previous latch is
     the graph's input `state` at column `start`."""
     rule = DamperFallback(plant.experiment.supervisor.fallback, plant, 1)
-    was = g.node(
-        "Cast", [g.columns("state", start, start + 1, "previous_fallback")], "was_fallen_back", to=9
-    )  # bool
+    # bool
+    was = g.node("Cast", [g.columns("state", start, start + 1, "previous_fallback")], "was_fallen_back", to=9)
     displacements = g.columns(
         stored, rule.displacements.start, rule.displacements.stop, "fallback_displacements"
     )

@@ -20,5 +20,14 @@ from rlcontroller.devices.variable_damper import VariableDamperConfig
 DEVICE_TYPES = (TunedMassConfig, ActiveMassConfig, VariableDamperConfig, MRDamperConfig)
 DeviceConfig = Annotated[Union[DEVICE_TYPES], Field(discriminator="type")]  # noqa: UP007
 
-__all__ = ["DEVICE_TYPES", "ActiveMassConfig", "Damper", "Device", "DeviceConfig", "MRDamperConfig", "MassDevice",
-           "TunedMassConfig", "VariableDamperConfig"]  # fmt: skip
+__all__ = [
+    "DEVICE_TYPES",
+    "ActiveMassConfig",
+    "Damper",
+    "Device",
+    "DeviceConfig",
+    "MRDamperConfig",
+    "MassDevice",
+    "TunedMassConfig",
+    "VariableDamperConfig",
+]

@@ -16,8 +16,11 @@ from rlcontroller.schema import StrictModel
 class Device(StrictModel):
     """A device on the building (subclasses add the `type` literal and their fields)."""
 
-    semi_active: ClassVar[bool] = False  # a damper commanded in [-1, 1]; else a mass device (a degree of freedom)
-    fail_safe_action: ClassVar[float | None] = None  # its action when the controller fails safe; None: no command
+    # a damper commanded in [-1, 1]; else a mass device (a degree of freedom)
+
+    semi_active: ClassVar[bool] = False
+    # its action when the controller fails safe; None: no command
+    fail_safe_action: ClassVar[float | None] = None
 
     def command_label(self) -> str | None:
         """Its column's label in the action ("AMD 5", "MR 1"), None when it takes no command."""

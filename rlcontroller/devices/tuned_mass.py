@@ -84,7 +84,8 @@ class TunedMassConfig(Device):
     tuning: Literal["random", "harmonic"] = "random"
     frequency_ratio: Annotated[float, Field(gt=0.0, le=10.0)] | None = None
     damping_ratio: Annotated[float, Field(ge=0.0, lt=1.0)] | None = None
-    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)] | None = None  # m: its end-stops; None: a free mass
+    # m: its end-stops; None: a free mass
+    stroke_limit: Annotated[float, Field(gt=0.0, le=100.0)] | None = None
     stop_stiffness: Annotated[float, Field(gt=0.0, le=1e12)] | None = None  # N/m; None: STOP_FREQUENCY_HZ
     stop_restitution: Annotated[float, Field(gt=0.0, le=1.0)] = STOP_RESTITUTION
 

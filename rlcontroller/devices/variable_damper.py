@@ -27,7 +27,9 @@ class VariableDamperConfig(Damper):
     @model_validator(mode="after")
     def _ordered(self) -> VariableDamperConfig:
         if self.damping_min >= self.damping_max:
-            raise ValueError(f"damping_min {self.damping_min:g} must be below damping_max {self.damping_max:g}")
+            raise ValueError(
+                f"damping_min {self.damping_min:g} must be below damping_max {self.damping_max:g}"
+            )
         return self
 
     def kernel_row(self) -> list[float]:

@@ -1,11 +1,12 @@
-"""The nonlinear benchmark's criteria J1-J17 (`rlc evaluate --criteria benchmark`): Ohtori, Christenson, Spencer
-and Dyke (2004), "Benchmark control problems for seismically excited nonlinear buildings", J. Eng. Mech. 130(4).
+"""The nonlinear benchmark's criteria J1-J17 (`rlc evaluate --criteria benchmark`): Ohtori, Christenson,
+Spencer and Dyke (2004), "Benchmark control problems for seismically excited nonlinear buildings", J. Eng.
+Mech. 130(4).
 
 Per record, the controlled response C against the uncontrolled building's UC on the same record (the benchmark
 takes each criterion's largest value over its records: `worst_over_records`, over those where it is defined).
-h_i story heights, m_i floor masses, W = g sum m_i the seismic weight, ||q|| = sqrt(1/t_f int q^2 dt) over the
-whole response (t_f: the record and its settling tail), x and x' floor displacements and velocities relative to
-the ground, a absolute ones.
+h_i story heights, m_i floor masses, W = g sum m_i the seismic weight, ||q|| = sqrt(1/t_f int q^2 dt) over
+the whole response (t_f: the record and its settling tail), x and x' floor displacements and velocities
+relative to the ground, a absolute ones.
 
     J1  max_t,i |d_i|/h_i            / the same of UC          peak interstory drift ratio
     J2  max_t,i |a_i|                / the same of UC          peak floor acceleration
@@ -21,14 +22,14 @@ the ground, a absolute ones.
     J14 sum_l 1/t_f int P_l dt / (max_t,i |x'_i of UC| W)      total control power
     J15 control devices    J16 sensors the controller reads    J17 states the controller carries between steps
 
-J7-J10 need an FE plant's member ends (`physics.fe.connections`; other plants: not reported). A connection yields
-where its tangent stiffness falls below half its value after gravity; its yield moment M_y is its force there and
-its yield curvature phi_y = M_y / that initial tangent (the curvature it would have reached elastically). J7, J8
-and J10 go over the connections that yield in C or UC (the others never reach their yield values, which are then
-unknown); E_j is int M dphi less the change of the elastic energy M^2 / (2 k0) (J). With no connection yielding
-in UC the four are not defined (NaN). y_l (J12) is integrated from the velocity across the device at the control
-steps. The paper itself was not reachable from where this was written: the forms above are the benchmark's as
-the field quotes them; docs/opensees.md says what was and was not checked.
+J7-J10 need an FE plant's member ends (`physics.fe.connections`; other plants: not reported). A connection
+yields where its tangent stiffness falls below half its value after gravity; its yield moment M_y is its force
+there and its yield curvature phi_y = M_y / that initial tangent (the curvature it would have reached
+elastically). J7, J8 and J10 go over the connections that yield in C or UC (the others never reach their yield
+values, which are then unknown); E_j is int M dphi less the change of the elastic energy M^2 / (2 k0) (J).
+With no connection yielding in UC the four are not defined (NaN). y_l (J12) is integrated from the velocity
+across the device at the control steps. The paper itself was not reachable from where this was written: the
+forms above are the benchmark's as the field quotes them; docs/opensees.md says what was and was not checked.
 """
 
 from __future__ import annotations
@@ -68,7 +69,9 @@ def response_criteria(controlled: Response, uncontrolled: Response, building: Bu
         criteria[f"J{number + 4}"] = float(np.max(norm(c)) / np.max(norm(u)))
     force = controlled.force
     power = np.abs(force * controlled.device_velocity)
-    stroke = np.vstack([np.zeros((1, force.shape[1])), np.cumsum(_trapezoids(controlled.device_velocity, dt), axis=0)])
+    stroke = np.vstack(
+        [np.zeros((1, force.shape[1])), np.cumsum(_trapezoids(controlled.device_velocity, dt), axis=0)]
+    )
     speed = float(np.max(np.abs(uncontrolled.velocity)))
     criteria["J11"] = float(np.max(np.abs(force))) / weight
     criteria["J12"] = float(np.max(np.abs(stroke)) / np.max(np.abs(uncontrolled.displacement)))
@@ -119,7 +122,8 @@ def benchmark_criteria(
     building: Building,
 ) -> pd.DataFrame:
     """J1-J17 per controller and record, long form (controller, record, criterion, value). `controllers`: name
-    -> (devices, sensors, carried states) for J15-J17; `responses[name, record]`, "uncontrolled" among them."""
+    -> (devices, sensors, carried states) for J15-J17; `responses[name, record]`, "uncontrolled" among
+    them."""
     if building.story_heights is None:
         raise ValueError("the benchmark's criteria need the building's story_heights (J1, J4: drift ratios)")
     rows = []
@@ -132,8 +136,10 @@ def benchmark_criteria(
             if devices == 0:  # no control: no force, stroke or power
                 criteria |= {"J11": 0.0, "J12": 0.0, "J13": 0.0, "J14": 0.0}
             criteria |= {"J15": devices, "J16": sensors, "J17": states}
-            rows += [{"controller": name, "record": record, "criterion": key, "value": float(value)}
-                     for key, value in criteria.items()]  # fmt: skip
+            rows += [
+                {"controller": name, "record": record, "criterion": key, "value": float(value)}
+                for key, value in criteria.items()
+            ]
     return pd.DataFrame(rows)
 
 
@@ -146,25 +152,31 @@ def write_benchmark(evaluation, building: Building, folder: Path) -> str:
     table = worst_over_records(criteria)
     table[["J15", "J16", "J17"]] = table[["J15", "J16", "J17"]].astype(int).astype(str)  # counts, as counts
     table.index.name = "controller"
-    elastic = criteria[(criteria.controller == "uncontrolled") & (criteria.criterion == "J9")]["value"].isna().sum()
+    elastic = (
+        criteria[(criteria.controller == "uncontrolled") & (criteria.criterion == "J9")]["value"].isna().sum()
+    )
     defined = f" (J7-J10 over {len(evaluation.records) - elastic}: the others leave the bare frame elastic)"
-    text = "\n".join([
-        f"# The benchmark's criteria J1-J17 (Ohtori et al. 2004), the largest over {len(evaluation.records)} records"
-        + (defined if elastic and "J9" in set(criteria.criterion) else ""),
-        "",
-        markdown_table(table),
-        "",
-        "J1-J10: controlled / uncontrolled (J7-J10 at the FE model's member ends; - where not defined). "
-        "J11-J14: force, stroke and power over the building's weight and uncontrolled peaks. "
-        "J15 devices, J16 sensors, J17 states carried (rlcontroller/evaluation/benchmark.py).",
-    ])  # fmt: skip
+    text = "\n".join(
+        [
+            "# The benchmark's criteria J1-J17 (Ohtori et al. 2004), the largest over "
+            f"{len(evaluation.records)} records"
+            + (defined if elastic and "J9" in set(criteria.criterion) else ""),
+            "",
+            markdown_table(table),
+            "",
+            "J1-J10: controlled / uncontrolled (J7-J10 at the FE model's member ends; - where not defined). "
+            "J11-J14: force, stroke and power over the building's weight and uncontrolled peaks. "
+            "J15 devices, J16 sensors, J17 states carried (rlcontroller/evaluation/benchmark.py).",
+        ]
+    )
     atomic_write(folder / "benchmark_criteria.md", text + "\n")
     return text
 
 
 def worst_over_records(criteria: pd.DataFrame) -> pd.DataFrame:
     """The benchmark's form: each criterion's largest value over the records where it is defined (J7-J10 are
-    not where the uncontrolled building stays elastic), per controller (rows) and criterion (columns, J1-J17)."""
+    not where the uncontrolled building stays elastic), per controller (rows) and criterion (columns,
+    J1-J17)."""
     table = criteria.groupby(["controller", "criterion"], sort=False)["value"].max().unstack("criterion")
     order = list(dict.fromkeys(criteria["controller"]))
     return table.loc[order, [c for c in CRITERIA if c in table.columns]]

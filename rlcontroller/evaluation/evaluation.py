@@ -18,7 +18,13 @@ import pandas as pd
 
 from rlcontroller.background import in_background
 from rlcontroller.config import Experiment, RewardConfig, WindGeneratorConfig, display_path
-from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand, Controller, LQGController, Uncontrolled
+from rlcontroller.control.controllers import (
+    ClippedOptimal,
+    ConstantCommand,
+    Controller,
+    LQGController,
+    Uncontrolled,
+)
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.optimal import optimal_responses
 from rlcontroller.control.policy_controller import PolicyController
@@ -41,8 +47,18 @@ from rlcontroller.simulation import kept
 from rlcontroller.simulation.rollout import batch_rollout, uncontrolled_responses
 
 OPTIMAL = "optimal (clairvoyant)"
-PASSIVE = "passive devices"  # the mass devices with no command: tuned masses as tuned, drivers as tuned masses
-DAMPER_LEVELS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)  # passive command levels of a damper sweep, of its range
+# the mass devices with no command: tuned masses as tuned, drivers as tuned masses
+PASSIVE = "passive devices"
+# passive command levels of a damper sweep, of its range
+DAMPER_LEVELS = (
+    0.0,
+    0.1,
+    0.2,
+    0.35,
+    0.5,
+    0.75,
+    1.0,
+)
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 
@@ -59,7 +75,8 @@ class Evaluation:
     sources: dict[str, str] = field(default_factory=dict)  # controller -> what was evaluated (a model file)
     descriptions: dict[str, str] = field(default_factory=dict)  # record -> event, station ... (may be empty)
     pgas: dict[str, float] = field(default_factory=dict)  # record -> peak ground acceleration (m/s^2)
-    costs: dict[str, tuple[int, int, int]] = field(default_factory=dict)  # controller -> devices, sensors, states
+    # controller -> devices, sensors, states
+    costs: dict[str, tuple[int, int, int]] = field(default_factory=dict)
 
     @property
     def controllers(self) -> list[str]:
@@ -80,7 +97,8 @@ class Evaluation:
 
 
 def progress_total(plant: Plant, motions: list) -> int:
-    """The motions `evaluate` reports to its `on_motions`: an FE plant's uncontrolled runs, then the controlled."""
+    """The motions `evaluate` reports to its `on_motions`: an FE plant's uncontrolled runs, then the
+    controlled."""
     return len(motions) * (2 if plant.fe_model is not None else 1)
 
 
@@ -102,7 +120,8 @@ def evaluate(
     start = time.perf_counter()
     yielding = plant.yielding
     include_optimal = include_optimal and plant.integrator is None and not plant.has_actuator_dynamics
-    include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)  # ground only
+    # ground only
+    include_optimal = include_optimal and all(motion.floor_forces is None for motion in motions)
     settle = settle and (yielding is not None or plant.fe_model is not None)
     yield_drift = plant.yield_drift if settle else None
     simulated = [with_settling_tail(motion) for motion in motions] if settle else motions
@@ -120,7 +139,9 @@ def evaluate(
     responses: dict[tuple[str, str], Response] = {}
     for number, motion in enumerate(motions):
         results = [("uncontrolled", bare[number])] + ([(PASSIVE, passive[number])] if devices else [])
-        results += [(controller.name, run[number][0]) for controller, run in zip(controllers, controlled, strict=True)]
+        results += [
+            (controller.name, run[number][0]) for controller, run in zip(controllers, controlled, strict=True)
+        ]
         if include_optimal:
             results.append((OPTIMAL, optimal[number]))
         for name, result in results:
@@ -136,7 +157,13 @@ def evaluate(
                 metrics |= device_metrics(result, damping=damping, stroke_limits=stroke_limits)
             for metric, values in metrics.items():
                 rows.extend(
-                    {"controller": name, "record": motion.name, "metric": metric, "index": i + 1, "value": float(v)}
+                    {
+                        "controller": name,
+                        "record": motion.name,
+                        "metric": metric,
+                        "index": i + 1,
+                        "value": float(v),
+                    }
                     for i, v in enumerate(values)
                 )
     descriptions = {motion.name: motion.description for motion in motions}
@@ -145,9 +172,15 @@ def evaluate(
     costs = {"uncontrolled": (0, 0, 0)}
     costs |= {c.name: controller_costs(c, plant.layout, plant.building.n_actuators) for c in controllers}
     return Evaluation(
-        label, plant.experiment, pd.DataFrame(rows), responses, seconds, descriptions=descriptions, pgas=pgas,
+        label,
+        plant.experiment,
+        pd.DataFrame(rows),
+        responses,
+        seconds,
+        descriptions=descriptions,
+        pgas=pgas,
         costs=costs,
-    )  # fmt: skip
+    )
 
 
 def compare(
@@ -253,7 +286,8 @@ def scaled_weights(reward: RewardConfig, multipliers: dict[str, float]) -> Rewar
     """The reward with each term's weight times its quantity's multiplier (`{"force": 0.1}`; other
     quantities unchanged): a point of a trade-off."""
     terms = [
-        term.model_copy(update={"weight": term.weight * multipliers.get(term.quantity, 1.0)}) for term in reward.terms
+        term.model_copy(update={"weight": term.weight * multipliers.get(term.quantity, 1.0)})
+        for term in reward.terms
     ]
     return reward.model_copy(update={"terms": terms})
 
@@ -292,7 +326,11 @@ def damper_sweep(
     evaluation = evaluate(plant, motions, chosen, label, include_optimal=False, on_motions=on_motions)
     summary = evaluation.summary()
     rows = [
-        {"family": family, "parameter": parameter, **{m: float(summary.loc[controller.name, m]) for m in METRICS}}
+        {
+            "family": family,
+            "parameter": parameter,
+            **{m: float(summary.loc[controller.name, m]) for m in METRICS},
+        }
         for family, parameter, controller in controllers
     ]
     return pd.DataFrame(rows)

@@ -49,7 +49,9 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
     improvement = improvement_table(evaluation)
     per_record = per_record_frame(evaluation)
     written = [
-        atomic_write(out / "metrics.csv", evaluation.metrics.assign(suite=evaluation.label).to_csv(index=False)),
+        atomic_write(
+            out / "metrics.csv", evaluation.metrics.assign(suite=evaluation.label).to_csv(index=False)
+        ),
         atomic_write(out / "per_record.csv", per_record.assign(suite=evaluation.label).to_csv(index=False)),
         atomic_write(out / "summary.csv", summary.assign(suite=evaluation.label).to_csv()),
     ]
@@ -65,7 +67,12 @@ def write_tables(evaluation: Evaluation, out: Path) -> list[Path]:
         written.append(
             atomic_write(out / f"{metric.lower()}_by_pga.csv", banded.assign(suite=evaluation.label).to_csv())
         )
-        text += [f"Mean {metric} by the record's PGA (number of records in the band):", "", markdown_table(banded), ""]
+        text += [
+            f"Mean {metric} by the record's PGA (number of records in the band):",
+            "",
+            markdown_table(banded),
+            "",
+        ]
     text += [f"Evaluated in {evaluation.seconds:.1f} s.", ""]
     atomic_write(out / "summary.md", "\n".join(text))
     stories = ", ".join(evaluation.experiment.command_labels())
@@ -95,7 +102,9 @@ def time_history_record(evaluation: Evaluation) -> str:
     return evaluation.records[0]
 
 
-def strong_part(ground: np.ndarray, time: np.ndarray, low: float = 0.05, high: float = 0.95) -> tuple[float, float]:
+def strong_part(
+    ground: np.ndarray, time: np.ndarray, low: float = 0.05, high: float = 0.95
+) -> tuple[float, float]:
     """The strong shaking: the significant duration D5-95 of the ground motion (where its Arias
     intensity, the integral of a_g^2, goes from 5 % to 95 %), padded by 1 s before and 4 s after,
     at least 10 s long (s)."""
@@ -120,7 +129,12 @@ def time_history_data(evaluation: Evaluation, story: int = 4) -> dict:
     for controller in evaluation.controllers:
         result = evaluation.responses[controller, record]
         lines.append(
-            (controller, result.time[shown], 100 * result.drift[shown, story - 1], result.base_shear[shown] / 1e3)
+            (
+                controller,
+                result.time[shown],
+                100 * result.drift[shown, story - 1],
+                result.base_shear[shown] / 1e3,
+            )
         )
     description = evaluation.descriptions.get(record, "")
     source = "SYNTHETIC motion" if "SYNTHETIC" in evaluation.label else "as recorded"
@@ -161,13 +175,21 @@ def per_story_data(evaluation: Evaluation) -> dict:
     present = set(mean.index.droplevel("index"))  # no J3 for passive devices: nothing commanded
     lines = {
         metric: [
-            (controller, mean.loc[metric, controller].index.to_numpy(), mean.loc[metric, controller].to_numpy())
+            (
+                controller,
+                mean.loc[metric, controller].index.to_numpy(),
+                mean.loc[metric, controller].to_numpy(),
+            )
             for controller in evaluation.controllers
             if (metric, controller) in present
         ]
         for metric in METRICS
     }
-    return {"label": evaluation.label, "lines": lines, "command_labels": evaluation.experiment.command_labels()}
+    return {
+        "label": evaluation.label,
+        "lines": lines,
+        "command_labels": evaluation.experiment.command_labels(),
+    }
 
 
 def draw_metrics_per_story(data: dict, path: Path) -> Path:
@@ -196,7 +218,8 @@ def draw_metrics_per_story(data: dict, path: Path) -> Path:
         axis.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
     figure.suptitle(f"J1–J4 per story, mean over records — {data['label']}", fontsize=11)
-    figure.subplots_adjust(left=0.04, right=0.99, bottom=0.14, top=0.84, wspace=0.2)  # tight_layout's, fixed (above)
+    # tight_layout's, fixed (above)
+    figure.subplots_adjust(left=0.04, right=0.99, bottom=0.14, top=0.84, wspace=0.2)
     atomic_savefig(figure, path)
     plt.close(figure)
     return path
@@ -244,7 +267,9 @@ class Drawing:
         try:
             status, value = self._connection.recv()
         except EOFError:
-            raise RuntimeError(f"the drawing process ended early (exit code {self._process.exitcode})") from None
+            raise RuntimeError(
+                f"the drawing process ended early (exit code {self._process.exitcode})"
+            ) from None
         if status == "error":
             raise RuntimeError(f"drawing the plots failed:\n{value}")
         return value

@@ -53,16 +53,20 @@ def robustness(
     start = time.perf_counter()
     model = Plant(experiment.model_copy(update={"plant": None, "plant_randomization": None}))
     dampers = model.semi_active is not None
-    designed: list[Controller] = [  # designed once, without knowing the plant
-        LQGController(design_lqg(model), model, NOMINAL_LQG),
-        LQGController(design_lqg_wind_model(model), model, NOMINAL_WIND_MODEL)
-        if model.wind is not None
-        else LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
-    ] if not dampers else [
-        ConstantCommand(-1.0, model.building.n_actuators, "passive-off"),
-        ConstantCommand(1.0, model.building.n_actuators, "passive-on"),
-        ClippedOptimal(model, NOMINAL_CLIPPED),
-    ]  # fmt: skip
+    designed: list[Controller] = (
+        [  # designed once, without knowing the plant
+            LQGController(design_lqg(model), model, NOMINAL_LQG),
+            LQGController(design_lqg_wind_model(model), model, NOMINAL_WIND_MODEL)
+            if model.wind is not None
+            else LQGController(design_lqg_ground_model(model), model, NOMINAL_GROUND_MODEL),
+        ]
+        if not dampers
+        else [
+            ConstantCommand(-1.0, model.building.n_actuators, "passive-off"),
+            ConstantCommand(1.0, model.building.n_actuators, "passive-on"),
+            ClippedOptimal(model, NOMINAL_CLIPPED),
+        ]
+    )
     robust: list[Controller] = []
     if experiment.plant_randomization is not None and not dampers:
         part = centre_of_ranges(experiment.plant_randomization, experiment.plant)
@@ -95,7 +99,11 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
 
 def worst_record_j1(table: pd.DataFrame) -> pd.Series:
     """Scenario x controller: the largest per-record mean J1 (above 1: worse than no control)."""
-    j1 = table[table["metric"] == "J1"].groupby(["scenario", "controller", "record"], sort=False)["value"].mean()
+    j1 = (
+        table[table["metric"] == "J1"]
+        .groupby(["scenario", "controller", "record"], sort=False)["value"]
+        .mean()
+    )
     return j1.groupby(["scenario", "controller"], sort=False).max()
 
 

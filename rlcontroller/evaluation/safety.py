@@ -1,4 +1,5 @@
-"""The safety check: a controller must never make the building worse than it is when the controller fails safe.
+"""The safety check: a controller must never make the building worse than it is when the controller fails
+safe.
 
 The reference is the building as it stands when its controller fails safe (`fail_safe`): without
 devices, the building with no control; with devices, each at its fail-safe action (tuned masses as
@@ -29,6 +30,7 @@ re-derived wherever it is read).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -36,7 +38,20 @@ from rlcontroller.config import SafetyCheckConfig, Scenario, check_generator
 from rlcontroller.control.controllers import Controller, fail_safe_controller
 from rlcontroller.control.policy_controller import PolicyController
 from rlcontroller.evaluation.evaluation import PASSIVE, evaluate
-from rlcontroller.evaluation.standard import SHAPE_DAMPING, SHAPE_MODES, rest_figures, stability_figures, suite_figures
+from rlcontroller.evaluation.figures import (
+    DeviceFigures,
+    MotionFigures,
+    RestFigures,
+    StabilityFigures,
+    SuiteFigures,
+)
+from rlcontroller.evaluation.standard import (
+    SHAPE_DAMPING,
+    SHAPE_MODES,
+    rest_figures,
+    stability_figures,
+    suite_figures,
+)
 from rlcontroller.evaluation.verdict import Verdict, also_criterion
 from rlcontroller.physics.metrics import ratio_to_reference, residual_drift
 from rlcontroller.physics.motions.excitation import FLOOR_FORCES, STANDARD_GRAVITY, Load
@@ -98,15 +113,19 @@ def safety_check(
         "at rest": lambda: rest_criterion(plant, controller, standard, bounds),
     }
     if (also := standard.also) is not None:
-        judges[also_criterion(also)] = lambda: suite_criterion(plant, controller, also, drift_bounds(plant, also))
+        judges[also_criterion(also)] = lambda: suite_criterion(
+            plant, controller, also, drift_bounds(plant, also)
+        )
     if isinstance(controller, PolicyController):
-        judges["closed-loop stability"] = lambda: stability_criterion(plant, controller, scenarios, standard.stable_on)
+        judges["closed-loop stability"] = lambda: stability_criterion(
+            plant, controller, scenarios, standard.stable_on
+        )
     criteria = {}
     for name, judge in judges.items():
         criteria[name] = judge()
         if on_criterion is not None:
             on_criterion(name)
-    passed = all(item["passed"] for item in criteria.values())
+    passed = all(item.passed for item in criteria.values())
     return Verdict(controller.name, passed, criteria)
 
 
@@ -116,7 +135,9 @@ def check_suite(plant: Plant, standard: SafetyCheckConfig) -> list[Load]:
     return generate_suite(generator, standard.motions, standard.seed, plant.building)
 
 
-def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
+def suite_criterion(
+    plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray
+) -> SuiteFigures:
     motions = check_suite(plant, standard)
     reference, words = fail_safe(plant)
     controllers = [controller] if reference is None else [controller, reference]
@@ -128,7 +149,7 @@ def suite_criterion(plant: Plant, controller: Controller, standard: SafetyCheckC
     )
 
 
-def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
+def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> SuiteFigures:
     """The check suite's criterion for a building's devices left passive (tuned masses as tuned, drivers
     off, dampers at their least command) against the building without them: what the devices alone do."""
     motions = check_suite(plant, standard)
@@ -136,21 +157,31 @@ def passive_verdict(plant: Plant, standard: SafetyCheckConfig) -> dict:
     bounds = drift_bounds(plant, standard)
     words = "the building without its devices"
     verdict = judge_suite(
-        evaluation, motions, PASSIVE, "uncontrolled", words=words, bounds=bounds, standard=standard, plant=plant
+        evaluation,
+        motions,
+        PASSIVE,
+        "uncontrolled",
+        words=words,
+        bounds=bounds,
+        standard=standard,
+        plant=plant,
     )
     first = 1.0 / plant.bare.building.periods()[0]
     share = {motion.name: energy_near(motion, first) for motion in motions}
-    failing = set(verdict["failures"])
-    for name in failing:
-        verdict["per_motion"][name]["ground_energy_near_first_mode"] = round(share[name], 4)
-    if failing:
-        passing = [share[name] for name, row in verdict["per_motion"].items() if "ratio" in row and name not in failing]
-        verdict["summary"] += (
-            f"; the motions it fails carry a median {np.median([share[name] for name in failing]):.1%} of their "
-            f"ground energy within {NEAR_MODE:.0%} of the first mode's {first:.3f} Hz "
-            f"(the significant ones it passes {np.median(passing):.1%})"
-        )
-    return verdict
+    failing = set(verdict.failures)
+    if not failing:
+        return verdict
+    rows = {
+        name: replace(row, ground_energy_near_first_mode=round(share[name], 4)) if name in failing else row
+        for name, row in verdict.per_motion.items()
+    }
+    passing = [share[name] for name, row in rows.items() if row.significant and name not in failing]
+    summary = verdict.summary + (
+        f"; the motions it fails carry a median {np.median([share[name] for name in failing]):.1%} of "
+        f"their ground energy within {NEAR_MODE:.0%} of the first mode's {first:.3f} Hz "
+        f"(the significant ones it passes {np.median(passing):.1%})"
+    )
+    return replace(verdict, summary=summary, per_motion=rows)
 
 
 NEAR_MODE = 0.15  # the band around the first mode a tuned mass acts in (of its frequency)
@@ -175,7 +206,7 @@ def judge_suite(
     bounds: np.ndarray,
     standard,
     plant: Plant,
-) -> dict:
+) -> SuiteFigures:
     """The check suite's criterion from an evaluation of its `motions`: the responses named `judged` against
     those named `reference` (described by `words`), each motion's figures in `per_motion` and the outcome
     derived from them (`evaluation.standard.suite_figures`) under `standard` for `plant`'s lateral system."""
@@ -187,37 +218,46 @@ def judge_suite(
     for motion in motions:
         reference_run = evaluation.responses[reference, motion.name]
         controlled = evaluation.responses[judged, motion.name]
-        reference_peak, peak = np.max(np.abs(reference_run.drift), axis=0), np.max(np.abs(controlled.drift), axis=0)
+        reference_peak = np.max(np.abs(reference_run.drift), axis=0)
+        peak = np.max(np.abs(controlled.drift), axis=0)
         row = strength(motion)
         if ground:  # what the motion is made of at the building's own periods
-            row["sa_over_pga"] = [round(float(v), 4) for v in spectral_shape(motion, np.array(periods), SHAPE_DAMPING)]
+            shape = spectral_shape(motion, np.array(periods), SHAPE_DAMPING)
+            row = replace(row, sa_over_pga=tuple(round(float(v), 4) for v in shape))
         if np.max(reference_peak / bounds) < 1.0:  # insignificant: stay below the bound
-            rows[motion.name] = row | {"over_bound": round(float(np.max(peak / bounds)), 4)}
+            rows[motion.name] = replace(row, over_bound=round(float(np.max(peak / bounds)), 4))
             continue
-        row |= {
-            "J1": round(float(np.mean(peak / reference_peak)), 4),
-            "J2": round(float(np.mean(peak_acceleration(controlled) / peak_acceleration(reference_run))), 4),
-            "ratio": round(ratio_to_reference(controlled, reference_run), 4),
-            "drift_ratio": round(float(np.max(peak / heights)), 6),
-            "reference_drift_ratio": round(float(np.max(reference_peak / heights)), 6),
-        }
+        accelerations = peak_acceleration(controlled) / peak_acceleration(reference_run)
+        row = replace(
+            row,
+            J1=round(float(np.mean(peak / reference_peak)), 4),
+            J2=round(float(np.mean(accelerations)), 4),
+            ratio=round(ratio_to_reference(controlled, reference_run), 4),
+            drift_ratio=round(float(np.max(peak / heights)), 6),
+            reference_drift_ratio=round(float(np.max(reference_peak / heights)), 6),
+        )
         if yields:  # the permanent drift, after the settling tail
-            for key, run in (("residual_ratio", controlled), ("reference_residual_ratio", reference_run)):
-                row[key] = round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
+            residual, reference_residual = (
+                round(float(np.max(residual_drift(run)["residual_drift_m"] / heights)), 6)
+                for run in (controlled, reference_run)
+            )
+            row = replace(row, residual_ratio=residual, reference_residual_ratio=reference_residual)
         rows[motion.name] = row
     devices = device_figures(evaluation, judged, reference, motions, plant=plant)
-    criterion = suite_figures(rows, words, plant.experiment.building.system, standard, devices=devices, periods=periods)
-    return criterion | {"per_motion": rows}
+    system = plant.experiment.building.system
+    return suite_figures(rows, words, system, standard, devices=devices, periods=periods)
 
 
-def device_figures(evaluation, judged: str, reference: str, motions: list[Load], *, plant: Plant) -> dict | None:
-    """Per mass device of `plant` over the motions, under the controller `judged` and the `reference`: the largest
-    stroke (m); with end-stops also their limits (m), the contacts and the largest contact force (N). None without
-    mass devices."""
+def device_figures(
+    evaluation, judged: str, reference: str, motions: list[Load], *, plant: Plant
+) -> DeviceFigures | None:
+    """Per mass device of `plant` over the motions, under the controller `judged` and the `reference`: the
+    largest stroke (m); with end-stops also their limits (m), the contacts and the largest contact force (N).
+    None without mass devices."""
     figures: dict[str, list] = {}
     for name, prefix in ((judged, ""), (reference, "reference_")):
         runs = [evaluation.responses[name, motion.name] for motion in motions]
-        if runs[0].stroke is None or runs[0].stroke.shape[1] == 0:  # no mass devices (a passive verdict's reference)
+        if runs[0].stroke is None or runs[0].stroke.shape[1] == 0:  # no mass (a passive verdict's reference)
             continue
         strokes = np.max([np.max(np.abs(run.stroke), axis=0) for run in runs], axis=0)
         figures[f"{prefix}peak_stroke_m"] = [round(float(value), 4) for value in strokes]
@@ -228,17 +268,19 @@ def device_figures(evaluation, judged: str, reference: str, motions: list[Load],
         forces = np.max([np.max(run.stop_force, axis=0) for run in runs], axis=0)
         figures[f"{prefix}contacts"] = [int(value) for value in contacts]
         figures[f"{prefix}peak_contact_force_N"] = [round(float(value), 1) for value in forces]
-    return figures or None
+    return DeviceFigures(**figures) if figures else None
 
 
-def strength(motion: Load) -> dict:
+def strength(motion: Load) -> MotionFigures:
     """How strong a load is, for a verdict's rows: a ground motion's PGA (g), a wind load's mean speed."""
     if motion.kind == FLOOR_FORCES:
-        return {"load": motion.description or "floor forces"}
-    return {"pga_g": round(motion.pga / STANDARD_GRAVITY, 5)}
+        return MotionFigures(load=motion.description or "floor forces")
+    return MotionFigures(pga_g=round(motion.pga / STANDARD_GRAVITY, 5))
 
 
-def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray) -> dict:
+def rest_criterion(
+    plant: Plant, controller: Controller, standard: SafetyCheckConfig, bounds: np.ndarray
+) -> RestFigures:
     dt = plant.control_dt
     still = Load("at rest", dt, np.zeros(round(standard.rest_duration / dt) + 1), synthetic=True)
     seeds = [standard.seed + 1 + run for run in range(standard.rest_runs)]
@@ -249,7 +291,7 @@ def rest_criterion(plant: Plant, controller: Controller, standard: SafetyCheckCo
 
 def stability_criterion(
     plant: Plant, controller: PolicyController, scenarios: list[Scenario], stable_on: list[str]
-) -> dict:
+) -> StabilityFigures:
     design = spectral_radius(plant.design, controller)
     failed_safe = spectral_radius(plant.design, fail_safe_controller(plant.design))
     experiment = plant.experiment
@@ -260,4 +302,6 @@ def stability_criterion(
             "not linear: not checked" if linear is None else round(spectral_radius(linear, controller), 8)
         )
     supervised = experiment.supervisor is not None
-    return stability_figures(round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on=stable_on)
+    return stability_figures(
+        round(design, 8), per_scenario, supervised, round(failed_safe, 8), stable_on=stable_on
+    )

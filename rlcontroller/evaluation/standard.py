@@ -1,4 +1,5 @@
-"""The standard's rules on a check suite's figures: performance levels, the stated risk, the verdict's numbers.
+"""The standard's rules on a check suite's figures: performance levels, the stated risk, the verdict's
+numbers.
 
 Everything here is a function of a suite's per-motion figures (drift ratios, J1, J2) and the standard, so a
 verdict file can be re-derived from its own rows (`evaluation.verdict.contradictions`): a criterion whose
@@ -20,7 +21,17 @@ recorded outcome, counts, bound or means its rows contradict is refused wherever
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
+
+from rlcontroller.evaluation.figures import (
+    DeviceFigures,
+    MotionFigures,
+    RestFigures,
+    StabilityFigures,
+    SuiteFigures,
+)
 
 ROUNDING = 1e-9  # a controller that never acts equals the reference to this relative rounding
 PLUMB = 0.002  # "negligible" permanent drift: AISC 303's erection tolerance, 1/500
@@ -39,7 +50,8 @@ SYSTEM_WORDS = {
 
 
 def level(drift_ratio: float, limits: tuple[float, ...], slack: float = 1.0) -> str:
-    """The performance level a peak drift ratio reaches: the first limit (times `slack`) it does not exceed."""
+    """The performance level a peak drift ratio reaches: the first limit (times `slack`) it does not
+    exceed."""
     return LEVELS[sum(drift_ratio > limit * slack for limit in limits)]
 
 
@@ -54,28 +66,18 @@ def risk_upper_bound(k: int, n: int, confidence: float) -> float:
     return 1.0 if k >= n else float(betaincinv(k + 1, n - k, confidence))
 
 
-def motion_levels(row: dict, system: str, tolerance: float) -> tuple[str, str]:
+def motion_levels(row: MotionFigures, system: str, tolerance: float) -> tuple[str, str]:
     """The performance levels a significant motion leaves the controlled building and the reference at: the
     higher of the level by peak transient drift and, where the row has residual drift ratios (a yielding
     plant), by permanent drift, as FEMA 356 defines a level (both within its limits). The controlled
     building's drifts count against a limit only beyond 1 + tolerance of it."""
-    kinds = [("transient", "drift_ratio")] + [("permanent", "residual_ratio")] * ("residual_ratio" in row)
-    levels = []
-    for prefix, slack in (("", 1.0 + tolerance), ("reference_", 1.0)):
-        reached = [LEVELS.index(level(row[prefix + key], DRIFT_LIMITS[system][kind], slack)) for kind, key in kinds]
-        levels.append(LEVELS[max(reached)])
-    return levels[0], levels[1]
-
-
-DEVICE_FIGURES = (  # per mass device over a suite, the controlled building's then the reference's
-    "peak_stroke_m",
-    "reference_peak_stroke_m",
-    "stroke_limit_m",  # with end-stops (`physics.end_stops`), these too
-    "contacts",
-    "reference_contacts",
-    "peak_contact_force_N",
-    "reference_peak_contact_force_N",
-)
+    limits = DRIFT_LIMITS[system]
+    controlled = [level(row.drift_ratio, limits["transient"], 1.0 + tolerance)]
+    reference = [level(row.reference_drift_ratio, limits["transient"])]
+    if row.yields:
+        controlled.append(level(row.residual_ratio, limits["permanent"], 1.0 + tolerance))
+        reference.append(level(row.reference_residual_ratio, limits["permanent"]))
+    return max(controlled, key=LEVELS.index), max(reference, key=LEVELS.index)
 
 
 SHAPE_MODES = 3  # a ground-motion suite states its spectral shape at the building's first periods
@@ -83,156 +85,116 @@ SHAPE_DAMPING = 0.02  # of the oscillators it is measured with (Sa / PGA)
 SHAPE_QUANTILES = {"p16": 16.0, "median": 50.0, "p84": 84.0}
 
 
-POSSIBLE = {  # a per-motion figure and its possible range: ratios and drift ratios are finite and not negative
-    "J1": (0.0, np.inf),
-    "J2": (0.0, np.inf),
-    "ratio": (0.0, np.inf),
-    "drift_ratio": (0.0, np.inf),
-    "reference_drift_ratio": (0.0, np.inf),
-    "residual_ratio": (0.0, np.inf),
-    "reference_residual_ratio": (0.0, np.inf),
-    "over_bound": (0.0, np.inf),
-}
-
-
-def check_possible(rows: dict[str, dict]) -> None:
-    """ValueError (one line naming the motion and the figure) for a per-motion figure no run can give: not a number
-    (NaN, a boolean, text), infinite or negative. A verdict with one counts as none (`verdict.contradictions`)."""
-    for name, row in rows.items():
-        for key, (low, high) in POSSIBLE.items():
-            if key in row and not possible(row[key], low, high):
-                raise ValueError(f"{name}.{key} {row[key]!r} is no possible figure (a finite number >= {low:g})")
-        shape = row.get("sa_over_pga", [])
-        if not isinstance(shape, list) or not all(possible(value, 0.0, np.inf) for value in shape):
-            raise ValueError(f"{name}.sa_over_pga {shape!r} is no possible figure (a list of finite numbers >= 0)")
-
-
-def possible(value, low: float, high: float) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and low <= value < high
-
-
 def suite_figures(
-    rows: dict[str, dict],
+    rows: dict[str, MotionFigures],
     words: str,
     system: str,
     standard,
     *,
-    devices: dict | None = None,
+    devices: DeviceFigures | None = None,
     periods: list | None = None,
-) -> dict:
-    """A suite criterion's figures from its per-motion `rows` (significant: J1, J2, ratio, drift ratios;
-    insignificant: over_bound) against the reference `words` describes, under `standard`
-    (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral `system`; with mass
-    devices their figures over the suite (`DEVICE_FIGURES`: peak strokes, m; with end-stops the limits, the
-    contacts and the largest contact force, N); for ground motions measured at the building's `periods` (s), the
-    suite's spread of spectral shapes there (each row's `sa_over_pga`: quantiles over every motion)."""
-    check_possible(rows)
+) -> SuiteFigures:
+    """A suite criterion from its motions' figures `rows` against the reference `words` describes, under
+    `standard` (`config.SafetyCheckConfig`: tolerance, risk_bound, confidence) for a building of lateral
+    `system`; with mass devices their figures over the suite; for ground motions measured at the building's
+    `periods` (s), the suite's spread of spectral shapes there (quantiles of every row's `sa_over_pga`)."""
     tolerance = standard.tolerance
-    significant = {name: row for name, row in rows.items() if "ratio" in row}
-    quiet = {name: row for name, row in rows.items() if "ratio" not in row}
-    above = [name for name, row in significant.items() if row["ratio"] > 1.0 + tolerance]
-    strict = sum(row["ratio"] > 1.0 + ROUNDING for row in significant.values())
+    significant = {name: row for name, row in rows.items() if row.significant}
+    quiet = {name: row for name, row in rows.items() if not row.significant}
+    above = [name for name, row in significant.items() if row.ratio > 1.0 + tolerance]
+    strict = sum(row.ratio > 1.0 + ROUNDING for row in significant.values())
     levels = {name: motion_levels(row, system, tolerance) for name, row in significant.items()}
-    higher = {name: list(pair) for name, pair in levels.items() if LEVELS.index(pair[0]) > LEVELS.index(pair[1])}
-    loud = [name for name, row in quiet.items() if row["over_bound"] >= 1.0]
+    higher = {
+        name: list(pair) for name, pair in levels.items() if LEVELS.index(pair[0]) > LEVELS.index(pair[1])
+    }
+    loud = [name for name, row in quiet.items() if row.over_bound >= 1.0]
     n, k = len(significant), len(above)
     bound = risk_upper_bound(k, n, standard.confidence)
     risk_ok = k == 0 if standard.risk_bound == 0.0 else bound <= standard.risk_bound
-    j1 = float(np.mean([row["J1"] for row in significant.values()])) if n else float("nan")
-    j2 = float(np.mean([row["J2"] for row in significant.values()])) if n else float("nan")
+    j1 = float(np.mean([row.J1 for row in significant.values()])) if n else float("nan")
+    j2 = float(np.mean([row.J2 for row in significant.values()])) if n else float("nan")
     means_ok = not n or (j1 <= 1.0 + ROUNDING and j2 <= 1.0 + ROUNDING)
-    passed = bool(n and risk_ok and means_ok and not higher and not loud)  # a suite that judged nothing passes not
-    worst = max(significant, key=lambda name: significant[name]["ratio"], default=None)
-    worst_j2 = max(significant, key=lambda name: significant[name]["J2"], default=None)
-    figures = {
-        "passed": passed,
-        "dominates": passed and k == 0,
-        "reference": words,
-        "system": system,
-        "motions": len(rows),
-        "insignificant_motions": len(quiet),
-        "significant_motions": n,
-        "failure_count": k,  # significant motions above the reference beyond the tolerance
-        "failures": above,
-        "failure_probability_bound": round(bound, 4),
-        "strict_failure_count": strict,  # significant motions above the reference by more than rounding
-        "higher_level": higher,  # motion: [its level, the reference's]
-        "insignificant_above_bound": loud,
-        "mean_J1": round(j1, 4),
-        "mean_J2": round(j2, 4),
-        "worst_significant": worst,
-        "worst_J2": worst_j2,
-    }
-    if devices is not None:
-        figures |= {key: devices[key] for key in DEVICE_FIGURES if key in devices}
+    passed = bool(n and risk_ok and means_ok and not higher and not loud)  # one that judged nothing fails
+    shape = None
     if periods is not None:
-        shapes = np.array([row["sa_over_pga"] for row in rows.values()], dtype=float).reshape(len(rows), len(periods))
-        spread = {
-            key: [round(float(v), 3) for v in np.percentile(shapes, q, axis=0)] for key, q in SHAPE_QUANTILES.items()
+        shapes = np.array([row.sa_over_pga for row in rows.values()], dtype=float).reshape(len(rows), -1)
+        shape = {
+            key: [round(float(v), 3) for v in np.percentile(shapes, q, axis=0)]
+            for key, q in SHAPE_QUANTILES.items()
         }
-        figures |= {"spectral_periods_s": periods, "spectral_shape": spread}
-    return {"summary": suite_summary(figures, rows, standard)} | figures
+    figures = SuiteFigures(
+        summary="",
+        passed=passed,
+        dominates=passed and k == 0,
+        reference=words,
+        system=system,
+        motions=len(rows),
+        insignificant_motions=len(quiet),
+        significant_motions=n,
+        failure_count=k,
+        failures=above,
+        failure_probability_bound=round(bound, 4),
+        strict_failure_count=strict,
+        higher_level=higher,
+        insignificant_above_bound=loud,
+        mean_J1=round(j1, 4),
+        mean_J2=round(j2, 4),
+        worst_significant=max(significant, key=lambda name: significant[name].ratio, default=None),
+        worst_J2=max(significant, key=lambda name: significant[name].J2, default=None),
+        devices=devices,
+        spectral_periods_s=periods,
+        spectral_shape=shape,
+        per_motion=rows,
+    )
+    return replace(figures, summary=suite_summary(figures, standard))
 
 
-def suite_summary(figures: dict, rows: dict[str, dict], standard) -> str:
+def suite_summary(figures: SuiteFigures, standard) -> str:
     """One line: the outcome's figures, as `rlc check` prints them."""
-    n, k = figures["significant_motions"], figures["failure_count"]
+    n, k, rows = figures.significant_motions, figures.failure_count, figures.per_motion
+    risk = f"{k} of {n} significant worse than {figures.reference} beyond {standard.tolerance:.0%}"
     if standard.risk_bound == 0.0:
-        risk = f"{k} of {n} significant worse than {figures['reference']} beyond {standard.tolerance:.0%} (none may be)"
+        risk += " (none may be)"
     else:
-        risk = (
-            f"{k} of {n} significant worse than {figures['reference']} beyond {standard.tolerance:.0%}, "
-            f"failure probability <= {figures['failure_probability_bound']:.2%} at {standard.confidence:.0%} "
+        risk += (
+            f", failure probability <= {figures.failure_probability_bound:.2%} at {standard.confidence:.0%} "
             f"(at most {standard.risk_bound:.0%})"
         )
     text = (
-        f"{risk}{'; dominates' if figures['dominates'] else ''}; {figures['strict_failure_count']} worse at all; "
-        f"{len(figures['higher_level'])} at a higher performance level ({SYSTEM_WORDS[figures['system']]}, "
-        f"FEMA 356); {figures['insignificant_motions']} insignificant, "
-        f"{len(figures['insignificant_above_bound'])} of them above the bound; "
-        f"mean J1 {figures['mean_J1']:.3f}, mean J2 {figures['mean_J2']:.3f}"
+        f"{risk}{'; dominates' if figures.dominates else ''}; {figures.strict_failure_count} worse at "
+        f"all; {len(figures.higher_level)} at a higher performance level "
+        f"({SYSTEM_WORDS[figures.system]}, FEMA 356); {figures.insignificant_motions} insignificant, "
+        f"{len(figures.insignificant_above_bound)} of them above the bound; mean J1 "
+        f"{figures.mean_J1:.3f}, mean J2 {figures.mean_J2:.3f}"
     )
-    if (worst := figures["worst_significant"]) is not None:
-        text += f"; worst {rows[worst]['ratio']:.3f} ({worst}, {strength_text(rows[worst])})"
-    if (worst := figures["worst_J2"]) is not None:
-        text += f"; worst J2 {rows[worst]['J2']:.3f} ({worst})"
-    if "peak_stroke_m" in figures:
-        metres = {key: ", ".join(f"{value:.2f}" for value in figures.get(key, ())) for key in DEVICE_FIGURES[:2]}
-        text += f"; peak stroke {metres['peak_stroke_m']} m"
-        if "reference_peak_stroke_m" in figures:  # a passive verdict's reference, the bare building, has no mass
-            text += f" ({metres['reference_peak_stroke_m']} m for the reference)"
-    if "stroke_limit_m" in figures:
-        limits = ", ".join(f"{value:g}" for value in figures["stroke_limit_m"])
-        text += f" on end-stops at {limits} m: {sum(figures['contacts']):g} contacts, up to "
-        text += f"{max(figures['peak_contact_force_N']) / 1e3:.0f} kN"
-        if "reference_contacts" in figures:  # a passive verdict's reference, the bare building, has no stops
-            reference = (sum(figures["reference_contacts"]), max(figures["reference_peak_contact_force_N"]) / 1e3)
-            text += f" ({reference[0]:g}, {reference[1]:.0f} kN for the reference)"
-    if "spectral_shape" in figures:
-        shape, periods = figures["spectral_shape"], figures["spectral_periods_s"]
+    if (worst := figures.worst_significant) is not None:
+        text += f"; worst {rows[worst].ratio:.3f} ({worst}, {rows[worst].strength()})"
+    if (worst := figures.worst_J2) is not None:
+        text += f"; worst J2 {rows[worst].J2:.3f} ({worst})"
+    if figures.devices is not None:
+        text += figures.devices.summary()
+    if figures.spectral_shape is not None:
+        shape, periods = figures.spectral_shape, figures.spectral_periods_s
         at = ", ".join(
             f"{median:.2f} ({low:.2f}-{high:.2f}) at {period:.3g} s"
-            for period, low, median, high in zip(periods, shape["p16"], shape["median"], shape["p84"], strict=True)
+            for period, low, median, high in zip(
+                periods, shape["p16"], shape["median"], shape["p84"], strict=True
+            )
         )
         text += f"; the suite's Sa/PGA ({SHAPE_DAMPING:.0%} damped, median (16-84 %)) {at}"
     return text
 
 
-def strength_text(row: dict) -> str:
-    return f"PGA {row['pga_g']:g} g" if "pga_g" in row else row.get("load", "")
+def rest_figures(peak_over_bound: float, standard) -> RestFigures:
+    """The at-rest criterion from its peak drift over the insignificance bound (the worst noise
+    realisation)."""
+    runs = f"{standard.rest_runs} noise realisations of {standard.rest_duration:g} s"
+    summary = f"peak drift {peak_over_bound:.3f} of the bound over {runs}"
+    return RestFigures(passed=peak_over_bound < 1.0, summary=summary, peak_drift_over_bound=peak_over_bound)
 
 
-def rest_figures(peak_over_bound: float, standard) -> dict:
-    """The at-rest criterion from its peak drift over the insignificance bound (the worst noise realisation)."""
-    return {
-        "passed": peak_over_bound < 1.0,
-        "summary": f"peak drift {peak_over_bound:.3f} of the bound over {standard.rest_runs} noise realisations of "
-        f"{standard.rest_duration:g} s",
-        "peak_drift_over_bound": peak_over_bound,
-    }
-
-
-MARGINAL = 1e-6  # a closed loop within this of the building failed safe's own marginal modes is as stable as it
+# a closed loop within this of the building failed safe's own marginal modes is as stable as it
+MARGINAL = 1e-6
 
 
 def stability_figures(
@@ -242,7 +204,7 @@ def stability_figures(
     failed_safe: float,
     *,
     stable_on: list[str] | tuple[str, ...] = (),
-) -> dict:
+) -> StabilityFigures:
     """The closed-loop stability criterion from the spectral radius on the design model and on each standard
     scenario's plant (a string where it was not checked): below 1, or where the building failed safe is itself
     marginal (a radius of 1 to rounding: an MR damper's hysteretic memory, which no command removes), no more
@@ -256,21 +218,24 @@ def stability_figures(
     judged = [name for name in stable_on if name in numbers]
     unstable = [name for name, radius in numbers.items() if radius >= bound]
     failing = [name for name in judged if numbers[name] >= bound]
-    where = f"; unstable on {', '.join(unstable)}" if unstable else "; stable on every linear standard scenario"
+    where = "; stable on every linear standard scenario"
+    if unstable:
+        where = f"; unstable on {', '.join(unstable)}"
     if judged:
-        where += f"; judged on {', '.join(judged)}: {'unstable on ' + ', '.join(failing) if failing else 'stable'}"
+        outcome = f"unstable on {', '.join(failing)}" if failing else "stable"
+        where += f"; judged on {', '.join(judged)}: {outcome}"
     unjudged = [name for name in stable_on if name not in numbers]
     if unjudged:
         where += f"; {', '.join(unjudged)}: not among this experiment's linear scenarios, not judged"
     unsupervised = ", without the supervisor" if supervised else ""
     marginal = f" (the building failed safe: {failed_safe:.8f}, marginal)" if bound > 1.0 else ""
-    return {
-        "passed": design < bound and not failing,
-        "summary": f"spectral radius {design:.8f} on the design model (linearised at rest{unsupervised}){marginal}"
-        f"{where}",
-        "judged_scenarios": judged,
-        "spectral_radius_design_model": design,
-        "spectral_radius_failed_safe": failed_safe,
-        "spectral_radius_scenarios": per_scenario,
-        "supervisor_left_out": supervised,
-    }
+    return StabilityFigures(
+        passed=design < bound and not failing,
+        summary=f"spectral radius {design:.8f} on the design model (linearised at rest{unsupervised})"
+        f"{marginal}{where}",
+        judged_scenarios=judged,
+        spectral_radius_design_model=design,
+        spectral_radius_failed_safe=failed_safe,
+        spectral_radius_scenarios=per_scenario,
+        supervisor_left_out=supervised,
+    )

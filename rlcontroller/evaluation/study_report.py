@@ -14,7 +14,9 @@ from rlcontroller.evaluation.tables import METRIC_NAMES, markdown_table
 from rlcontroller.files import atomic_savefig, atomic_write
 
 
-def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tuple[float, float]]) -> list[Path]:
+def write_sweep(
+    sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tuple[float, float]]
+) -> list[Path]:
     """LQG's J1-J3 trade-off (one row per force-weight multiplier) with other controllers marked."""
     plt = pyplot()
     out.mkdir(parents=True, exist_ok=True)
@@ -30,7 +32,8 @@ def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tu
         lqg_j1 = lqg_j1_at(sweep, j3)
         verdict = "below" if j1 < lqg_j1 else "above"
         lines.append(
-            f"- {name}: J3 = {j3:.4f}, J1 = {j1:.3f}; LQG at the same J3: J1 = {lqg_j1:.3f} ({verdict} the curve)"
+            f"- {name}: J3 = {j3:.4f}, J1 = {j1:.3f}; LQG at the same J3: J1 = {lqg_j1:.3f} ({verdict} the "
+            "curve)"
         )
     atomic_write(out / "lqg_sweep.md", "\n".join(lines) + "\n")
     figure, axis = plt.subplots(figsize=(7, 5))
@@ -46,9 +49,16 @@ def write_sweep(sweep: pd.DataFrame, out: Path, label: str, points: dict[str, tu
     for name, (j3, j1) in points.items():
         marker = "*" if name == "RL" else "D"
         axis.plot(
-            [j3], [j1], marker, markersize=13 if marker == "*" else 8, color=COLOURS.get(name, "tab:green"), label=name
+            [j3],
+            [j1],
+            marker,
+            markersize=13 if marker == "*" else 8,
+            color=COLOURS.get(name, "tab:green"),
+            label=name,
         )
-    axis.set(xscale="log", xlabel="J3 = E_u / E_Vb,UC (mean over actuators)", ylabel="J1 = peak drift ratio (mean)")
+    axis.set(
+        xscale="log", xlabel="J3 = E_u / E_Vb,UC (mean over actuators)", ylabel="J1 = peak drift ratio (mean)"
+    )
     axis.set_title(f"LQG trade-off — {label}", fontsize=9)
     axis.grid(alpha=0.3, which="both")
     axis.legend(fontsize=8)
@@ -77,7 +87,8 @@ def write_damper_sweep(
         "",
         markdown_table(sweep.set_index("family")),
         "",
-        f"- lowest J1 of the classical points: {best['family']} at {best['parameter']:g}, J1 = {best['J1']:.3f}, "
+        f"- lowest J1 of the classical points: {best['family']} at {best['parameter']:g}, J1 = "
+        f"{best['J1']:.3f}, "
         f"J2 = {best['J2']:.3f}",
     ]
     for name, (j1, j2, j3) in points.items():
@@ -91,8 +102,12 @@ def write_damper_sweep(
     for number, (name, (j1, j2, j3)) in enumerate(points.items()):  # each its own marker and colour
         marker, size = ("*", 13) if name == "RL" else ("Dv^PX"[number % 5], 8)
         for axis, x in zip(axes, (j3, j2), strict=True):
-            axis.plot([x], [j1], marker, markersize=size, color=COLOURS.get(name, f"C{number + 2}"), label=name)
-    axes[0].set(xlabel="J3 (damper force energy / uncontrolled base shear energy)", ylabel="J1 (peak drift ratio)")
+            axis.plot(
+                [x], [j1], marker, markersize=size, color=COLOURS.get(name, f"C{number + 2}"), label=name
+            )
+    axes[0].set(
+        xlabel="J3 (damper force energy / uncontrolled base shear energy)", ylabel="J1 (peak drift ratio)"
+    )
     axes[1].set(xlabel="J2 (peak acceleration ratio)", ylabel="J1 (peak drift ratio)")
     for axis in axes:
         axis.grid(alpha=0.3)
@@ -129,7 +144,8 @@ def write_preview(
         f"# What knowing the coming ground motion is worth: {label}",
         "",
         "Full-state LQR (same cost) plus the optimal feed-forward on the next `preview_s` seconds of",
-        "ground motion; inf = the whole record (the clairvoyant optimum). A causal controller has no preview.",
+        "ground motion; inf = the whole record (the clairvoyant optimum). A causal controller has no "
+        "preview.",
         "",
         markdown_table(preview.set_index("preview_s")),
         "",
@@ -143,12 +159,17 @@ def write_preview(
     clairvoyant = preview[~np.isfinite(preview["preview_s"])]
     figure, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     for axis, metric in zip(axes, ("J1", "J2"), strict=True):
-        axis.plot(finite["preview_s"], finite[metric], "o-", color="black", label="full-state LQR with preview")
+        axis.plot(
+            finite["preview_s"], finite[metric], "o-", color="black", label="full-state LQR with preview"
+        )
         for _, row in clairvoyant.iterrows():
             axis.axhline(row[metric], color="black", linestyle=":", label="whole record known (clairvoyant)")
         for index, (name, values) in enumerate(references.items()):
             axis.axhline(
-                values[0 if metric == "J1" else 1], color=COLOURS.get(name, f"C{index}"), linestyle="--", label=name
+                values[0 if metric == "J1" else 1],
+                color=COLOURS.get(name, f"C{index}"),
+                linestyle="--",
+                label=name,
             )
         axis.set(xlabel="ground motion known ahead (s)", ylabel=METRIC_NAMES[metric] + " (mean)")
         axis.grid(alpha=0.3)
@@ -160,12 +181,19 @@ def write_preview(
     return written
 
 
-def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str, *, seconds: float) -> list[Path]:
+def write_robustness(
+    table: pd.DataFrame, scenarios: list, out: Path, label: str, *, seconds: float
+) -> list[Path]:
     """robustness.csv (long form), robustness.md (scenario x controller means, the worst record's
     J1, the mean over scenarios) and robustness.png (J1 against the stiffness factor; J1 and J2 per
     scenario)."""
     plt = pyplot()
-    from rlcontroller.evaluation.robustness import mean_over_scenarios, stiffness_curve, summary, worst_record_j1
+    from rlcontroller.evaluation.robustness import (
+        mean_over_scenarios,
+        stiffness_curve,
+        summary,
+        worst_record_j1,
+    )
 
     out.mkdir(parents=True, exist_ok=True)
     means = summary(table)
@@ -178,7 +206,8 @@ def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str
         "",
         "Every controller is designed on the design model (the experiment's building, actuators and sensors)",
         "and run on each scenario's plant; J against the uncontrolled plant, mean over records and stories.",
-        "LQG (re-designed on the plant) is the oracle: LQG designed on the true plant, actuator lag and delay",
+        "LQG (re-designed on the plant) is the oracle: LQG designed on the true plant, actuator lag and "
+        "delay",
         "included (from the floor accelerometers; LQG + ground model also reads the ground accelerometer).",
         "Worst record: the largest per-record mean J1 (above 1: worse than no control).",
         "",
@@ -204,12 +233,16 @@ def write_robustness(table: pd.DataFrame, scenarios: list, out: Path, label: str
     ]
     atomic_write(out / "robustness.md", "\n".join(lines))
     curve = stiffness_curve(means, scenarios)
-    figure, (curve_axis, bar_axis) = plt.subplots(1, 2, figsize=(14, 5.5), gridspec_kw={"width_ratios": [1, 2]})
+    figure, (curve_axis, bar_axis) = plt.subplots(
+        1, 2, figsize=(14, 5.5), gridspec_kw={"width_ratios": [1, 2]}
+    )
     for name in controllers if not curve.empty else []:
         colour = COLOURS.get("RL") if name == "RL" else None
         curve_axis.plot(curve.index, curve[name], "o-", label=name, color=colour)
     curve_axis.axhline(1.0, color="0.5", linestyle=":", linewidth=0.8)
-    curve_axis.set(xlabel="stiffness factor (plant / design)", ylabel="J1 (mean)", title="J1 against stiffness")
+    curve_axis.set(
+        xlabel="stiffness factor (plant / design)", ylabel="J1 (mean)", title="J1 against stiffness"
+    )
     curve_axis.grid(alpha=0.3)
     curve_axis.legend(fontsize=8)
     positions = np.arange(len(wide))

@@ -72,7 +72,14 @@ def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataF
     return pd.DataFrame.from_dict(rows, orient="index").rename_axis("comparison")
 
 
-PGA_BANDS_G = (0.0, 0.02, 0.1, 0.3, np.inf)  # weak motions, where sensor noise is as large as the signal, first
+# weak motions, where sensor noise is as large as the signal, first
+PGA_BANDS_G = (
+    0.0,
+    0.02,
+    0.1,
+    0.3,
+    np.inf,
+)
 
 
 def by_pga(evaluation: Evaluation, metric: str = "J1") -> pd.DataFrame:

@@ -19,18 +19,27 @@ from pathlib import Path
 
 import yaml
 
-from rlcontroller.evaluation.standard import DEVICE_FIGURES, rest_figures, stability_figures, suite_figures
+from rlcontroller.evaluation.figures import (
+    Criterion,
+    DeviceFigures,
+    MotionFigures,
+    RestFigures,
+    StabilityFigures,
+    SuiteFigures,
+)
+from rlcontroller.evaluation.standard import rest_figures, stability_figures, suite_figures
 from rlcontroller.files import atomic_write
 
 SUITES = {"check suite": "standard", "wind suite": "also", "ground-motion suite": "also"}
-# --verify: figures agree within the noise another CPU's kernel brings plus the verdict's rounding (4 decimals):
-# under OPENBLAS_CORETYPE=Prescott the 76-story driver's per-motion J1 moved by up to 0.7 % (its trigger switches
-# on a threshold), every other shipped verdict's by under 0.1 %: the standard's own tolerance, 1 %
-# (docs/safety_check.md)
+# --verify: figures agree within the noise another CPU's kernel brings plus the verdict's rounding (4
+# decimals): under OPENBLAS_CORETYPE=Prescott the 76-story driver's per-motion J1 moved by up to 0.7 % (its
+# trigger switches on a threshold), every other shipped verdict's by under 0.1 %: the standard's own
+# tolerance, 1 % (docs/safety_check.md)
 VERIFY_RELATIVE, VERIFY_ABSOLUTE = 1e-2, 1.5e-4
-# the scenarios' spectral radii (judged on `stable_on`'s, reported on the rest): a delay makes the linearised loop's
-# eigenvalues defective, and another kernel moves them by up to 1 % (the default's under OPENBLAS_CORETYPE=Prescott:
-# 0.4 % and 0.8 %); whether a judged one is below 1 is compared exactly, as every pass is
+# the scenarios' spectral radii (judged on `stable_on`'s, reported on the rest): a delay makes the linearised
+# loop's eigenvalues defective, and another kernel moves them by up to 1 % (the default's under
+# OPENBLAS_CORETYPE=Prescott: 0.4 % and 0.8 %); whether a judged one is below 1 is compared exactly, as every
+# pass is
 VERIFY_REPORTED = 0.02
 
 
@@ -40,31 +49,48 @@ class Verdict:
 
     controller: str
     passed: bool
-    criteria: dict[str, dict] = field(default_factory=dict)
+    criteria: dict[str, Criterion] = field(default_factory=dict)
     judged: dict[str, str] = field(default_factory=dict)  # sha256 of what it judged (`judged_digests`)
 
     @classmethod
     def read(cls, fields: dict) -> Verdict:
         """A verdict from its file's fields (`dominates` there is derived, not read)."""
-        return cls(fields["controller"], fields["passed"], fields.get("criteria", {}), fields.get("judged", {}))
+        criteria = {name: read_criterion(name, item) for name, item in fields.get("criteria", {}).items()}
+        return cls(fields["controller"], fields["passed"], criteria, fields.get("judged", {}))
 
     @property
     def dominates(self) -> bool:
         """Passed, with no significant motion of any suite worse than the reference beyond the tolerance."""
-        suites = [item for name, item in self.criteria.items() if name in SUITES]
-        return self.passed and bool(suites) and all(item.get("dominates") for item in suites)
+        return dominating(self.passed, {name: item.dominates for name, item in self.suites().items()})
+
+    def suites(self) -> dict[str, SuiteFigures]:
+        return {name: item for name, item in self.criteria.items() if isinstance(item, SuiteFigures)}
 
     def to_yaml(self) -> str:
+        """The verdict file: a motion's figures on one line."""
         fields = {"controller": self.controller, "passed": self.passed, "dominates": self.dominates}
-        fields |= {"criteria": self.criteria} | ({"judged": self.judged} if self.judged else {})
-        return yaml.safe_dump(fields, sort_keys=False, default_flow_style=None)  # a motion's figures on one line
+        criteria = {name: item.fields() for name, item in self.criteria.items()}
+        fields |= {"criteria": criteria} | ({"judged": self.judged} if self.judged else {})
+        return yaml.safe_dump(fields, sort_keys=False, default_flow_style=None)
 
     def lines(self) -> list[str]:
         outcome = ("PASSED, dominates" if self.dominates else "PASSED") if self.passed else "FAILED"
         return [f"safety check of {self.controller}: {outcome}"] + [
-            f"  {name}: {'pass' if item['passed'] else 'FAIL'} - {item['summary']}"
+            f"  {name}: {'pass' if item.passed else 'FAIL'} - {item.summary}"
             for name, item in self.criteria.items()
         ]
+
+
+def read_criterion(name: str, item: dict) -> Criterion:
+    """A criterion of a verdict file by its name: a suite's, the at-rest one or closed-loop stability."""
+    if name in SUITES:
+        return SuiteFigures.read(item)
+    return {"at rest": RestFigures, "closed-loop stability": StabilityFigures}[name].read(item)
+
+
+def dominating(passed: bool, suites: dict[str, bool | None]) -> bool:
+    """A verdict dominates when it passed and every suite it judged dominates."""
+    return passed and bool(suites) and all(suites.values())
 
 
 def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
@@ -74,7 +100,8 @@ def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
 
 def judged_digests(folder: Path, model: str, standard) -> dict[str, str]:
     """sha256 of what a verdict judges: the policy's files, the experiment it runs in (the run's
-    config.yaml) and the standard (its resolved settings, so a comment does not count; `also` when it has one)."""
+    config.yaml) and the standard (its resolved settings, so a comment does not count; `also` when it has
+    one)."""
     names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
     digests = {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
     settings = standard.model_dump(mode="json", exclude={"also"} if standard.also is None else None)
@@ -98,16 +125,21 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
     if not isinstance(criteria, dict):
         return ["it has no criteria"]
     standards = {"standard": standard, "also": standard.also}
-    needed = ["check suite", "at rest"] + ([also_criterion(standard.also)] if standard.also is not None else [])
+    needed = ["check suite", "at rest"] + (
+        [also_criterion(standard.also)] if standard.also is not None else []
+    )
     found = [f"it has no {name!r} criterion" for name in needed if name not in criteria]
     for name, item in criteria.items():
         try:
             if name in SUITES:
-                devices = {key: item[key] for key in DEVICE_FIGURES if key in item} or None
-                standard_of = standards[SUITES[name]]
-                periods = item.get("spectral_periods_s")
+                rows = {motion: MotionFigures.read(motion, row) for motion, row in item["per_motion"].items()}
                 derived = suite_figures(
-                    item["per_motion"], item["reference"], system, standard_of, devices=devices, periods=periods
+                    rows,
+                    item["reference"],
+                    system,
+                    standards[SUITES[name]],
+                    devices=DeviceFigures.read(item),
+                    periods=item.get("spectral_periods_s"),
                 )
             elif name == "at rest":
                 derived = rest_figures(item["peak_drift_over_bound"], standard)
@@ -130,13 +162,18 @@ def contradictions(fields: dict, standard, system: str) -> list[str]:
             continue
         found += [
             f"{name}.{key} {item.get(key)!r}, its figures give {value!r}"
-            for key, value in derived.items()
-            if not same(item.get(key), value)
+            for key, value in derived.fields().items()
+            if key != "per_motion" and not same(item.get(key), value)
         ]
     passed = all(isinstance(item, dict) and item.get("passed") is True for item in criteria.values())
     if fields.get("passed") is not passed:
         found.append(f"passed {fields.get('passed')!r}, its criteria give {passed!r}")
-    dominates = Verdict("", passed, criteria).dominates
+    suites = {
+        name: isinstance(item, dict) and item.get("dominates")
+        for name, item in criteria.items()
+        if name in SUITES
+    }
+    dominates = dominating(passed, suites)
     if fields.get("dominates") is not dominates:
         found.append(f"dominates {fields.get('dominates')!r}, its criteria give {dominates!r}")
     return found
@@ -204,19 +241,25 @@ def differences(recorded: dict, rerun: dict, path: str = "") -> list[str]:
         if key == "summary" or (key == "controller" and not path):
             continue
         if key not in rerun or key not in recorded:
-            found.append(f"{where}: {'only in the recorded verdict' if key in recorded else 'missing from it'}")
+            found.append(
+                f"{where}: {'only in the recorded verdict' if key in recorded else 'missing from it'}"
+            )
             continue
         mine, theirs = recorded[key], rerun[key]
         if isinstance(mine, dict) and isinstance(theirs, dict):
             found += differences(mine, theirs, where)
-        elif not agree(mine, theirs, VERIFY_REPORTED if "spectral_radius_scenarios" in where else VERIFY_RELATIVE):
+        elif not agree(
+            mine, theirs, VERIFY_REPORTED if "spectral_radius_scenarios" in where else VERIFY_RELATIVE
+        ):
             found.append(f"{where}: recorded {mine!r}, re-run {theirs!r}")
     return found
 
 
 def agree(recorded, rerun, relative: float = VERIFY_RELATIVE) -> bool:
     if isinstance(recorded, list) and isinstance(rerun, list):
-        return len(recorded) == len(rerun) and all(agree(a, b, relative) for a, b in zip(recorded, rerun, strict=True))
+        return len(recorded) == len(rerun) and all(
+            agree(a, b, relative) for a, b in zip(recorded, rerun, strict=True)
+        )
     numbers = (int, float)
     if isinstance(recorded, bool) or isinstance(rerun, bool) or not isinstance(recorded, numbers):
         return recorded == rerun

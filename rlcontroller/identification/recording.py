@@ -32,8 +32,8 @@ FORCE = "force_"
 
 @dataclass(frozen=True)
 class Recording:
-    """One test (`name`: its file): samples every `dt` s of the ground (m/s^2), the actuators' forces (N, one column per
-    `actuators` label) and the floors' absolute accelerations (m/s^2, one column per `floors`)."""
+    """One test (`name`: its file): samples every `dt` s of the ground (m/s^2), the actuators' forces (N, one
+    column per `actuators` label) and the floors' absolute accelerations (m/s^2, one column per `floors`)."""
 
     name: str
     dt: float
@@ -48,7 +48,12 @@ class Recording:
         return self.dt * (self.ground.size - 1)
 
     def to_csv(self, comment: str = "") -> str:
-        header = ["time", "ground", *(FORCE + a for a in self.actuators), *(f"{ACCELERATION}{f}" for f in self.floors)]
+        header = [
+            "time",
+            "ground",
+            *(FORCE + a for a in self.actuators),
+            *(f"{ACCELERATION}{f}" for f in self.floors),
+        ]
         time = np.arange(self.ground.size) * self.dt
         table = np.column_stack([time, self.ground, self.forces, self.accelerations])
         text = io.StringIO()
@@ -67,14 +72,21 @@ def read_recording(path: Path) -> Recording:
         raise RecordingError(f"{path}: cannot read the file ({error.strerror})") from None
     except UnicodeDecodeError:
         raise RecordingError(f"{path}: not a text (UTF-8) file") from None
-    numbered = [(number, line) for number, line in enumerate(lines, 1) if line.strip() and not line.startswith("#")]
+    numbered = [
+        (number, line) for number, line in enumerate(lines, 1) if line.strip() and not line.startswith("#")
+    ]
     if len(numbered) < 3:
         raise RecordingError(f"{path}: expected a header row and samples")
     header_line, header = numbered[0][0], [cell.strip() for cell in next(csv.reader([numbered[0][1]]))]
     floors = [column for column in header if column.startswith(ACCELERATION)]
     actuators = [column for column in header if column.startswith(FORCE)]
     known = {"time", "ground", *floors, *actuators}
-    if header[:2] != ["time", "ground"] or len(set(header)) != len(header) or set(header) != known or not floors:
+    if (
+        header[:2] != ["time", "ground"]
+        or len(set(header)) != len(header)
+        or set(header) != known
+        or not floors
+    ):
         raise RecordingError(
             f"{path}:{header_line}: expected the columns time, ground, force_<story>..., "
             f"{ACCELERATION}<floor>... (each once), got {','.join(header)}"
@@ -82,26 +94,32 @@ def read_recording(path: Path) -> Recording:
     try:
         floor_numbers = tuple(int(column.removeprefix(ACCELERATION)) for column in floors)
     except ValueError:
-        raise RecordingError(f"{path}:{header_line}: a floor is named by its number, e.g. {ACCELERATION}3") from None
+        raise RecordingError(
+            f"{path}:{header_line}: a floor is named by its number, e.g. {ACCELERATION}3"
+        ) from None
     for column in actuators:
         story = column.removeprefix(FORCE)
         if not story.isdigit() or not 1 <= int(story) <= max(floor_numbers):
             raise RecordingError(
-                f"{path}:{header_line}: {column}: expected the number of a story the accelerations cover, 1 to "
-                f"{max(floor_numbers)} (the top floor recorded is {ACCELERATION}{max(floor_numbers)})"
+                f"{path}:{header_line}: {column}: expected the number of a story the accelerations cover, 1 "
+                f"to {max(floor_numbers)} (the top floor recorded is {ACCELERATION}{max(floor_numbers)})"
             )
     rows = []
     for number, line in numbered[1:]:
         cells = line.split(",")
         if len(cells) != len(header):
-            raise RecordingError(f"{path}:{number}: {len(cells)} values, expected {len(header)} like the header")
+            raise RecordingError(
+                f"{path}:{number}: {len(cells)} values, expected {len(header)} like the header"
+            )
         try:
             values = [float(cell) for cell in cells]
         except ValueError:
             raise RecordingError(f"{path}:{number}: expected numbers, got {line.strip()[:60]!r}") from None
         if not all(np.isfinite(values)):
             column = header[int(np.argmin(np.isfinite(values)))]
-            raise RecordingError(f"{path}:{number}: {column} is not a finite number (a gap in the recording?)")
+            raise RecordingError(
+                f"{path}:{number}: {column} is not a finite number (a gap in the recording?)"
+            )
         rows.append(values)
     table = np.array(rows)
     steps = np.diff(table[:, 0])
@@ -109,7 +127,9 @@ def read_recording(path: Path) -> Recording:
     uneven = np.abs(steps - dt) > 1e-6 * dt
     if dt <= 0.0 or np.any(uneven):
         line = numbered[2 + int(np.argmax(uneven))][0] if np.any(uneven) else numbered[1][0]
-        raise RecordingError(f"{path}:{line}: time must advance by the same step ({dt:g} s): a gap or a repeat")
+        raise RecordingError(
+            f"{path}:{line}: time must advance by the same step ({dt:g} s): a gap or a repeat"
+        )
     first = 2 + len(actuators)
     return Recording(
         name=str(path),

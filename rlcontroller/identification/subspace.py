@@ -80,24 +80,29 @@ class Identified:
     decimation: int  # samples of the recording per sample identified on
 
 
-def identify(recordings: list[Recording], modes: int, band: float, masses: np.ndarray | None = None) -> Identified:
-    """The model of `modes` modes below `band` Hz from one or more recordings of the same sensors (concatenated
-    after decimation), with story shear rows where the floor `masses` (kg) are given; a `RecordingError` says
-    what is missing where it cannot be identified."""
+def identify(
+    recordings: list[Recording], modes: int, band: float, masses: np.ndarray | None = None
+) -> Identified:
+    """The model of `modes` modes below `band` Hz from one or more recordings of the same sensors
+    (concatenated after decimation), with story shear rows where the floor `masses` (kg) are given; a
+    `RecordingError` says what is missing where it cannot be identified."""
     first = recordings[0]
     for recording in recordings[1:]:
         if (recording.floors, recording.actuators, recording.dt) != (first.floors, first.actuators, first.dt):
             raise RecordingError(
-                f"{recording.name}: channels or sampling differ from {first.name}'s; identify one set of sensors"
+                f"{recording.name}: channels or sampling differ from {first.name}'s; identify one set of "
+                "sensors"
             )
     floors = len(first.floors)
     if sorted(first.floors) != list(range(1, floors + 1)):
-        raise RecordingError(f"{first.name}: needs an acceleration on every floor 1..{max(first.floors)} (drifts)")
+        raise RecordingError(
+            f"{first.name}: needs an acceleration on every floor 1..{max(first.floors)} (drifts)"
+        )
     nyquist = 0.5 / first.dt
     if band > nyquist:
         raise RecordingError(
-            f"{first.name}: sampled every {first.dt:g} s (Nyquist {nyquist:g} Hz), too coarse for modes up to "
-            f"{band:g} Hz; sample at least every {0.5 / band:.3g} s or lower --band"
+            f"{first.name}: sampled every {first.dt:g} s (Nyquist {nyquist:g} Hz), too coarse for modes up "
+            f"to {band:g} Hz; sample at least every {0.5 / band:.3g} s or lower --band"
         )
     if np.std(first.ground) == 0.0:
         raise RecordingError(f"{first.name}: the ground channel is constant: nothing excites the building")
@@ -108,7 +113,8 @@ def identify(recordings: list[Recording], modes: int, band: float, masses: np.nd
     block_rows = max(math.ceil(BLOCK_PERIODS / (band * dt)), math.ceil(2 * modes / floors) + 1)
     if inputs.shape[0] < 10 * block_rows * (inputs.shape[1] + floors):
         raise RecordingError(
-            f"{first.name}: {inputs.shape[0] * dt:.0f} s is too short to identify {modes} modes up to {band:g} Hz"
+            f"{first.name}: {inputs.shape[0] * dt:.0f} s is too short to identify {modes} modes up to "
+            f"{band:g} Hz"
         )
     model, poles = _n4sid(inputs, outputs, 2 * modes, block_rows, dt, band)
     explained = _check_explained(model, inputs, outputs, first)
@@ -152,7 +158,9 @@ class ThinN4SID(NFourSID):
     factors it keeps are the same."""
 
     def _get_observability_matrix_decomposition(self) -> Decomposition:
-        hankels = [Utils.block_hankel_matrix(data, self.num_block_rows) for data in (self.u_array, self.y_array)]
+        hankels = [
+            Utils.block_hankel_matrix(data, self.num_block_rows) for data in (self.u_array, self.y_array)
+        ]
         observability = self.R32 @ np.linalg.pinv(self.R22) @ np.concatenate(hankels)
         left, values, right = np.linalg.svd(observability, full_matrices=False)
         rank = self.x_dim
@@ -174,7 +182,9 @@ def _n4sid(inputs, outputs, order, block_rows, dt, band) -> tuple[tuple[np.ndarr
     columns_u = [f"u{i}" for i in range(inputs.shape[1])]
     columns_y = [f"y{i}" for i in range(outputs.shape[1])]
     frame = pd.DataFrame(np.column_stack([inputs, outputs]), columns=columns_u + columns_y)
-    identification = ThinN4SID(frame, output_columns=columns_y, input_columns=columns_u, num_block_rows=block_rows)
+    identification = ThinN4SID(
+        frame, output_columns=columns_y, input_columns=columns_u, num_block_rows=block_rows
+    )
     identification.subspace_identification()
     model, _ = identification.system_identification(rank=order)
     discrete = (model.a, model.b, model.c, model.d)
@@ -201,8 +211,9 @@ def _check_explained(model, inputs: np.ndarray, outputs: np.ndarray, recording: 
     if np.min(explained) < MIN_EXPLAINED:
         floor = recording.floors[int(np.argmin(explained))]
         raise RecordingError(
-            f"{recording.name}: too quiet: the model explains {max(np.min(explained), 0.0):.0%} of floor {floor}'s "
-            "acceleration (the sensors' noise dominates); excite the building more strongly or record longer"
+            f"{recording.name}: too quiet: the model explains {max(np.min(explained), 0.0):.0%} of floor "
+            f"{floor}'s acceleration (the sensors' noise dominates); excite the building more strongly or "
+            "record longer"
         )
     return explained
 
@@ -227,7 +238,11 @@ def _continuous(a, b, c, d, dt: float, held: int = 0) -> tuple[np.ndarray, np.nd
     n = a.shape[0]
     continuous_a = np.real(scipy.linalg.logm(a)) / dt
     augmented = np.zeros((3 * n, 3 * n))
-    augmented[:n, :n], augmented[:n, n : 2 * n], augmented[n : 2 * n, 2 * n :] = continuous_a, np.eye(n), np.eye(n)
+    augmented[:n, :n], augmented[:n, n : 2 * n], augmented[n : 2 * n, 2 * n :] = (
+        continuous_a,
+        np.eye(n),
+        np.eye(n),
+    )
     exponential = scipy.linalg.expm(augmented * dt)
     held_gain, ramp = exponential[:n, n : 2 * n], exponential[:n, 2 * n :] / dt
     end = ramp  # M1: the weight of the step's end sample

@@ -36,7 +36,9 @@ def actor_of(model) -> Actor | None:
         )
     elif all(hasattr(actor, name) for name in ("latent_pi", "mu", "log_std")):
         extractor, modules, squash = actor.features_extractor, [*actor.latent_pi, actor.mu], True  # SAC
-    elif isinstance(getattr(actor, "mu", None), torch.nn.Sequential) and isinstance(actor.mu[-1], torch.nn.Tanh):
+    elif isinstance(getattr(actor, "mu", None), torch.nn.Sequential) and isinstance(
+        actor.mu[-1], torch.nn.Tanh
+    ):
         extractor, modules, squash = actor.features_extractor, list(actor.mu)[:-1], True  # TD3, DDPG
     else:
         return None

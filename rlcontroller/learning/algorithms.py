@@ -72,7 +72,9 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, *, tens
     if algorithm.backend == "sbx":  # JAX's device, not torch's
         from rlcontroller.learning.jax_learners import jax_policy_kwargs
 
-        return _constructed(experiment, vec_env, seed, "MlpPolicy", jax_policy_kwargs(experiment), {}, tensorboard)
+        return _constructed(
+            experiment, vec_env, seed, "MlpPolicy", jax_policy_kwargs(experiment), {}, tensorboard
+        )
     import torch
 
     net_arch: list[int] | dict[str, list[int]] = list(algorithm.policy.net_arch)
@@ -97,7 +99,9 @@ def build_model(experiment: Experiment, vec_env, seed: int, device: str, *, tens
     return _constructed(experiment, vec_env, seed, policy, policy_kwargs, {"device": device}, tensorboard)
 
 
-def _constructed(experiment: Experiment, vec_env, seed: int, policy, policy_kwargs: dict, extra: dict, tensorboard):
+def _constructed(
+    experiment: Experiment, vec_env, seed: int, policy, policy_kwargs: dict, extra: dict, tensorboard
+):
     """The learner of the experiment's algorithm and backend; what its constructor refuses is one line."""
     algorithm = experiment.algorithm
     try:

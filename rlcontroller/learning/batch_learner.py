@@ -1,9 +1,9 @@
-"""The base of the learners whose iterations simulate whole motions on the batched env's plant (`RandomSearch`,
-`DAgger`): a stable-baselines3 `BaseAlgorithm`, so that validation, checkpoints, `--resume`, the progress bar and
-saving are those of any run.
+"""The base of the learners whose iterations simulate whole motions on the batched env's plant
+(`RandomSearch`, `DAgger`): a stable-baselines3 `BaseAlgorithm`, so that validation, checkpoints, `--resume`,
+the progress bar and saving are those of any run.
 
-A subclass builds its policy and its own state in `_setup_model` (after `_setup_policy_and_plant`) and runs one
-iteration in `iterate`, returning the control steps it simulated: `num_timesteps` counts them.
+A subclass builds its policy and its own state in `_setup_model` (after `_setup_policy_and_plant`) and runs
+one iteration in `iterate`, returning the control steps it simulated: `num_timesteps` counts them.
 """
 
 from __future__ import annotations
@@ -47,7 +47,9 @@ class BatchLearner(BaseAlgorithm):
         """The policy, the env's plant (None without an env: a model loaded to be read) and the prior."""
         self._setup_lr_schedule()
         self.set_random_seed(self.seed)
-        policy = self.policy_class(self.observation_space, self.action_space, self.lr_schedule, **self.policy_kwargs)
+        policy = self.policy_class(
+            self.observation_space, self.action_space, self.lr_schedule, **self.policy_kwargs
+        )
         self.policy = policy.to(self.device)
         self.plant = getattr(self.env.unwrapped, "plant", None) if self.env is not None else None
         residual = self.plant is not None and self.plant.experiment.algorithm.residual_lqg

@@ -68,7 +68,9 @@ class BuildingEnv(gym.Env):
         elif isinstance(config, Experiment):
             plant = Plant(config)
         else:
-            plant = Plant(Experiment() if config is None else load_experiment(config, reduce=reduced_building))
+            plant = Plant(
+                Experiment() if config is None else load_experiment(config, reduce=reduced_building)
+            )
         experiment = self.experiment = plant.experiment
         self.motions = motions
         self.render_mode = render_mode
@@ -151,10 +153,14 @@ class BuildingEnv(gym.Env):
         if self._load_windows is None:
             state = self.plant.integrator.step(state, clipped, self._windows[k], self.control_dt)
         else:  # floor forces: a plant that takes them in its own step (end-stops)
-            state = self.plant.integrator.step(state, clipped, self._windows[k], self.control_dt, self._load_windows[k])
+            state = self.plant.integrator.step(
+                state, clipped, self._windows[k], self.control_dt, self._load_windows[k]
+            )
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict]:
         super().reset(seed=seed)
         if self._randomization is not None:
             drawn = draw_plant(self._randomization, self.experiment.plant, self.np_random)
@@ -196,7 +202,9 @@ class BuildingEnv(gym.Env):
         self._previous_ground = readings[-1]
         self._observation[self.layout.estimate] = self.layout.scaled_estimate(self._estimate)
         if self.twin is not None:
-            self._observation[self.layout.twin] = self.layout.scaled_twin(*self.twin.observe(self._estimate[None]))[0]
+            self._observation[self.layout.twin] = self.layout.scaled_twin(
+                *self.twin.observe(self._estimate[None])
+            )[0]
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         k = self._k

@@ -3,17 +3,17 @@
 DAgger (Ross, Gordon and Bagnell 2011, AISTATS): each iteration draws `n_motions` training motions (the
 experiment's generator, never the records) with their noise seeds, runs them with the current policy (the
 first iteration with MPC itself: behaviour cloning), asks MPC (`control.mpc.MPCController` on the design
-model, horizon `horizon`; `SemiActiveMPC`, whose action is each damper's command, for semi-active dampers) what
-it would do at every observation the policy met, adds those pairs to the
-data set (at most `max_samples`, a uniform subset kept), and fits the actor to the whole set for `epochs`
-passes of Adam. The expert's labels come from the states the learner itself visits, so its mistakes are
-corrected where they lead, which cloning MPC's own trajectories does not do.
+model, horizon `horizon`; `SemiActiveMPC`, whose action is each damper's command, for semi-active dampers)
+what it would do at every observation the policy met, adds those pairs to the data set (at most `max_samples`,
+a uniform subset kept), and fits the actor to the whole set for `epochs` passes of Adam. The expert's labels
+come from the states the learner itself visits, so its mistakes are corrected where they lead, which cloning
+MPC's own trajectories does not do.
 
-The loss is the squared error of the action the env takes against MPC's (`imitation_loss`). With `residual_lqg`
-the policy learns a correction to LQG + ground model (the env's own prior), without it the whole action; a
-residual cannot imitate MPC where LQG's demand is beyond twice the force limit and MPC's is not (the env clips
-the residual to [-1, 1] before adding it), so the study's policy learns the whole action from the observation's
-Kalman estimate.
+The loss is the squared error of the action the env takes against MPC's (`imitation_loss`). With
+`residual_lqg` the policy learns a correction to LQG + ground model (the env's own prior), without it the
+whole action; a residual cannot imitate MPC where LQG's demand is beyond twice the force limit and MPC's is
+not (the env clips the residual to [-1, 1] before adding it), so the study's policy learns the whole action
+from the observation's Kalman estimate.
 
 The policy is stable-baselines3's `ActorCriticPolicy` (its Gaussian mean is the actor; no critic is trained),
 so saving, loading, validation, `rlc check` and ONNX export are those of any run. `num_timesteps` counts the
@@ -30,7 +30,8 @@ import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 from rlcontroller.control.controllers import residual_action
-from rlcontroller.control.mpc import DEFAULT_HORIZON, mpc_controller
+from rlcontroller.control.mpc import DEFAULT_HORIZON
+from rlcontroller.control.mpc_controllers import mpc_controller
 from rlcontroller.learning.batch_learner import BatchLearner
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.simulation.rollout import batch_rollout
@@ -128,7 +129,9 @@ class DAgger(BatchLearner):
 
     def fit(self) -> float:
         """`epochs` passes of Adam over the data set; returns the last pass' mean loss."""
-        observation, expert, prior = (torch.as_tensor(self.samples[key]) for key in ("observation", "expert", "prior"))
+        observation, expert, prior = (
+            torch.as_tensor(self.samples[key]) for key in ("observation", "expert", "prior")
+        )
         count = observation.shape[0]
         optimizer = self.policy.optimizer
         for group in optimizer.param_groups:
@@ -148,7 +151,8 @@ class DAgger(BatchLearner):
         return loss_sum / count
 
     def iterate(self) -> int:
-        """One DAgger iteration (MPC acts in the first): collect, then fit; returns the control steps simulated."""
+        """One DAgger iteration (MPC acts in the first): collect, then fit; returns the control steps
+        simulated."""
         steps = self.collect(expert_acts=self._n_updates == 0)
         self.logger.record("train/imitation_loss", self.fit())
         return steps
@@ -183,7 +187,8 @@ class _Collector:
         learner = self.learner
         expert = learner.expert.act(observation)
         prior = np.zeros_like(expert) if learner.prior is None else learner.prior(observation)
-        self.rows["observation"].append(np.array(observation, dtype=np.float32))  # the simulator reuses its buffer
+        # the simulator reuses its buffer
+        self.rows["observation"].append(np.array(observation, dtype=np.float32))
         self.rows["expert"].append(expert)
         self.rows["prior"].append(prior)
         return expert if self.expert_acts else learner.act(observation)

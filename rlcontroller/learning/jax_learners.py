@@ -7,9 +7,9 @@ folder's files. sbx's own `save` pickles the whole policy; this backend never wr
 
     learner.npz        every array of the learner's JAX state (the actor's and critics' parameters, target
                        parameters, optimiser moments, the entropy coefficient, the random keys), in the order
-                       of its pytree, which a fresh model of the same config rebuilds; counters in learner.json
-    replay_buffer.npz  the replay buffer's filled rows and its position
-    vecnormalize.npz   the observation and return statistics (with normalisation)
+                       of its pytree, which a fresh model of the same config rebuilds; counters in
+    learner.json replay_buffer.npz the replay buffer's filled rows and its position vecnormalize.npz the
+    observation and return statistics (with normalisation)
 
 all read back with `allow_pickle=False`, and checked against the fresh model's shapes.
 """
@@ -29,8 +29,8 @@ import numpy as np
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.control.networks import Actor, Layer
 
-# JAX warns at every fork once its threads run. rlc forks after training (the check's fan-out, the report's drawing
-# process); those children simulate in numpy and never call JAX, which is what the warning is about.
+# JAX warns at every fork once its threads run. rlc forks after training (the check's fan-out, the report's
+# drawing process); those children simulate in numpy and never call JAX, which is what the warning is about.
 warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called", category=RuntimeWarning)
 
 LEARNER_FILE, LEARNER_COUNTERS = "learner.npz", "learner.json"
@@ -46,7 +46,8 @@ def jax_algorithm_class(name: str) -> type:
         import sbx
     except ImportError:
         raise ConfigError(
-            "algorithm.backend: sbx needs the sbx-rl package (pip install 'rlcontroller[fast]'), or use backend: sb3"
+            "algorithm.backend: sbx needs the sbx-rl package (pip install 'rlcontroller[fast]'), or use "
+            "backend: sb3"
         ) from None
     return getattr(sbx, name)
 
@@ -65,13 +66,15 @@ def jax_device() -> str:
 def _activation(name: str):
     import flax.linen as nn
 
-    if name == "gelu":  # PyTorch's and the numpy actor's GELU are exact; flax's default is the tanh approximation
+    # PyTorch's and the numpy actor's GELU are exact; flax's default is the tanh approximation
+    if name == "gelu":
         return functools.partial(nn.gelu, approximate=False)
     return getattr(nn, name)
 
 
 def jax_policy_kwargs(experiment: Experiment) -> dict[str, Any]:
-    """sbx's policy arguments for the experiment's network, as `algorithms.build_model` builds stable-baselines3's."""
+    """sbx's policy arguments for the experiment's network, as `algorithms.build_model` builds
+    stable-baselines3's."""
     policy = experiment.algorithm.policy
     net_arch: list[int] | dict[str, list[int]] = list(policy.net_arch)
     if policy.actor_arch is not None:
@@ -81,7 +84,8 @@ def jax_policy_kwargs(experiment: Experiment) -> dict[str, Any]:
 
 def jax_actor(model) -> Actor:
     """The deterministic actor of an sbx SAC/TQC (tanh of the Gaussian's mean) or TD3 (its tanh output) as
-    plain float32 layers: flax's Dense layers in order, the hidden ones followed by the policy's activation."""
+    plain float32 layers: flax's Dense layers in order, the hidden ones followed by the policy's
+    activation."""
     policy = model.policy
     params = policy.actor_state.params["params"]
     dense = sorted((name for name in params if name.startswith("Dense_")), key=lambda n: int(n.split("_")[1]))
@@ -89,7 +93,8 @@ def jax_actor(model) -> Actor:
     function = policy.activation_fn
     activation = FLAX_TO_NUMPY[getattr(getattr(function, "func", function), "__name__", "")]
     layers = []
-    for index, name in enumerate(dense[: hidden + 1]):  # SAC/TQC: the mean layer; the log-std one after it is noise
+    # SAC/TQC: the mean layer; the log-std one after it is noise
+    for index, name in enumerate(dense[: hidden + 1]):
         weight = np.asarray(params[name]["kernel"], dtype=np.float32).T.copy()  # flax: (in, out)
         bias = np.asarray(params[name]["bias"], dtype=np.float32).copy()
         layers.append(Layer(weight, bias, activation if index < hidden else None))
@@ -97,7 +102,8 @@ def jax_actor(model) -> Actor:
 
 
 def _states(model) -> dict[str, Any]:
-    """The learner's JAX state by attribute: flax train states and random keys, of the model and its policy."""
+    """The learner's JAX state by attribute: flax train states and random keys, of the model and its
+    policy."""
     from flax.training.train_state import TrainState
 
     found = {}
@@ -110,7 +116,8 @@ def _states(model) -> dict[str, Any]:
 
 
 def _array(leaf) -> np.ndarray:
-    """A state's leaf as JAX holds it (a fresh state's step counter is a Python int: int32, as after an update)."""
+    """A state's leaf as JAX holds it (a fresh state's step counter is a Python int: int32, as after an
+    update)."""
     import jax.numpy as jnp
 
     return np.asarray(jnp.asarray(leaf))
@@ -146,9 +153,14 @@ def save_normalization(normalize, path: Path) -> None:
     """VecNormalize's running statistics as arrays."""
     obs, ret = normalize.obs_rms, normalize.ret_rms
     np.savez(
-        path, obs_mean=obs.mean, obs_var=obs.var, obs_count=np.float64(obs.count),
-        ret_mean=ret.mean, ret_var=ret.var, ret_count=np.float64(ret.count),
-    )  # fmt: skip
+        path,
+        obs_mean=obs.mean,
+        obs_var=obs.var,
+        obs_count=np.float64(obs.count),
+        ret_mean=ret.mean,
+        ret_var=ret.var,
+        ret_count=np.float64(ret.count),
+    )
 
 
 def load_normalization(normalize, path: Path) -> None:
@@ -170,13 +182,15 @@ class UnreadableFile(Exception):
 
 
 def load_jax_learner(model, folder: Path) -> None:
-    """Restore into `model` (a fresh learner of the same config) what `save_jax_learner` wrote into `folder`; a
-    missing file, or one that does not fit the model, is an `UnreadableFile` naming it."""
+    """Restore into `model` (a fresh learner of the same config) what `save_jax_learner` wrote into `folder`;
+    a missing file, or one that does not fit the model, is an `UnreadableFile` naming it."""
     files = [(LEARNER_FILE, _load_states), (LEARNER_COUNTERS, _load_counters)]
     if model.replay_buffer is not None:
         files.append((REPLAY_FILE, _load_replay_buffer))
     if model.get_vec_normalize_env() is not None:
-        files.append((NORMALIZE_FILE, lambda model, path: load_normalization(model.get_vec_normalize_env(), path)))
+        files.append(
+            (NORMALIZE_FILE, lambda model, path: load_normalization(model.get_vec_normalize_env(), path))
+        )
     for name, load in files:
         try:
             load(model, folder / name)
@@ -192,12 +206,16 @@ def _load_states(model, path: Path) -> None:
     with _open_npz(path) as saved:
         arrays = [saved[f"arr_{index}"] for index in range(len(saved.files))]
     if len(arrays) != len(leaves):
-        raise ValueError(f"{len(arrays)} arrays, expected {len(leaves)} for this config's {type(model).__name__}")
+        raise ValueError(
+            f"{len(arrays)} arrays, expected {len(leaves)} for this config's {type(model).__name__}"
+        )
     for index, (array, leaf) in enumerate(zip(arrays, leaves, strict=True)):
         expected = _array(leaf)
         if array.shape != expected.shape or array.dtype != expected.dtype:
-            raise ValueError(f"array {index} is {array.dtype}{list(array.shape)}, expected {expected.dtype}"
-                             f"{list(expected.shape)}")  # fmt: skip
+            raise ValueError(
+                f"array {index} is {array.dtype}{list(array.shape)}, expected {expected.dtype}"
+                f"{list(expected.shape)}"
+            )
     restored = jax.tree_util.tree_unflatten(structure, [jnp.asarray(array) for array in arrays])
     for attribute, value in restored.items():
         owner_name, name = attribute.split(".", 1)
@@ -221,6 +239,8 @@ def _load_replay_buffer(model, path: Path) -> None:
         for name in REPLAY_ARRAYS:
             target, rows = getattr(buffer, name), saved[name]
             if rows.shape[1:] != target.shape[1:] or len(rows) > len(target):
-                raise ValueError(f"replay buffer {name} of shape {rows.shape}, expected at most {target.shape}")
+                raise ValueError(
+                    f"replay buffer {name} of shape {rows.shape}, expected at most {target.shape}"
+                )
             target[: len(rows)] = rows
     buffer.pos, buffer.full = pos, full

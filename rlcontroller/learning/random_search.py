@@ -125,7 +125,12 @@ class RandomSearch(BatchLearner):
     def _parameters(self) -> list[torch.Tensor]:
         """The actor network's weights and biases, layer by layer (the order of the searched vector)."""
         linears = [*self.policy.mlp_extractor.policy_net, self.policy.action_net]
-        return [p for module in linears if isinstance(module, torch.nn.Linear) for p in (module.weight, module.bias)]
+        return [
+            p
+            for module in linears
+            if isinstance(module, torch.nn.Linear)
+            for p in (module.weight, module.bias)
+        ]
 
     def _set_actor(self) -> None:
         with torch.no_grad():
@@ -138,7 +143,9 @@ class RandomSearch(BatchLearner):
                 return
             weights, bias = self._split(self.weights)
             self.policy.action_net.weight.copy_(torch.as_tensor(weights, dtype=torch.float32))
-            self.policy.action_net.bias.copy_(torch.as_tensor(0.0 if bias is None else bias, dtype=torch.float32))
+            self.policy.action_net.bias.copy_(
+                torch.as_tensor(0.0 if bias is None else bias, dtype=torch.float32)
+            )
 
     def candidate(self, parameters: np.ndarray) -> Controller:
         """The controller of one candidate's parameters, as its saved policy would act."""
@@ -174,7 +181,9 @@ class RandomSearch(BatchLearner):
             f = np.array([standard_cost(lane, reference[0]) for lane in runs])
         else:
             f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
-        episodes = [{"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane]
+        episodes = [
+            {"r": total, "l": response.drift.shape[0] - 1} for lane in runs for response, total in lane
+        ]
         self.ep_info_buffer.extend(episodes)
         return f[: len(deltas)], f[len(deltas) :], sum(episode["l"] for episode in episodes)
 

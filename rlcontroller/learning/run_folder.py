@@ -65,7 +65,17 @@ KEPT_CHECKPOINTS = 2
 
 
 def package_versions() -> dict[str, str]:
-    names = ("rlcontroller", "stable-baselines3", "sbx-rl", "jax", "gymnasium", "torch", "numpy", "scipy", "control")
+    names = (
+        "rlcontroller",
+        "stable-baselines3",
+        "sbx-rl",
+        "jax",
+        "gymnasium",
+        "torch",
+        "numpy",
+        "scipy",
+        "control",
+    )
     names += ("pydantic",)
     versions = {"python": platform.python_version()}
     for name in names:
@@ -91,7 +101,12 @@ class TrainingState:
     stopped_by_validation: bool = False
 
     def to_json(self, steps: int) -> dict[str, Any]:
-        return {"wall_time_s": self.wall_time_s, "best_steps": self.best_steps, "best": self.best, "steps": steps}
+        return {
+            "wall_time_s": self.wall_time_s,
+            "best_steps": self.best_steps,
+            "best": self.best,
+            "steps": steps,
+        }
 
     @classmethod
     def from_json(cls, saved: Any) -> TrainingState:
@@ -99,7 +114,9 @@ class TrainingState:
         if not isinstance(saved, dict) or not isinstance(saved.get("wall_time_s"), int | float):
             raise ValueError("expected a mapping with wall_time_s")
         best, best_steps = saved.get("best"), saved.get("best_steps")
-        if not (best is None or isinstance(best, dict)) or not (best_steps is None or isinstance(best_steps, int)):
+        if not (best is None or isinstance(best, dict)) or not (
+            best_steps is None or isinstance(best_steps, int)
+        ):
             raise ValueError("expected best as a mapping and best_steps as a whole number")
         return cls(wall_time_s=float(saved["wall_time_s"]), best=best, best_steps=best_steps)
 
@@ -184,7 +201,9 @@ class RunFolder:
         with open(self.curve_path, newline="") as handle:
             rows = list(csv.DictReader(handle))
         kept = [list(CURVE_COLUMNS)] + [
-            [row.get(column, "nan") for column in CURVE_COLUMNS] for row in rows if int(float(row["steps"])) <= steps
+            [row.get(column, "nan") for column in CURVE_COLUMNS]
+            for row in rows
+            if int(float(row["steps"])) <= steps
         ]
         temporary = self.curve_path.with_name(self.curve_path.name + ".tmp")
         with open(temporary, "w", newline="") as handle:
@@ -197,7 +216,8 @@ class RunFolder:
 
     def save_model(self, model, name: str, controller: PolicyController, plant: Plant) -> Path:
         """Save the model `name` (best or final) atomically: NAME_model.zip (and its
-        .vecnormalize.pkl if used) for this run (not with sbx: no pickle), and `controller`, its policy, as data."""
+        .vecnormalize.pkl if used) for this run (not with sbx: no pickle), and `controller`, its policy, as
+        data."""
         if is_jax_model(model):
             return write_policy(controller, plant, self.path, name)
         temporary = self.path / f".{name}_model.tmp.zip"

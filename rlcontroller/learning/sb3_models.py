@@ -72,11 +72,15 @@ def policy_controller(model, prior: LQGPrior | None, normalize=None, name: str =
     data: exactly what `write_policy` saves and `read_policy` reads back."""
     actor = actor_of(model)
     if actor is None:
-        raise ConfigError(f"{type(model).__name__}: only MLP policies on flat observations can be saved as data")
+        raise ConfigError(
+            f"{type(model).__name__}: only MLP policies on flat observations can be saved as data"
+        )
     normalizer = None
     if normalize is not None and normalize.norm_obs:
         statistics = normalize.obs_rms
-        normalizer = Normalizer(statistics.mean.copy(), statistics.var.copy(), normalize.epsilon, normalize.clip_obs)
+        normalizer = Normalizer(
+            statistics.mean.copy(), statistics.var.copy(), normalize.epsilon, normalize.clip_obs
+        )
     steps, algorithm = int(model.num_timesteps), type(model).__name__
     return PolicyController(actor, normalizer, prior, name, steps=steps, algorithm=algorithm)
 
@@ -104,7 +108,9 @@ def convert(folder: Path) -> list[Path]:
                 normalize = VecNormalize.load(str(statistics), DummyVecEnv([lambda: BuildingEnv(plant)]))
         except Exception as error:  # a damaged file: zip, pickle or torch errors of any kind
             detail = (str(error).splitlines() or [""])[0][:120] or type(error).__name__
-            raise ConfigError(f"{path}: cannot load the saved model ({type(error).__name__}: {detail})") from None
+            raise ConfigError(
+                f"{path}: cannot load the saved model ({type(error).__name__}: {detail})"
+            ) from None
         written.append(write_policy(policy_controller(model, prior, normalize), plant, folder, model_name))
     if not written:
         raise ConfigError(f"{folder}: no best_model.zip or final_model.zip to convert")

@@ -64,7 +64,8 @@ def _callback(
             self.started = self.session_start = time.perf_counter()
             self.keep_going = True
             self.previous_steps = self.model.num_timesteps
-            if self.model.num_timesteps == 0:  # the starting policy is a candidate too: a residual's is its prior
+            # the starting policy is a candidate too: a residual's is its prior
+            if self.model.num_timesteps == 0:
                 self.validate()
 
         def wall_time(self) -> float:
@@ -116,8 +117,8 @@ def _callback(
 
 def selection_score(result: dict[str, float], select_by: str) -> float:
     """Higher is better: the validation reward, or minus the validation J1 or J1 + J2 (`algorithm.select_by`),
-    or for `standard` a stable closed loop first, then minus the share of motions worse than the building failed
-    safe, then J1 + J2."""
+    or for `standard` a stable closed loop first, then minus the share of motions worse than the building
+    failed safe, then J1 + J2."""
     if select_by == "standard":  # one motion in a hundred outweighs any J1 + J2 (each at most about 2)
         unstable = result.get("eval_spectral_radius", 0.0) >= 1.0  # the check's stability criterion fails
         return -1.0e6 * unstable - 1000.0 * result["eval_worse"] - result["eval_J1"] - result["eval_J2"]
@@ -152,7 +153,8 @@ class TrainingSummary:
         text = f"{verb}: {self.steps} steps in {self.wall_time_s:.0f} s ({rate:.0f} steps/s)"
         if self.beat_lqg_at:
             first = self.beat_lqg_at
-            text += f"; validation J1 first below LQG's at step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
+            at = f"step {first['steps']:.0f} ({first['wall_time_s']:.0f} s)"
+            text += f"; validation J1 first below LQG's at {at}"
         if self.best:
             best = self.best
             references = [
@@ -166,7 +168,8 @@ class TrainingSummary:
                 if np.isfinite(best[key])  # none for dampers, which LQG cannot command
             ]
             scores = ", ".join([f"J1 {best['eval_J1']:.3f}", f"J2 {best['eval_J2']:.3f}", *references])
-            text += f"; best model at step {self.best_steps}: validation reward {best['eval_reward']:.2f} ({scores})"
+            reward = f"validation reward {best['eval_reward']:.2f} ({scores})"
+            text += f"; best model at step {self.best_steps}: {reward}"
         return text + f"; run folder: {self.run_dir}"
 
 
@@ -192,13 +195,16 @@ def train(
     """
     if tensorboard and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError(
-            "--tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
+            "--tensorboard: the tensorboard package is not installed (pip install "
+            "'rlcontroller[tensorboard]')"
         )
     with ExitStack() as held:  # the run folder's lock, from the start (resume) or its creation (new)
         if resume is not None and (resume / "config.yaml").is_file():
             held.enter_context(folder_lock(resume, "rlc train"))
         device = training_device(device)
-        return _train(experiment, run_dir, resume, device, progress_bar, time_limit_s, on_validation, tensorboard, held)
+        return _train(
+            experiment, run_dir, resume, device, progress_bar, time_limit_s, on_validation, tensorboard, held
+        )
 
 
 def training_device(device: str) -> str:
@@ -233,7 +239,8 @@ def _train(
     if not experiment.command_labels():
         where = experiment.origin("actuators")[0]
         raise ConfigError(
-            f"{where}: nothing to command (no actuators, no active devices): a passive building is not trained"
+            f"{where}: nothing to command (no actuators, no active devices): a passive building is not "
+            "trained"
         )
     if experiment.algorithm.backend == "sbx" and device != "cpu":
         raise ConfigError(
@@ -243,7 +250,8 @@ def _train(
     torch.set_num_threads(experiment.algorithm.torch_threads)
     plant = Plant(experiment)
     if plant.fe_model is not None and experiment.plant.opensees.train_on == "reduced":
-        plant = plant.design  # learned on the FE model's reduced one, judged on the FE model (evaluate --config)
+        # learned on the FE model's reduced one, judged on the FE model (evaluate --config)
+        plant = plant.design
     vec_env = make_vec_env(plant, experiment.seed)
     created = False
     try:
@@ -253,11 +261,14 @@ def _train(
             held.enter_context(folder_lock(run.path, "rlc train"))
         policy_controller(model, None)  # a policy that cannot be saved as data stops before training
         stop = StopRequest()
-        signals = (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()
+        signals = (
+            (signal.SIGINT, signal.SIGTERM) if threading.current_thread() is threading.main_thread() else ()
+        )
         previous_handlers = {s: signal.signal(s, stop) for s in signals}  # none in a worker thread (Dask)
         callback = _callback(run, experiment, Validator(plant), stop, state, time_limit_s, on_validation)
         remaining = max(experiment.algorithm.total_steps - model.num_timesteps, 0)
-        try:  # also with nothing left (stopped after its last step, before the final save): sets the callback up
+        # also with nothing left (stopped after its last step, before the final save): sets the callback up
+        try:
             model.learn(remaining, callback=callback, reset_num_timesteps=False, progress_bar=progress_bar)
         finally:
             for number, handler in previous_handlers.items():

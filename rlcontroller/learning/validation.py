@@ -6,11 +6,10 @@ The deterministic policy runs on `excitation.validation_motions` motions of the 
 and the three LQGs, designed on the design model as deployed, are run once on them as references.
 `eval_worse` is the share of the motions on which the policy is worse than the building failed safe (the
 safety check's measure, `metrics.ratio_to_reference`, above 1 + the standard's default tolerance): what
-`select_by: standard` minimises first, among the policies whose closed loop linearised at rest is stable on the
-design model and on the scenarios the standard judges (`eval_spectral_radius`, the largest, below 1: the check's
-stability criterion; measured only then).
-With `plant_randomization`, motion i runs on the plant drawn with seed i, the same draw for every
-controller and every validation.
+`select_by: standard` minimises first, among the policies whose closed loop linearised at rest is stable on
+the design model and on the scenarios the standard judges (`eval_spectral_radius`, the largest, below 1: the
+check's stability criterion; measured only then). With `plant_randomization`, motion i runs on the plant drawn
+with seed i, the same draw for every controller and every validation.
 """
 
 from __future__ import annotations
@@ -40,9 +39,13 @@ class Validator:
         )
         self.prior = LQGPrior.design(plant) if plant.experiment.algorithm.residual_lqg else None
         bare = plant.bare  # without its mass devices
-        uncontrolled = batch_rollout(bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True)
+        uncontrolled = batch_rollout(
+            bare, self.motions, [Uncontrolled(bare.building.n_actuators)], randomize=True
+        )
         self.uncontrolled = [response for response, _ in uncontrolled[0]]
-        failed_safe = batch_rollout(plant.failed_safe, self.motions, [fail_safe_controller(plant)], randomize=True)
+        failed_safe = batch_rollout(
+            plant.failed_safe, self.motions, [fail_safe_controller(plant)], randomize=True
+        )
         self.fail_safe = [response for response, _ in failed_safe[0]]
         self.reference = {}
         model = plant.design
@@ -89,4 +92,6 @@ class Validator:
         }
 
 
-WORSE_TOLERANCE = SafetyCheckConfig.model_fields["tolerance"].default  # the standard's, configs/checks/standard.yaml
+WORSE_TOLERANCE = SafetyCheckConfig.model_fields[
+    "tolerance"
+].default  # the standard's, configs/checks/standard.yaml

@@ -40,7 +40,8 @@ def metrics_file(run: Path) -> Path:
     if not (run / "config.yaml").is_file():
         raise ConfigError(f"{run}: not a run folder nor an evaluation or robustness folder (no metrics.csv)")
     raise ConfigError(
-        f"{run}: no evaluation/metrics.csv; evaluate it first with 'rlc evaluate {run} --out {run}/evaluation'"
+        f"{run}: no evaluation/metrics.csv; evaluate it first with 'rlc evaluate {run} --out "
+        f"{run}/evaluation'"
     )
 
 
@@ -59,7 +60,9 @@ def scores(runs: list[Path]) -> pd.DataFrame:
             pooled = per_record.assign(
                 group="all scenarios", record=per_record["scenario"] + ": " + per_record["record"]
             )
-            per_record = pd.concat([per_record.rename(columns={"scenario": "group"}), pooled.drop(columns="scenario")])
+            per_record = pd.concat(
+                [per_record.rename(columns={"scenario": "group"}), pooled.drop(columns="scenario")]
+            )
         frames.append(per_record)
     table = pd.concat(frames, ignore_index=True)
     if "group" in table.columns and table["group"].isna().any():
@@ -189,7 +192,9 @@ def plot(frame: pd.DataFrame, path: Path, title: str) -> Path:
     import matplotlib.pyplot as plt
 
     metrics = list(frame["metric"].cat.categories.intersection(frame["metric"].unique()))
-    labels = frame[[c for c in ("group", "controller") if c in frame.columns]].astype(str).agg(" · ".join, axis=1)
+    labels = (
+        frame[[c for c in ("group", "controller") if c in frame.columns]].astype(str).agg(" · ".join, axis=1)
+    )
     names = list(dict.fromkeys(labels))
     figure, axes = plt.subplots(
         1, len(metrics), figsize=(3.2 * len(metrics) + 2.5, 0.35 * len(names) + 1.6), sharey=True

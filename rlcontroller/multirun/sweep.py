@@ -96,7 +96,9 @@ def parse_setting(text: str) -> tuple[str, list[Any]]:
     return key.strip(), parsed
 
 
-def plan(experiment: Experiment, seeds: list[int], settings: list[tuple[str, list[Any]]], out: Path) -> list[SweepRun]:
+def plan(
+    experiment: Experiment, seeds: list[int], settings: list[tuple[str, list[Any]]], out: Path
+) -> list[SweepRun]:
     """Every combination of settings' values and seeds, each checked as a whole experiment now."""
     keys = [key for key, _ in settings]
     if len(set(keys)) != len(keys):
@@ -133,7 +135,9 @@ def run_one(run: SweepRun, records: str | None) -> RunResult:
         return RunResult(run, status, time.perf_counter() - start)
     except Exception as error:  # reported with the others; a sweep goes on
         message = (str(error).strip().splitlines() or [""])[-1]
-        return RunResult(run, "failed", time.perf_counter() - start, f"{type(error).__name__}: {message}"[:300])
+        return RunResult(
+            run, "failed", time.perf_counter() - start, f"{type(error).__name__}: {message}"[:300]
+        )
 
 
 def _train(run: SweepRun) -> str:
@@ -147,7 +151,9 @@ def _train(run: SweepRun) -> str:
         for config in (stored, planned):
             config.get("algorithm", {}).pop("search", None)  # rlc tune's space: training ignores it
         if stored != planned:
-            raise ConfigError(f"{run.folder}: holds a run of another configuration; move it or choose another --out")
+            raise ConfigError(
+                f"{run.folder}: holds a run of another configuration; move it or choose another --out"
+            )
         summary = train(resume=run.folder)
         status = "resumed"
     else:
@@ -209,24 +215,32 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
     dead_holders: dict[Path, set[int]] = {run.folder: set() for run in runs}
     while pending:
         lost = []
-        with ProcessPoolExecutor(workers, context, initializer=stop_with_parent, initargs=(os.getpid(), stop)) as pool:
+        with ProcessPoolExecutor(
+            workers, context, initializer=stop_with_parent, initargs=(os.getpid(), stop)
+        ) as pool:
             futures = {pool.submit(_run_local, run, records): run for run in pending}
             try:
                 for future in local_completed(futures):
                     run = futures[future]
                     try:
                         yield future.result()
-                    except BrokenProcessPool:  # a run still queued, or stopped by its sibling's death, is not to blame
+                    # a run still queued, or stopped by its sibling's death, is not to blame
+                    except BrokenProcessPool:
                         holder = lock_pid(run.folder)
                         if holder is not None:
                             dead_holders[run.folder].add(holder)
                         if len(dead_holders[run.folder]) > WORKER_LOSSES:
-                            yield RunResult(run, "failed", 0.0, f"worker lost {len(dead_holders[run.folder])} times")
+                            yield RunResult(
+                                run, "failed", 0.0, f"worker lost {len(dead_holders[run.folder])} times"
+                            )
                         else:
                             lost.append(run)
                     except Exception as error:
-                        yield RunResult(run, "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300])
-            except KeyboardInterrupt:  # the pool's exit then waits for the workers' checkpoints, starts nothing
+                        yield RunResult(
+                            run, "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300]
+                        )
+            # the pool's exit then waits for the workers' checkpoints, starts nothing
+            except KeyboardInterrupt:
                 stop.set()
                 pool.shutdown(wait=True, cancel_futures=True)
                 raise
@@ -278,7 +292,9 @@ def _run_local(run: SweepRun, records: str | None) -> RunResult:
             os._exit(1)
 
 
-def _dask(runs: list[SweepRun], records: str | None, workers: int, address: str | None) -> Iterator[RunResult]:
+def _dask(
+    runs: list[SweepRun], records: str | None, workers: int, address: str | None
+) -> Iterator[RunResult]:
     from distributed import as_completed
 
     with dask_client(workers, address) as client:
@@ -300,7 +316,9 @@ def _as_completed(futures: dict, completed: Callable) -> Iterator[RunResult]:
         try:
             yield future.result()
         except Exception as error:  # the worker itself died (killed, out of memory)
-            yield RunResult(futures[future], "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300])
+            yield RunResult(
+                futures[future], "failed", 0.0, f"worker lost: {type(error).__name__}: {error}"[:300]
+            )
 
 
 def sweep(
@@ -365,5 +383,6 @@ def _sweep(
     table = scores([run.folder for run in evaluated])
     groups = {str(run.folder): run.group for run in evaluated}
     table["group"] = table["run"].map(groups)
-    title = f"{experiment.name}: {len(evaluated)} run{'s' * (len(evaluated) != 1)}, aggregated over seeds per setting"
+    runs = f"{len(evaluated)} run{'s' * (len(evaluated) != 1)}"
+    title = f"{experiment.name}: {runs}, aggregated over seeds per setting"
     return results, write_aggregate(aggregate(table), out, title)

@@ -43,10 +43,13 @@ def storage(url: str | None, out: Path):
         return JournalStorage(JournalFileBackend(str(out / "study.journal")))
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)  # the heartbeat is "experimental"
+            # the heartbeat is "experimental"
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             return optuna.storages.RDBStorage(url, heartbeat_interval=HEARTBEAT_S, grace_period=GRACE_S)
     except Exception as error:  # a bad URL, a missing driver, an unreachable server
-        raise ConfigError(f"--storage {url}: {type(error).__name__}: {str(error).splitlines()[0][:200]}") from None
+        raise ConfigError(
+            f"--storage {url}: {type(error).__name__}: {str(error).splitlines()[0][:200]}"
+        ) from None
 
 
 def suggest(trial, space: dict[str, SearchRange]) -> dict[str, Any]:
@@ -135,7 +138,9 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
             return not trial.should_prune()
 
         try:
-            resolved = with_overrides(experiment, suggest(trial, experiment.algorithm.search), f"trial {trial.number}")
+            resolved = with_overrides(
+                experiment, suggest(trial, experiment.algorithm.search), f"trial {trial.number}"
+            )
             summary = train(experiment=resolved, run_dir=folder, on_validation=report)
         except Exception as error:  # a failed trial, recorded with its reason; the worker goes on
             trial.set_user_attr("error", f"{type(error).__name__}: {error}"[:300])
@@ -148,9 +153,15 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
         fail_dead_trials(study)
         write_outputs(study, experiment, out)
         result = f"validation J1 {trial.value:.3f}" if trial.value is not None else trial.state.name.lower()
-        print(f"trial {trial.number}: {result}; {counted(study)} of {trials} trials done", file=sys.stderr, flush=True)
+        print(
+            f"trial {trial.number}: {result}; {counted(study)} of {trials} trials done",
+            file=sys.stderr,
+            flush=True,
+        )
         recent = [t.state for t in study.get_trials(deepcopy=False) if t.number in mine[-FAILURES_IN_A_ROW:]]
-        if counted(study) >= trials or (len(recent) == FAILURES_IN_A_ROW and set(recent) == {TrialState.FAIL}):
+        if counted(study) >= trials or (
+            len(recent) == FAILURES_IN_A_ROW and set(recent) == {TrialState.FAIL}
+        ):
             study.stop()
 
     fail_dead_trials(study)
@@ -159,7 +170,9 @@ def worker(experiment: Experiment, trials: int, storage_url: str | None, study_n
     write_outputs(study, experiment, out)
     states = [t.state for t in study.get_trials(deepcopy=False) if t.number in mine[-FAILURES_IN_A_ROW:]]
     if len(states) == FAILURES_IN_A_ROW and set(states) == {TrialState.FAIL}:
-        raise ConfigError(f"{FAILURES_IN_A_ROW} trials in a row failed; see the error column of {out / 'trials.csv'}")
+        raise ConfigError(
+            f"{FAILURES_IN_A_ROW} trials in a row failed; see the error column of {out / 'trials.csv'}"
+        )
     return len(mine)
 
 
@@ -175,11 +188,13 @@ def write_outputs(study, experiment: Experiment, out: Path) -> list[Path]:
     if not complete:
         return written
     best = min(complete, key=lambda trial: trial.value)
-    values = {path: json.loads(value) if isinstance(value, str) else value for path, value in best.params.items()}
+    values = {
+        path: json.loads(value) if isinstance(value, str) else value for path, value in best.params.items()
+    }
     resolved = with_overrides(experiment, values, f"trial {best.number}")
     header = (
-        f"# rlc tune: best of {len(complete)} complete trials of study {study.study_name!r}: trial {best.number}, "
-        f"validation J1 {best.value:.4f} (run folder {best.user_attrs.get('run_dir', '?')}).\n"
+        f"# rlc tune: best of {len(complete)} complete trials of study {study.study_name!r}: trial "
+        f"{best.number}, validation J1 {best.value:.4f} (run folder {best.user_attrs.get('run_dir', '?')}).\n"
     )
     written.append(atomic_write(out / "best.yaml", header + resolved.to_yaml()))
     written += _plots(study, out, len(complete))
@@ -213,11 +228,15 @@ def _plots(study, out: Path, complete: int) -> list[Path]:
     return written
 
 
-def tune(experiment: Experiment, trials: int, storage_url: str | None, study_name: str, *, out: Path, jobs: int) -> int:
+def tune(
+    experiment: Experiment, trials: int, storage_url: str | None, study_name: str, *, out: Path, jobs: int
+) -> int:
     """`jobs` worker processes (or this process for one) on the study; the number of trials run here."""
     if not experiment.algorithm.search:
         file, prefix = experiment.origin("algorithm")
-        raise ConfigError(f"{file}: {prefix + '.' if prefix else ''}search: empty; declare the settings to tune")
+        raise ConfigError(
+            f"{file}: {prefix + '.' if prefix else ''}search: empty; declare the settings to tune"
+        )
     with_overrides(experiment, {}, "rlc tune")
     storage(storage_url, out)  # a bad URL stops here, before any worker starts
     if jobs == 1:

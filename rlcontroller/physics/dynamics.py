@@ -46,7 +46,9 @@ def state_space(building: Building | StateSpaceBuilding) -> StateSpace:
         return StateSpace(a=building.a, b_force=building.b_force, b_ground=building.b_ground)
     n = building.n_dofs
     inverse = np.linalg.inv(building.mass)
-    a = np.block([[np.zeros((n, n)), np.eye(n)], [-inverse @ building.stiffness, -inverse @ building.damping]])
+    a = np.block(
+        [[np.zeros((n, n)), np.eye(n)], [-inverse @ building.stiffness, -inverse @ building.damping]]
+    )
     b_force = np.vstack([np.zeros((n, building.n_actuators)), inverse @ building.actuator_matrix])
     b_ground = np.concatenate([np.zeros(n), -np.ones(n)])
     return StateSpace(a=a, b_force=b_force, b_ground=b_ground)
@@ -175,10 +177,13 @@ def ground_model_step(building: Building, control_dt: float, model: GroundModel)
     return compose(exact_substep(augmented, control_dt), 1, control_dt)
 
 
-def wind_model_system(building: Building, time_constant: float, ground: GroundModel | None = None) -> StateSpace:
-    """The continuous system of [z; f] (with `ground`, [z; f; x_g; x_g']): the building, a first-order model of
-    the fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.motions.wind.load_model`), and the ground
-    filter shaking its base, driven by the actuator forces (the noises enter through `discrete_noise`)."""
+def wind_model_system(
+    building: Building, time_constant: float, ground: GroundModel | None = None
+) -> StateSpace:
+    """The continuous system of [z; f] (with `ground`, [z; f; x_g; x_g']): the building, a first-order model
+    of the fluctuating floor forces f (N), f' = -f / time_constant + w (`physics.motions.wind.load_model`),
+    and the ground filter shaking its base, driven by the actuator forces (the noises enter through
+    `discrete_noise`)."""
     system = state_space(building)
     size, floors = system.a.shape[0], building.n_floors
     inputs = np.vstack([np.zeros((building.n_dofs, floors)), np.linalg.inv(building.mass)[:, :floors]])
@@ -209,7 +214,8 @@ class LoadMap:
     gain: np.ndarray  # (2 n_dofs, r + 1, floors)
 
     def terms(self, forces: np.ndarray) -> np.ndarray:
-        """The floor forces' contribution to every control step, (steps, 2 n_dofs), for samples (.., floors)."""
+        """The floor forces' contribution to every control step, (steps, 2 n_dofs), for samples (..,
+        floors)."""
         r = self.gain.shape[1] - 1
         windows = sliding_window_view(forces, r + 1, axis=0)[::r]  # (steps, floors, r + 1)
         return np.einsum("sfj,ijf->si", windows, self.gain)

@@ -27,7 +27,8 @@ env, the batch and evaluation all step the same numbers through one compiled ker
 The plant's state is [x; per stopped device (f at the step's end, the largest |f| over the step, contacts
 begun in the step)]: the first is a register through which every output stays linear in the state (the floor
 accelerations feel it at once; a story shear, which counts the mass's inertia with its floor's, through the
-motion), the others are what the tables report (peak contact force, number of contacts) and feed back into nothing.
+motion), the others are what the tables report (peak contact force, number of contacts) and feed back into
+nothing.
 """
 
 from __future__ import annotations
@@ -38,20 +39,29 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rlcontroller.config import SimulationConfig
-from rlcontroller.physics.dynamics import StateSpace, StepMap, exact_substep, load_map, newmark_substep, state_space
+from rlcontroller.physics.dynamics import (
+    StateSpace,
+    StepMap,
+    exact_substep,
+    load_map,
+    newmark_substep,
+    state_space,
+)
 from rlcontroller.physics.structure import Building
 
-REGISTERS = 3  # per stopped device: force at the step's end (N), peak |force| over the step (N), contacts begun
+# per stopped device: force at the step's end (N), peak |force| over the step (N), contacts begun
+
+REGISTERS = 3
 LONGEST_SUBSTEP_S = 0.001
 SUBSTEPS_PER_STOP_PERIOD = 200
 
 
 @dataclass(frozen=True)
 class StopMaps:
-    """One load sampling's maps (module docstring), on the inputs v = [x; u; ground window; floor-force window,
-    sample by sample, when the load has floor forces]: y_j = strokes[j] @ v (j = 0..J), H_l = response[l - 1]
-    (l = 1..J), E_j = end[j] (j = 0..J-1), and the plant's own linear step x_{k+1} = linear @ v (its load map
-    for the floor forces)."""
+    """One load sampling's maps (module docstring), on the inputs v = [x; u; ground window; floor-force
+    window, sample by sample, when the load has floor forces]: y_j = strokes[j] @ v (j = 0..J), H_l =
+    response[l - 1] (l = 1..J), E_j = end[j] (j = 0..J-1), and the plant's own linear step x_{k+1} = linear @
+    v (its load map for the floor forces)."""
 
     strokes: np.ndarray  # (J + 1, 2 d, inputs): strokes (m), then stroke rates (m/s)
     response: np.ndarray  # (J, 2 d, d)
@@ -136,10 +146,13 @@ class EndStops:
 
     def _substep(self, h: float):
         """(phi, gain on [command applied; stop forces], ground start, ground end, floor forces' start and end
-        (q, floors)) of the inner state q over h: the building's z, with a lag also the delivered forces. Floor
-        forces, linear between their samples, are discretised exactly whatever the method, as the plant's."""
+        (q, floors)) of the inner state q over h: the building's z, with a lag also the delivered forces.
+        Floor forces, linear between their samples, are discretised exactly whatever the method, as the
+        plant's."""
         building, m = self.building, self.building.n_actuators
-        pushed = replace(building, actuator_matrix=np.hstack([building.actuator_matrix, self.contact_matrix()]))
+        pushed = replace(
+            building, actuator_matrix=np.hstack([building.actuator_matrix, self.contact_matrix()])
+        )
         if self.time_constant > 0:
             system, size = state_space(pushed), building.n_states
             a = np.zeros((size + m, size + m))
@@ -149,7 +162,9 @@ class EndStops:
             b = np.zeros((size + m, m + self.devices.size))
             b[size:, :m] = np.eye(m) / self.time_constant
             b[:size, m:] = system.b_force[:, m:]
-            sub = exact_substep(StateSpace(a=a, b_force=b, b_ground=np.concatenate([system.b_ground, np.zeros(m)])), h)
+            sub = exact_substep(
+                StateSpace(a=a, b_force=b, b_ground=np.concatenate([system.b_ground, np.zeros(m)])), h
+            )
         elif self.simulation.method == "newmark":
             sub = newmark_substep(pushed, h, self.simulation.newmark_beta, self.simulation.newmark_gamma)
         else:
@@ -184,12 +199,18 @@ class EndStops:
         for j in range(total):
             interval, part = divmod(j, per_interval)
             state = phi @ state + command_gain @ applied
-            for weight, column in ((ground_start, part / per_interval), (ground_end, (part + 1) / per_interval)):
+            for weight, column in (
+                (ground_start, part / per_interval),
+                (ground_end, (part + 1) / per_interval),
+            ):
                 state[:, n_x + m + interval] += weight * (1.0 - column)
                 state[:, n_x + m + interval + 1] += weight * column
             if floor_forces:  # sample i's forces in columns loads + i floors ... + (i + 1) floors
                 here, after = (loads + (interval + i) * floors for i in (0, 1))
-                for weight, column in ((load_start, part / per_interval), (load_end, (part + 1) / per_interval)):
+                for weight, column in (
+                    (load_start, part / per_interval),
+                    (load_end, (part + 1) / per_interval),
+                ):
                     state[:, here : here + floors] += weight * (1.0 - column)
                     state[:, after : after + floors] += weight * column
             strokes[j + 1] = strokes_on_q @ state
@@ -226,8 +247,8 @@ class EndStops:
         floor_forces: np.ndarray | None = None,
     ) -> np.ndarray:
         """The state after one control step with `action` (forces / force limits) held, `ground` the r + 1
-        ground samples (m/s^2) spanning it and `floor_forces` the r + 1 floor-force samples (r + 1, floors; N), if
-        the load has them."""
+        ground samples (m/s^2) spanning it and `floor_forces` the r + 1 floor-force samples (r + 1, floors;
+        N), if the load has them."""
         forces = None if floor_forces is None else floor_forces[None]
         return self.step_many(state[None], action[None], ground[None], control_dt, forces)[0]
 
@@ -245,7 +266,7 @@ class EndStops:
         loads = [actions * self.building.force_limits, grounds]
         if floor_forces is not None:
             loads.append(floor_forces.reshape(len(states), -1))
-        from rlcontroller.physics.integrators import stop_step_many  # numba: imported when first needed
+        from rlcontroller.physics.integrators.stops import stop_step_many  # numba: imported when first needed
 
         stops = (self.limits, self.stiffness, self.damping)
         loads = np.ascontiguousarray(np.hstack(loads))

@@ -1,23 +1,24 @@
-"""A fishbone model of a moment frame: floors that sway, floor rotations that couple the stories, beams that yield.
+"""A fishbone model of a moment frame: floors that sway, floor rotations that couple the stories, beams that
+yield.
 
-One elastic column line carries the frame's bending (flexural stiffness EI_i per story, Euler-Bernoulli between
-the floors), each floor's beams act as one rotational spring k_b,j on the floor's rotation theta_j, the base's
-rotation is held by a spring k_0, and the floors' weights stand on a leaning column (P-Delta: -W_i / h_i on story
-i's drift, W_i the weight above it) — Nakashima, Ogawa & Inoue (2002), "Generic frame model for simulation of
-earthquake responses of steel moment frames", Earthquake Eng. Struct. Dyn. 31(3). Masses sit on the floors'
-lateral displacements x only, so the n + 1 rotations (the base's first) are massless. Where story springs
-(`physics.hysteresis`) make each story yield alone, here a floor's beam hinge acts on the stories above and
-below it, which is what lets a frame's upper stories lean back while its lower ones keep their lean.
+One elastic column line carries the frame's bending (flexural stiffness EI_i per story, Euler-Bernoulli
+between the floors), each floor's beams act as one rotational spring k_b,j on the floor's rotation theta_j,
+the base's rotation is held by a spring k_0, and the floors' weights stand on a leaning column (P-Delta: -W_i
+/ h_i on story i's drift, W_i the weight above it) — Nakashima, Ogawa & Inoue (2002), "Generic frame model for
+simulation of earthquake responses of steel moment frames", Earthquake Eng. Struct. Dyn. 31(3). Masses sit on
+the floors' lateral displacements x only, so the n + 1 rotations (the base's first) are massless. Where story
+springs (`physics.hysteresis`) make each story yield alone, here a floor's beam hinge acts on the stories
+above and below it, which is what lets a frame's upper stories lean back while its lower ones keep their lean.
 
 Each floor's beam spring yields (Bouc-Wen on its rotation): moment k_b (a theta + (1 - a) theta_y z) with
-z' = (theta'/theta_y) [1 - |z|^n (beta sgn(theta' z) + gamma)]. The rotations are in equilibrium at every instant,
-theta = -K_tt^-1 (K_tx x + H z) (K_tt with the beams' a k_b only, H = diag((1 - a) k_b theta_y), 0 at the base),
-so the floors obey
+z' = (theta'/theta_y) [1 - |z|^n (beta sgn(theta' z) + gamma)]. The rotations are in equilibrium at every
+instant, theta = -K_tt^-1 (K_tx x + H z) (K_tt with the beams' a k_b only, H = diag((1 - a) k_b theta_y), 0 at
+the base), so the floors obey
 
     M v' = -C v - K_e x - B z + F - M 1 a_g,   K_e = K_xx - K_xt K_tt^-1 K_tx,   B = -K_xt K_tt^-1 H,
 
-and theta' = -(I + G Phi)^-1 A v (A = K_tt^-1 K_tx, G = K_tt^-1 H, Phi = diag(z'/theta')), a linear solve per RK4
-stage with the sign of theta' taken from a first pass (`integrators.fishbone_step`). SI units throughout:
+and theta' = -(I + G Phi)^-1 A v (A = K_tt^-1 K_tx, G = K_tt^-1 H, Phi = diag(z'/theta')), a linear solve per
+RK4 stage with the sign of theta' taken from a first pass (`integrators.fishbone_step`). SI units throughout:
 N m^2, N m/rad, m, kg, s.
 """
 
@@ -55,11 +56,25 @@ class ColumnLine:
         n = self.n
         full = np.zeros((2 * n + 1, 2 * n + 1))  # [x_1..x_n, theta_0..theta_n]
         for i, (stiffness, h) in enumerate(zip(self.column, self.heights, strict=True)):
-            k = stiffness / h**3 * np.array(
-                [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
-                 [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
-            )  # fmt: skip
-            dofs = [i - 1, n + i, i, n + i + 1]  # x below (-1: the ground, fixed), theta below, x above, theta above
+            k = (
+                stiffness
+                / h**3
+                * np.array(
+                    [
+                        [12, 6 * h, -12, 6 * h],
+                        [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                        [-12, -6 * h, 12, -6 * h],
+                        [6 * h, 2 * h * h, -6 * h, 4 * h * h],
+                    ]
+                )
+            )
+            # x below (-1: the ground, fixed), theta below, x above, theta above
+            dofs = [
+                i - 1,
+                n + i,
+                i,
+                n + i + 1,
+            ]
             for a, p in enumerate(dofs):
                 for b, q in enumerate(dofs):
                     if p >= 0 and q >= 0:
@@ -72,7 +87,8 @@ class ColumnLine:
         return full[:n, :n] + p_delta, full[:n, n:], full[n:, n:]
 
     def lateral(self) -> np.ndarray:
-        """The lateral stiffness (N/m, n x n) the floors feel with the beams elastic, rotations condensed out."""
+        """The lateral stiffness (N/m, n x n) the floors feel with the beams elastic, rotations condensed
+        out."""
         xx, xt, tt = self.matrices()
         return xx - xt @ np.linalg.solve(tt, xt.T)
 
@@ -151,14 +167,25 @@ class Fishbone:
         if building.story_heights is None:
             raise ValueError("model fishbone needs the building's story_heights (m)")
         if len(config.column_stiffness) != n or len(config.beam_stiffness) != n:
-            raise ValueError(f"column_stiffness and beam_stiffness: expected {n} values each (one per story, floor)")
+            raise ValueError(
+                f"column_stiffness and beam_stiffness: expected {n} values each (one per story, floor)"
+            )
         masses = np.diag(building.mass)[:n].copy()
-        line = ColumnLine(masses, np.asarray(building.story_heights, dtype=float), np.asarray(config.column_stiffness),
-                          np.asarray(config.beam_stiffness), config.base_stiffness)  # fmt: skip
+        line = ColumnLine(
+            masses,
+            np.asarray(building.story_heights, dtype=float),
+            np.asarray(config.column_stiffness),
+            np.asarray(config.beam_stiffness),
+            config.base_stiffness,
+        )
         fishbone = cls.of(
-            line, building.damping[:n, :n], per_story(config.yield_rotation, n), per_story(config.post_yield_ratio, n),
-            per_story(config.exponent, n), per_story(config.beta, n),
-        )  # fmt: skip
+            line,
+            building.damping[:n, :n],
+            per_story(config.yield_rotation, n),
+            per_story(config.post_yield_ratio, n),
+            per_story(config.exponent, n),
+            per_story(config.beta, n),
+        )
         collapse = np.inf if config.collapse_drift is None else config.collapse_drift
         gain = building.actuator_matrix[:n] * building.force_limits
         return replace(
@@ -183,20 +210,26 @@ class Fishbone:
             beta=self.beta,
         )
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+    def step(
+        self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float
+    ) -> np.ndarray:
         """The state [x; v; z] after one control step: the action (forces / force limits) held, `ground` the
         r + 1 ground samples (m/s^2) spanning the step."""
-        from rlcontroller.physics.integrators import fishbone_step
+        from rlcontroller.physics.integrators.yielding import fishbone_step
 
         force = self.floor_gain @ action
-        return fishbone_step(state, force, ground, control_dt, self.substeps, self.collapse_drift, *self.arrays())
+        return fishbone_step(
+            state, force, ground, control_dt, self.substeps, self.collapse_drift, *self.arrays()
+        )
 
     def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3 n) from rest under `ground`
         (m/s^2, K * per_step + 1 samples), collapse included; a run that diverges is nan from there on."""
-        from rlcontroller.physics.integrators import fishbone_history
+        from rlcontroller.physics.integrators.yielding import fishbone_history
 
-        collapse = np.full(self.mass_inverse.size, np.inf) if self.collapse_drift is None else self.collapse_drift
+        collapse = (
+            np.full(self.mass_inverse.size, np.inf) if self.collapse_drift is None else self.collapse_drift
+        )
         return fishbone_history(ground, per_step, control_dt, self.substeps, collapse, *self.arrays())
 
 
@@ -206,20 +239,27 @@ def hysteretic_model(building: Building, config: HysteresisConfig) -> BoucWen | 
     (ValueError, one line)."""
     n = building.n_floors
     if config.collapse_drift is not None and building.story_heights is not None:
-        collapse, heights = per_story(config.collapse_drift, n), np.asarray(building.story_heights, dtype=float)
+        collapse, heights = (
+            per_story(config.collapse_drift, n),
+            np.asarray(building.story_heights, dtype=float),
+        )
         story = int(np.argmax(collapse > heights))
         if collapse[story] > heights[story]:
             raise ValueError(
-                f"collapse_drift: {collapse[story]:g} m in story {story + 1}, beyond its height {heights[story]:g} m"
+                f"collapse_drift: {collapse[story]:g} m in story {story + 1}, beyond its height "
+                f"{heights[story]:g} m"
             )
     if config.model == "fishbone":
         fishbone = Fishbone.of_building(building, config)
-        lowest = float(np.min(np.linalg.eigvalsh(0.5 * (fishbone.elastic_stiffness + fishbone.elastic_stiffness.T))))
+        lowest = float(
+            np.min(np.linalg.eigvalsh(0.5 * (fishbone.elastic_stiffness + fishbone.elastic_stiffness.T)))
+        )
         if lowest <= 0.0:
             raise ValueError(
-                "the frame cannot stand under its own weight: its lateral stiffness with P-Delta (column line, "
-                f"beams elastic) is not positive definite (lowest eigenvalue {lowest:.3g} N/m); expected stiffer "
-                "columns or beams (column_stiffness, beam_stiffness, N m^2 and N m/rad) or lighter floors"
+                "the frame cannot stand under its own weight: its lateral stiffness with P-Delta (column "
+                f"line, beams elastic) is not positive definite (lowest eigenvalue {lowest:.3g} N/m); "
+                "expected stiffer columns or beams (column_stiffness, beam_stiffness, N m^2 and N m/rad) or "
+                "lighter floors"
             )
         return fishbone
     return BoucWen.of(building, config)

@@ -7,9 +7,8 @@ building, the frame action of a condensed FE model (it carries no load in the fi
 the nine-story frame it is positive semi-definite, so no post-yield ratio makes it unstable, where
 reading the coupling of adjacent floors as the story springs, as Patsialis & Taflanidis 2020 do, leaves
 it indefinite below a = 0.65). A building whose yielded stiffness K - D' diag((1 - a) k) D would not be
-positive semi-definite is refused, unless a story's a is negative (losing strength is then the point). Story i's
-spring (drift d_i = x_i - x_{i-1}) resists with
-F_i = a_i k_i d_i + (1 - a_i) k_i d_y,i z_i, where
+positive semi-definite is refused, unless a story's a is negative (losing strength is then the point). Story
+i's spring (drift d_i = x_i - x_{i-1}) resists with F_i = a_i k_i d_i + (1 - a_i) k_i d_y,i z_i, where
 
     z_i' = (d_i' / d_y,i) [1 - |z_i|^n_i (beta_i sgn(d_i' z_i) + gamma_i)],   beta_i + gamma_i = 1,
 
@@ -99,11 +98,13 @@ class BoucWen:
         drift = building.drift_matrix()  # floors only: yielding stories take no mass devices
         linear = stiffness - drift.T @ np.diag(yielding) @ drift
         lowest, highest = np.linalg.eigvalsh(linear)[[0, -1]]
-        softening = np.min(config.post_yield_ratio) < 0.0  # the yielded building may lose stiffness: on purpose
+        # the yielded building may lose stiffness: on purpose
+        softening = np.min(config.post_yield_ratio) < 0.0
         if lowest < -1e-9 * highest and not softening:
             raise ValueError(
-                f"the yielded building's stiffness is not positive semi-definite (lowest eigenvalue {lowest:.3g} "
-                "N/m): its stories' springs hold more than its stiffness matrix; expected a larger post_yield_ratio"
+                "the yielded building's stiffness is not positive semi-definite (lowest eigenvalue "
+                f"{lowest:.3g} N/m): its stories' springs hold more than its stiffness matrix; expected a "
+                "larger post_yield_ratio"
             )
         return cls(
             floor_gain=building.actuator_matrix * building.force_limits,
@@ -142,17 +143,23 @@ class BoucWen:
         """diag(h) (n, n): each story's hysteretic force from z (N)."""
         return np.diag(self.hysteretic_stiffness)
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+    def step(
+        self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float
+    ) -> np.ndarray:
         """The state after one control step: the action (forces / force limits) held, `ground` the
         r + 1 ground samples (m/s^2) spanning the step."""
-        from rlcontroller.physics.integrators import bouc_wen_step  # numba: imported when first needed
+        from rlcontroller.physics.integrators.yielding import (
+            bouc_wen_step,  # numba: imported when first needed
+        )
 
-        return bouc_wen_step(state, self.floor_gain @ action, ground, control_dt, self.substeps, *self.arrays())
+        return bouc_wen_step(
+            state, self.floor_gain @ action, ground, control_dt, self.substeps, *self.arrays()
+        )
 
     def history(self, ground: np.ndarray, per_step: int, control_dt: float) -> np.ndarray:
         """The uncontrolled states [x; v; z] at every control step (K + 1, 3n) from rest under `ground`
         (m/s^2, K * per_step + 1 samples, `per_step` per control step of `control_dt` s)."""
-        from rlcontroller.physics.integrators import bouc_wen_history
+        from rlcontroller.physics.integrators.yielding import bouc_wen_history
 
         n = self.mass_inverse.size
         return bouc_wen_history(

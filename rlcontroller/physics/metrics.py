@@ -17,7 +17,13 @@ from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY
 from rlcontroller.physics.response import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
-YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J", "collapsed")  # per story, yielding plants
+# per story, yielding plants
+YIELDING_METRICS = (
+    "ductility",
+    "residual_drift_m",
+    "hysteretic_energy_J",
+    "collapsed",
+)
 WIND_METRICS = (  # under floor loads
     "rms_acceleration",
     "rms_acceleration_top",
@@ -90,11 +96,13 @@ def wind_metrics(controlled: Response, uncontrolled: Response) -> dict[str, np.n
     }
 
 
-def device_metrics(result: Response, *, damping: np.ndarray, stroke_limits: np.ndarray) -> dict[str, np.ndarray]:
-    """Per mass device (dashpot coefficients `damping`, N*s/m; `stroke_limits`, m): peak and RMS stroke (m) and the
-    energy its dashpot dissipated (J); per commanded device: peak and RMS power (W), force times
-    the velocity across it, at the control steps (the force held over the step ending there), and
-    the energy it took out of the building (J; negative: it put energy in)."""
+def device_metrics(
+    result: Response, *, damping: np.ndarray, stroke_limits: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Per mass device (dashpot coefficients `damping`, N*s/m; `stroke_limits`, m): peak and RMS stroke (m)
+    and the energy its dashpot dissipated (J); per commanded device: peak and RMS power (W), force times the
+    velocity across it, at the control steps (the force held over the step ending there), and the energy it
+    took out of the building (J; negative: it put energy in)."""
     dt = float(result.time[1] - result.time[0])
     duration = dt * (result.time.size - 1)
     power = result.force * result.device_velocity
@@ -109,9 +117,9 @@ def device_metrics(result: Response, *, damping: np.ndarray, stroke_limits: np.n
 
 
 def stop_metrics(result: Response, stroke_limits: np.ndarray) -> dict[str, np.ndarray]:
-    """Per mass device meeting end-stops (`physics.end_stops`) at `stroke_limits` (m; nan: a free mass): its peak
-    stroke over its limit, the contacts with its stops and the largest force one put on it (N); none without
-    stops."""
+    """Per mass device meeting end-stops (`physics.end_stops`) at `stroke_limits` (m; nan: a free mass): its
+    peak stroke over its limit, the contacts with its stops and the largest force one put on it (N); none
+    without stops."""
     if result.stop_contacts is None:
         return {}
     return {

@@ -9,7 +9,7 @@ configured readings, H = `sensors.history`, m actuators and A = `sensors.action_
 | k (p + 1) ... k (p + 1) + p - 1 | step t - k's readings, with noise and bias | each sensor's `scale` |
 | k (p + 1) + p | step t - k's ground acceleration reading, with noise (m/s^2) | `ground_scale` |
 | H (p + 1) ... H (p + 1) + E - 1 | the estimate (below) | `displacement_scale`, `velocity_scale` |
-| then T = E + n, with `twin` | the fail-safe twin's estimate, then each story's running peak drift (m) | as above |
+| then T = E + n, with `twin` | the fail-safe twin's estimate, each story's running peak drift (m) | ditto |
 | then j m ... + m - 1 | the action applied j steps ago (after the supervisor), in [-1, 1] | 1 |
 
 The estimate: with `state_estimate`, the Kalman estimate of [x (n floors, m); v (n, m/s)], then in an
@@ -69,7 +69,9 @@ class ObservationLayout:
         block, first_action, m = self.block, self.action.start, self.action.stop - self.action.start
         observations[:, block:first_action] = observations[:, : first_action - block]
         observations[:, :block] = readings
-        observations[:, first_action + m : self.actions.stop] = observations[:, first_action : self.actions.stop - m]
+        observations[:, first_action + m : self.actions.stop] = observations[
+            :, first_action : self.actions.stop - m
+        ]
         observations[:, self.action] = action
 
     def scaled_estimate(self, estimates: np.ndarray) -> np.ndarray:
@@ -77,7 +79,8 @@ class ObservationLayout:
         return estimates / self.estimate_scale
 
     def scaled_twin(self, twin: np.ndarray, peaks: np.ndarray) -> np.ndarray:
-        """The twin's estimates (..., E) and running story peaks (..., n), SI units, as they sit in the observation."""
+        """The twin's estimates (..., E) and running story peaks (..., n), SI units, as they sit in the
+        observation."""
         return np.concatenate([twin, peaks], axis=-1) / self.twin_scale
 
 

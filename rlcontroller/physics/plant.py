@@ -20,8 +20,8 @@ the last d steps wait in a buffer, and without a lag a register holds the force 
 last step. Every output is then C x (no feed-through), and z is always x[:2n]. Yielding stories
 (Bouc-Wen, `physics.hysteresis`) make the state [x_floors; v_floors; z_stories]: the step is then
 the non-linear integrator, and every output is still linear in that state and the command. Mass devices with
-a stroke limit meet end-stops (`physics.end_stops`): the state gains their registers, the step their integrator;
-the design model has no stops (a linear design knows the stroke limit only as a limit).
+a stroke limit meet end-stops (`physics.end_stops`): the state gains their registers, the step their
+integrator; the design model has no stops (a linear design knows the stroke limit only as a limit).
 """
 
 from __future__ import annotations
@@ -93,15 +93,21 @@ class Plant:
     def __init__(self, experiment: Experiment, *, stops: bool = True) -> None:
         self.experiment = experiment
         self.config = experiment.plant
-        building = experiment.building if self.config is None else true_building(experiment.building, self.config)
+        building = (
+            experiment.building if self.config is None else true_building(experiment.building, self.config)
+        )
         self.building = build_any(building, experiment.actuators)
         if experiment.devices:  # tuned on the design model's floors, attached to this plant's
-            design = self.building if self.config is None else build(experiment.building, experiment.actuators)
+            design = (
+                self.building if self.config is None else build(experiment.building, experiment.actuators)
+            )
             devices = tune_devices(design, experiment.devices)
             if self.config is not None:
                 factors = self.config.devices
                 devices = tuple(
-                    replace(d, stiffness=d.stiffness * factors.frequency**2, damping=d.damping * factors.damping)
+                    replace(
+                        d, stiffness=d.stiffness * factors.frequency**2, damping=d.damping * factors.damping
+                    )
                     for d in devices
                 )
             self.building = with_devices(self.building, devices)
@@ -123,7 +129,11 @@ class Plant:
         self.fe_model = None
         if fe is not None:  # the building is its design model; the FE model steps itself
             self.fe_model = OpenSeesIntegrator(
-                Path(fe.model), fe.function, fe.analysis_dt, self.building.actuator_matrix, self.building.force_limits
+                Path(fe.model),
+                fe.function,
+                fe.analysis_dt,
+                self.building.actuator_matrix,
+                self.building.force_limits,
             )
         self.force_limits = self.building.force_limits
         self.control_dt = experiment.simulation.control_dt
@@ -136,9 +146,11 @@ class Plant:
         self.n_state = size + lag + self.delay_steps * m + held
         self.n_state += self.building.n_floors if self.yielding is not None else 0
         self.n_state += self.semi_active.size if self.semi_active is not None else 0
-        self.n_state += self.building.n_dofs if self.fe_model is not None else 0  # [x; v; absolute accelerations]
+        # [x; v; absolute accelerations]
+        self.n_state += self.building.n_dofs if self.fe_model is not None else 0
         self.end_stops = None
-        if stops and self.semi_active is None:  # dampers with stopped masses: refused by the experiment's checks
+        # dampers with stopped masses: refused by the experiment's checks
+        if stops and self.semi_active is None:
             self.end_stops = EndStops.of(
                 self.building,
                 experiment.simulation,
@@ -148,13 +160,18 @@ class Plant:
                 linear_step=self._linear_step,
             )
         self.n_state += self.end_stops.size if self.end_stops is not None else 0
-        self.integrator = self.fe_model or self.yielding or self.semi_active or self.end_stops  # when not linear
+        # when not linear
+        self.integrator = self.fe_model or self.yielding or self.semi_active or self.end_stops
         faults = self.config.sensors if self.config is not None else None
         self.sensors = sensor_matrices(self.outputs, self.building, experiment.sensors, faults)
         self.wind = design_wind(experiment)
         load_scale = np.sqrt(np.diag(self.wind.covariance)) if self.wind is not None else None
         self.layout = observation_layout(
-            self.building, experiment.sensors, self.sensors.c.shape[0], self.sensors.scale, load_scale=load_scale
+            self.building,
+            experiment.sensors,
+            self.sensors.c.shape[0],
+            self.sensors.scale,
+            load_scale=load_scale,
         )
         self.ground_model = GroundModel()
         self._sampled: dict[int, SampledPlant] = {}  # sub-steps -> this plant sampled
@@ -179,7 +196,9 @@ class Plant:
         if self._bare is None:
             experiment = self.experiment
             kept = [m for m in experiment.sensors.measurements if m.quantity not in ("stroke", "force")]
-            sensors = experiment.sensors.model_copy(update={"measurements": kept or SensorConfig().measurements})
+            sensors = experiment.sensors.model_copy(
+                update={"measurements": kept or SensorConfig().measurements}
+            )
             terms = [term for term in experiment.reward.terms if term.quantity != "stroke"]
             reward = experiment.reward.model_copy(update={"terms": terms})
             update = {"devices": [], "sensors": sensors, "reward": reward, "supervisor": None}
@@ -203,10 +222,16 @@ class Plant:
         on the plant itself for the robustness study's oracle)."""
         experiment = self.experiment
         dampers = [d for d in experiment.devices if d.semi_active]
-        actuators = [*experiment.actuators, *(ActuatorConfig(story=d.story, force_limit=d.capacity) for d in dampers)]
+        actuators = [
+            *experiment.actuators,
+            *(ActuatorConfig(story=d.story, force_limit=d.capacity) for d in dampers),
+        ]
         masses = [d for d in experiment.devices if not d.semi_active]
-        if any(d.command_label() is not None for d in masses):  # the action's order: actuators, drivers, dampers
-            raise ValueError("clipped-optimal control with active mass drivers and dampers together is not built")
+        # the action's order: actuators, drivers, dampers
+        if any(d.command_label() is not None for d in masses):
+            raise ValueError(
+                "clipped-optimal control with active mass drivers and dampers together is not built"
+            )
         return Plant(experiment.model_copy(update={"actuators": actuators, "devices": masses}))
 
     @property
@@ -237,7 +262,8 @@ class Plant:
         return self._pushover.yield_drift
 
     def _linear_step(self, substeps: int):
-        """This plant's own linear control-step map, what its end-stops superpose on (a method: it pickles)."""
+        """This plant's own linear control-step map, what its end-stops superpose on (a method: it
+        pickles)."""
         return self.sampled(substeps).step
 
     @property
@@ -256,16 +282,19 @@ class Plant:
         return self._linear_outputs(quantity)
 
     def _stopped_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
-        """The linear plant's outputs with the stops' force registers: a stop pushes its mass with f and its floor
-        with -f, which the floor's acceleration feels at once (`physics.end_stops`); a story shear counts the mass's
-        inertia with its floor's, to which the stop's force is internal: it feels the impact through the motion."""
+        """The linear plant's outputs with the stops' force registers: a stop pushes its mass with f and its
+        floor with -f, which the floor's acceleration feels at once (`physics.end_stops`); a story shear
+        counts the mass's inertia with its floor's, to which the stop's force is internal: it feels the impact
+        through the motion."""
         c, d = self._linear_outputs(quantity)
         stops = self.end_stops
         full = np.zeros((c.shape[0], self.n_state))
         full[:, : c.shape[1]] = c
         if quantity in ("absolute_acceleration", "story_shear", "base_shear"):
             pushed = replace(self.building, actuator_matrix=stops.contact_matrix())
-            full[:, stops.n_linear : stops.n_linear + stops.devices.size] = output_matrices(pushed, quantity)[1]
+            full[:, stops.n_linear : stops.n_linear + stops.devices.size] = output_matrices(pushed, quantity)[
+                1
+            ]
         return full, d
 
     def _linear_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
@@ -284,7 +313,8 @@ class Plant:
         if self.time_constant > 0:
             full[:, size : size + m] = d  # the delivered force is a state
         else:
-            full[:, self.n_linear - m : self.n_linear] = d  # the register of the force applied over the last step
+            # the register of the force applied over the last step
+            full[:, self.n_linear - m : self.n_linear] = d
         return full, np.zeros_like(d)
 
     def _fe_outputs(self, quantity: Quantity) -> tuple[np.ndarray, np.ndarray]:
@@ -341,7 +371,12 @@ class Plant:
         """Why this plant cannot be loaded by a load of `kind` (`excitation.FLOOR_FORCES` or
         `GROUND_ACCELERATION`), in one line; None when it can."""
         if kind == FLOOR_FORCES and self.integrator not in (None, self.end_stops):
-            return "floor loads (wind) on a building with yielding stories or semi-active dampers are not modelled"
+            return (
+                "floor loads (wind) on a building with yielding stories or semi-active dampers are not "
+                "modelled"
+            )
         if kind == FLOOR_FORCES and isinstance(self.building, StateSpaceBuilding):
-            return "a state-space model takes the ground acceleration only (it declares no floor-force inputs)"
+            return (
+                "a state-space model takes the ground acceleration only (it declares no floor-force inputs)"
+            )
         return None

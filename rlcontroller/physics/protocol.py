@@ -38,7 +38,9 @@ class Integrator(Protocol):
     from outside): the state after one step of `control_dt` with `action` (forces / force limits) held and
     `ground` the r + 1 ground samples (m/s^2) spanning the step."""
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray: ...
+    def step(
+        self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float
+    ) -> np.ndarray: ...
 
 
 @runtime_checkable

@@ -1,8 +1,9 @@
 """A plant's time histories at its control steps (SI units), and the one function that makes them from states.
 
-Every consumer (the batch, the env, evaluation, the FE loop) simulates states; `response` turns states, the forces
-held over each step and the floor forces into every quantity the tables and the standard read, through the
-plant's output matrices (C, D on the state): outputs at t_k use the force held over the step ending at t_k.
+Every consumer (the batch, the env, evaluation, the FE loop) simulates states; `response` turns states, the
+forces held over each step and the floor forces into every quantity the tables and the standard read, through
+the plant's output matrices (C, D on the state): outputs at t_k use the force held over the step ending at
+t_k.
 """
 
 from __future__ import annotations
@@ -63,8 +64,8 @@ def response(
 ) -> Response:
     """Every time history from states x (K+1, size), the forces (N) held just before each instant (K+1, m)
     and the floor forces (N) at each instant (K+1, floors), if any, through `outputs(quantity)` = (C, D) on
-    x and `load_outputs(quantity)` (how floor forces enter it); with `story_force_map` (n, n: the stories' shear
-    carried by the hysteretic parts from z, x = [x; v; z]) also the story hysteretic forces (N)."""
+    x and `load_outputs(quantity)` (how floor forces enter it); with `story_force_map` (n, n: the stories'
+    shear carried by the hysteretic parts from z, x = [x; v; z]) also the story hysteretic forces (N)."""
     values = {}
     for quantity in RESPONSE_QUANTITIES:
         c, d = outputs(quantity)

@@ -80,6 +80,7 @@ class Sampleable(Protocol):
 
     def cannot_take(self, kind: str) -> str | None: ...
 
+
 class SampledPlant:
     """`plant` sampled at its control step with `substeps` load samples per step (module docstring); each
     map is built on first use and kept."""
@@ -114,7 +115,9 @@ class SampledPlant:
                 b_force=np.vstack([np.zeros((size, m)), np.eye(m) / plant.time_constant]),
                 b_ground=np.concatenate([system.b_ground, np.zeros(m)]),
             )
-            core = compose(exact_substep(lagged, self.control_dt / self.substeps), self.substeps, self.control_dt)
+            core = compose(
+                exact_substep(lagged, self.control_dt / self.substeps), self.substeps, self.control_dt
+            )
         else:
             core = self.structure
         return _delayed(core, plant.delay_steps, m, plant.n_linear, lagged=plant.time_constant > 0)
@@ -132,7 +135,8 @@ class SampledPlant:
 
     @cached_property
     def ground_model(self) -> StepMap:
-        """The exact control-step map of the building and its Kanai-Tajimi ground model (`plant.ground_model`)."""
+        """The exact control-step map of the building and its Kanai-Tajimi ground model
+        (`plant.ground_model`)."""
         return ground_model_step(self.plant.building, self.control_dt, self.plant.ground_model)
 
     @cached_property
@@ -159,15 +163,16 @@ class SampledPlant:
         forcing = np.zeros((n_steps, n_state + c.shape[0]))
         if self.plant.integrator is None:
             forcing[:, :n_state] = self.step.ground_terms(grid.ground)
-        if grid.floor_forces is not None and self.plant.integrator is None:  # end-stops take them in their step
+        # end-stops take them in their step
+        if grid.floor_forces is not None and self.plant.integrator is None:
             forcing[:, :n_state] += self.load_terms(grid)
             forcing[:, n_state:] = grid.floor_forces[grid.substeps :: grid.substeps][:n_steps] @ load_rows.T
         forcing[:, n_state:] += forcing[:, :n_state] @ c.T
         return forcing
 
     def transition(self, c: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """T with [x_{k+1} | y_{k+1}] = [x_k | action_k] @ T + forcing[k], for outputs y = c x + d u (u in N, the
-        action times the force limits); linear plants."""
+        """T with [x_{k+1} | y_{k+1}] = [x_k | action_k] @ T + forcing[k], for outputs y = c x + d u (u in N,
+        the action times the force limits); linear plants."""
         step, force_limits = self.step, self.plant.force_limits
         force_gain = step.force_gain * force_limits
         return np.vstack(
@@ -182,7 +187,9 @@ class SampledPlant:
         on another number of floors than the building's)."""
         floors = self.plant.building.n_floors
         if grid.floor_forces.shape[1] != floors:
-            raise MotionError(f"floor forces on {grid.floor_forces.shape[1]} floors, the building has {floors}")
+            raise MotionError(
+                f"floor forces on {grid.floor_forces.shape[1]} floors, the building has {floors}"
+            )
         return self.load.terms(grid.floor_forces)
 
     def simulate(self, grid: LoadGrid) -> Response:
@@ -200,12 +207,18 @@ class SampledPlant:
         held = np.zeros((n_steps + 1, building.n_actuators))
         time = np.arange(n_steps + 1) * self.control_dt
         ground = grid.ground[:: self.substeps][: n_steps + 1]
-        floor_forces = None if grid.floor_forces is None else grid.floor_forces[:: self.substeps][: n_steps + 1]
+        floor_forces = (
+            None if grid.floor_forces is None else grid.floor_forces[:: self.substeps][: n_steps + 1]
+        )
         return response(
             lambda quantity: output_matrices(building, quantity),
             lambda quantity: load_feedthrough(building, quantity),
-            states, held, time=time, ground=ground, floor_forces=floor_forces,
-        )  # fmt: skip
+            states,
+            held,
+            time=time,
+            ground=ground,
+            floor_forces=floor_forces,
+        )
 
     def response(
         self,
@@ -249,7 +262,8 @@ def _delayed(core: StepMap, delay: int, m: int, size: int, lagged: bool) -> Step
     inner = core.phi.shape[0]
     phi = np.zeros((size, size))
     phi[:inner, :inner] = core.phi
-    oldest = slice(inner + (delay - 1) * m, inner + delay * m)  # the command of `delay` steps ago, applied now
+    # the command of `delay` steps ago, applied now
+    oldest = slice(inner + (delay - 1) * m, inner + delay * m)
     phi[:inner, oldest] = core.force_gain
     for j in range(1, delay):  # the buffer shifts by one step
         phi[inner + j * m : inner + (j + 1) * m, inner + (j - 1) * m : inner + j * m] = np.eye(m)

@@ -72,22 +72,41 @@ class SemiActiveDampers:
             self._maps[intervals] = (per_interval, *(np.ascontiguousarray(m) for m in maps))
         return self._maps[intervals]
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+    def step(
+        self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float
+    ) -> np.ndarray:
         """The state after one control step: the action held (the active devices' forces / force
         limits, the dampers' commands in [-1, 1]), `ground` the r + 1 ground samples (m/s^2) spanning
         the step."""
         return self.step_many(state[None], action[None], ground[None], control_dt)[0]
 
-    def step_many(self, states: np.ndarray, actions: np.ndarray, grounds: np.ndarray, control_dt: float) -> np.ndarray:
+    def step_many(
+        self, states: np.ndarray, actions: np.ndarray, grounds: np.ndarray, control_dt: float
+    ) -> np.ndarray:
         """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds
         (N, r + 1)), in one compiled call."""
-        per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(grounds.shape[1] - 1, control_dt)
+        per_interval, phi, force_gain, ground_start, ground_end = self._substep_maps(
+            grounds.shape[1] - 1, control_dt
+        )
         first, building = self.first_command, self.building
         active = actions[:, :first] @ (building.actuator_matrix[:, :first] * building.force_limits[:first]).T
         h = control_dt / ((grounds.shape[1] - 1) * per_interval)
-        from rlcontroller.physics.integrators import damper_step_many  # numba: imported when first needed
+        from rlcontroller.physics.integrators.dampers import (
+            damper_step_many,  # numba: imported when first needed
+        )
 
         return damper_step_many(
-            states, active, np.ascontiguousarray(actions[:, first:]), grounds, per_interval, h, phi, force_gain,
-            ground_start, ground_end, self.stories, self.kinds, self.parameters,
-        )  # fmt: skip
+            states,
+            active,
+            np.ascontiguousarray(actions[:, first:]),
+            grounds,
+            per_interval,
+            h,
+            phi,
+            force_gain,
+            ground_start,
+            ground_end,
+            self.stories,
+            self.kinds,
+            self.parameters,
+        )

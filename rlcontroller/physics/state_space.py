@@ -94,7 +94,8 @@ class StateSpaceBuilding:
 
 def continuous(a: np.ndarray, b: np.ndarray, sample_time: float) -> tuple[np.ndarray, np.ndarray]:
     """The continuous (A, B) whose zero-order-hold discretisation at `sample_time` is the discrete (a, b):
-    the matrix logarithm of [[a, b], [0, I]] over the sample time (the inverse of `dynamics.exact_substep`)."""
+    the matrix logarithm of [[a, b], [0, I]] over the sample time (the inverse of
+    `dynamics.exact_substep`)."""
     n, inputs = b.shape
     augmented = np.block([[a, b], [np.zeros((inputs, n)), np.eye(inputs)]])
     logarithm = scipy.linalg.logm(augmented) / sample_time

@@ -40,7 +40,9 @@ class Building:
     force_limits: np.ndarray
     story_heights: np.ndarray | None = None
     devices: tuple[MassDevice, ...] = ()
-    dampers: tuple[DamperConfig, ...] = ()  # semi-active, as configured; their commands are the last columns of Gamma
+    dampers: tuple[
+        DamperConfig, ...
+    ] = ()  # semi-active, as configured; their commands are the last columns of Gamma
 
     @property
     def n_dofs(self) -> int:
@@ -115,7 +117,9 @@ def shear_stiffness_matrix(story_stiffness: np.ndarray) -> np.ndarray:
     return matrix
 
 
-def rayleigh_coefficients(omega_a: float, ratio_a: float, omega_b: float, ratio_b: float) -> tuple[float, float]:
+def rayleigh_coefficients(
+    omega_a: float, ratio_a: float, omega_b: float, ratio_b: float
+) -> tuple[float, float]:
     """Coefficients (a0, a1) of C = a0 M + a1 K giving the two damping ratios at the two frequencies.
 
     Each mode's ratio is zeta = a0 / (2 omega) + a1 omega / 2.
@@ -165,9 +169,14 @@ def with_devices(building: Building, devices: tuple[MassDevice, ...]) -> Buildin
         gamma[n + index, column], gamma[devices[index].floor - 1, column] = 1.0, -1.0
     limits = np.concatenate([building.force_limits, [devices[index].force_limit for index in active]])
     return replace(
-        building, mass=mass, stiffness=stiffness, damping=damping, actuator_matrix=gamma, force_limits=limits,
+        building,
+        mass=mass,
+        stiffness=stiffness,
+        damping=damping,
+        actuator_matrix=gamma,
+        force_limits=limits,
         devices=devices,
-    )  # fmt: skip
+    )
 
 
 def with_dampers(building: Building, dampers: list[DamperConfig]) -> Building:
@@ -220,7 +229,9 @@ def build(building: BuildingConfig, actuators: list[ActuatorConfig]) -> Building
     else:
         omega, _ = natural_modes(mass, stiffness)
         first, second = building.damping.rayleigh
-        a0, a1 = rayleigh_coefficients(omega[first.mode - 1], first.ratio, omega[second.mode - 1], second.ratio)
+        a0, a1 = rayleigh_coefficients(
+            omega[first.mode - 1], first.ratio, omega[second.mode - 1], second.ratio
+        )
         damping = a0 * mass + a1 * stiffness
     heights = None if building.story_heights is None else np.asarray(building.story_heights, dtype=float)
     return Building(

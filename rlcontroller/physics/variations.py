@@ -1,6 +1,6 @@
 """How a simulated plant differs from its design model: the `plant` part's factors and damage applied to
-the building (a damper stronger or weaker than designed is its own `scaled`), and random plant parts drawn from a
-`plant_randomization` (or its centre, what a careful engineer designs on)."""
+the building (a damper stronger or weaker than designed is its own `scaled`), and random plant parts drawn
+from a `plant_randomization` (or its centre, what a careful engineer designs on)."""
 
 from __future__ import annotations
 
@@ -36,13 +36,17 @@ def true_building(building: BuildingPart, plant: PlantConfig) -> BuildingPart:
             update["modal_damping"] = [ratio * plant.damping for ratio in building.modal_damping]
         return building.model_copy(update=update)
     n = len(building.masses)
-    stiffness = np.asarray(building.stiffnesses) * np.broadcast_to(np.asarray(plant.stiffness, dtype=float), n)
+    stiffness = np.asarray(building.stiffnesses) * np.broadcast_to(
+        np.asarray(plant.stiffness, dtype=float), n
+    )
     for damage in plant.damage:
         stiffness[damage.story - 1] *= 1.0 + damage.stiffness
     masses = np.asarray(building.masses) * np.broadcast_to(np.asarray(plant.mass, dtype=float), n)
     damping = building.damping
     if damping.rayleigh is not None:
-        pairs = tuple(pair.model_copy(update={"ratio": pair.ratio * plant.damping}) for pair in damping.rayleigh)
+        pairs = tuple(
+            pair.model_copy(update={"ratio": pair.ratio * plant.damping}) for pair in damping.rayleigh
+        )
         damping = damping.model_copy(update={"rayleigh": pairs})
     else:
         damping = damping.model_copy(update={"matrix": (np.asarray(damping.matrix) * plant.damping).tolist()})
@@ -51,7 +55,9 @@ def true_building(building: BuildingPart, plant: PlantConfig) -> BuildingPart:
     )
 
 
-def draw_plant(randomization: PlantRandomization, base: PlantConfig | None, rng: np.random.Generator) -> PlantConfig:
+def draw_plant(
+    randomization: PlantRandomization, base: PlantConfig | None, rng: np.random.Generator
+) -> PlantConfig:
     """One random plant part: the ranged fields drawn (uniform, log-uniform or whole numbers) with `rng`,
     in the fixed order of RANDOMIZED_FIELDS (a field added there goes last: earlier draws stay), the rest
     from `base`."""

@@ -43,7 +43,9 @@ class BuildingBatch:
     plant states x then the clipped actions, `plants`, `steps` (K per member), `k` (steps taken).
     """
 
-    def __init__(self, plant: Plant, size: int, motions: list[Load] | None = None, randomize: bool = False) -> None:
+    def __init__(
+        self, plant: Plant, size: int, motions: list[Load] | None = None, randomize: bool = False
+    ) -> None:
         experiment = plant.experiment
         self.plant, self.size, self.motions = plant, size, motions
         self.randomization = experiment.plant_randomization if randomize else None
@@ -96,8 +98,9 @@ class BuildingBatch:
         self._stacked = None
 
     def _drawn_plant(self, drawn: PlantConfig) -> tuple[Plant, StepOutputs, dict[int, np.ndarray]]:
-        """The plant of a drawn plant part with its output rows and its transitions per sampling, built once per
-        distinct draw (a whole-number draw, such as a delay, repeats; continuous ones are kept up to DRAWN_KEPT)."""
+        """The plant of a drawn plant part with its output rows and its transitions per sampling, built once
+        per distinct draw (a whole-number draw, such as a delay, repeats; continuous ones are kept up to
+        DRAWN_KEPT)."""
         key = drawn.model_dump_json()
         if key not in self._drawn:
             if len(self._drawn) >= DRAWN_KEPT:
@@ -110,10 +113,13 @@ class BuildingBatch:
         self, member: int, rng: np.random.Generator, motion: Load | None = None, grid: LoadGrid | None = None
     ) -> None:
         """Start `member` from rest: draw its plant (with randomisation) and motion (unless given, with
-        its `grid` when known), then its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws them."""
+        its `grid` when known), then its sensor noise, from `rng`, in the order `BuildingEnv.reset` draws
+        them."""
         plant, rows, transitions = self.plant, self.rows, self._cache
         if self.randomization is not None:
-            plant, rows, transitions = self._drawn_plant(draw_plant(self.randomization, plant.experiment.plant, rng))
+            plant, rows, transitions = self._drawn_plant(
+                draw_plant(self.randomization, plant.experiment.plant, rng)
+            )
         reused = motion is not None or bool(self.motions)  # a motion other members may start with too
         if motion is None:
             if self.motions:
@@ -268,7 +274,11 @@ class BuildingBatch:
             k = min(self.k[member], windows.shape[0] - 1)
             limits = plant.force_limits
             arguments = (self.states[member, :n], clipped[member], windows[k], self.control_dt)
-            state = plant.integrator.step(*arguments) if loads is None else plant.integrator.step(*arguments, loads[k])
+            state = (
+                plant.integrator.step(*arguments)
+                if loads is None
+                else plant.integrator.step(*arguments, loads[k])
+            )
             rows = self._member_rows[member]
             new[member, :n] = state
             new[member, size:] = state @ rows.c.T + clipped[member] @ (rows.d * limits).T

@@ -4,8 +4,8 @@ The engine is `local` (forked processes here, as many as cores) or `dask` (the w
 local one, or an existing scheduler's); a command chooses it for what it runs inside `engine(...)`
 (`--engine dask` of `rlc evaluate`, `compare lqg`, `check`). `rlc sweep` connects to Dask the same way
 (`dask_client`). Inside `model_messages()` what the model itself prints while it runs (OpenSees' warnings and
-FAILURE lines, on its standard output and error) goes to a log instead of the terminal; the command keeps it in
-its output folder and says how many lines it holds (local engine: the forked workers, or this process).
+FAILURE lines, on its standard output and error) goes to a log instead of the terminal; the command keeps it
+in its output folder and says how many lines it holds (local engine: the forked workers, or this process).
 """
 
 from __future__ import annotations
@@ -51,13 +51,18 @@ def dask_client(workers: int, address: str | None) -> Iterator[Any]:
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise ConfigError("--engine dask needs Dask distributed: pip install 'rlcontroller[distributed]'") from None
+        raise ConfigError(
+            "--engine dask needs Dask distributed: pip install 'rlcontroller[distributed]'"
+        ) from None
     for name in [*logging.root.manager.loggerDict, "distributed", "distributed.client"]:
-        if name.startswith("distributed"):  # a lost scheduler is reported by the caller, once, not as log tracebacks
+        # a lost scheduler is reported by the caller, once, not as log tracebacks
+        if name.startswith("distributed"):
             logging.getLogger(name).setLevel(logging.CRITICAL)
     cluster = None
     if address is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
     try:
         client = Client(cluster if cluster is not None else address, timeout="30s")
     except OSError as error:
@@ -154,7 +159,9 @@ def fanned_map(function: Callable[[Any, Any], Any], shared: Any, items: list) ->
     global _SHARED
     _SHARED = (function, shared)
     context = multiprocessing.get_context("fork")
-    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker, initargs=(os.getpid(), log))
+    pool = ProcessPoolExecutor(
+        workers, mp_context=context, initializer=_start_worker, initargs=(os.getpid(), log)
+    )
     try:
         yield from pool.map(_call, items)
     finally:
@@ -164,8 +171,8 @@ def fanned_map(function: Callable[[Any, Any], Any], shared: Any, items: list) ->
 
 def _start_worker(parent: int, log: Path | None) -> None:
     """Worker initializer: what the worker's model prints goes to `log` (if any), and the worker ends once its
-    parent is gone (a SIGTERM or kill of rlc would otherwise leave it running its FE model, or waiting for work,
-    for good)."""
+    parent is gone (a SIGTERM or kill of rlc would otherwise leave it running its FE model, or waiting for
+    work, for good)."""
     if log is not None:
         target = os.open(log, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
         os.dup2(target, 1)

@@ -4,13 +4,13 @@ Every controller is judged against the building uncontrolled on the same motions
 fail-safe reference of a building without devices or supervisor): on an FE model those runs are half of
 `rlc check`'s work and never depend on the controller. They are kept in one file per FE model and suite,
 named by the sha256 of everything they depend on: the model's folder (every .py, .tcl and .yaml file in it:
-a model sources its neighbours), the function that builds it, the analysis and control steps, whether member ends
-are read, every motion's samples, and rlc's version. A change to any of them names another file; a file that does
-not read back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
-~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under the ground (its peak drift
-under 1 % of its design model's under the same motion: its masses do not feel the ground) is refused before any
-run (`check_moves`: a unit ground pulse, in this process, a fraction of a second of analysis) and, should a motion
-find what the pulse did not, before anything is kept or judged.
+a model sources its neighbours), the function that builds it, the analysis and control steps, whether member
+ends are read, every motion's samples, and rlc's version. A change to any of them names another file; a file
+that does not read back is computed again. The folder is $RLC_CACHE, else $XDG_CACHE_HOME/rlcontroller, else
+~/.cache/rlcontroller; deleting it costs only the runs. A model that stands still under the ground (its peak
+drift under 1 % of its design model's under the same motion: its masses do not feel the ground) is refused
+before any run (`check_moves`: a unit ground pulse, in this process, a fraction of a second of analysis) and,
+should a motion find what the pulse did not, before anything is kept or judged.
 """
 
 from __future__ import annotations
@@ -33,7 +33,8 @@ from rlcontroller.physics.response import Response
 from rlcontroller.simulation.rollout import uncontrolled_responses
 
 MODEL_SUFFIXES = (".py", ".tcl", ".yaml")
-STANDING_STILL = 0.01  # of the design model's peak drift under the same motion: an FE model moving less stands still
+# of the design model's peak drift under the same motion: an FE model moving less stands still
+STANDING_STILL = 0.01
 
 
 def cache_folder() -> Path:
@@ -49,7 +50,9 @@ def reference_key(plant: Plant, motions: list[Load]) -> str:
     from rlcontroller import __version__
 
     fe = plant.fe_model
-    digest = hashlib.sha256(f"rlc {__version__}; {fe.function}; {fe.analysis_dt!r}; {plant.control_dt!r}".encode())
+    digest = hashlib.sha256(
+        f"rlc {__version__}; {fe.function}; {fe.analysis_dt!r}; {plant.control_dt!r}".encode()
+    )
     if fe.record_connections:  # the member ends too
         digest.update(b"connections")
     folder = Path(fe.path).parent
@@ -67,8 +70,8 @@ PULSE_S = 1.0  # the stand-still test: a ground pulse of one control step at 1 m
 
 
 def check_moves(plant: Plant) -> float:
-    """The FE plant's peak drift under a unit ground pulse over its design model's (stepped here, in this process:
-    the model is built once more); ModelError, one line, before any run, when it stands still."""
+    """The FE plant's peak drift under a unit ground pulse over its design model's (stepped here, in this
+    process: the model is built once more); ModelError, one line, before any run, when it stands still."""
     steps = max(2, round(PULSE_S / plant.control_dt))
     ground = np.zeros(steps + 1)
     ground[1] = 1.0  # m/s^2: up over the first step, down over the second
@@ -86,15 +89,18 @@ def check_moves(plant: Plant) -> float:
 def _refuse_standing_still(plant: Plant, what: str, peak: float, expected: float) -> None:
     if peak < STANDING_STILL * expected:
         raise ModelError(
-            f"{plant.fe_model.path}: the model stands still under {what} (peak drift {peak:.1e} m, its design model "
-            f"{expected:.1e} m): its masses do not feel the ground; masses on nodes tied by equalDOF under the "
+            f"{plant.fe_model.path}: the model stands still under {what} (peak drift {peak:.1e} m, its "
+            f"design model {expected:.1e} m): its masses do not feel the ground; masses on nodes tied by "
+            "equalDOF under the "
             'Transformation handler do not (docs/opensees.md, "A Tcl model"): try constraints: [Plain]'
         )
 
 
-def uncontrolled(plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None) -> list[Response]:
-    """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring); an FE plant's runs are
-    reported to `on_motions` as each is done (all at once when kept)."""
+def uncontrolled(
+    plant: Plant, motions: list[Load], on_motions: Callable[[int], None] | None = None
+) -> list[Response]:
+    """`uncontrolled_responses(plant, motions)`, kept for an FE plant (module docstring); an FE plant's runs
+    are reported to `on_motions` as each is done (all at once when kept)."""
     if plant.fe_model is None:
         return uncontrolled_responses(plant, motions)
     path = cache_folder() / f"uncontrolled-{reference_key(plant, motions)}.npz"

@@ -24,8 +24,9 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
     """A with s_{k+1} = A s_k for the closed loop linearised at rest without ground motion, noise or
     supervisor (`control.supervisor`: its trigger keeps a policy off at rest, its dissipative rule is
     not differentiable there), s = [plant state x; observation] (the observation holds the sensor
-    history, the filter's estimate and the last actions, so it is the controller's whole state). Central differences of
-    one batched control step from +/- `step` along each coordinate (exact for a linear policy)."""
+    history, the filter's estimate and the last actions, so it is the controller's whole state). Central
+    differences of one batched control step from +/- `step` along each coordinate (exact for a linear
+    policy)."""
     if plant.experiment.supervisor is not None:
         plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
     n_x, n_o = plant.n_state, plant.layout.size

@@ -38,7 +38,9 @@ class StepOutputs:
     quadratic: bool  # every term squared
     change_factor: np.ndarray | None  # force limit * weight^(1/power) / scale per change row
 
-    def reward_terms(self, weighted: np.ndarray, action: np.ndarray, previous_action: np.ndarray) -> np.ndarray:
+    def reward_terms(
+        self, weighted: np.ndarray, action: np.ndarray, previous_action: np.ndarray
+    ) -> np.ndarray:
         """Each reward term's value (positive: the reward is minus their sum), shape (..., terms), from
         the outputs' weighted reward rows `outputs[..., reward]` and the action held over the step and
         over the step before."""
@@ -50,7 +52,8 @@ class StepOutputs:
         starts, rows = self.reward_starts, values.shape[-1]
         if starts.size and starts[-1] < rows and np.all(np.diff(starts) > 0):
             return np.add.reduceat(values, starts, axis=-1)
-        # a term without rows (the force of a building with nothing to command) is 0; reduceat would not say so
+        # a term without rows (the force of a building with nothing to command) is 0; reduceat would not say
+        # so
         ends = np.append(starts[1:], rows)
         padded = np.concatenate([values, np.zeros(values.shape[:-1] + (1,))], axis=-1)
         return np.where(ends > starts, np.add.reduceat(padded, np.minimum(starts, rows), axis=-1), 0.0)
@@ -72,12 +75,18 @@ def step_outputs(plant: Plant) -> StepOutputs:
     linear_terms = [t for t in experiment.reward.terms if t.quantity != "force_change"]
     change_terms = [t for t in experiment.reward.terms if t.quantity == "force_change"]
     reward_c, reward_d, reward_factor, reward_slices = reward_matrices(plant, linear_terms)
-    starts = [rows.start for rows in reward_slices] + [reward_c.shape[0] + i * m for i in range(len(change_terms))]
-    row_powers = [np.full(rows.stop - rows.start, t.power) for t, rows in zip(linear_terms, reward_slices, strict=True)]
+    starts = [rows.start for rows in reward_slices] + [
+        reward_c.shape[0] + i * m for i in range(len(change_terms))
+    ]
+    row_powers = [
+        np.full(rows.stop - rows.start, t.power) for t, rows in zip(linear_terms, reward_slices, strict=True)
+    ]
     row_powers += [np.full(m, t.power) for t in change_terms]
     change_factor = None
     if change_terms:
-        change_factor = np.concatenate([plant.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms])
+        change_factor = np.concatenate(
+            [plant.force_limits * t.weight ** (1 / t.power) / t.scale for t in change_terms]
+        )
     blocks = [
         (sensors.c / sensors.scale[:, None], sensors.d / sensors.scale[:, None]),
         (np.zeros((1, plant.n_state)), np.zeros((1, m))),
@@ -123,5 +132,7 @@ def noisy_readings(plant: Plant, ground: np.ndarray, rng: np.random.Generator) -
     readings = np.empty((ground.size, p + 1))
     readings[:, :p] = rng.standard_normal((ground.size, p)) * (sensors.noise_std / sensors.scale)
     readings[:, :p] += sensors.bias / sensors.scale
-    readings[:, p] = (ground + config.ground_noise_std * rng.standard_normal(ground.size)) / config.ground_scale
+    readings[:, p] = (
+        ground + config.ground_noise_std * rng.standard_normal(ground.size)
+    ) / config.ground_scale
     return readings

@@ -39,7 +39,9 @@ def batch_rollout(
     seeds = list(range(len(motions))) if seeds is None else list(seeds)
     grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
     if plant.fe_model is not None:
-        return _fanned_rollout(plant, list(zip(motions, grids, strict=True)), controllers, seeds, randomize, on_motions)
+        return _fanned_rollout(
+            plant, list(zip(motions, grids, strict=True)), controllers, seeds, randomize, on_motions
+        )
     lengths = [grid.n_steps for grid in grids]  # control steps
     order = sorted(range(len(motions)), key=lambda i: lengths[i])
     results: list[list] = [[None] * len(motions) for _ in controllers]
@@ -90,7 +92,11 @@ def _fanned_run(shared: tuple, run: tuple[int, int]) -> tuple[Response, float]:
 
 
 def _rollout_chunk(
-    plant: Plant, loads: list[tuple[Load, LoadGrid]], controllers: list[Controller], seeds: list[int], randomize: bool
+    plant: Plant,
+    loads: list[tuple[Load, LoadGrid]],
+    controllers: list[Controller],
+    seeds: list[int],
+    randomize: bool,
 ) -> list[list[tuple[Response, float]]]:
     count = len(loads)
     batch = BuildingBatch(plant, count * len(controllers), randomize=randomize)
@@ -162,7 +168,9 @@ def uncontrolled_responses(
     simulations with the step map, or a batch through the non-linear step for yielding stories (and an FE
     model's runs, each motion reported to `on_motions` as it is done)."""
     if plant.integrator is not None:
-        runs = batch_rollout(plant, motions, [Uncontrolled(plant.building.n_actuators)], on_motions=on_motions)[0]
+        runs = batch_rollout(
+            plant, motions, [Uncontrolled(plant.building.n_actuators)], on_motions=on_motions
+        )[0]
         return [response for response, _ in runs]
     grids = [on_control_grid(motion, plant.control_dt) for motion in motions]
     return [plant.sampled(grid.substeps).simulate(grid) for grid in grids]

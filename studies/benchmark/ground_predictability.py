@@ -24,7 +24,8 @@ HORIZONS = (1, 2, 5, 10)
 
 
 def prediction_r2(ground: np.ndarray, horizon: int, history: int = HISTORY) -> float:
-    """R^2 of the least-squares AR(history) prediction of ground[k + horizon - 1] from ground[k - history:k]."""
+    """R^2 of the least-squares AR(history) prediction of ground[k + horizon - 1] from ground[k -
+    history:k]."""
     count = ground.size - history - horizon + 1
     past = np.stack([ground[lag : lag + count] for lag in range(history)], axis=1)
     future = ground[history + horizon - 1 :]

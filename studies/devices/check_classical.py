@@ -39,7 +39,9 @@ def classical_verdicts(config: Path, standard: Path | None = None) -> list[Verdi
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("config", type=Path, help="an experiment YAML")
-    parser.add_argument("--standard", type=Path, default=None, help="default: the experiment's (ground or wind)")
+    parser.add_argument(
+        "--standard", type=Path, default=None, help="default: the experiment's (ground or wind)"
+    )
     arguments = parser.parse_args()
     try:
         verdicts = classical_verdicts(arguments.config, arguments.standard)

@@ -28,7 +28,8 @@ FIRST_MODE_HZ = 0.69  # the five-story building's first mode (docs/safety_check.
 
 
 class BandPassed:
-    """`inner`'s actions through a band-pass biquad (centre `centre_hz`, quality `q`) per action, then clipped."""
+    """`inner`'s actions through a band-pass biquad (centre `centre_hz`, quality `q`) per action, then
+    clipped."""
 
     def __init__(self, inner: LQGController, centre_hz: float, q: float, dt: float) -> None:
         self.inner, self.name = inner, f"LQG + ground model, band-pass {centre_hz:g} Hz, Q {q:g}"

@@ -50,7 +50,8 @@ MEDIUM_SOIL = GroundModel(frequency=12.0, damping=0.6)  # the weighting spectrum
 def responses(plant: Plant, design: LQGDesign, frequency: np.ndarray) -> dict[str, np.ndarray]:
     """Open-loop frequency responses at `frequency` (Hz), per unit ground acceleration (w) and per unit action
     (u): the story drifts (drift_w, drift_u; m per m/s^2 and per action) and the Kalman estimate (estimate_w,
-    estimate_u), with the env's timing: action k held over [t_k, t_k+1], the readings at t_k feel action k-1."""
+    estimate_u), with the env's timing: action k held over [t_k, t_k+1], the readings at t_k feel action
+    k-1."""
     step, kalman = plant.sampled(1).step, design.filter
     phi, force = step.phi, step.force_gain[:, 0] * plant.building.force_limits[0]
     free, held, measured, _ = kalman.update_matrices
@@ -75,7 +76,9 @@ def closed_drift(r: dict[str, np.ndarray], gain: np.ndarray) -> np.ndarray:
     return r["drift_w"] + r["drift_u"] * action[:, None]
 
 
-def simulated_ratio(plant: Plant, controller: LQGController, frequency: float, amplitude: float = 0.2) -> float:
+def simulated_ratio(
+    plant: Plant, controller: LQGController, frequency: float, amplitude: float = 0.2
+) -> float:
     """Peak drift (max over stories) of the last 20 s of a 60 s sine, controlled over driver off."""
     time = np.arange(0.0, 60.0 + plant.control_dt / 2, plant.control_dt)
     sine = Load(f"sine {frequency:g} Hz", plant.control_dt, amplitude * np.sin(2 * np.pi * frequency * time))
@@ -88,8 +91,10 @@ def feedforward_bound(r: dict[str, np.ndarray], frequency: np.ndarray, dt: float
     """The spectrum-weighted drift (to the tuned mass's) of the best u = T(z) a_g under dominance, and T."""
     z = np.exp(2j * np.pi * frequency * dt)
     a = LAGUERRE_POLE
-    basis = np.array([np.ones_like(z)] + [np.sqrt(1 - a * a) / (z - a) * ((1 - a * z) / (z - a)) ** j
-                                          for j in range(LAGUERRE_COUNT)]).T  # fmt: skip
+    basis = np.array(
+        [np.ones_like(z)]
+        + [np.sqrt(1 - a * a) / (z - a) * ((1 - a * z) / (z - a)) ** j for j in range(LAGUERRE_COUNT)]
+    ).T
     peak = np.abs(r["drift_w"]).max(axis=0)
     drift_w, drift_u = r["drift_w"] / peak, r["drift_u"] / peak
     reference = np.abs(drift_w)
@@ -98,8 +103,12 @@ def feedforward_bound(r: dict[str, np.ndarray], frequency: np.ndarray, dt: float
     for angle in 2 * np.pi * np.arange(POLYGON) / POLYGON:  # Re(e^-i angle drift) <= t: |drift| <= t, 16-gon
         turn = np.exp(-1j * angle)
         for story in range(ns):
-            bound = sparse.coo_matrix((-np.ones(nf), (np.arange(nf), np.arange(nf) * ns + story)), shape=(nf, nf * ns))
-            rows.append(sparse.hstack([sparse.coo_matrix(((turn * drift_u[:, story])[:, None] * basis).real), bound]))
+            bound = sparse.coo_matrix(
+                (-np.ones(nf), (np.arange(nf), np.arange(nf) * ns + story)), shape=(nf, nf * ns)
+            )
+            rows.append(
+                sparse.hstack([sparse.coo_matrix(((turn * drift_u[:, story])[:, None] * basis).real), bound])
+            )
             rhs.append(-(turn * drift_w[:, story]).real)
     weight = MEDIUM_SOIL.spectrum(frequency) * np.gradient(frequency)
     cost = np.concatenate([np.zeros(nq), (weight[:, None] * reference).ravel()])
@@ -112,10 +121,14 @@ def feedforward_bound(r: dict[str, np.ndarray], frequency: np.ndarray, dt: float
 
 def weighted(drift: np.ndarray, reference: np.ndarray, weight: np.ndarray) -> float:
     """Spectrum-weighted mean square drift, to the reference's (all stories)."""
-    return float(np.sum(np.abs(drift) ** 2 * weight[:, None]) / np.sum(np.abs(reference) ** 2 * weight[:, None]))
+    return float(
+        np.sum(np.abs(drift) ** 2 * weight[:, None]) / np.sum(np.abs(reference) ** 2 * weight[:, None])
+    )
 
 
-def dominant_gain(r: dict[str, np.ndarray], frequency: np.ndarray, start: np.ndarray, slack: float) -> np.ndarray:
+def dominant_gain(
+    r: dict[str, np.ndarray], frequency: np.ndarray, start: np.ndarray, slack: float
+) -> np.ndarray:
     """A gain on the Kalman estimate: spectrum-weighted drift plus mu times the squared excess over the tuned
     mass plus `slack` of each story's peak (to that peak), mu raised from 1e2 to 1e6."""
     reference = np.abs(r["drift_w"])
@@ -151,12 +164,17 @@ def main() -> None:
     for f in (0.2, 0.3, 0.4, 0.5, 0.69, 0.9, 1.0, 1.2, 2.0, 3.0):
         k = np.argmin(np.abs(FREQUENCIES - f))
         print(f"   {FREQUENCIES[k]:5.2f} Hz: " + " ".join(f"{v:.2f}" for v in lqg[k]))
-    print(f"   spectrum-weighted drift {weighted(closed_drift(r, design.feedback[0]), r['drift_w'], weight):.3f}"
-          f" of the driver off's; worst ratio below 5 Hz {lqg[FREQUENCIES < 5.0].max():.2f}")  # fmt: skip
+    print(
+        "   spectrum-weighted drift "
+        f"{weighted(closed_drift(r, design.feedback[0]), r['drift_w'], weight):.3f}"
+        f" of the driver off's; worst ratio below 5 Hz {lqg[FREQUENCIES < 5.0].max():.2f}"
+    )
 
     bound, transfer = feedforward_bound(r, FREQUENCIES, plant.control_dt)
-    print(f"3. any linear controller under dominance (feedforward bound): spectrum-weighted drift {bound:.3f}"
-          f" of the driver off's (|T| up to {np.abs(transfer).max():.0f} action per m/s^2)")  # fmt: skip
+    print(
+        f"3. any linear controller under dominance (feedforward bound): spectrum-weighted drift {bound:.3f}"
+        f" of the driver off's (|T| up to {np.abs(transfer).max():.0f} action per m/s^2)"
+    )
 
     standard = load_safety_check(safety_standard(plant.experiment))
     for slack in (0.0, 0.005):
@@ -164,11 +182,15 @@ def main() -> None:
         drift = closed_drift(r, gain)
         excess = (np.abs(drift) - np.abs(r["drift_w"])) / np.abs(r["drift_w"]).max(axis=0)
         share = weighted(drift, r["drift_w"], weight)
-        print(f"4. a gain on the Kalman estimate designed for dominance, slack {slack:g} of a story's peak: "
-              f"spectrum-weighted drift {share:.3f}, largest excess {excess.max():.4f}")  # fmt: skip
+        print(
+            f"4. a gain on the Kalman estimate designed for dominance, slack {slack:g} of a story's peak: "
+            f"spectrum-weighted drift {share:.3f}, largest excess {excess.max():.4f}"
+        )
         if "--check" in sys.argv[1:]:
             name = f"dominant gain, slack {slack:g}"
-            shaped = LQGController(LQGDesign(gain[None, :], design.feedforward, design.filter), plant, name=name)
+            shaped = LQGController(
+                LQGDesign(gain[None, :], design.feedforward, design.filter), plant, name=name
+            )
             print("\n".join(safety_check(plant, shaped, standard, scenarios=[]).lines()), flush=True)
 
 

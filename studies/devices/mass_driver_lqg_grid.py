@@ -44,7 +44,9 @@ def grid(experiment: Experiment, force: list[float], stroke: list[float]) -> lis
     design = Plant(experiment).design
     return [
         LQGController(
-            design_lqg_ground_model(design, reward=scaled_weights(experiment.reward, {"force": f, "stroke": s})),
+            design_lqg_ground_model(
+                design, reward=scaled_weights(experiment.reward, {"force": f, "stroke": s})
+            ),
             design,
             f"LQG + ground model, force x{f:g}, stroke x{s:g}",
         )
@@ -108,14 +110,22 @@ def plot(rows: list[dict[str, float | str]], runs: list[Path], out: Path) -> Non
         lines.setdefault(str(row["controller"]).split(", stroke")[0], []).append(row)
     for label, chosen in lines.items():
         axis.plot(
-            [r["peak stroke (m)"] for r in chosen], [r["J1 x1"] for r in chosen], "o-", label=f"{label}, stroke x ..."
+            [r["peak stroke (m)"] for r in chosen],
+            [r["J1 x1"] for r in chosen],
+            "o-",
+            label=f"{label}, stroke x ...",
         )
-    axis.plot([rows[0]["peak stroke (m)"]], [rows[0]["J1 x1"]], "s", color="grey", label="passive (driver off)")
+    axis.plot(
+        [rows[0]["peak stroke (m)"]], [rows[0]["J1 x1"]], "s", color="grey", label="passive (driver off)"
+    )
     experiments: dict[str, list[Path]] = {}
     for run in runs:
         experiments.setdefault(run.parent.name, []).append(run)
     for number, (name, chosen) in enumerate(experiments.items()):  # colours after the LQG lines'
-        points = [pd.read_csv(run / "evaluation" / "summary.csv").set_index("controller").loc["RL"] for run in chosen]
+        points = [
+            pd.read_csv(run / "evaluation" / "summary.csv").set_index("controller").loc["RL"]
+            for run in chosen
+        ]
         stroke, j1 = [point["stroke_m"] for point in points], [point["J1"] for point in points]
         axis.plot(
             stroke,
@@ -155,7 +165,9 @@ def main() -> None:
         sys.exit(f"error: {error}")
     missing = [run for run in arguments.runs if not (run / "evaluation" / "summary.csv").is_file()]
     if missing:
-        sys.exit(f"error: --runs: {missing[0]} has no evaluation/summary.csv (evaluate it on the first suite)")
+        sys.exit(
+            f"error: --runs: {missing[0]} has no evaluation/summary.csv (evaluate it on the first suite)"
+        )
     for number, (name, motions) in enumerate(suites.items()):
         rows = table(experiment, controllers, motions, arguments.frequencies)
         print(f"## {name}\n\n{markdown(rows)}\n", flush=True)

@@ -71,11 +71,17 @@ def main() -> None:
     coefficients = [float(value) for value in sys.argv[1:]] or [1e5, 1e6]
     for coefficient in coefficients:
         share, frequency, story = viscous_excess(plant, stories, coefficient)
-        print(f"ideal viscous dampers, C = {coefficient:g} N s/m on stories {stories}: story {story}'s drift rises by "
-              f"{share:.4f} of its peak at {frequency:.2f} Hz")  # fmt: skip
+        print(
+            f"ideal viscous dampers, C = {coefficient:g} N s/m on stories {stories}: story {story}'s drift "
+            f"rises by {share:.4f} of its peak at {frequency:.2f} Hz"
+        )
     standard = load_safety_check(safety_standard(plant.experiment))
     for coefficient in coefficients:
-        print("\n".join(safety_check(plant, ViscousEmulation(plant, coefficient), standard, scenarios=[]).lines()))
+        print(
+            "\n".join(
+                safety_check(plant, ViscousEmulation(plant, coefficient), standard, scenarios=[]).lines()
+            )
+        )
 
 
 if __name__ == "__main__":

@@ -1,14 +1,14 @@
 """The study of docs/identification.md: LQG designed on a model identified from D seconds of a vibration test,
-against LQG on the true matrices and the uncontrolled building, on the true building (linear, and with yielding
-stories), on the seven records and a generated suite.
+against LQG on the true matrices and the uncontrolled building, on the true building (linear, and with
+yielding stories), on the seven records and a generated suite.
 
 Usage: python studies/identification/identification_study.py [--records ../shared/records] [--out FOLDER]
-For each plant, budget D and seed: `rlc simulate-test` of the paper's experiment (configs/five_story.yaml; ambient
-white-noise ground of 0.1 m/s^2 RMS, actuators shaking at 5 % of their limits, the experiment's sensor noise),
-`rlc identify` with the floor masses from the drawings, then the experiment designed on that model (its `building`)
-and simulated as the true building (its plant part's `building`), evaluated like `rlc compare lqg`. Writes
-identified.csv (frequencies and damping ratios per run), controllers.csv (mean J1-J4 per run and controller) and
-summary.md to the new folder --out.
+For each plant, budget D and seed: `rlc simulate-test` of the paper's experiment (configs/five_story.yaml;
+ambient white-noise ground of 0.1 m/s^2 RMS, actuators shaking at 5 % of their limits, the experiment's sensor
+noise), `rlc identify` with the floor masses from the drawings, then the experiment designed on that model
+(its `building`) and simulated as the true building (its plant part's `building`), evaluated like `rlc compare
+lqg`. Writes identified.csv (frequencies and damping ratios per run), controllers.csv (mean J1-J4 per run and
+controller) and summary.md to the new folder --out.
 """
 
 from __future__ import annotations
@@ -31,7 +31,10 @@ from rlcontroller.physics.plant import Plant
 
 EXPERIMENT = CONFIGS / "five_story.yaml"
 MASSES = [25e3, 20e3, 20e3, 18e3, 15e3]  # kg, the floor masses an engineer reads from the drawings
-PLANTS = {"linear": {}, "yielding": {"hysteresis": {"yield_drift": 0.03, "post_yield_ratio": 0.1, "exponent": 2.0}}}
+PLANTS = {
+    "linear": {},
+    "yielding": {"hysteresis": {"yield_drift": 0.03, "post_yield_ratio": 0.1, "exponent": 2.0}},
+}
 BUDGETS = (150.0, 600.0, 3600.0)  # s of recorded response
 SEEDS = (0, 1, 2)
 SUITE_SEED, SUITE_SIZE = 2027, 20  # generated motions, a seed no training or check uses
@@ -56,9 +59,13 @@ def judged(path: Path, suites: dict[str, list]) -> list[dict]:
     plant = Plant(load_experiment(path))
     rows = []
     for suite, motions in suites.items():
-        summary = evaluate(plant, motions, classical_controllers(plant), suite, include_optimal=False).summary()
+        summary = evaluate(
+            plant, motions, classical_controllers(plant), suite, include_optimal=False
+        ).summary()
         for controller, values in summary.iterrows():
-            rows.append({"suite": suite, "controller": controller, **{j: values[j] for j in ("J1", "J2", "J3", "J4")}})
+            rows.append(
+                {"suite": suite, "controller": controller, **{j: values[j] for j in ("J1", "J2", "J3", "J4")}}
+            )
     return rows
 
 
@@ -72,7 +79,9 @@ def main() -> None:
     truth = Plant(experiment).building
     suites = {
         "seven records": load_records(arguments.records)[0],
-        f"generated ({SUITE_SIZE})": generate_suite(experiment.excitation.generator, SUITE_SIZE, SUITE_SEED, truth),
+        f"generated ({SUITE_SIZE})": generate_suite(
+            experiment.excitation.generator, SUITE_SIZE, SUITE_SEED, truth
+        ),
     }
     true_frequencies, true_damping = 1 / truth.periods(), truth.modal_damping_ratios()
     identified, controllers = [], []
@@ -80,7 +89,9 @@ def main() -> None:
         folder = arguments.out / plant_name
         folder.mkdir()
         for row in judged(experiment_file(folder, plant_part, None), suites):
-            controllers.append({"plant": plant_name, "design": "true matrices", "budget_s": np.nan, "seed": -1, **row})
+            controllers.append(
+                {"plant": plant_name, "design": "true matrices", "budget_s": np.nan, "seed": -1, **row}
+            )
         for budget in BUDGETS:
             for seed in SEEDS:
                 run = folder / f"D{budget:.0f}_seed{seed}"
@@ -110,7 +121,9 @@ def main() -> None:
     identified_table, controller_table = pd.DataFrame(identified), pd.DataFrame(controllers)
     identified_table.to_csv(arguments.out / "identified.csv", index=False)
     controller_table.to_csv(arguments.out / "controllers.csv", index=False)
-    errors = identified_table.groupby(["plant", "budget_s"]).agg(lambda x: np.abs(x).max()).drop(columns="seed")
+    errors = (
+        identified_table.groupby(["plant", "budget_s"]).agg(lambda x: np.abs(x).max()).drop(columns="seed")
+    )
     keys = ["plant", "suite", "controller", "design", "budget_s"]
     means = controller_table.groupby(keys, dropna=False, sort=False)[["J1", "J2", "J3", "J4"]]
     table = means.mean().join(means.std(), rsuffix=" std").reset_index().set_index("plant")

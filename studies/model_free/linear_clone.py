@@ -39,7 +39,9 @@ def fit_linear(observations: np.ndarray, actions: np.ndarray, ridge: float) -> n
     return np.linalg.solve(gram, x.T @ np.asarray(actions, dtype=float)).T
 
 
-def teacher_data(plant: Plant, teacher: LQGController, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+def teacher_data(
+    plant: Plant, teacher: LQGController, count: int, seed: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(observations, teacher actions) of every step of `count` training motions."""
     env = BuildingEnv(plant)
     observations, actions = [], []
@@ -69,7 +71,9 @@ def main() -> None:
 
     plant = Plant(load_experiment(arguments.config))
     records = load_records(arguments.records)[0] if arguments.records is not None else None  # before the work
-    teacher = LQGController(design_lqg(plant.design, known_ground=True), plant.design, "LQG + ground (teacher)")
+    teacher = LQGController(
+        design_lqg(plant.design, known_ground=True), plant.design, "LQG + ground (teacher)"
+    )
     observations, actions = teacher_data(plant, teacher, arguments.motions, arguments.seed)
     weights = fit_linear(observations, actions, arguments.ridge)
     fit = 1.0 - (actions - observations @ weights.T).var() / actions.var()

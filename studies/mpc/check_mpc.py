@@ -4,10 +4,10 @@ Usage: python studies/mpc/check_mpc.py [CONFIG ...]
 
 For each experiment (default: the default experiment with every story's actuator behind the faded supervisor,
 the roof active mass driver, the MR dampers) MPC (N = 20; `SemiActiveMPC` for dampers) runs the standard's
-check suite against the experiment's fail-safe reference and its runs at rest (`evaluation.safety.safety_check`,
-the criteria `rlc check` applies). The closed-loop stability criterion linearises a policy at rest; MPC at rest
-is LQR exactly (tests/control/test_mpc.py), so its linearisation is LQG + ground model's, which `rlc design`'s
-check covers; it is not repeated here.
+check suite against the experiment's fail-safe reference and its runs at rest
+(`evaluation.safety.safety_check`, the criteria `rlc check` applies). The closed-loop stability criterion
+linearises a policy at rest; MPC at rest is LQR exactly (tests/control/test_mpc.py), so its linearisation is
+LQG + ground model's, which `rlc design`'s check covers; it is not repeated here.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import sys
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment, load_safety_check
 from rlcontroller.config.scenarios import safety_standard
-from rlcontroller.control.mpc import mpc_controller
+from rlcontroller.control.mpc_controllers import mpc_controller
 from rlcontroller.evaluation.safety import safety_check
 from rlcontroller.physics.plant import Plant
 
@@ -37,7 +37,7 @@ def main() -> None:
         )
         print(f"{experiment.name}: {'PASSED' if verdict.passed else 'FAILED'}")
         for name, criterion in verdict.criteria.items():
-            print(f"  {name}: {criterion['summary']}", flush=True)
+            print(f"  {name}: {criterion.summary}", flush=True)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ from suite import Suite
 from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import ClippedOptimal, ConstantCommand
-from rlcontroller.control.mpc import SemiActiveMPC
+from rlcontroller.control.mpc_controllers import SemiActiveMPC
 from rlcontroller.evaluation.evaluation import scaled_weights
 from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
@@ -28,7 +28,9 @@ MULTIPLIERS = (3.0, 1.0, 0.3, 0.1, 0.03, 0.01)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("config", type=Path, nargs="?", default=CONFIGS / "experiments" / "five_story_mr.yaml")
+    parser.add_argument(
+        "config", type=Path, nargs="?", default=CONFIGS / "experiments" / "five_story_mr.yaml"
+    )
     parser.add_argument("--records", type=Path, default=Path("../shared/records"))
     arguments = parser.parse_args()
     experiment = load_experiment(arguments.config)
@@ -41,7 +43,10 @@ def main() -> None:
     print("| controller | force weight x | validation J1 | J2 | records J1 | J2 |\n|---|---|---|---|---|---|")
     for name, value in (("passive-off", -1.0), ("passive-on", 1.0)):
         rows = [suite.judge(ConstantCommand(value, count, name)) for suite in suites.values()]
-        print(f"| {name} | – | {rows[0]['J1']:.3f} | {rows[0]['J2']:.3f} | {rows[1]['J1']:.3f} | {rows[1]['J2']:.3f} |")
+        print(
+            f"| {name} | – | {rows[0]['J1']:.3f} | {rows[0]['J2']:.3f} | {rows[1]['J1']:.3f} | "
+            f"{rows[1]['J2']:.3f} |"
+        )
     for multiplier in MULTIPLIERS:
         reward = scaled_weights(experiment.reward, {"force": multiplier})
         for law in (
@@ -50,7 +55,8 @@ def main() -> None:
         ):
             rows = [suite.judge(law) for suite in suites.values()]
             print(
-                f"| {law.name} | {multiplier:g} | {rows[0]['J1']:.3f} | {rows[0]['J2']:.3f} | {rows[1]['J1']:.3f} | "
+                f"| {law.name} | {multiplier:g} | {rows[0]['J1']:.3f} | {rows[0]['J2']:.3f} | "
+                f"{rows[1]['J1']:.3f} | "
                 f"{rows[1]['J2']:.3f} |",
                 flush=True,
             )

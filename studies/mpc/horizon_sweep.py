@@ -19,7 +19,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.control.mpc import MPCController
+from rlcontroller.control.mpc_controllers import MPCController
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.physics.plant import Plant
 
@@ -32,7 +32,8 @@ EXPERIMENTS = (
 
 
 def validation_motions(plant: Plant) -> list:
-    """The experiment's held-out generated validation motions (as `learning.validation.Validator` draws them)."""
+    """The experiment's held-out generated validation motions (as `learning.validation.Validator` draws
+    them)."""
     excitation = plant.experiment.excitation
     return generate_suite(
         excitation.validation, excitation.validation_motions, excitation.validation_seed, plant.building

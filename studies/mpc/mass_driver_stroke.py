@@ -22,7 +22,7 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.control.mpc import MPCController
+from rlcontroller.control.mpc_controllers import MPCController
 from rlcontroller.evaluation.evaluation import scaled_weights
 from rlcontroller.physics.motions.records import load_records
 from rlcontroller.physics.plant import Plant
@@ -33,8 +33,8 @@ EXPERIMENT = CONFIGS / "experiments" / "five_story_amd.yaml"
 
 def row_text(name: str, row: dict[str, float]) -> str:
     return (
-        f"| {name} | {row['J1']:.3f} | {row['J2']:.3f} | {row['stroke_max']:.3f} | {row['stroke_mean']:.3f} | "
-        f"{row['over_limit']} |"
+        f"| {name} | {row['J1']:.3f} | {row['J2']:.3f} | {row['stroke_max']:.3f} | {row['stroke_mean']:.3f} "
+        f"| {row['over_limit']} |"
     )
 
 
@@ -47,13 +47,16 @@ def main() -> None:
     design = plant.design
     validation = Suite(plant, validation_motions(plant))
     records = Suite(plant, load_records(arguments.records)[0])
-    header = "| controller | J1 | J2 | largest peak stroke / limit | mean | motions over |\n|---|---|---|---|---|---|"
+    header = "| controller | J1 | J2 | largest peak stroke / limit | mean | motions over |\n"
+    header += "|---|---|---|---|---|---|"
 
     print(f"LQG + ground model by stroke weight, {len(validation.motions)} validation motions\n{header}")
     safe = None
     for multiplier in MULTIPLIERS:
         reward = scaled_weights(experiment.reward, {"stroke": multiplier})
-        controller = LQGController(design_lqg_ground_model(design, reward=reward), design, f"stroke x{multiplier}")
+        controller = LQGController(
+            design_lqg_ground_model(design, reward=reward), design, f"stroke x{multiplier}"
+        )
         row = validation.judge(controller)
         print(row_text(controller.name, row), flush=True)
         if safe is None and row["stroke_max"] <= 1.01:
@@ -63,7 +66,9 @@ def main() -> None:
 
     controllers = {
         "LQG + ground model": lambda: LQGController(design_lqg_ground_model(design), design),
-        f"LQG + ground model, stroke-safe ({safe.name})": lambda: LQGController(safe.design, design, safe.name),
+        f"LQG + ground model, stroke-safe ({safe.name})": lambda: LQGController(
+            safe.design, design, safe.name
+        ),
         "MPC (N = 20)": lambda: MPCController(design, 20),
     }
     for label, suite in (("validation motions", validation), ("records", records)):

@@ -1,4 +1,5 @@
-"""What the MPC studies measure on a suite of motions: mean J1, mean J2 and the strokes against their limits."""
+"""What the MPC studies measure on a suite of motions: mean J1, mean J2 and the strokes against their
+limits."""
 
 from __future__ import annotations
 

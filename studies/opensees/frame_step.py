@@ -1,7 +1,7 @@
 """The nine-story FE frame at two analysis steps (docs/opensees.md, "Speed"): LQG + ground model and the
 uncontrolled frame on motions of the check's family drawn with another seed (777; never the check suite), each
-motion's uncontrolled peak drift, the check's ratio (`metrics.ratio_to_reference`) and peak floor accelerations,
-and the wall time of each step's runs (fanned out over the cores).
+motion's uncontrolled peak drift, the check's ratio (`metrics.ratio_to_reference`) and peak floor
+accelerations, and the wall time of each step's runs (fanned out over the cores).
 
 Usage (from the repository's root; about 4 and 6 min on this project's 2 shared cores):
     python studies/opensees/frame_step.py --steps 0.01 0.005
@@ -52,8 +52,8 @@ def main() -> None:
             controlled = evaluation.responses[controller.name, motion.name]
             ratio = ratio_to_reference(controlled, reference)
             print(
-                f"  {motion.name} ({np.max(np.abs(motion.acceleration)) / 9.80665:.2f} g): uncontrolled peak drift "
-                f"{1000 * np.max(np.abs(reference.drift)):.2f} mm, ratio {ratio:.4f}, "
+                f"  {motion.name} ({np.max(np.abs(motion.acceleration)) / 9.80665:.2f} g): uncontrolled peak "
+                f"drift {1000 * np.max(np.abs(reference.drift)):.2f} mm, ratio {ratio:.4f}, "
                 f"peak floor acceleration {np.max(np.abs(reference.absolute_acceleration)):.3f} / "
                 f"{np.max(np.abs(controlled.absolute_acceleration)):.3f} m/s^2"
             )

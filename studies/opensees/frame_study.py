@@ -36,7 +36,9 @@ lqg = LQGController(design_lqg_ground_model(fe.design), fe.design, "LQG + ground
 uncontrolled, controlled = batch_rollout(fe, tailed, [Uncontrolled(fe.building.n_actuators), lqg])
 print("peak drift ratio FE / reduced model, uncontrolled; residual drift ratio of the FE model after")
 print(f"{SETTLING_TAIL_S:g} s at rest, uncontrolled / LQG + ground model (all % of the story height):")
-for motion, (fe_run, _), (lqg_run, _), linear_run in zip(records, uncontrolled, controlled, linear_runs, strict=True):
+for motion, (fe_run, _), (lqg_run, _), linear_run in zip(
+    records, uncontrolled, controlled, linear_runs, strict=True
+):
     peak_fe = np.max(np.abs(fe_run.drift) / heights) * 100
     peak_linear = np.max(np.abs(linear_run.drift) / heights) * 100
     residual = [np.max(np.abs(run.drift[-1]) / heights) * 100 for run in (fe_run, lqg_run)]

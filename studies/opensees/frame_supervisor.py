@@ -1,13 +1,14 @@
 """Designs for the nine-story frame judged on its nonlinear reduced model (docs/opensees.md, "Designs on the
-nonlinear reduced model"): a classical law (LQG + ground model by default, designed on the linear reduced model,
-with the cost's weights scaled by --weights) alone or behind a supervisor (a trigger, the dissipative rule on the
-estimate or on measured stroke velocities, stiffness-proportional dampers past a hand-over drift), judged by the
-safety check's own criterion on suites of the check's family drawn with other seeds (never the check suite's
-31337), optionally with every PGA drawn log-uniform in [--pga-low, --pga-high] (m/s^2).
+nonlinear reduced model"): a classical law (LQG + ground model by default, designed on the linear reduced
+model, with the cost's weights scaled by --weights) alone or behind a supervisor (a trigger, the dissipative
+rule on the estimate or on measured stroke velocities, stiffness-proportional dampers past a hand-over drift),
+judged by the safety check's own criterion on suites of the check's family drawn with other seeds (never the
+check suite's 31337), optionally with every PGA drawn log-uniform in [--pga-low, --pga-high] (m/s^2).
 
 Usage (from the repository's root; 2-4 min per suite of 320 on one of this project's 2 shared cores):
-    python studies/opensees/frame_supervisor.py --no-trigger --no-fallback --weights force=0.3 absolute_acceleration=30
-Prints, per suite, the check's summary line, each failing motion, and the mean J1 and J2 by PGA.
+    python studies/opensees/frame_supervisor.py --no-trigger --no-fallback --weights force=0.3
+absolute_acceleration=30 Prints, per suite, the check's summary line, each failing motion, and the mean J1 and
+J2 by PGA.
 """
 
 from __future__ import annotations
@@ -49,7 +50,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--experiment", type=Path, default=EXPERIMENT)
     parser.add_argument("--law", default="lqg_ground_model")
-    parser.add_argument("--weights", nargs="*", default=[], help="QUANTITY=M: the cost's QUANTITY weight times M")
+    parser.add_argument(
+        "--weights", nargs="*", default=[], help="QUANTITY=M: the cost's QUANTITY weight times M"
+    )
     parser.add_argument("--no-supervisor", action="store_true", help="the controller alone")
     parser.add_argument("--trigger", type=float, nargs=2, default=[0.2, 0.6], help="m/s^2")
     parser.add_argument("--no-trigger", action="store_true", help="full authority from the first step")
@@ -66,7 +69,9 @@ def main() -> None:
     springs = story_springs(np.asarray(base.building.mass_matrix), np.asarray(base.building.stiffness_matrix))
     multipliers = {item.split("=")[0]: float(item.split("=")[1]) for item in arguments.weights}
     layer = supervisor(arguments, springs)
-    plant = Plant(base.model_copy(update={"supervisor": layer, "reward": scaled_weights(base.reward, multipliers)}))
+    plant = Plant(
+        base.model_copy(update={"supervisor": layer, "reward": scaled_weights(base.reward, multipliers)})
+    )
     check = load_safety_check(safety_standard(base))
     controller = classical_policy(plant, arguments.law)
     print(f"{arguments.law}, weights x{multipliers or 1}, supervisor {layer.model_dump() if layer else None}")
@@ -81,16 +86,18 @@ def main() -> None:
             check.model_dump() | {"generator": generator, "seed": seed, "motions": arguments.motions}
         )
         verdict = suite_criterion(plant, controller, suite, drift_bounds(plant, suite))
-        print(f"seed {seed}: {verdict['summary']}", flush=True)
-        motions = verdict["per_motion"]
-        for name in verdict["failures"]:
-            print(f"  {name}: {motions[name]}")
-        rows = np.array([[row["pga_g"], row["J1"], row["J2"]] for row in motions.values() if "J1" in row])
+        print(f"seed {seed}: {verdict.summary}", flush=True)
+        motions = verdict.per_motion
+        for name in verdict.failures:
+            print(f"  {name}: {motions[name].row()}")
+        rows = np.array([[row.pga_g, row.J1, row.J2] for row in motions.values() if row.significant])
         for low, high in PGA_BINS:
             inside = rows[(rows[:, 0] >= low) & (rows[:, 0] < high)]
             if inside.size:
                 j1, j2 = inside[:, 1].mean(), inside[:, 2].mean()
-                print(f"  PGA {low}-{high} g: {len(inside)} motions, mean J1 {j1:.3f}, J2 {j2:.3f}", flush=True)
+                print(
+                    f"  PGA {low}-{high} g: {len(inside)} motions, mean J1 {j1:.3f}, J2 {j2:.3f}", flush=True
+                )
 
 
 if __name__ == "__main__":

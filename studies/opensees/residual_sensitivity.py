@@ -8,8 +8,8 @@ very measure to the FE model against itself, changed in ways a modeller would ca
 - the analysis step halved (5 ms against the experiment's 10 ms): the numerics alone;
 - the beams' yield strength 2 % higher (253 against 248 MPa; A36 steel's expected yield is 1.5 times its
   nominal one, FEMA 356 Table 5-3): a material far inside its own scatter.
-If the FE frame's residual moves by 25 % or more in a story under these, no reduced model can be held to 25 % there
-against one run of it. Peak drift errors are printed beside, by the same measure. The FE runs are kept
+If the FE frame's residual moves by 25 % or more in a story under these, no reduced model can be held to 25 %
+there against one run of it. Peak drift errors are printed beside, by the same measure. The FE runs are kept
 (`simulation.kept`): a second run of the study computes nothing again. About 15 min on 2 cores the first time.
 """
 
@@ -36,7 +36,9 @@ def frame(analysis_dt: float | None = None, model: Path | None = None) -> Plant:
     experiment = load(CONFIG)
     fe = experiment.plant.opensees
     fe = fe.model_copy(update={"analysis_dt": analysis_dt or fe.analysis_dt, "model": str(model or fe.model)})
-    return Plant(experiment.model_copy(update={"plant": experiment.plant.model_copy(update={"opensees": fe})}))
+    return Plant(
+        experiment.model_copy(update={"plant": experiment.plant.model_copy(update={"opensees": fe})})
+    )
 
 
 def stronger_beams(folder: Path, factor: float) -> Path:
@@ -56,7 +58,9 @@ def errors(variant: list[np.ndarray], base: list[np.ndarray], dt: float) -> tupl
     for drift, target in zip(variant, base, strict=True):
         fe_peak, fe_residual = peak(target), np.abs(residual(target, dt))
         peaks.append(np.abs(peak(drift) - fe_peak) / fe_peak)
-        residuals.append(np.abs(np.abs(residual(drift, dt)) - fe_residual) / np.maximum(fe_residual, 0.01 * fe_peak))
+        residuals.append(
+            np.abs(np.abs(residual(drift, dt)) - fe_residual) / np.maximum(fe_residual, 0.01 * fe_peak)
+        )
     return np.median(peaks, axis=0), np.median(residuals, axis=0)
 
 
@@ -73,14 +77,19 @@ def main() -> None:
             "analysis step 5 ms": frame(analysis_dt=0.005),
             "beams' yield strength x 1.02": frame(model=stronger_beams(Path(scratch), 1.02)),
         }
-        print(f"The FE frame against itself on {args.motions} motions of seed {TEST_SEED} (rlc reduce's test motions)")
+        print(
+            f"The FE frame against itself on {args.motions} motions of seed {TEST_SEED} (rlc reduce's test "
+            "motions)"
+        )
         print("median relative error per story, stories 1 -> 9")
         for name, plant in variants.items():
             drifts = [response.drift for response in fe_responses(plant, motions)]
             peak_error, residual_error = errors(drifts, base, dt)
             print(f"{name}: peak drift {np.round(100 * peak_error, 1).tolist()} %")
-            print(f"{name}: residual drift {np.round(100 * residual_error, 1).tolist()} %, "
-                  f"{int(np.sum(residual_error < 0.25))} of 9 within 25 %")  # fmt: skip
+            print(
+                f"{name}: residual drift {np.round(100 * residual_error, 1).tolist()} %, "
+                f"{int(np.sum(residual_error < 0.25))} of 9 within 25 %"
+            )
 
 
 if __name__ == "__main__":

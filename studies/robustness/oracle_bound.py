@@ -1,14 +1,16 @@
 """Study: how far any controller of the default's family could go on the 14 standard scenarios (issue 68's
 robustness target: mean J1 <= 0.260 over them on the seven records).
 
-Usage: python studies/robustness/oracle_bound.py [--model models/five_story_every_story] [--records ../shared/records]
+Usage: python studies/robustness/oracle_bound.py [--model models/five_story_every_story] [--records
+../shared/records]
 
 Per scenario, on the seven records (mean J1 over stories and records): the shipped model, LQG + ground model
-designed on the design model (as deployed), and LQG + ground model re-designed on the scenario's own plant (its
-stiffness, mass, damping, damage, sensor faults; the oracle of that family, which knows what no deployed
+designed on the design model (as deployed), and LQG + ground model re-designed on the scenario's own plant
+(its stiffness, mass, damping, damage, sensor faults; the oracle of that family, which knows what no deployed
 controller knows). Actuator lag and delay are not states of LQG + ground model's design, so there it has no
-oracle and the best of the other two stands in. The last line is the mean over the scenarios of the best of the
-three per scenario: a lower bound for these controllers, not for every controller. About 2 min on one core.
+oracle and the best of the other two stands in. The last line is the mean over the scenarios of the best of
+the three per scenario: a lower bound for these controllers, not for every controller. About 2 min on one
+core.
 """
 
 from __future__ import annotations
@@ -49,7 +51,10 @@ def main() -> None:
         metrics = evaluate(plant, motions, controllers, "records", include_optimal=False).metrics
         j1 = metrics[metrics["metric"] == "J1"].groupby("controller")["value"].mean().drop("uncontrolled")
         rows[scenario.name] = j1.rename({shipped.name: "shipped"})
-        print(f"{scenario.name}: " + ", ".join(f"{name} {value:.3f}" for name, value in rows[scenario.name].items()))
+        print(
+            f"{scenario.name}: "
+            + ", ".join(f"{name} {value:.3f}" for name, value in rows[scenario.name].items())
+        )
     table = pd.DataFrame(rows).T
     means = ", ".join(f"{name} {table[name].mean():.3f} ({table[name].count()})" for name in table.columns)
     print(f"\nmean over the scenarios each has (how many): {means}")

@@ -41,7 +41,9 @@ def randomized_lqg(experiment: Experiment, count: int, seed: int) -> tuple[list[
     motions = generate_suite(experiment.excitation.validation, count, seed)
     lanes = [Uncontrolled(design.building.n_actuators), *controllers]
     bare, *runs = batch_rollout(Plant(experiment), motions, lanes, randomize=True)
-    metrics = [[j_metrics(run, free) for (run, _), (free, _) in zip(lane, bare, strict=True)] for lane in runs]
+    metrics = [
+        [j_metrics(run, free) for (run, _), (free, _) in zip(lane, bare, strict=True)] for lane in runs
+    ]
     j1 = np.array([[np.mean(m["J1"]) for m in lane] for lane in metrics])
     j2 = np.array([[np.mean(m["J2"]) for m in lane] for lane in metrics])
     return [controller.name for controller in controllers], j1, j2
@@ -49,7 +51,9 @@ def randomized_lqg(experiment: Experiment, count: int, seed: int) -> tuple[list[
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", type=Path, default=REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml")
+    parser.add_argument(
+        "--config", type=Path, default=REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"
+    )
     parser.add_argument("--count", type=int, default=200)
     parser.add_argument("--seed", type=int, default=20_000)
     arguments = parser.parse_args()

@@ -2,11 +2,12 @@
 
 Usage: python studies/safety_check/default_by_band.py
 
-On the supervisor study's generated suites (supervisor_study.py: the same generator and seeds, never the check's
-or a training seed): the shipped default (models/five_story_every_story, the learned MPC) and MPC (N = 20), both
-behind the experiment's faded supervisor, beside LQG + ground model with no supervisor on the drift, shear and
-force cost and on the cost with the floors' accelerations. Issue 40's criterion: on motions of 0.02-0.1 g the
-supervised default within 15 % of unsupervised LQG + ground model's J1 (drift, shear and force).
+On the supervisor study's generated suites (supervisor_study.py: the same generator and seeds, never the
+check's or a training seed): the shipped default (models/five_story_every_story, the learned MPC) and MPC (N =
+20), both behind the experiment's faded supervisor, beside LQG + ground model with no supervisor on the drift,
+shear and force cost and on the cost with the floors' accelerations. Issue 40's criterion: on motions of
+0.02-0.1 g the supervised default within 15 % of unsupervised LQG + ground model's J1 (drift, shear and
+force).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from rlcontroller.config import RewardConfig, load_experiment, load_safety_check
 from rlcontroller.config.base import read_model
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.control.mpc import MPCController
+from rlcontroller.control.mpc_controllers import MPCController
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.evaluation.evaluation import evaluate
 from rlcontroller.physics.plant import Plant
@@ -26,7 +27,8 @@ from rlcontroller.physics.plant import Plant
 
 def main() -> None:
     suites = generated_suites(load_safety_check(SAFETY_STANDARD))
-    supervised = Plant(load_experiment(DEFAULT_MODEL / "config.yaml", self_contained=True))  # faded supervisor
+    # faded supervisor
+    supervised = Plant(load_experiment(DEFAULT_MODEL / "config.yaml", self_contained=True))
     default = read_policy(DEFAULT_MODEL, "best", supervised, "the default (learned MPC), faded supervisor")
     mpc = MPCController(supervised.design, 20, "MPC (N = 20), faded supervisor")
     unsupervised = Plant(supervised.experiment.model_copy(update={"supervisor": None}))

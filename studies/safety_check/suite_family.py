@@ -1,12 +1,12 @@
-"""What a check suite's ground motions are made of at a building's periods: Sa / PGA (2 % damped) over its motions,
-median and 16-84 %, for each standard named (and, for comparison only, a folder of records).
+"""What a check suite's ground motions are made of at a building's periods: Sa / PGA (2 % damped) over its
+motions, median and 16-84 %, for each standard named (and, for comparison only, a folder of records).
 
 Usage (from the repository's root):
     python studies/safety_check/suite_family.py configs/checks/standard.yaml [OTHER_STANDARD.yaml ...] \\
         --periods 6.25 2 1.44 0.55 0.35 [--records ../shared/records]
 
-Round 6's standard is in git: `git show 0259b7f:configs/checks/standard.yaml > /tmp/round6.yaml`. The records are
-the test set: they are shown, never fitted (docs/safety_check.md, "Round 7: the check suite's family").
+Round 6's standard is in git: `git show 0259b7f:configs/checks/standard.yaml > /tmp/round6.yaml`. The records
+are the test set: they are shown, never fitted (docs/safety_check.md, "Round 7: the check suite's family").
 """
 
 from __future__ import annotations
@@ -39,7 +39,10 @@ def main() -> None:
     arguments = parser.parse_args()
     periods = np.array(arguments.periods)
     print(f"Sa/PGA ({DAMPING:.0%} damped): median (16-84 %) at " + ", ".join(f"{p:g} s" for p in periods))
-    suites = {str(path): generate_suite(load_safety_check(path).generator, 320, 31337) for path in arguments.standards}
+    suites = {
+        str(path): generate_suite(load_safety_check(path).generator, 320, 31337)
+        for path in arguments.standards
+    }
     if arguments.records is not None:
         suites[f"{arguments.records} (the test set)"] = load_records(arguments.records)[0]
     for name, motions in suites.items():

@@ -1,6 +1,7 @@
 """Study: what each part of the supervisor costs, and the smallest supervisor that passes the check.
 
-Usage: python studies/safety_check/supervisor_study.py [--records ../shared/records] [--out results/supervisor_study]
+Usage: python studies/safety_check/supervisor_study.py [--records ../shared/records] [--out
+results/supervisor_study]
 
 LQG + ground model on the five-story building with an actuator on every story
 (configs/experiments/five_story_every_story.yaml), designed on two costs — drift, base shear and force
@@ -49,7 +50,8 @@ REPOSITORY = Path(__file__).resolve().parents[2]
 EXPERIMENT = REPOSITORY / "configs/experiments/five_story_every_story.yaml"
 COSTS = {
     "drift, shear, force": REPOSITORY / "configs/rewards/drift_shear_force.yaml",
-    "+ accelerations": REPOSITORY / "configs/rewards/drift_shear_force_peak_acceleration.yaml",  # the experiment's
+    "+ accelerations": REPOSITORY
+    / "configs/rewards/drift_shear_force_peak_acceleration.yaml",  # the experiment's
 }
 SUPERVISORS = {  # name: SupervisorConfig fields (None: no supervisor)
     "none": None,
@@ -63,12 +65,18 @@ SUPERVISORS = {  # name: SupervisorConfig fields (None: no supervisor)
     "trigger 0.1-0.3 + dissipative (hard)": {"trigger": [0.1, 0.3], "dissipative": True},
     **{
         f"trigger 0.1-0.3 + dissipative, fade {fade:g} m/s": {
-            "trigger": [0.1, 0.3], "dissipative": True, "fade_velocity": fade,
+            "trigger": [0.1, 0.3],
+            "dissipative": True,
+            "fade_velocity": fade,
         }
         for fade in (0.02, 0.05, 0.1, 0.2, 0.5)
     },
-    "trigger 0.25-1 + dissipative, fade 0.1 m/s": {"trigger": [0.25, 1.0], "dissipative": True, "fade_velocity": 0.1},
-}  # fmt: skip
+    "trigger 0.25-1 + dissipative, fade 0.1 m/s": {
+        "trigger": [0.25, 1.0],
+        "dissipative": True,
+        "fade_velocity": 0.1,
+    },
+}
 BANDS_G = {"0.02-0.1 g": (0.02, 0.1), "0.1-0.3 g": (0.1, 0.3), "0.3-1.5 g": (0.3, 1.5)}
 SELECTION_SEED, BAND_SEED = 2026, 2027  # neither the check's (31337) nor any training or validation seed
 
@@ -82,7 +90,8 @@ def in_band(generator: GeneratorConfig, low_g: float, high_g: float) -> Generato
 
 
 def generated_suites(standard: SafetyCheckConfig) -> dict[str, list]:
-    """The selection suite (200 motions, 0.02-1.5 g) and each band's (100 motions) of the standard's generator."""
+    """The selection suite (200 motions, 0.02-1.5 g) and each band's (100 motions) of the standard's
+    generator."""
     suites = {"selection": generate_suite(in_band(standard.generator, 0.02, 1.5), 200, SELECTION_SEED)}
     for offset, (band, (low, high)) in enumerate(BANDS_G.items()):
         suites[band] = generate_suite(in_band(standard.generator, low, high), 100, BAND_SEED + offset)
@@ -99,19 +108,23 @@ def study(records: Path) -> pd.DataFrame:
         for name, fields in SUPERVISORS.items():
             supervisor = None if fields is None else SupervisorConfig(**fields)
             plant = Plant(experiment.model_copy(update={"supervisor": supervisor}))
-            lqg = LQGController(design_lqg_ground_model(plant.design, reward=reward), plant.design, "LQG + GM")
+            lqg = LQGController(
+                design_lqg_ground_model(plant.design, reward=reward), plant.design, "LQG + GM"
+            )
             verdict = safety_check(plant, lqg, standard, scenarios=[])
             suite = verdict.criteria["check suite"]
             row = {
                 "cost": cost,
                 "supervisor": name,
                 "check": "pass" if verdict.passed else "FAIL",
-                "check_failures": suite["failure_count"],
-                "check_mean_J1": suite["mean_J1"],
-                "at_rest": verdict.criteria["at rest"]["peak_drift_over_bound"],
+                "check_failures": suite.failure_count,
+                "check_mean_J1": suite.mean_J1,
+                "at_rest": verdict.criteria["at rest"].peak_drift_over_bound,
             }
             for suite_name, motions in suites.items():
-                summary = evaluate(plant, motions, [lqg], suite_name, include_optimal=False).summary().loc[lqg.name]
+                summary = (
+                    evaluate(plant, motions, [lqg], suite_name, include_optimal=False).summary().loc[lqg.name]
+                )
                 row |= {
                     f"{suite_name} J1": round(float(summary["J1"]), 4),
                     f"{suite_name} J2": round(float(summary["J2"]), 4),
@@ -162,7 +175,8 @@ def main() -> None:
     print(
         f"chosen: {pick['supervisor']} with {pick['cost']}: "
         f"J1 {pick['selection J1']:.3f}, J2 {pick['selection J2']:.3f} "
-        f"on the selection suite; seven records {pick['seven records J1']:.3f} / {pick['seven records J2']:.3f}"
+        f"on the selection suite; seven records {pick['seven records J1']:.3f} / "
+        f"{pick['seven records J2']:.3f}"
     )
 
 

@@ -51,7 +51,9 @@ def lqg_at(plant: Plant, multiplier: float) -> LQGController:
     """LQG + wind model with the reward's force and stroke weights times `multiplier`."""
     reward = plant.experiment.reward
     terms = [
-        term.model_copy(update={"weight": term.weight * multiplier}) if term.quantity in ("force", "stroke") else term
+        term.model_copy(update={"weight": term.weight * multiplier})
+        if term.quantity in ("force", "stroke")
+        else term
         for term in reward.terms
     ]
     name = CHOSEN if multiplier == 1.0 else f"{CHOSEN} x{multiplier:g}"
@@ -91,16 +93,30 @@ def main() -> None:
     evaluation = evaluate(plant, motions, controllers, "wind", include_optimal=False)
     table = per_speed_table(evaluation, suite.speeds)
     arguments.out.mkdir(parents=True, exist_ok=True)
-    flat = table.set_axis([f"{speed:g} m/s, {name}" for speed, name in table.index]).rename_axis("wind, controller")
+    flat = table.set_axis([f"{speed:g} m/s, {name}" for speed, name in table.index]).rename_axis(
+        "wind, controller"
+    )
     text = markdown_table(flat)
     atomic_write(arguments.out / "wind_comfort.md", text + "\n")
     print(text)
 
     figure, axis = plt.subplots(figsize=(6, 4))
     summary = evaluation.summary()
-    sweep = summary.loc[[c.name for c in controllers if c.name.startswith(CHOSEN)]].sort_values("stroke_rms_m")
-    axis.plot(sweep["stroke_rms_m"], sweep["rms_acceleration"], "o-", label="LQG + wind model (effort weights swept)")
-    axis.plot(summary.loc[PASSIVE, "stroke_rms_m"], summary.loc[PASSIVE, "rms_acceleration"], "s", label="passive TMD")
+    sweep = summary.loc[[c.name for c in controllers if c.name.startswith(CHOSEN)]].sort_values(
+        "stroke_rms_m"
+    )
+    axis.plot(
+        sweep["stroke_rms_m"],
+        sweep["rms_acceleration"],
+        "o-",
+        label="LQG + wind model (effort weights swept)",
+    )
+    axis.plot(
+        summary.loc[PASSIVE, "stroke_rms_m"],
+        summary.loc[PASSIVE, "rms_acceleration"],
+        "s",
+        label="passive TMD",
+    )
     if "learned" in summary.index:
         axis.plot(
             summary.loc["learned", "stroke_rms_m"],
@@ -109,7 +125,9 @@ def main() -> None:
             ms=12,
             label="learned",
         )
-    axis.set(xlabel="RMS stroke of the damper (m)", ylabel="RMS floor acceleration, controlled / uncontrolled")
+    axis.set(
+        xlabel="RMS stroke of the damper (m)", ylabel="RMS floor acceleration, controlled / uncontrolled"
+    )
     axis.legend(fontsize=8)
     atomic_savefig(figure, arguments.out / "wind_tradeoff.png")
 

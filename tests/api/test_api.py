@@ -60,7 +60,11 @@ def test_compare_lqg_reports_its_notes_and_progress_and_prints_nothing(tmp_path,
     assert compared.out == tmp_path / "out" and (compared.out / "metrics.csv").is_file()
     assert compared.sweep is None and compared.preview is None
     text = api.summary_text(compared.evaluation, compared.out)
-    assert text.startswith("# SYNTHETIC") and "| LQG |" in text and text.endswith(f"tables and plots in {compared.out}")
+    assert (
+        text.startswith("# SYNTHETIC")
+        and "| LQG |" in text
+        and text.endswith(f"tables and plots in {compared.out}")
+    )
 
 
 def test_a_user_mistake_is_the_commands_one_line_error(tmp_path):
@@ -80,16 +84,22 @@ def test_an_unchecked_policy_is_a_note_before_it_is_used(tmp_path):
     from rlcontroller.assets import DEFAULT_MODEL
 
     passed = api.unchecked_note(DEFAULT_MODEL, "best")  # the shipped default passed: the folder's claim
-    assert passed.endswith("policy passed the safety check, dominating: the folder's claim until re-run: "
-                           "'rlc check models/five_story_every_story --verify'")  # fmt: skip
+    assert passed.endswith(
+        "policy passed the safety check, dominating: the folder's claim until re-run: "
+        "'rlc check models/five_story_every_story --verify'"
+    )
     copy = tmp_path / "model"
     shutil.copytree(DEFAULT_MODEL, copy)
     (copy / "best_check.yaml").unlink()
     report = Recorded()
     out = api.export(copy, tmp_path / "controller.onnx", report=report)
     assert out.is_file()
-    assert report.notes == [f"note: {copy}'s best policy counts as never safety-checked; run 'rlc check {copy}'"]
-    assert report.lines == [f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"]
+    assert report.notes == [
+        f"note: {copy}'s best policy counts as never safety-checked; run 'rlc check {copy}'"
+    ]
+    assert report.lines == [
+        f"wrote {out}: readings (SI) and state in, forces (N) out; see docs/deployment.md"
+    ]
 
 
 @pytest.mark.slow
@@ -105,7 +115,9 @@ def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_defau
         ["nine_story_frame)", "five_story_amd)", "seventy_six_story_atmd)"]
     )
     wind = lines.index("paper five-story under wind, actuators on stories 1, 2, 3, 4, 5:")
-    assert lines[wind + 1].startswith("  five_story_wind: DAgger, ") and lines[wind + 1].endswith("check passed")
+    assert lines[wind + 1].startswith("  five_story_wind: DAgger, ") and lines[wind + 1].endswith(
+        "check passed"
+    )
     mr = lines.index("paper five-story under ground motion, mr_damper on stories 1, 3, 5:")
     learned = lines[mr + 1]
     assert learned.startswith("  five_story_mr_standard: RandomSearch, ")
@@ -120,13 +132,17 @@ def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_de
     from rlcontroller.assets import DEFAULT_MODEL
 
     experiments = REPOSITORY / "configs" / "experiments"
-    robust = load_experiment(experiments / "five_story_every_story_robust.yaml")  # other training, same hardware
+    # other training, same hardware
+    robust = load_experiment(experiments / "five_story_every_story_robust.yaml")
     assert shipped_for(robust) == DEFAULT_MODEL
     report = Recorded()
     assert api.model_folder(experiments / "five_story_every_story_robust.yaml", report) == DEFAULT_MODEL
-    assert report.notes[0].endswith(f"using {DEFAULT_MODEL}, the shipped controller for its paper five-story under "
-                                    "ground motion, actuators on stories 1, 2, 3, 4, 5")  # fmt: skip
-    yielding = load_experiment(experiments / "five_story_yielding.yaml")  # the plant tells it from the default
+    assert report.notes[0].endswith(
+        f"using {DEFAULT_MODEL}, the shipped controller for its paper five-story "
+        "under ground motion, actuators on stories 1, 2, 3, 4, 5"
+    )
+    # the plant tells it from the default
+    yielding = load_experiment(experiments / "five_story_yielding.yaml")
     assert shipped_for(yielding) == DEFAULT_MODEL.parent / "five_story_yielding"
     wind = load_experiment(experiments / "five_story_wind.yaml")  # the load tells it from the default
     assert shipped_for(wind) == DEFAULT_MODEL.parent / "five_story_wind"
@@ -135,11 +151,17 @@ def test_an_experiment_yaml_names_the_controller_shipped_for_its_building_and_de
     dampers = load_experiment(experiments / "five_story_mr.yaml")
     assert shipped_for(dampers) == DEFAULT_MODEL.parent / "five_story_mr_standard"
     other = tmp_path / "stories_2_4.yaml"  # actuators on stories 2 and 4: nothing ships for them
-    other.write_text(f"name: stories_2_4\nbuilding: {REPOSITORY}/configs/buildings/five_story.yaml\n"
-                     "actuators: [{story: 2}, {story: 4}]\n")  # fmt: skip
+    other.write_text(
+        f"name: stories_2_4\nbuilding: {REPOSITORY}/configs/buildings/five_story.yaml\n"
+        "actuators: [{story: 2}, {story: 4}]\n"
+    )
     assert shipped_for(load_experiment(other)) is None
-    with pytest.raises(ConfigError, match=r"stories_2_4.yaml: no shipped controller for its paper five-story under "
-                       r"ground motion, actuators on stories 2, 4 \(rlc models\): train one"):  # fmt: skip
+    with pytest.raises(
+        ConfigError,
+        match=r"stories_2_4.yaml: no shipped controller for its paper five-story "
+        r"under "
+        r"ground motion, actuators on stories 2, 4 \(rlc models\): train one",
+    ):
         api.model_folder(other)
 
 
@@ -160,9 +182,11 @@ def test_a_controller_judged_on_loads_not_its_own_is_told_so_first(tmp_path, mon
     wind = REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml"
     report = Recorded()
     compared = api.compare_lqg(config=wind, out=tmp_path / "wind", report=report)
+    # after the one naming the synthetic suite
     assert report.notes[1:] == [
-        "note: the controllers were made for wind; these loads are ground motions: judged on loads not their own"
-    ]  # after the one naming the synthetic suite
+        "note: the controllers were made for wind; these loads are ground motions: judged on loads not their "
+        "own"
+    ]
     assert (compared.out / "metrics.csv").is_file()
     report = Recorded()
     api.compare_lqg(config=SMOKE, out=tmp_path / "smoke", report=report)
@@ -172,7 +196,10 @@ def test_a_controller_judged_on_loads_not_its_own_is_told_so_first(tmp_path, mon
 @pytest.mark.parametrize(
     "config",
     [
-        REPOSITORY / "studies" / "identification" / "five_story_identified_design.yaml",  # a state-space building
+        REPOSITORY
+        / "studies"
+        / "identification"
+        / "five_story_identified_design.yaml",  # a state-space building
         REPOSITORY / "configs" / "experiments" / "seventy_six_story_atmd.yaml",
         REPOSITORY / "configs" / "five_story.yaml",
     ],

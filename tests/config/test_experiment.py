@@ -25,7 +25,9 @@ def test_the_benchmark_shares_the_paper_building_actuators_and_lqg_cost():
     benchmark, paper = load_experiment(CONFIGS / "five_story.yaml"), Experiment()
     assert benchmark.building == paper.building and benchmark.actuators == paper.actuators
     assert benchmark.sensors.measurements == paper.sensors.measurements
-    np.testing.assert_allclose(design_lqg(Plant(benchmark)).feedback, design_lqg(Plant(paper)).feedback, rtol=1e-6)
+    np.testing.assert_allclose(
+        design_lqg(Plant(benchmark)).feedback, design_lqg(Plant(paper)).feedback, rtol=1e-6
+    )
 
 
 EXPERIMENTS = [
@@ -37,7 +39,8 @@ EXPERIMENTS = [
 
 
 def test_the_experiments_a_user_starts_from_are_few_and_each_is_named_in_the_configs_readme():
-    """configs/experiments/ holds what a user starts from; the configs behind one docs number live in studies/."""
+    """configs/experiments/ holds what a user starts from; the configs behind one docs number live in
+    studies/."""
     starts = sorted((CONFIGS / "experiments").glob("*.yaml"))
     assert 0 < len(starts) <= 11
     readme = (CONFIGS / "README.md").read_text()
@@ -54,9 +57,12 @@ def test_every_experiment_config_loads_as_the_paper_building_with_its_own_name(p
     if path.stem.startswith("seventy_six_story"):  # the wind benchmark's building, given by matrices
         assert len(experiment.building.masses) == 76 and experiment.devices[0].floor == 75
         return
-    if path.stem.startswith("nine_story_frame"):  # the OpenSees frame's reduced model, nine floors above ground,
+    # the OpenSees frame's reduced model, nine floors above ground,
+    if path.stem.startswith("nine_story_frame"):
         plant = experiment.plant  # the frame itself as the plant, or its nonlinear reduced model (rlc reduce)
-        assert len(experiment.building.masses) == 9 and (plant.opensees is not None or plant.hysteresis is not None)
+        assert len(experiment.building.masses) == 9 and (
+            plant.opensees is not None or plant.hysteresis is not None
+        )
         return
     if path.parent.name == "identification":  # designed on a model identified from the paper's building
         assert experiment.building.state == "physical" and experiment.building.n_floors == 5
@@ -113,7 +119,8 @@ def write(tmp_path: Path, text: str, name: str = "bad.yaml") -> Path:
         ),
         (
             "algorithm:\n  name: DQN\n",
-            "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C', 'TQC', 'RandomSearch' or 'DAgger'",
+            "algorithm.name: Input should be 'SAC', 'PPO', 'TD3', 'DDPG', 'A2C', 'TQC', 'RandomSearch' or "
+            "'DAgger'",
         ),
         ("building: [1, 2\n", "bad.yaml:2: invalid YAML"),
         ("- 1\n", "expected a mapping of experiment keys"),
@@ -130,9 +137,13 @@ def test_bad_configs_give_one_line_naming_file_and_key(tmp_path, text, expected)
 def test_errors_in_a_part_file_name_that_file(tmp_path):
     write(tmp_path, "masses: [1.0]\nstiffnesses: [-1.0]\ndamping: {matrix: [[0.0]]}\n", "building.yaml")
     path = write(tmp_path, "building: building.yaml\nactuators: [{story: 1}]\n")
-    with pytest.raises(ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than or equal"):
+    with pytest.raises(
+        ConfigError, match=r"building.yaml: stiffnesses\[0\]: Input should be greater than or equal"
+    ):
         load_experiment(path)
-    with pytest.raises(ConfigError, match="building: file not found: nowhere.yaml .*copy the parts along with it"):
+    with pytest.raises(
+        ConfigError, match="building: file not found: nowhere.yaml .*copy the parts along with it"
+    ):
         load_experiment(write(tmp_path, "building: nowhere.yaml\n"))
 
 
@@ -179,7 +190,8 @@ def test_rlc_info_shows_the_design_model_and_the_simulated_plant(tmp_path):
 
 
 def test_an_experiment_trains_on_the_check_suite_s_family():
-    """The standard's site-based family is a valid training excitation, and check_family.yaml is the standard's."""
+    """The standard's site-based family is a valid training excitation, and check_family.yaml is the
+    standard's."""
     from rlcontroller.config import ExcitationConfig, load_safety_check
     from rlcontroller.config.base import read_model
 
@@ -187,7 +199,9 @@ def test_an_experiment_trains_on_the_check_suite_s_family():
     excitation = {"generator": standard.generator.model_dump(), "validation_motions": 4}
     experiment = build_experiment({"excitation": excitation})
     assert [source.kind for source in experiment.excitation.sources()] == ["site_based"]
-    family = read_model(REPOSITORY / "configs" / "excitations" / "check_family.yaml", ExcitationConfig, "'generator'")
+    family = read_model(
+        REPOSITORY / "configs" / "excitations" / "check_family.yaml", ExcitationConfig, "'generator'"
+    )
     assert family.generator == standard.generator == family.validation_generator
 
 
@@ -202,7 +216,11 @@ def test_the_wind_standard_also_judges_the_ground_motion_suite_and_a_bad_also_is
     assert wind.generator.kind == "wind" and wind.also.motions == 320
     text = (checks / "wind.yaml").read_text()
     (tmp_path / "standard.yaml").write_text(text.replace("also: standard.yaml", "also: wind.yaml"))
-    for also, expected in [("missing.yaml", "'missing.yaml'"), ("standard.yaml", "'standard.yaml'"), ("[1]", "[1]")]:
+    for also, expected in [
+        ("missing.yaml", "'missing.yaml'"),
+        ("standard.yaml", "'standard.yaml'"),
+        ("[1]", "[1]"),
+    ]:
         (tmp_path / "wind.yaml").write_text(text.replace("also: standard.yaml", f"also: {also}"))
         message = rf"wind.yaml: also: expected the file name of a standard beside it.*{re.escape(expected)}"
         with pytest.raises(ConfigError, match=message):

@@ -13,7 +13,8 @@ from rlcontroller.config.learning import JAX_LEARNER_KWARGS, LEARNER_KWARGS
 
 
 @pytest.mark.parametrize(
-    ("backend", "name"), [("sb3", name) for name in sorted(LEARNER_KWARGS)] + [("sbx", n) for n in JAX_LEARNER_KWARGS]
+    ("backend", "name"),
+    [("sb3", name) for name in sorted(LEARNER_KWARGS)] + [("sbx", n) for n in JAX_LEARNER_KWARGS],
 )
 def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
     from rlcontroller.learning.sb3_models import algorithm_class
@@ -27,14 +28,23 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
 @pytest.mark.parametrize(
     ("algorithm", "message"),
     [
-        ({"name": "PPO", "kwargs": {"buffer_size": 10}}, "algorithm.kwargs.buffer_size: not a keyword argument of PPO"),
+        (
+            {"name": "PPO", "kwargs": {"buffer_size": 10}},
+            "algorithm.kwargs.buffer_size: not a keyword argument of PPO",
+        ),
         (
             {"name": "PPO", "kwargs": {"gama": 0.9}},
             "algorithm.kwargs.gama: not a keyword argument of PPO; did you mean 'gamma'?",
         ),
-        ({"name": "SAC", "kwargs": {"gamma": 1.5}}, "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
+        (
+            {"name": "SAC", "kwargs": {"gamma": 1.5}},
+            "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]",
+        ),
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
-        ({"name": "SAC", "policy": {"odd": True}}, "algorithm.policy.odd: only for PPO, A2C and RandomSearch"),
+        (
+            {"name": "SAC", "policy": {"odd": True}},
+            "algorithm.policy.odd: only for PPO, A2C and RandomSearch",
+        ),
         (
             {"name": "SAC", "backend": "sbx", "kwargs": {"param_resets": "yes"}},
             "algorithm.kwargs.param_resets: expected a list of time steps (whole numbers >= 0), got 'yes'",

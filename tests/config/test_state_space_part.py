@@ -14,7 +14,8 @@ from rlcontroller.physics.dynamics import state_space_arrays
 from rlcontroller.physics.plant import Plant
 from rlcontroller.physics.state_space import state_space_outputs
 
-ARRAYS = state_space_arrays(Plant(Experiment()).building)  # the paper's five-story building, actuators 1, 3, 5
+# the paper's five-story building, actuators 1, 3, 5
+ARRAYS = state_space_arrays(Plant(Experiment()).building)
 
 
 def write(folder, arrays=None, experiment=None, **part) -> str:
@@ -34,7 +35,9 @@ def test_a_model_loads_and_keeps_what_it_was_given(tmp_path):
     assert experiment.building.n_floors == 5 and experiment.building.source.endswith("model.npz")
 
 
-DISCRETE_A, DISCRETE_B, *_ = scipy.signal.cont2discrete((ARRAYS["A"], ARRAYS["B"], ARRAYS["C"], ARRAYS["D"]), 0.003)
+DISCRETE_A, DISCRETE_B, *_ = scipy.signal.cont2discrete(
+    (ARRAYS["A"], ARRAYS["B"], ARRAYS["C"], ARRAYS["D"]), 0.003
+)
 DISCRETE_3_MS = {"A": DISCRETE_A, "B": DISCRETE_B, "dt": 0.003}
 UNSTABLE = ARRAYS["A"].copy()
 UNSTABLE[5, 0] = 1.0e6  # a floor pushed away by its own displacement
@@ -54,8 +57,18 @@ UNSTABLE[5, 0] = 1.0e6  # a floor pushed away by its own displacement
             {},
             "inputs.actuators: 2 columns, expected one per actuator (3",
         ),
-        ({}, {"inputs": {"actuators": [0, 1, 9], "ground": 3}}, {}, "inputs: 9 is not a column of B, expected 0..3"),
-        ({}, {"outputs": {"drift": [10, 11], "absolute_acceleration": [15, 16, 17, 18, 19]}}, {}, "5 rows, expected 2"),
+        (
+            {},
+            {"inputs": {"actuators": [0, 1, 9], "ground": 3}},
+            {},
+            "inputs: 9 is not a column of B, expected 0..3",
+        ),
+        (
+            {},
+            {"outputs": {"drift": [10, 11], "absolute_acceleration": [15, 16, 17, 18, 19]}},
+            {},
+            "5 rows, expected 2",
+        ),
         ({}, {"outputs": {"absolute_acceleration": [15, 16, 17, 18, 19]}}, {}, "drift"),
         (
             {},
@@ -104,7 +117,9 @@ def test_an_array_header_declaring_more_than_the_file_holds_is_refused_before_re
     """A forged header (745 GiB declared, 16 bytes stored) is refused from the header, never allocated."""
     path = write(tmp_path)
     header = io.BytesIO()
-    np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (100000, 1000000)})
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (100000, 1000000)}
+    )
     with zipfile.ZipFile(tmp_path / "model.npz", "a") as archive:
         archive.writestr("dt.npy", header.getvalue() + bytes(16))
     with pytest.raises(ConfigError) as error:

@@ -64,7 +64,8 @@ def test_the_twin_is_the_estimate_of_the_building_failed_safe_whatever_the_actua
     twins, estimates = np.array(twins), np.array(estimates)
     assert 0.05 < np.mean(engaged) < 0.95  # both modes were exercised
     peak = np.abs(estimates).max(axis=0)
-    np.testing.assert_array_less(np.abs(twins - estimates).max(axis=0), 1e-4 * peak + 1e-12)  # float32 storage
+    # float32 storage
+    np.testing.assert_array_less(np.abs(twins - estimates).max(axis=0), 1e-4 * peak + 1e-12)
 
 
 def test_the_twin_s_story_peaks_are_the_fail_safe_building_s_within_one_percent_with_sensor_noise():
@@ -76,7 +77,9 @@ def test_the_twin_s_story_peaks_are_the_fail_safe_building_s_within_one_percent_
         controller.reset()
         twin_peak = np.zeros(5)
         for _ in range(info["steps"]):
-            twin_peak = np.maximum(twin_peak, np.abs(assurance.twin(observation[None])[1][0] @ assurance.drift_t))
+            twin_peak = np.maximum(
+                twin_peak, np.abs(assurance.twin(observation[None])[1][0] @ assurance.drift_t)
+            )
             observation, *_ = env.step(controller.act(observation))
         true_peak = peak_drift_ratios(BuildingEnv(experiment(None)), Uncontrolled(5), motion)
         np.testing.assert_allclose(twin_peak, true_peak, rtol=0.01)
@@ -111,5 +114,7 @@ def test_a_bad_assurance_section_is_one_line_naming_the_field(assurance, message
 
 
 def test_assurance_needs_the_state_estimate():
-    with pytest.raises(ConfigError, match=r"^<config>: supervisor.assurance: needs sensors.state_estimate: true"):
+    with pytest.raises(
+        ConfigError, match=r"^<config>: supervisor.assurance: needs sensors.state_estimate: true"
+    ):
         build_experiment({"supervisor": {"assurance": {}}})

@@ -1,5 +1,5 @@
-"""Classical controllers as controller files (control/policy_controller.py): written by `rlc design`, read back as
-exactly their law — an LQG on the env's estimate acts as the evaluation's own LQG, a passive damper
+"""Classical controllers as controller files (control/policy_controller.py): written by `rlc design`, read
+back as exactly their law — an LQG on the env's estimate acts as the evaluation's own LQG, a passive damper
 setting as the constant command, MPC as the comparisons' MPC — and a file that claims a law it does not hold
 is refused."""
 
@@ -12,7 +12,8 @@ from rlcontroller import api
 from rlcontroller.config import ConfigError, load_experiment
 from rlcontroller.control.controllers import ConstantCommand, LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.control.mpc import DEFAULT_HORIZON, MPCController
+from rlcontroller.control.mpc import DEFAULT_HORIZON
+from rlcontroller.control.mpc_controllers import MPCController
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.physics.motions.records import synthetic_suite
 from rlcontroller.physics.plant import Plant
@@ -60,7 +61,9 @@ def test_a_classical_file_whose_weights_are_not_zero_is_refused(tmp_path):
 
 
 def test_design_refuses_a_law_the_experiment_cannot_hold_and_an_existing_folder(tmp_path):
-    with pytest.raises(ConfigError, match="law lqg_ground: this experiment's LQG on its estimate is lqg_ground_model"):
+    with pytest.raises(
+        ConfigError, match="law lqg_ground: this experiment's LQG on its estimate is lqg_ground_model"
+    ):
         api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqg_ground", tmp_path / "a")
     with pytest.raises(ConfigError, match="--law lqr: expected one of"):
         api.design(EXPERIMENTS / "five_story_every_story.yaml", "lqr", tmp_path / "b")
@@ -84,8 +87,8 @@ def test_a_designed_mpc_file_acts_as_the_comparisons_mpc(tmp_path, experiment):
     for (file_run, _), (built_run, _) in zip(*runs, strict=True):
         scale = np.abs(built_run.force).max()
         assert scale > 1e3
-        # the float32 estimate against the built filter's float64 one: equal plans to the solver's tolerance but
-        # at the odd step where the driver's stroke binds and a solve stops short (its fallback)
+        # the float32 estimate against the built filter's float64 one: equal plans to the solver's tolerance
+        # but at the odd step where the driver's stroke binds and a solve stops short (its fallback)
         difference = np.abs(file_run.force - built_run.force)
         assert np.mean(difference > 1e-3 * scale) < 0.02 and np.mean(difference) < 1e-3 * scale
         peaks = [np.abs(run.drift).max() for run in (file_run, built_run)]
@@ -99,20 +102,43 @@ def test_at_rest_an_mpc_file_is_its_lqg(tmp_path):
     plant = Plant(load_experiment(path))
     mpc = read_policy(api.design(path, "mpc", tmp_path / "mpc"), "best", plant)
     lqg = read_policy(api.design(path, "lqg_ground_model", tmp_path / "lqg"), "best", plant)
-    np.testing.assert_allclose(closed_loop_matrix(plant, mpc), closed_loop_matrix(plant, lqg), rtol=0, atol=1e-3)
+    np.testing.assert_allclose(
+        closed_loop_matrix(plant, mpc), closed_loop_matrix(plant, lqg), rtol=0, atol=1e-3
+    )
 
 
 @pytest.mark.parametrize(
     ("forge", "message"),
     [
-        (lambda yaml, npz: npz.__setitem__("mpc_terminal", -npz["mpc_terminal"]), "mpc_terminal: expected a symm"),
-        (lambda yaml, npz: yaml["mpc"].__setitem__("horizon", 100000), r"mpc.horizon 100000: expected a whole"),
-        (lambda yaml, npz: yaml.__setitem__("law", "lqg_ground_model"), "mpc: a classical mpc law has an mpc sec"),
-        (lambda yaml, npz: npz.__setitem__("mpc_strokes", np.zeros((9, 12))), "mpc: 1 cost rows|mpc: .* 9 stroke"),
+        (
+            lambda yaml, npz: npz.__setitem__("mpc_terminal", -npz["mpc_terminal"]),
+            "mpc_terminal: expected a symm",
+        ),
+        (
+            lambda yaml, npz: yaml["mpc"].__setitem__("horizon", 100000),
+            r"mpc.horizon 100000: expected a whole",
+        ),
+        (
+            lambda yaml, npz: yaml.__setitem__("law", "lqg_ground_model"),
+            "mpc: a classical mpc law has an mpc sec",
+        ),
+        (
+            lambda yaml, npz: npz.__setitem__("mpc_strokes", np.zeros((9, 12))),
+            "mpc: 1 cost rows|mpc: .* 9 stroke",
+        ),
         # a model other than the folder's design model never reaches the QP solver (x 1e6: OSQP "non-convex")
-        (lambda yaml, npz: npz.__setitem__("mpc_phi", 1e6 * npz["mpc_phi"]), "mpc_phi: not the control-step map"),
-        (lambda yaml, npz: npz.__setitem__("mpc_action_gain", 1.001 * npz["mpc_action_gain"]), "mpc_action_gain: not"),
-        (lambda yaml, npz: npz.__setitem__("mpc_cost_state", 1e200 * npz["mpc_cost_state"]), "their QP overflows"),
+        (
+            lambda yaml, npz: npz.__setitem__("mpc_phi", 1e6 * npz["mpc_phi"]),
+            "mpc_phi: not the control-step map",
+        ),
+        (
+            lambda yaml, npz: npz.__setitem__("mpc_action_gain", 1.001 * npz["mpc_action_gain"]),
+            "mpc_action_gain: not",
+        ),
+        (
+            lambda yaml, npz: npz.__setitem__("mpc_cost_state", 1e200 * npz["mpc_cost_state"]),
+            "their QP overflows",
+        ),
     ],
 )
 def test_a_forged_mpc_file_is_refused_in_one_line(tmp_path, forge, message):
@@ -128,7 +154,9 @@ def test_a_forged_mpc_file_is_refused_in_one_line(tmp_path, forge, message):
 
 
 def test_mpc_files_refuse_dampers_and_export(tmp_path):
-    with pytest.raises(ConfigError, match="law mpc: MPC as a controller file runs on the env's Kalman estimate"):
+    with pytest.raises(
+        ConfigError, match="law mpc: MPC as a controller file runs on the env's Kalman estimate"
+    ):
         api.design(EXPERIMENTS / "five_story_mr.yaml", "mpc", tmp_path / "mr")
     folder = api.design(EXPERIMENTS / "five_story_every_story.yaml", "mpc", tmp_path / "mpc")
     with pytest.raises(ConfigError, match="an MPC controller solves a quadratic program every step"):

@@ -5,7 +5,13 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import Experiment, PlantConfig
-from rlcontroller.control.controllers import LinearFeedback, LQGController, LQGPrior, Uncontrolled, residual_action
+from rlcontroller.control.controllers import (
+    LinearFeedback,
+    LQGController,
+    LQGPrior,
+    Uncontrolled,
+    residual_action,
+)
 from rlcontroller.control.lqg import design_lqg, design_lqg_ground_model
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.motions.records import synthetic_suite
@@ -150,4 +156,6 @@ def test_an_lqg_bank_acts_as_each_lqg_alone():
         together = bank.act(observations)
         for lane, controller in enumerate(alone):
             rows = slice(3 * lane, 3 * lane + 3)
-            np.testing.assert_allclose(together[rows], controller.act(observations[rows]), rtol=1e-12, atol=1e-14)
+            np.testing.assert_allclose(
+                together[rows], controller.act(observations[rows]), rtol=1e-12, atol=1e-14
+            )

@@ -9,7 +9,12 @@ from conftest import REPOSITORY
 
 from rlcontroller.config import Experiment, MeasurementConfig, PlantConfig, SensorConfig, load_experiment
 from rlcontroller.config.plant import DeviceFactors
-from rlcontroller.control.estimation import design_kalman, design_kalman_ground_model, integration_filter, kalman_gain
+from rlcontroller.control.estimation import (
+    design_kalman,
+    design_kalman_ground_model,
+    integration_filter,
+    kalman_gain,
+)
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.plant import Plant
@@ -31,7 +36,8 @@ def test_the_estimate_converges_to_the_true_state_from_noise_free_readings():
     by orders of magnitude (the filter is stable and unbiased)."""
     experiment = Experiment(
         sensors=SensorConfig(
-            measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0)], ground_noise_std=0.0
+            measurements=[MeasurementConfig(quantity="absolute_acceleration", scale=5.0)],
+            ground_noise_std=0.0,
         )
     )
     plant = Plant(experiment)
@@ -76,7 +82,11 @@ def test_a_batch_of_estimates_updates_as_each_one_alone():
 @pytest.mark.parametrize("design", ["known ground", "ground model"])
 def test_the_update_on_raw_observations_is_the_update_on_si_readings(design):
     plant = Plant(Experiment())
-    kalman = design_kalman(plant, known_ground=True) if design == "known ground" else design_kalman_ground_model(plant)
+    kalman = (
+        design_kalman(plant, known_ground=True)
+        if design == "known ground"
+        else design_kalman_ground_model(plant)
+    )
     layout = plant.layout
     free, observed, previous_ground_gain = kalman.on_observations(layout)
     rng = np.random.default_rng(2)
@@ -125,15 +135,17 @@ def test_the_integration_filter_is_the_backward_euler_image_of_its_transfer_func
 @pytest.mark.slow
 def test_integrated_accelerations_give_velocity_and_displacement_and_forget_a_bias():
     """a = -W^2 A sin(W t) + bias, well above the cutoff: after the transient, d = A sin(W t) and
-    v = A W cos(W t) to 5 % (the three poles at 0.02 Hz lead by 3 atan(0.01), 3 % of the amplitude), whatever the
-    constant bias of the sensor."""
+    v = A W cos(W t) to 5 % (the three poles at 0.02 Hz lead by 3 atan(0.01), 3 % of the amplitude), whatever
+    the constant bias of the sensor."""
     dt, cutoff, amplitude, w = 0.001, 0.02, 0.01, 2 * np.pi * 2.0
     time = np.arange(1, 200_001) * dt
     acceleration = -(w**2) * amplitude * np.sin(w * time) + 0.3
     states = run_filter(integration_filter(cutoff, dt, channels=1, n_actuators=1), acceleration)
     late = time > 150.0
     np.testing.assert_allclose(states[late, 1], amplitude * np.sin(w * time[late]), atol=0.05 * amplitude)
-    np.testing.assert_allclose(states[late, 2], amplitude * w * np.cos(w * time[late]), atol=0.05 * amplitude * w)
+    np.testing.assert_allclose(
+        states[late, 2], amplitude * w * np.cos(w * time[late]), atol=0.05 * amplitude * w
+    )
 
 
 @pytest.mark.slow

@@ -30,7 +30,9 @@ def experiment(supervisor, actuators=EVERY_STORY) -> Experiment:
 
 def strong(motion: Load, pga: float = 8.0) -> Load:
     """`motion` scaled to `pga` (m/s^2): the yielding building's stories yield."""
-    return Load(motion.name, motion.dt, motion.acceleration * pga / np.abs(motion.acceleration).max(), synthetic=True)
+    return Load(
+        motion.name, motion.dt, motion.acceleration * pga / np.abs(motion.acceleration).max(), synthetic=True
+    )
 
 
 def lqg(plant: Plant) -> LQGController:
@@ -65,7 +67,8 @@ def test_the_measured_stroke_velocity_follows_the_true_one_on_a_yielding_buildin
     motion = strong(synthetic_suite(count=1)[0])
     _, _, measured, true, drift, _ = stepped(env, Uncontrolled(5), motion)
     assert np.abs(drift).max() > 1.5 * 0.03  # the stories yield (yield drift 3 cm)
-    slope = np.sum(measured * true, axis=0) / np.sum(true * true, axis=0)  # least squares: measured ~ slope x true
+    # least squares: measured ~ slope x true
+    slope = np.sum(measured * true, axis=0) / np.sum(true * true, axis=0)
     np.testing.assert_allclose(slope, 1.0, atol=0.05)
     correlation = [np.corrcoef(measured[:, j], true[:, j])[0, 1] for j in range(5)]
     assert min(correlation) > 0.95, correlation
@@ -105,17 +108,28 @@ def test_a_measured_dissipative_rule_passes_only_forces_opposing_the_measured_st
 
 
 def test_env_and_batch_apply_the_fallback_alike():
-    plant = Plant(experiment({"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1,
-                              "fallback": FALLBACK}))  # fmt: skip
+    plant = Plant(
+        experiment(
+            {"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1, "fallback": FALLBACK}
+        )
+    )
     assert_env_and_batch_agree(plant, [strong(motion) for motion in synthetic_suite(count=2)], lqg)
 
 
 @pytest.mark.parametrize(
     ("supervisor", "where", "message"),
     [
-        ({"fallback": FALLBACK | {"damping": [1.0e5] * 3}}, "supervisor.fallback.damping", "3 values, expected one"),
+        (
+            {"fallback": FALLBACK | {"damping": [1.0e5] * 3}},
+            "supervisor.fallback.damping",
+            "3 values, expected one",
+        ),
         ({"fallback": FALLBACK | {"drift": 0.0}}, "supervisor.fallback.drift", "greater than 0"),
-        ({"fallback": FALLBACK | {"damping": [-1.0] * 5}}, "supervisor.fallback.damping[0]", "greater than or equal"),
+        (
+            {"fallback": FALLBACK | {"damping": [-1.0] * 5}},
+            "supervisor.fallback.damping[0]",
+            "greater than or equal",
+        ),
         ({"dissipative": "estimated"}, "supervisor.dissipative", "expected true, false or measured"),
     ],
 )
@@ -128,8 +142,12 @@ def test_a_bad_fallback_is_one_line_naming_the_field(supervisor, where, message)
 
 def test_measured_velocities_need_every_floor_s_acceleration_first():
     sensors = SENSORS | {"measurements": [{"quantity": "absolute_acceleration", "floors": [5], "scale": 5.0}]}
-    with pytest.raises(ConfigError, match=r"^<config>: sensors.measurements: .*absolute_acceleration on every floor"):
-        build_experiment({"actuators": EVERY_STORY, "sensors": sensors, "supervisor": {"dissipative": "measured"}})
+    with pytest.raises(
+        ConfigError, match=r"^<config>: sensors.measurements: .*absolute_acceleration on every floor"
+    ):
+        build_experiment(
+            {"actuators": EVERY_STORY, "sensors": sensors, "supervisor": {"dissipative": "measured"}}
+        )
 
 
 def test_the_fallback_needs_the_state_estimate():
@@ -139,9 +157,17 @@ def test_the_fallback_needs_the_state_estimate():
 
 def test_measured_velocities_are_not_a_mass_device_s_stroke():
     devices = [{"type": "tuned_mass", "floor": 5, "mass_ratio": 0.02}]
-    with pytest.raises(ConfigError, match=r"^<config>: supervisor.dissipative: measured stroke velocities are"):
-        build_experiment({"actuators": EVERY_STORY, "devices": devices, "sensors": SENSORS,
-                          "supervisor": {"dissipative": "measured"}})  # fmt: skip
+    with pytest.raises(
+        ConfigError, match=r"^<config>: supervisor.dissipative: measured stroke velocities are"
+    ):
+        build_experiment(
+            {
+                "actuators": EVERY_STORY,
+                "devices": devices,
+                "sensors": SENSORS,
+                "supervisor": {"dissipative": "measured"},
+            }
+        )
 
 
 def test_the_building_failed_safe_has_no_fallback():
@@ -155,4 +181,5 @@ def test_the_building_failed_safe_has_no_fallback():
         response = batch_rollout(reference, [motion], [Uncontrolled(5)], seeds=[3])[0][0][0]
         np.testing.assert_array_equal(response.drift, bare.drift)
     supervised = batch_rollout(plant, [motion], [Uncontrolled(5)], seeds=[3])[0][0][0]
-    assert np.abs(supervised.drift).max() < 0.9 * np.abs(bare.drift).max()  # the dampers act behind zero commands
+    # the dampers act behind zero commands
+    assert np.abs(supervised.drift).max() < 0.9 * np.abs(bare.drift).max()

@@ -51,7 +51,9 @@ def test_gain_matches_an_independent_riccati_solution():
     a, b = step.phi, step.force_gain * env.force_limits
     q, r, n = cost.state.T @ cost.state, cost.action.T @ cost.action, cost.state.T @ cost.action
     p = scipy.linalg.solve_discrete_are(a, b, q, r, s=n)
-    np.testing.assert_allclose(gain, np.linalg.solve(r + b.T @ p @ b, b.T @ p @ a + n.T), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(
+        gain, np.linalg.solve(r + b.T @ p @ b, b.T @ p @ a + n.T), rtol=1e-6, atol=1e-9
+    )
 
 
 def test_the_lqr_cost_is_exactly_the_reward():
@@ -83,7 +85,8 @@ def test_kalman_estimate_converges_on_a_noise_free_free_vibration():
 
 
 def test_lqg_reduces_drift_on_a_record_without_saturating(records):
-    motion = scale_to_pga(read_at2(records / "RSN1086_NORTHR_SYL090.AT2"), 0.5)  # small: forces stay below 100 kN
+    # small: forces stay below 100 kN
+    motion = scale_to_pga(read_at2(records / "RSN1086_NORTHR_SYL090.AT2"), 0.5)
     env = BuildingEnv(Experiment())
     bare, _ = rollout(env, motion, Uncontrolled(3))
     controlled, _ = rollout(env, motion, LQGController(design_lqg(Plant(Experiment())), env.plant))
@@ -112,7 +115,8 @@ def test_forces_respect_the_limits(records):
 
 
 def test_a_reward_that_leaves_forces_free_is_refused():
-    experiment = Experiment(reward={"terms": [{"quantity": "base_shear", "weight": 1.0, "scale": 1e5}]})  # rank 1 < 3
+    # rank 1 < 3
+    experiment = Experiment(reward={"terms": [{"quantity": "base_shear", "weight": 1.0, "scale": 1e5}]})
     with pytest.raises(ValueError, match="R is singular"):
         design_lqg(Plant(experiment))
 
@@ -144,9 +148,13 @@ def test_a_zero_residual_on_the_lqg_prior_is_the_matching_lqg(ground_model):
     experiment = Experiment(sensors=sensors, algorithm={"residual_lqg": True})
     env = BuildingEnv(experiment)
     motion = read_at2_or_synthetic()
-    residual, _ = rollout(env, motion, PolicyController(ZeroActor(), prior=LQGPrior.design(Plant(experiment))))
+    residual, _ = rollout(
+        env, motion, PolicyController(ZeroActor(), prior=LQGPrior.design(Plant(experiment)))
+    )
     design = (
-        design_lqg_ground_model(Plant(experiment)) if ground_model else design_lqg(Plant(experiment), known_ground=True)
+        design_lqg_ground_model(Plant(experiment))
+        if ground_model
+        else design_lqg(Plant(experiment), known_ground=True)
     )
     lqg, _ = rollout(env, motion, LQGController(design, env.plant))
     np.testing.assert_allclose(residual.force, lqg.force, rtol=1e-3, atol=1.0)
@@ -205,7 +213,8 @@ def test_clairvoyant_actions_solve_the_finite_least_squares_problem():
 def test_more_preview_never_costs_more_and_zero_preview_is_full_state_lqr():
     experiment, motion = Experiment(), weak_motion(400)
     costs = [
-        episode_cost(optimal_response(Plant(experiment), motion, preview=p), experiment) for p in (0, 1, 5, 25, None)
+        episode_cost(optimal_response(Plant(experiment), motion, preview=p), experiment)
+        for p in (0, 1, 5, 25, None)
     ]
     assert costs == sorted(costs, reverse=True) and len(set(costs)) == len(costs)
     assert optimal_response(Plant(experiment), motion, preview=10_000).force == pytest.approx(
@@ -213,7 +222,9 @@ def test_more_preview_never_costs_more_and_zero_preview_is_full_state_lqr():
     )
     building = build(experiment.building, experiment.actuators)
     step = step_map(building, experiment.simulation)
-    feedback, _ = lqr_gain(step, quadratic_cost(Plant(experiment), experiment.reward, step), building.force_limits)
+    feedback, _ = lqr_gain(
+        step, quadratic_cost(Plant(experiment), experiment.reward, step), building.force_limits
+    )
     blind = optimal_response(Plant(experiment), motion, preview=0)
     actions = -np.hstack([blind.displacement, blind.velocity]) @ feedback.T
     np.testing.assert_allclose(blind.force[1:], actions[:-1] * building.force_limits, atol=1e-6)
@@ -224,7 +235,9 @@ def test_ground_model_keeps_the_building_gain_and_is_stable():
     feedback on the building state is plain LQR's; the ground model only adds a feed-forward."""
     experiment = Experiment()
     design = design_lqg_ground_model(Plant(experiment))
-    np.testing.assert_allclose(design.feedback[:, :10], design_lqg(Plant(experiment)).feedback, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(
+        design.feedback[:, :10], design_lqg(Plant(experiment)).feedback, rtol=1e-6, atol=1e-9
+    )
     assert np.abs(design.feedback[:, 10:]).max() > 1e-3
     assert np.max(np.abs(design.closed_loop_eigenvalues())) < 1.0
     kalman = design.filter

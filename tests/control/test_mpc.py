@@ -1,6 +1,6 @@
 """MPC: with loose limits its first move is LQR's; with binding limits it never leaves them and its plan
-costs no more than clipped LQR's; a stroke limit is kept where it can be, and its excess paid where not; a step
-the solver does not finish takes the last plan's next action, or LQR's clipped one, and is counted."""
+costs no more than clipped LQR's; a stroke limit is kept where it can be, and its excess paid where not; a
+step the solver does not finish takes the last plan's next action, or LQR's clipped one, and is counted."""
 
 import numpy as np
 import pytest
@@ -9,7 +9,8 @@ from rlcontroller.assets import CONFIGS
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.control.lqg import design_lqg_ground_model, design_lqg_wind_model
 from rlcontroller.control.lqr import lqr_gain, quadratic_cost
-from rlcontroller.control.mpc import TOLERANCE, MPCController, SemiActiveMPC, mpc_design, stroke_rows
+from rlcontroller.control.mpc import TOLERANCE, mpc_design, stroke_rows
+from rlcontroller.control.mpc_controllers import MPCController, SemiActiveMPC
 from rlcontroller.physics.plant import Plant
 
 PLANT = Plant(Experiment())
@@ -35,8 +36,8 @@ def test_with_loose_limits_the_first_move_is_lqrs(controller):
 
 
 def test_under_wind_it_plans_on_the_wind_model_and_its_first_move_is_lqg_wind_models_lqr():
-    """Under wind the estimate is LQG + wind model's (the floor forces among its states) and, with loose limits,
-    the first move is that LQR's -K z; with large estimates the plan stays within the limits."""
+    """Under wind the estimate is LQG + wind model's (the floor forces among its states) and, with loose
+    limits, the first move is that LQR's -K z; with large estimates the plan stays within the limits."""
     plant = Plant(load_experiment(CONFIGS / "experiments" / "five_story_wind.yaml")).design
     wind = MPCController(plant, 20)
     feedback = design_lqg_wind_model(plant).feedback
@@ -80,7 +81,9 @@ def test_a_step_the_solver_does_not_finish_falls_back_to_lqr_and_is_counted():
         solver.update_settings(max_iter=1)
     actions = controller.act(observation)
     assert controller.fallbacks == 2
-    np.testing.assert_array_equal(actions, (controller.estimator._state @ controller.estimator.output).clip(-1.0, 1.0))
+    np.testing.assert_array_equal(
+        actions, (controller.estimator._state @ controller.estimator.output).clip(-1.0, 1.0)
+    )
 
 
 def test_the_problem_is_built_from_the_riccati_solution_it_ends_with():
@@ -102,14 +105,16 @@ def test_compare_lqg_gains_an_mpc_row(tmp_path):
     evaluation = api.compare_lqg(config=CONFIGS / "five_story.yaml", out=tmp_path / "out", mpc=20).evaluation
     summary = evaluation.summary()
     assert "MPC (N = 20)" in summary.index
-    assert summary.loc["MPC (N = 20)", "J1"] == pytest.approx(summary.loc["LQG + ground model", "J1"], rel=0.05)
+    assert summary.loc["MPC (N = 20)", "J1"] == pytest.approx(
+        summary.loc["LQG + ground model", "J1"], rel=0.05
+    )
 
 
 @pytest.mark.slow
 def test_under_strong_wind_mpc_is_ahead_of_lqg_wind_model_which_clips(tmp_path):
-    """The five-story building's wind loads (35 m/s ones drive LQG + wind model into its 100 kN limits on 2-3 % of
-    the steps): MPC on the wind model, planning around the limits, has the lower drift and floor acceleration
-    (measured: J1 + J2 0.582 against 0.614)."""
+    """The five-story building's wind loads (35 m/s ones drive LQG + wind model into its 100 kN limits on 2-3
+    % of the steps): MPC on the wind model, planning around the limits, has the lower drift and floor
+    acceleration (measured: J1 + J2 0.582 against 0.614)."""
     from rlcontroller import api
 
     evaluation = api.compare_lqg(
@@ -119,7 +124,9 @@ def test_under_strong_wind_mpc_is_ahead_of_lqg_wind_model_which_clips(tmp_path):
         mpc=20,
     ).evaluation
     summary = evaluation.summary()
-    mpc, lqg = (summary.loc[name, "J1"] + summary.loc[name, "J2"] for name in ("MPC (N = 20)", "LQG + wind model"))
+    mpc, lqg = (
+        summary.loc[name, "J1"] + summary.loc[name, "J2"] for name in ("MPC (N = 20)", "LQG + wind model")
+    )
     assert mpc < 0.97 * lqg
 
 
@@ -139,13 +146,16 @@ def predicted_strokes(problem, plant, estimate, plan):
 
 
 @pytest.mark.parametrize(
-    ("stroke", "velocity", "within_reach"), [(0.5, 5.0, True), (0.6, 4.5, True), (0.5, 6.0, False), (0.8, 5.0, False)]
+    ("stroke", "velocity", "within_reach"),
+    [(0.5, 5.0, True), (0.6, 4.5, True), (0.5, 6.0, False), (0.8, 5.0, False)],
 )
-def test_a_plan_keeps_the_stroke_limit_where_it_can_and_pays_for_what_it_cannot(stroke, velocity, within_reach):
+def test_a_plan_keeps_the_stroke_limit_where_it_can_and_pays_for_what_it_cannot(
+    stroke, velocity, within_reach
+):
     """The roof driver (10 kN, 1 m), its mass `stroke` (m) out and moving outward at `velocity` (m/s), the
     building at rest: clipped LQR overshoots the limit; MPC's plan keeps every predicted stroke within it with
-    zero slack where it can (`within_reach`: the price is an exact penalty), and elsewhere its slack is exactly
-    what its strokes exceed the limit by; its actions stay within the force limit."""
+    zero slack where it can (`within_reach`: the price is an exact penalty), and elsewhere its slack is
+    exactly what its strokes exceed the limit by; its actions stay within the force limit."""
     design = AMD.design
     controller = MPCController(design, 20)
     problem = controller.problem
@@ -205,7 +215,8 @@ def test_a_damper_plan_only_asks_for_forces_that_oppose_the_dampers_velocity():
 
 
 def test_a_variable_dampers_reach_grows_with_its_velocity():
-    """An ideal variable damper (c up to 2e6 N*s/m, capacity 1e5 N): its bound is c_max |v| / capacity, at most 1."""
+    """An ideal variable damper (c up to 2e6 N*s/m, capacity 1e5 N): its bound is c_max |v| / capacity, at
+    most 1."""
     experiment = load_experiment(CONFIGS / "experiments" / "five_story_mr.yaml")
     devices = [
         {"type": "variable_damper", "story": 1, "damping_min": 1e4, "damping_max": 2e6, "capacity": 1e5},

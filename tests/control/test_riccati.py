@@ -40,7 +40,8 @@ def test_the_truncation_keeps_an_invariant_subspace_exactly():
     assert basis.shape == (4, 3)
     np.testing.assert_allclose(projector @ basis, np.eye(3), atol=1e-12)
     reduced = projector @ phi @ basis
-    np.testing.assert_allclose(projector @ phi, reduced @ projector, atol=1e-12)  # the kept modes evolve alone
+    # the kept modes evolve alone
+    np.testing.assert_allclose(projector @ phi, reduced @ projector, atol=1e-12)
     np.testing.assert_allclose(np.sort(np.abs(np.linalg.eigvals(reduced))), [0.5, 0.97, 0.97], rtol=1e-10)
     assert modal_truncation(scipy.linalg.block_diag(phi[:2, :2], [[0.9]])) is None  # nothing to drop
 
@@ -56,7 +57,8 @@ def test_the_lifted_lqr_costs_what_the_full_one_costs():
     full = solve_dare(phi, b, q, r, s=n)
     full_gain = np.linalg.solve(b.T @ full @ b + r, b.T @ full @ phi + n.T)
     full_again, _ = lqr(phi, b, q, r, n=n)
-    np.testing.assert_allclose(full_again, full_gain, rtol=1e-10, atol=0.0)  # the full equation solves: the full design
+    # the full equation solves: the full design
+    np.testing.assert_allclose(full_again, full_gain, rtol=1e-10, atol=0.0)
     lifted_gain, _ = lqr_on_kept_modes(phi, b, q, r, n=n, truncation=modal_truncation(phi))
 
     def cost(gain):  # trace of the closed loop's cost-to-go from unit initial states
@@ -71,7 +73,9 @@ def test_the_lifted_lqr_costs_what_the_full_one_costs():
 def test_the_lifted_kalman_gain_leaves_a_stable_error():
     phi, _ = system_with_a_quasi_static_mode(1e-12)
     c = np.array([[1.0, 0.0, 0.5, 0.2]])
-    gain = kalman_gain_on_kept_modes(phi, c, 1e-2 * np.eye(4), np.array([[1e-4]]), truncation=modal_truncation(phi))
+    gain = kalman_gain_on_kept_modes(
+        phi, c, 1e-2 * np.eye(4), np.array([[1e-4]]), truncation=modal_truncation(phi)
+    )
     assert max(abs(np.linalg.eigvals((np.eye(4) - gain @ c) @ phi))) < 1
 
 
@@ -122,4 +126,6 @@ def test_an_actuator_delay_stays_in_the_design():
     b = step.force_gain * plant.building.force_limits
     q, r, n = cost.state.T @ cost.state, cost.action.T @ cost.action, cost.state.T @ cost.action
     riccati = scipy.linalg.solve_discrete_are(step.phi, b, q, r, s=n)
-    np.testing.assert_allclose(gain, np.linalg.solve(b.T @ riccati @ b + r, b.T @ riccati @ step.phi + n.T), rtol=1e-9)
+    np.testing.assert_allclose(
+        gain, np.linalg.solve(b.T @ riccati @ b + r, b.T @ riccati @ step.phi + n.T), rtol=1e-9
+    )

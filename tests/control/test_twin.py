@@ -54,7 +54,8 @@ def test_the_twin_is_the_estimate_of_the_building_failed_safe_whatever_the_actua
     twins, estimates, peaks = np.array(twins), np.array(estimates), np.array(peaks)
     assert np.abs(forces).max() > 0.5e5  # the controller acted: the twin is not the estimate itself
     scale = np.abs(estimates).max(axis=0)
-    np.testing.assert_array_less(np.abs(twins - estimates).max(axis=0), 1e-4 * scale + 1e-12)  # float32 storage
+    # float32 storage
+    np.testing.assert_array_less(np.abs(twins - estimates).max(axis=0), 1e-4 * scale + 1e-12)
     running = np.maximum.accumulate(np.abs(estimates[:, :5] @ drift.T), axis=0)
     np.testing.assert_allclose(peaks, running, rtol=1e-4, atol=1e-4 * running.max())
 
@@ -78,7 +79,8 @@ def test_env_and_batch_build_the_twin_alike():
 
 def test_the_observation_stays_the_whole_state_of_a_controller_that_ignores_the_twin():
     """The linearised closed loop with the twin block has every eigenvalue it has without (and the twin's own,
-    the design model's): the batch reads the twin's difference back from the observation as it does the estimate."""
+    the design model's): the batch reads the twin's difference back from the observation as it does the
+    estimate."""
     with_twin, without = Plant(experiment()), Plant(experiment(twin=False))
     plain = np.linalg.eigvals(closed_loop_matrix(without, lqg(without)))
     extended = np.linalg.eigvals(closed_loop_matrix(with_twin, lqg(with_twin)))
@@ -92,18 +94,31 @@ def test_the_observation_stays_the_whole_state_of_a_controller_that_ignores_the_
     [
         ({"sensors": {"twin": True}}, "<config>: sensors.twin: needs sensors.state_estimate: true"),
         (
-            {"sensors": {"state_estimate": True, "twin": True}, "actuators": [],
-             "devices": [{"type": "mr_damper", "story": 1, "capacity": 1.0e5}]},
+            {
+                "sensors": {"state_estimate": True, "twin": True},
+                "actuators": [],
+                "devices": [{"type": "mr_damper", "story": 1, "capacity": 1.0e5}],
+            },
             "<config>: sensors.twin: not with semi-active dampers",
         ),
         (
-            {"sensors": {"state_estimate": True, "twin": True}, "actuators": [],
-             "devices": [{"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e4,
-                          "stroke_limit": 1.0}]},
+            {
+                "sensors": {"state_estimate": True, "twin": True},
+                "actuators": [],
+                "devices": [
+                    {
+                        "type": "active_mass",
+                        "floor": 5,
+                        "mass_ratio": 0.02,
+                        "force_limit": 1.0e4,
+                        "stroke_limit": 1.0,
+                    }
+                ],
+            },
             "<config>: sensors.twin: not with a mass device on end-stops",
         ),
     ],
-)  # fmt: skip
+)
 def test_a_twin_the_plant_cannot_have_is_one_line(document, message):
     with pytest.raises(ConfigError, match="^" + message) as error:
         build_experiment(document)

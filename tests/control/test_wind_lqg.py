@@ -32,13 +32,17 @@ def test_the_discrete_process_noise_is_van_loans_integral():
     block = np.block([[-a, intensity], [np.zeros((4, 4)), a.T]])
     exponential = scipy.linalg.expm(block * dt)
     van_loan = exponential[4:, 4:].T @ exponential[:4, 4:]
-    np.testing.assert_allclose(discrete_noise(a, intensity, scipy.linalg.expm(a * dt)), van_loan, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        discrete_noise(a, intensity, scipy.linalg.expm(a * dt)), van_loan, rtol=1e-9, atol=1e-12
+    )
 
 
 def velocity_error(plant: Plant, design, motion) -> float:
     """Relative RMS error of the filter's floor velocities, noise-free accelerometers, no control."""
     forces = on_control_grid(motion, plant.control_dt).floor_forces
-    response = simulate(plant.building, plant.sampled(1).structure, np.zeros(forces.shape[0]), floor_forces=forces)
+    response = simulate(
+        plant.building, plant.sampled(1).structure, np.zeros(forces.shape[0]), floor_forces=forces
+    )
     n = plant.building.n_dofs
     states = np.hstack([response.displacement, response.velocity])
     readings = states @ plant.sensors.c.T + forces @ plant.sensors.load.T
@@ -86,12 +90,15 @@ def test_with_the_ground_model_the_wind_filter_also_tracks_the_building_in_an_ea
     both, wind_only = Plant(wind_experiment), Plant(wind_experiment.model_copy(update={"sensors": sensors}))
     assert wind_experiment.sensors.ground_model
     assert both.layout.estimate.stop - both.layout.estimate.start == 2 * 5 + 5 + 2
-    assert both.layout.estimate_scale[10] > 1e2 > both.layout.estimate_scale[-2:].max()  # N, then the ground's
+    # N, then the ground's
+    assert both.layout.estimate_scale[10] > 1e2 > both.layout.estimate_scale[-2:].max()
     generator = load_experiment(CONFIGS / "experiments" / "five_story_every_story.yaml").excitation.generator
     for motion in generate_suite(generator, 3, 5, both.building):
         error = earthquake_velocity_error(both, design_lqg_wind_model(both), motion, ground_noise=0.05)
         assert error < 0.1
-        assert error < 0.3 * earthquake_velocity_error(wind_only, design_lqg_wind_model(wind_only), motion, 0.05)
+        assert error < 0.3 * earthquake_velocity_error(
+            wind_only, design_lqg_wind_model(wind_only), motion, 0.05
+        )
     motion = generate_suite(wind_experiment.excitation.generator, 1, 3, both.building)[0]
     assert velocity_error(both, design_lqg_wind_model(both), motion) < 0.1
 
@@ -136,20 +143,25 @@ def test_without_a_wind_generator_there_is_no_wind_model():
 @pytest.mark.slow
 def test_compare_lqg_runs_on_the_76_story_benchmark(tmp_path):
     """The command that ended in a Riccati traceback (scipy's Schur reordering on modes that die within one
-    0.1 s step): LQG and LQG + wind model design and run; under a short generated wind the passive damper's RMS
-    acceleration beats the bare building's, and the drivers the laws command meet their 1 m end-stops, counted
-    (a free mass let both laws beat the passive damper; on its stops the 500 t mass slams: docs/wind.md)."""
+    0.1 s step): LQG and LQG + wind model design and run; under a short generated wind the passive damper's
+    RMS acceleration beats the bare building's, and the drivers the laws command meet their 1 m end-stops,
+    counted (a free mass let both laws beat the passive damper; on its stops the 500 t mass slams:
+    docs/wind.md)."""
     import pandas as pd
     from typer.testing import CliRunner
 
     from rlcontroller.cli import app
 
     wind = tmp_path / "wind.yaml"
-    wind.write_text((CONFIGS / "loads" / "wind_76.yaml").read_text().replace("duration: 600.0", "duration: 120.0"))
+    wind.write_text(
+        (CONFIGS / "loads" / "wind_76.yaml").read_text().replace("duration: 600.0", "duration: 120.0")
+    )
     wind.write_text(wind.read_text().replace("records_per_speed: 3", "records_per_speed: 1"))
     config = str(CONFIGS / "experiments" / "seventy_six_story_atmd.yaml")
     out = tmp_path / "out"
-    result = CliRunner().invoke(app, ["compare", "lqg", "--config", config, "--records", str(wind), "--out", str(out)])
+    result = CliRunner().invoke(
+        app, ["compare", "lqg", "--config", config, "--records", str(wind), "--out", str(out)]
+    )
     assert result.exit_code == 0, result.output
     table = pd.read_csv(out / "summary.csv", index_col=0)
     summary = table["rms_acceleration"]

@@ -93,7 +93,9 @@ def test_a_supervised_policy_exports_with_its_supervisor(tmp_path):
     forces = onnx_rollout(Plant(plant.experiment.model_copy(update={"supervisor": None})), path, still, 0)
     assert np.all(forces == 0.0)
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
-    assert metadata["supervisor"] == "trigger 0.25-1 m/s^2 on the peak ground reading; dissipative forces only"
+    assert (
+        metadata["supervisor"] == "trigger 0.25-1 m/s^2 on the peak ground reading; dissipative forces only"
+    )
 
 
 def test_the_default_exports_with_its_faded_supervisor(tmp_path):
@@ -149,7 +151,12 @@ def lockstep(plant: Plant, path, controller, motions, watch) -> tuple[np.ndarray
 def test_runtime_assurance_exports_with_its_twin(tmp_path):
     """Behind runtime assurance the graph carries the fail-safe twin and the switch: fed the readings the
     supervised env gave the Python controller, it gives that step's force, through hand-overs both ways."""
-    supervisor = {"trigger": [0.1, 0.3], "dissipative": True, "fade_velocity": 0.1, "assurance": {"engage": 0.95}}
+    supervisor = {
+        "trigger": [0.1, 0.3],
+        "dissipative": True,
+        "fade_velocity": 0.1,
+        "assurance": {"engage": 0.95},
+    }
     folder = with_supervisor(tmp_path, supervisor)
     plant = Plant(load_experiment(folder / "config.yaml"))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
@@ -168,8 +175,10 @@ def test_the_dampers_fallback_exports_with_its_measured_velocities(tmp_path):
     velocities and latches as the env's supervisor does: fed the same readings, the same force each step,
     before and after the hand-over."""
     fallback = {"drift": 0.01, "damping": [3.0e5, 3.0e5, 1.5e5, 1.0e5, 0.5e5], "deadband": 0.01}
-    folder = with_supervisor(tmp_path, {"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1,
-                                        "fallback": fallback})  # fmt: skip
+    folder = with_supervisor(
+        tmp_path,
+        {"trigger": [0.25, 1.0], "dissipative": "measured", "fade_velocity": 0.1, "fallback": fallback},
+    )
     plant = Plant(load_experiment(folder / "config.yaml"))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
     controller = read_policy(folder, "best", plant)
@@ -179,7 +188,9 @@ def test_the_dampers_fallback_exports_with_its_measured_velocities(tmp_path):
     assert 0.05 < np.mean(latched) < 0.95  # both the controller and the dampers acted
     np.testing.assert_allclose(onnx_forces, python, rtol=0.0, atol=3e-4 * np.abs(python).max())
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
-    assert "past 0.01 m of estimated story drift, dampers on measured stroke velocity" in metadata["supervisor"]
+    assert (
+        "past 0.01 m of estimated story drift, dampers on measured stroke velocity" in metadata["supervisor"]
+    )
 
 
 @pytest.mark.slow
@@ -194,16 +205,18 @@ def test_the_76_story_damper_controller_exports_and_acts_as_in_python(tmp_path):
     folder = api.design(config, "lqg_wind_model", tmp_path / "atmd")
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), seed=1, steps=600)
+    deviation, peak = graph_deviation(
+        plant, read_policy(folder, "best", plant), path.read_bytes(), seed=1, steps=600
+    )
     assert peak > 1e4 and deviation <= 1e-3  # the driver works (N), and as in Python
 
 
 @pytest.mark.slow
 def test_the_shipped_wind_controller_exports_with_its_floor_trigger(tmp_path, monkeypatch):
-    """Named by its experiment from another folder, the five-story wind controller (the learned MPC on LQG + wind
-    and ground model's estimate, behind a trigger on the floors' accelerations) exports; its graph gives the env's
-    forces under a generated wind load, within 1e-3 of their peak, and the metadata names what the trigger
-    watches."""
+    """Named by its experiment from another folder, the five-story wind controller (the learned MPC on LQG +
+    wind and ground model's estimate, behind a trigger on the floors' accelerations) exports; its graph gives
+    the env's forces under a generated wind load, within 1e-3 of their peak, and the metadata names what the
+    trigger watches."""
     from rlcontroller import api
 
     monkeypatch.chdir(tmp_path)
@@ -211,7 +224,9 @@ def test_the_shipped_wind_controller_exports_with_its_floor_trigger(tmp_path, mo
     assert folder.name == "five_story_wind"
     plant = Plant(load_experiment(folder / "config.yaml", self_contained=True))
     path = export_onnx(folder, "best", tmp_path / "controller.onnx")
-    deviation, peak = graph_deviation(plant, read_policy(folder, "best", plant), path.read_bytes(), seed=2, steps=600)
+    deviation, peak = graph_deviation(
+        plant, read_policy(folder, "best", plant), path.read_bytes(), seed=2, steps=600
+    )
     assert peak > 1e4 and deviation <= 1e-3
     metadata = {prop.key: prop.value for prop in onnx.load(path).metadata_props}
     assert metadata["supervisor"] == "trigger 0.3-1 m/s^2 on the peak floor acceleration readings"
@@ -221,7 +236,9 @@ def test_an_export_that_would_not_act_as_in_python_is_refused_in_one_line(tmp_pa
     from rlcontroller.deployment import export
 
     monkeypatch.setattr(export, "FAITHFUL", -1.0)  # every graph deviates by more
-    with pytest.raises(ConfigError, match=r"its ONNX graph's forces differ from the Python controller's by") as error:
+    with pytest.raises(
+        ConfigError, match=r"its ONNX graph's forces differ from the Python controller's by"
+    ) as error:
         export_onnx(DEFAULT_MODEL, "best", tmp_path / "controller.onnx")
     assert "\n" not in str(error.value) and not (tmp_path / "controller.onnx").exists()
 
@@ -234,7 +251,9 @@ def test_a_normalised_sac_policy_with_a_history_exports_too(tmp_path):
         {"sensors": {"history": 3, "action_history": 2}, "algorithm": {"name": "SAC"}}
     )
     plant = Plant(experiment)
-    model = algorithm_class("SAC")("MlpPolicy", BuildingEnv(plant), policy_kwargs={"net_arch": [64, 64]}, seed=0)
+    model = algorithm_class("SAC")(
+        "MlpPolicy", BuildingEnv(plant), policy_kwargs={"net_arch": [64, 64]}, seed=0
+    )
     with torch.no_grad():  # a policy that acts strongly, so that forces are worth comparing
         model.policy.actor.mu.weight.mul_(30.0)
     normalize = VecNormalize(DummyVecEnv([lambda: BuildingEnv(plant)]), norm_reward=False)
@@ -307,7 +326,9 @@ def test_policies_for_devices_export_too(tmp_path, name):
     from rlcontroller.learning.algorithms import build_model, make_vec_env
 
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")
-    experiment = experiment.model_copy(update={"algorithm": Experiment().algorithm.model_copy(update={"name": "PPO"})})
+    experiment = experiment.model_copy(
+        update={"algorithm": Experiment().algorithm.model_copy(update={"name": "PPO"})}
+    )
     plant = Plant(experiment)
     model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
     with torch.no_grad():
@@ -326,7 +347,9 @@ def assert_same_forces_open_loop(plant, controller, path):
     for _ in range(info["steps"]):
         action = controller.act(observation)
         readings = observation[layout.readings].astype(float) * layout.reading_scale
-        force = exported.step(readings[None], np.array([[float(observation[layout.ground]) * layout.ground_scale]]))
+        force = exported.step(
+            readings[None], np.array([[float(observation[layout.ground]) * layout.ground_scale]])
+        )
         assert np.all(np.abs(force[0] - action * plant.force_limits) <= 1e-3 * plant.force_limits)
         exported.state[0, layout.action] = action  # the held action is the one applied
         observation, *_ = env.step(action)
@@ -410,4 +433,6 @@ def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch):
     layout, observation = plant.layout, np.zeros(plant.layout.size, dtype=np.float32)
     observation[layout.readings] = readings[0] / layout.reading_scale
     observation[layout.ground] = ground[0, 0] / layout.ground_scale
-    np.testing.assert_allclose(force[0], controller.act(observation) * plant.force_limits, rtol=1e-5, atol=1e-2)
+    np.testing.assert_allclose(
+        force[0], controller.act(observation) * plant.force_limits, rtol=1e-5, atol=1e-2
+    )

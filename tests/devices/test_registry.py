@@ -16,7 +16,9 @@ EXAMPLES = {
 }
 
 
-@pytest.mark.parametrize("device_type", DEVICE_TYPES, ids=lambda t: t.model_fields["type"].annotation.__args__[0])
+@pytest.mark.parametrize(
+    "device_type", DEVICE_TYPES, ids=lambda t: t.model_fields["type"].annotation.__args__[0]
+)
 def test_each_registered_type_parses_to_itself_and_keeps_the_contract(device_type):
     name = device_type.model_fields["type"].annotation.__args__[0]
     device = TypeAdapter(DeviceConfig).validate_python({"type": name, **EXAMPLES[name]})
@@ -40,7 +42,8 @@ def test_registered_types_have_distinct_names_labels_and_kernels():
 def test_the_fail_safe_commands_are_the_passive_states():
     adapter = TypeAdapter(DeviceConfig)
     driver, mr, variable = (
-        adapter.validate_python({"type": n, **EXAMPLES[n]}) for n in ("active_mass", "mr_damper", "variable_damper")
+        adapter.validate_python({"type": n, **EXAMPLES[n]})
+        for n in ("active_mass", "mr_damper", "variable_damper")
     )
     assert driver.fail_safe_action == 0.0  # no force: the tuned mass it was built as
     assert mr.fail_safe_action == variable.fail_safe_action == -1.0  # the minimum command: passive-off
@@ -55,17 +58,26 @@ def test_a_scaled_mr_damper_scales_its_force_parameters_only():
 
 
 def test_a_scaled_variable_damper_scales_its_damping_range():
-    damper = TypeAdapter(DeviceConfig).validate_python({"type": "variable_damper", **EXAMPLES["variable_damper"]})
+    damper = TypeAdapter(DeviceConfig).validate_python(
+        {"type": "variable_damper", **EXAMPLES["variable_damper"]}
+    )
     scaled = damper.scaled(0.5)
     assert (scaled.damping_min, scaled.damping_max) == (0.5e4, 0.5e6)
-    assert scaled.capacity == damper.capacity  # the design force is what the designer assumed, not what was built
+    # the design force is what the designer assumed, not what was built
+    assert scaled.capacity == damper.capacity
 
 
 def test_commands_and_their_fail_safe_actions_follow_the_action_s_order():
     """Actuators first, then mass drivers, then dampers, whatever order the devices are listed in."""
     from rlcontroller.config import ConfigError, Experiment, build_experiment
 
-    driver = {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e5, "stroke_limit": 0.5}
+    driver = {
+        "type": "active_mass",
+        "floor": 5,
+        "mass_ratio": 0.02,
+        "force_limit": 1.0e5,
+        "stroke_limit": 0.5,
+    }
     damper = {"type": "mr_damper", "story": 3, "capacity": 1.0e5}
     tuned = {"type": "tuned_mass", "floor": 4, "mass_ratio": 0.01}
     raw = {"actuators": [{"story": 2}], "devices": [damper, tuned, driver]}

@@ -1,7 +1,7 @@
-"""The nonlinear benchmark's criteria (`evaluation.benchmark`) against hand-computed values: drift ratios, base
-shear from the floor masses, normed responses, force, stroke and power over the weight, and the member ends'
-ductility, dissipated energy and plastic connections of elastic-perfectly-plastic hinges driven through known
-cycles."""
+"""The nonlinear benchmark's criteria (`evaluation.benchmark`) against hand-computed values: drift ratios,
+base shear from the floor masses, normed responses, force, stroke and power over the weight, and the member
+ends' ductility, dissipated energy and plastic connections of elastic-perfectly-plastic hinges driven through
+known cycles."""
 
 import numpy as np
 import pytest
@@ -19,9 +19,13 @@ HEIGHTS = np.array([5.0, 4.0])
 def _building() -> Building:
     n = MASSES.size
     return Building(
-        mass=np.diag(MASSES), stiffness=np.eye(n), damping=np.zeros((n, n)), actuator_matrix=np.eye(n)[:, :1],
-        force_limits=np.array([1e6]), story_heights=HEIGHTS,
-    )  # fmt: skip
+        mass=np.diag(MASSES),
+        stiffness=np.eye(n),
+        damping=np.zeros((n, n)),
+        actuator_matrix=np.eye(n)[:, :1],
+        force_limits=np.array([1e6]),
+        story_heights=HEIGHTS,
+    )
 
 
 def _response(drift, acceleration, velocity, displacement, force=None, device_velocity=None) -> Response:
@@ -30,11 +34,17 @@ def _response(drift, acceleration, velocity, displacement, force=None, device_ve
     force = np.zeros((k, 1)) if force is None else force
     device_velocity = np.zeros((k, 1)) if device_velocity is None else device_velocity
     return Response(
-        time=np.arange(k) * DT, ground=np.zeros(k), displacement=np.asarray(displacement, float),
-        velocity=np.asarray(velocity, float), drift=np.asarray(drift, float),
-        absolute_acceleration=np.asarray(acceleration, float), story_shear=zeros, base_shear=np.zeros(k),
-        force=force, device_velocity=device_velocity,
-    )  # fmt: skip
+        time=np.arange(k) * DT,
+        ground=np.zeros(k),
+        displacement=np.asarray(displacement, float),
+        velocity=np.asarray(velocity, float),
+        drift=np.asarray(drift, float),
+        absolute_acceleration=np.asarray(acceleration, float),
+        story_shear=zeros,
+        base_shear=np.zeros(k),
+        force=force,
+        device_velocity=device_velocity,
+    )
 
 
 def test_response_criteria_are_the_benchmarks_ratios():
@@ -94,7 +104,9 @@ def test_member_end_criteria_of_bilinear_hinges_through_known_cycles():
     assert expected < 0.7
     assert criteria["J8"] == pytest.approx(expected, rel=0.01)  # the trapezoid rule on 400 steps
     normed = lambda run: np.sqrt(np.mean(run[1:, :, 0] ** 2, axis=0)) / 2.0  # noqa: E731
-    assert criteria["J10"] == pytest.approx(np.max(normed(runs["controlled"])) / np.max(normed(runs["uncontrolled"])))
+    assert criteria["J10"] == pytest.approx(
+        np.max(normed(runs["controlled"])) / np.max(normed(runs["uncontrolled"]))
+    )
 
 
 def test_member_end_criteria_are_undefined_where_nothing_yields_uncontrolled():

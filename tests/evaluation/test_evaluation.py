@@ -25,7 +25,9 @@ def test_whole_record_uncontrolled_equals_the_step_by_step_env(records):
     whole = uncontrolled_responses(env.plant, [motion])[0]
     stepped, _ = rollout(env, motion, Uncontrolled(3))
     for quantity in ("drift", "absolute_acceleration", "story_shear"):
-        np.testing.assert_allclose(whole.quantity(quantity), stepped.quantity(quantity), rtol=SAME_PHYSICS, atol=1e-12)
+        np.testing.assert_allclose(
+            whole.quantity(quantity), stepped.quantity(quantity), rtol=SAME_PHYSICS, atol=1e-12
+        )
 
 
 def test_uncontrolled_rows_are_one_and_lqg_helps():
@@ -53,7 +55,9 @@ def test_preview_study_improves_with_preview_and_ends_at_the_clairvoyant():
 
 def test_sweep_trades_force_energy_for_drift():
     experiment = Experiment()
-    table = lqg_sweep(Plant(experiment), synthetic_suite(count=2), SYNTHETIC_LABEL, np.array([0.01, 1.0, 100.0]))
+    table = lqg_sweep(
+        Plant(experiment), synthetic_suite(count=2), SYNTHETIC_LABEL, np.array([0.01, 1.0, 100.0])
+    )
     assert list(table["force_weight_multiplier"]) == [0.01, 1.0, 100.0]
     assert table["J3"].is_monotonic_decreasing
     assert table["J1"].iloc[-1] > table["J1"].iloc[0]
@@ -64,7 +68,9 @@ def test_the_sweep_designs_lqg_on_the_design_model_and_runs_it_on_the_plant():
     softer = Plant(Experiment(plant={"stiffness": 0.7}))
     motions = synthetic_suite(count=2)
     table = lqg_sweep(softer, motions, SYNTHETIC_LABEL, np.array([1.0]))
-    deployed = evaluate(softer, motions, [LQGController(design_lqg(softer.design), softer.design)], SYNTHETIC_LABEL)
+    deployed = evaluate(
+        softer, motions, [LQGController(design_lqg(softer.design), softer.design)], SYNTHETIC_LABEL
+    )
     oracle = evaluate(softer, motions, [LQGController(design_lqg(softer), softer)], SYNTHETIC_LABEL)
     assert table["J1"].iloc[0] == pytest.approx(mean_metric(deployed, "LQG", "J1"), rel=1e-12)
     assert abs(mean_metric(oracle, "LQG", "J1") - table["J1"].iloc[0]) > 1e-3
@@ -107,7 +113,9 @@ def test_a_tuned_mass_dampers_energy_balances(records):
         ground_input = np.trapezoid(-result.ground * (result.velocity @ floors.floor_masses), dx=dt)
         mass_velocity = result.velocity[:, 4] + result.stroke_velocity[:, 0]
         ground_input -= np.trapezoid(result.ground * mass_velocity * building.devices[0].mass, dx=dt)
-        floor_damping = np.trapezoid(np.einsum("ki,ij,kj->k", result.velocity, floors.damping, result.velocity), dx=dt)
+        floor_damping = np.trapezoid(
+            np.einsum("ki,ij,kj->k", result.velocity, floors.damping, result.velocity), dx=dt
+        )
         damping, free = np.array([building.devices[0].damping]), np.array([np.nan])
         damper = device_metrics(result, damping=damping, stroke_limits=free)["damper_energy_J"][0]
         x = np.append(result.displacement[-1], result.displacement[-1, 4] + result.stroke[-1, 0])
@@ -172,7 +180,9 @@ def test_the_damper_sweep_ends_at_passive_off_and_on_and_passes_through_clipped_
 
     plant = Plant(load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"))
     motions = load_records(records)[0][:2]
-    table = damper_sweep(plant, motions, "two records", np.array([0.0, 0.5, 1.0]), multipliers=np.array([1.0, 100.0]))
+    table = damper_sweep(
+        plant, motions, "two records", np.array([0.0, 0.5, 1.0]), multipliers=np.array([1.0, 100.0])
+    )
     classical = compare(plant, motions, "two records").summary()
     passive = table[table["family"] == "passive"]
     assert passive["J1"].iloc[0] == pytest.approx(classical.loc["passive-off", "J1"], rel=1e-12)
@@ -191,8 +201,11 @@ def test_a_wind_suite_is_evaluated_against_the_uncontrolled_building_under_the_s
 
     from rlcontroller.cli import app
 
-    (tmp_path / "wind.yaml").write_text("kind: wind\nspeeds: [30]\nrecords_per_speed: 2\nduration: 60\ndt: 0.05\n")
-    config = str(REPOSITORY / "configs" / "experiments" / "paper_sac.yaml")  # no ground trigger to keep LQG off
+    (tmp_path / "wind.yaml").write_text(
+        "kind: wind\nspeeds: [30]\nrecords_per_speed: 2\nduration: 60\ndt: 0.05\n"
+    )
+    # no ground trigger to keep LQG off
+    config = str(REPOSITORY / "configs" / "experiments" / "paper_sac.yaml")
     outputs = []
     for name in ("a", "b"):
         arguments = ["compare", "lqg", "--config", config, "--records", str(tmp_path / "wind.yaml")]
@@ -239,7 +252,11 @@ def test_a_story_that_collapses_is_reported_per_story_and_by_record(tmp_path):
     uncontrolled run reports story 1 collapsed and no other, and the printed summary names the record."""
     from rlcontroller.api.judging import summary_text
 
-    hysteresis = {"yield_drift": 0.004, "post_yield_ratio": [-0.3, 0.1, 0.1, 0.1, 0.1], "collapse_drift": 0.05}
+    hysteresis = {
+        "yield_drift": 0.004,
+        "post_yield_ratio": [-0.3, 0.1, 0.1, 0.1, 0.1],
+        "collapse_drift": 0.05,
+    }
     plant = Plant(Experiment(plant={"hysteresis": hysteresis}))
     motions = synthetic_suite(count=1)  # PGA 2-6 m/s^2: well past the first story's strength
     result = evaluate(plant, motions, [], SYNTHETIC_LABEL)

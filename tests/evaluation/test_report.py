@@ -34,7 +34,9 @@ def smoke_run(tmp_path_factory):
 @pytest.mark.slow
 def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records, tmp_path):
     out = tmp_path / "evaluation"
-    result = CliRunner().invoke(app, ["evaluate", str(smoke_run), "--records", str(records), "--out", str(out)])
+    result = CliRunner().invoke(
+        app, ["evaluate", str(smoke_run), "--records", str(records), "--out", str(out)]
+    )
     assert result.exit_code == 0, result.output
     for name in (
         "metrics.csv",
@@ -62,9 +64,15 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
     assert (bare.loc[bare["metric"] != "J3", "value"] == 1.0).all() and (
         bare.loc[bare["metric"] == "J3", "value"] == 0
     ).all()
-    lqg_j1 = metrics[(metrics["controller"] == "LQG") & (metrics["metric"] == "J1")].groupby("record")["value"].mean()
+    lqg_j1 = (
+        metrics[(metrics["controller"] == "LQG") & (metrics["metric"] == "J1")]
+        .groupby("record")["value"]
+        .mean()
+    )
     assert len(lqg_j1) == 7 and (lqg_j1 < 0.8).all()  # LQG reduces the mean drift on every record
-    assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {f"7 records from {records}, as recorded"}
+    assert len(set(metrics["record"])) == 7 and set(metrics["suite"]) == {
+        f"7 records from {records}, as recorded"
+    }
     summary = (out / "summary.md").read_text()
     assert "RL better than LQG (%)" in summary and f"7 records from {records}" in summary
     assert f"Evaluated RL: {smoke_run / 'best_policy.yaml'} (" in summary and "training steps)" in summary
@@ -79,7 +87,18 @@ def test_evaluate_writes_tables_and_plots_with_finite_numbers(smoke_run, records
 def test_compare_lqg_sweep_and_preview_mark_the_policy(smoke_run, records, tmp_path):
     out = tmp_path / "compare"
     result = CliRunner().invoke(
-        app, ["compare", "lqg", str(smoke_run), "--records", str(records), "--out", str(out), "--sweep", "--preview"]
+        app,
+        [
+            "compare",
+            "lqg",
+            str(smoke_run),
+            "--records",
+            str(records),
+            "--out",
+            str(out),
+            "--sweep",
+            "--preview",
+        ],
     )
     assert result.exit_code == 0, result.output
     sweep = pd.read_csv(out / "lqg_sweep.csv")
@@ -141,7 +160,9 @@ def test_an_output_folder_is_never_overwritten_and_never_half_written(tmp_path, 
     for out, expected in ((tmp_path / "full", "exists and is not empty"), (tmp_path / "a_file", "is a file")):
         result = CliRunner().invoke(app, ["compare", "lqg", "--out", str(out)])
         assert result.exit_code == 2 and expected in result.output and "Traceback" not in result.output
-    assert (tmp_path / "full" / "mine.txt").read_text() == "keep" and (tmp_path / "a_file").read_text() == "keep"
+    assert (tmp_path / "full" / "mine.txt").read_text() == "keep" and (
+        tmp_path / "a_file"
+    ).read_text() == "keep"
     nested = CliRunner().invoke(app, ["compare", "lqg", "--out", str(tmp_path / "a_file" / "sub")])
     assert nested.exit_code == 2 and nested.output.strip().splitlines()[-1].endswith(
         "a_file is a file, so it cannot hold the output folder"
@@ -171,7 +192,8 @@ def test_the_committed_model_evaluates_from_a_fresh_clone(records, tmp_path):
     assert "FAILED" not in result.output and "never safety-checked" not in result.output
     assert "passed the safety check, dominating: the folder's claim until re-run: 'rlc check" in result.output
     summary = pd.read_csv(tmp_path / "summary.csv", index_col="controller")
-    default = summary.loc[DEFAULT_NAME]  # the learned MPC: LQG + ground model's drift, fewer floor accelerations
+    # the learned MPC: LQG + ground model's drift, fewer floor accelerations
+    default = summary.loc[DEFAULT_NAME]
     assert default["J1"] < 0.5 and default["J1"] < summary.loc["LQG", "J1"]
     assert default["J1"] == pytest.approx(summary.loc["LQG + ground model", "J1"], rel=0.02)
     assert default["J2"] < 0.95 * summary.loc["LQG + ground model", "J2"]
@@ -210,7 +232,9 @@ def test_the_same_inputs_give_byte_identical_j_tables(smoke_run, tmp_path, monke
 
 
 def test_markdown_table_rounds_percentages_to_one_decimal():
-    frame = pd.DataFrame({"J1": [0.45678], "J1 reduction %": [54.3219]}, index=pd.Index(["RL"], name="controller"))
+    frame = pd.DataFrame(
+        {"J1": [0.45678], "J1 reduction %": [54.3219]}, index=pd.Index(["RL"], name="controller")
+    )
     assert tables.markdown_table(frame).splitlines() == [
         "| controller | J1 | J1 reduction % |",
         "|---|---|---|",
@@ -265,11 +289,20 @@ def test_j1_and_j2_by_pga_band_count_records_and_flag_controllers_worse_than_non
         "PGA ≥ 0.3 g (1)",
         "records with J1 > 1",
     ]
-    assert table.loc["uncontrolled", "records with J1 > 1"] == 0 and table.loc["pushes", "records with J1 > 1"] >= 2
-    assert np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0
+    assert (
+        table.loc["uncontrolled", "records with J1 > 1"] == 0
+        and table.loc["pushes", "records with J1 > 1"] >= 2
+    )
+    assert (
+        np.isnan(table.loc["pushes", "PGA 0.1–0.3 g (0)"]) and table.loc["pushes", "PGA 0–0.02 g (1)"] > 1.0
+    )
     accelerations = by_pga(evaluation, "J2")
     assert list(accelerations.columns) == [*table.columns[:-1], "records with J2 > 1"]
-    j2 = evaluation.metrics[evaluation.metrics["metric"] == "J2"].groupby(["controller", "record"])["value"].mean()
+    j2 = (
+        evaluation.metrics[evaluation.metrics["metric"] == "J2"]
+        .groupby(["controller", "record"])["value"]
+        .mean()
+    )
     strong = motions[2].name
     assert accelerations.loc["pushes", "PGA ≥ 0.3 g (1)"] == pytest.approx(j2["pushes", strong])
     assert accelerations.loc["uncontrolled", "records with J2 > 1"] == 0

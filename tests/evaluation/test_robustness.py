@@ -66,7 +66,10 @@ def test_lqg_with_the_ground_model_is_the_one_evaluate_runs_designed_on_the_desi
         ("scenarios: [{name: a}, {name: a}]\n", "scenarios: scenario name 'a' is used twice"),
         ("scenarios: [{name: a, plant: {stifness: 0.7}}]\n", "scenarios[0].plant.stifness: unknown key"),
         ("scenarios: [{name: a, plant: {stiffness: [1, 2]}}]\n", "scenarios[0].plant.stiffness: 2 factors"),
-        ("scenarios: [{name: a, plant: {sensors: {dead_floors: [9]}}}]\n", "sensors.dead_floors: 9 does not exist"),
+        (
+            "scenarios: [{name: a, plant: {sensors: {dead_floors: [9]}}}]\n",
+            "sensors.dead_floors: 9 does not exist",
+        ),
         ("scenarios: [{name: a, plant: {stiffness: .inf}}]\n", "Input should be a finite number"),
         ("scenarios: []\n", "scenarios: List should have at least 1 item"),
     ],
@@ -76,12 +79,18 @@ def test_bad_scenario_files_give_one_line(tmp_path, text, expected):
     path.write_text(text)
     with pytest.raises(ConfigError) as error:
         load_scenarios(path, Experiment())
-    assert str(error.value).startswith(str(path)) and expected in str(error.value) and "\n" not in str(error.value)
+    assert (
+        str(error.value).startswith(str(path))
+        and expected in str(error.value)
+        and "\n" not in str(error.value)
+    )
 
 
 @pytest.mark.slow
 def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path):
-    (tmp_path / "two.yaml").write_text("scenarios:\n  - {name: nominal}\n  - {name: soft, plant: {stiffness: 0.7}}\n")
+    (tmp_path / "two.yaml").write_text(
+        "scenarios:\n  - {name: nominal}\n  - {name: soft, plant: {stiffness: 0.7}}\n"
+    )
     record = tmp_path / "short.csv"
     motion = synthetic_suite(count=1)[0]
     record.write_text(
@@ -89,13 +98,27 @@ def test_rlc_robustness_writes_the_three_files_for_the_committed_model(tmp_path)
         + "\n".join(f"{k * motion.dt:.4f},{a:.6f}" for k, a in enumerate(motion.acceleration))
     )
     out = tmp_path / "out"
-    arguments = ["robustness", "--records", str(record), "--scenarios", str(tmp_path / "two.yaml"), "--out", str(out)]
+    arguments = [
+        "robustness",
+        "--records",
+        str(record),
+        "--scenarios",
+        str(tmp_path / "two.yaml"),
+        "--out",
+        str(out),
+    ]
     result = CliRunner().invoke(app, arguments)
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} == {"robustness.csv", "robustness.md", "robustness.png"}
     table = pd.read_csv(out / "robustness.csv")
     default = "RL"  # the default model, the learned MPC
-    assert set(table["controller"]) == {"uncontrolled", NOMINAL_LQG, NOMINAL_GROUND_MODEL, ORACLE_LQG, default}
+    assert set(table["controller"]) == {
+        "uncontrolled",
+        NOMINAL_LQG,
+        NOMINAL_GROUND_MODEL,
+        ORACLE_LQG,
+        default,
+    }
     assert (
         set(table["scenario"]) == {"nominal", "soft"}
         and "## Mean J1 per scenario" in (out / "robustness.md").read_text()
@@ -144,7 +167,9 @@ def test_under_wind_the_nominal_designs_are_lqg_and_lqg_with_the_wind_model():
     means = summary(result)["J1"]
     assert {NOMINAL_LQG, NOMINAL_WIND_MODEL} <= set(result["controller"])
     evaluated = compare(plant, motions, "wind")
-    assert means.loc[("nominal", NOMINAL_WIND_MODEL)] == pytest.approx(mean_metric(evaluated, "LQG + wind model", "J1"))
+    assert means.loc[("nominal", NOMINAL_WIND_MODEL)] == pytest.approx(
+        mean_metric(evaluated, "LQG + wind model", "J1")
+    )
     assert means.loc[("softer", NOMINAL_WIND_MODEL)] < means.loc[("softer", NOMINAL_LQG)]
 
 
@@ -161,13 +186,16 @@ def test_the_committed_scenario_files_load_for_their_experiments(scenarios, expe
     from rlcontroller.config import load_experiment
 
     configs = Path(__file__).resolve().parents[2] / "configs"
-    loaded = load_scenarios(configs / "scenarios" / scenarios, load_experiment(configs / "experiments" / experiment))
+    loaded = load_scenarios(
+        configs / "scenarios" / scenarios, load_experiment(configs / "experiments" / experiment)
+    )
     assert "nominal" in [scenario.name for scenario in loaded]
 
 
 def test_dampers_are_judged_by_their_own_classical_laws_and_no_lqg_is_designed_for_them():
-    """MR dampers: passive-off, passive-on and clipped-optimal, nominal; an LQG with the ground model cannot be
-    designed for a damper's command (it crashed here before, rlc robustness on five_story_mr.yaml included)."""
+    """MR dampers: passive-off, passive-on and clipped-optimal, nominal; an LQG with the ground model cannot
+    be designed for a damper's command (it crashed here before, rlc robustness on five_story_mr.yaml
+    included)."""
     from conftest import REPOSITORY
 
     from rlcontroller.config import load_experiment

@@ -14,8 +14,9 @@ from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.control.controllers import Uncontrolled
 from rlcontroller.control.networks import Actor, Layer
 from rlcontroller.control.policy_controller import PolicyController
+from rlcontroller.evaluation.figures import DeviceFigures, MotionFigures
 from rlcontroller.evaluation.safety import energy_near, judge_suite, passive_verdict, safety_check
-from rlcontroller.evaluation.standard import DEVICE_FIGURES, suite_figures
+from rlcontroller.evaluation.standard import suite_figures
 from rlcontroller.evaluation.verdict import VerdictState, judged_digests, write_verdict
 from rlcontroller.evaluation.verdict import read_verdict as read_verdict_of
 from rlcontroller.physics.motions.excitation import Load
@@ -46,33 +47,43 @@ def test_a_controller_that_never_acts_passes_the_motion_criteria():
     plant = Plant(Experiment())
     verdict = safety_check(plant, Uncontrolled(3), small_standard(), [])
     assert verdict.passed and set(verdict.criteria) == {"check suite", "at rest"}
-    assert verdict.criteria["check suite"]["mean_J1"] == pytest.approx(1.0, abs=1e-9)
-    assert verdict.criteria["at rest"]["peak_drift_over_bound"] == 0.0
+    assert verdict.criteria["check suite"].mean_J1 == pytest.approx(1.0, abs=1e-9)
+    assert verdict.criteria["at rest"].peak_drift_over_bound == 0.0
 
 
 def judged_scaled(scales: tuple[float, ...]) -> dict:
-    """The check suite's criterion for responses whose drift is `scales` times the reference's, motion by motion
-    (floor accelerations equal), under a 1 % tolerance."""
+    """The check suite's criterion for responses whose drift is `scales` times the reference's, motion by
+    motion (floor accelerations equal), under a 1 % tolerance."""
     from types import SimpleNamespace
 
     motions = [Load(f"m{index}", 0.02, np.full(11, 1.0)) for index in range(len(scales))]
-    reference = SimpleNamespace(drift=np.full((11, 2), 0.01), absolute_acceleration=np.ones((11, 2)),
-                                stroke=np.zeros((11, 0)))  # fmt: skip
+    reference = SimpleNamespace(
+        drift=np.full((11, 2), 0.01), absolute_acceleration=np.ones((11, 2)), stroke=np.zeros((11, 0))
+    )
     responses = {}
     for motion, scale in zip(motions, scales, strict=True):
         responses["fail-safe", motion.name] = reference
         responses["judged", motion.name] = SimpleNamespace(
-            drift=scale * reference.drift, absolute_acceleration=reference.absolute_acceleration,
+            drift=scale * reference.drift,
+            absolute_acceleration=reference.absolute_acceleration,
             stroke=reference.stroke,
-        )  # fmt: skip
+        )
     evaluation = SimpleNamespace(responses=responses)
     steel = SimpleNamespace(building=SimpleNamespace(system="steel_moment_frame"))
     periods = SimpleNamespace(building=SimpleNamespace(periods=lambda: np.array([1.0, 0.4, 0.2])))
     plant = SimpleNamespace(yielding=None, fe_model=None, experiment=steel, bare=periods)
-    standard = load_safety_check(STANDARD).model_copy(update={"risk_bound": 0.0})  # three motions: the strict rule
-    return judge_suite(
-        evaluation, motions, "judged", "fail-safe", words="it", bounds=np.full(2, 6e-4), standard=standard, plant=plant
+    standard = load_safety_check(STANDARD).model_copy(update={"risk_bound": 0.0})  # three motions: strict
+    criterion = judge_suite(
+        evaluation,
+        motions,
+        "judged",
+        "fail-safe",
+        words="it",
+        bounds=np.full(2, 6e-4),
+        standard=standard,
+        plant=plant,
     )
+    return criterion.fields()
 
 
 @pytest.mark.parametrize(
@@ -89,7 +100,11 @@ def test_a_significant_motion_fails_only_beyond_the_tolerance_and_the_strict_cou
 ):
     """1.005 of the reference passes under a 1 % tolerance but is counted as worse at all; 1.02 fails."""
     verdict = judged_scaled(scales)
-    assert (verdict["failure_count"], verdict["strict_failure_count"], verdict["passed"]) == (failures, strict, passed)
+    assert (verdict["failure_count"], verdict["strict_failure_count"], verdict["passed"]) == (
+        failures,
+        strict,
+        passed,
+    )
     assert f"{strict} worse at all" in verdict["summary"]
     assert verdict["mean_J1"] == pytest.approx(np.mean(scales), abs=1e-4)
     for name in verdict["failures"]:  # how far the reference drifted, to tell a building from a collapsed one
@@ -117,7 +132,7 @@ def test_positive_velocity_feedback_is_found_unstable_and_fails_the_check():
     stable = spectral_radius(plant, linear_policy(-weights * 0.001))
     assert radius > 1.0 > stable
     verdict = safety_check(plant, unstable, small_standard(), [])
-    assert not verdict.passed and not verdict.criteria["closed-loop stability"]["passed"]
+    assert not verdict.passed and not verdict.criteria["closed-loop stability"].passed
 
 
 def test_the_verdict_is_written_and_read_back(tmp_path):
@@ -131,7 +146,9 @@ def test_the_verdict_is_written_and_read_back(tmp_path):
     assert read_verdict(tmp_path, "best", standard).passed is True
     assert read_verdict(tmp_path, "final", standard) == VerdictState(None, "never safety-checked")
     (tmp_path / "best_check.yaml").write_text("passed: [")
-    assert read_verdict(tmp_path, "best", standard) == VerdictState(None, "its verdict best_check.yaml is unreadable")
+    assert read_verdict(tmp_path, "best", standard) == VerdictState(
+        None, "its verdict best_check.yaml is unreadable"
+    )
 
 
 @pytest.mark.parametrize("changed", ["best_policy.npz", "best_policy.yaml", "config.yaml", "standard"])
@@ -179,7 +196,8 @@ def test_tampered_weights_are_reported_as_unchecked_by_every_command(tmp_path):
     with np.load(folder / "best_policy.npz") as arrays:
         weights = {name: -20.0 * arrays[name] for name in arrays.files}
     np.savez(folder / "best_policy.npz", **weights)
-    line = f"note: {folder}'s best policy counts as never safety-checked (best_policy.npz changed since its verdict"
+    line = f"note: {folder}'s best policy counts as never safety-checked (best_policy.npz changed since its "
+    line += "verdict"
     for command in (
         ["evaluate", str(folder), "--out", str(tmp_path / "e")],
         ["export", str(folder), "--out", str(tmp_path / "c.onnx")],
@@ -214,9 +232,9 @@ def test_rlc_check_writes_the_verdict_and_exits_1_on_a_failing_controller(tmp_pa
 @pytest.mark.slow
 def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     """`rlc demo`'s experiment: every story actuated behind the ground trigger, a model-free linear policy
-    learned from zero gains with one step of delay drawn on half its motions; training changes it (validation J1,
-    the validation plants drawn alike, from 1, no control, to below 0.4) and the trained policy passes the whole
-    standard check (stable one step late), its worst significant motion at most 1.005 of no control."""
+    learned from zero gains with one step of delay drawn on half its motions; training changes it (validation
+    J1, the validation plants drawn alike, from 1, no control, to below 0.4) and the trained policy passes the
+    whole standard check (stable one step late), its worst significant motion at most 1.005 of no control."""
     from rlcontroller.config import load_experiment, load_scenarios
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.learning.training import train
@@ -229,9 +247,10 @@ def test_the_demo_trains_a_controller_that_passes_the_safety_check(tmp_path):
     scenarios = load_scenarios(REPOSITORY / "configs" / "scenarios" / "standard.yaml", experiment)
     verdict = safety_check(plant, policy, load_safety_check(STANDARD), scenarios)
     assert verdict.passed, verdict.lines()
-    # robust, not lucky: its worst significant motion within half the tolerance (CI runs this under two kernels)
+    # robust, not lucky: its worst significant motion within half the tolerance (CI runs this under two
+    # kernels)
     suite = verdict.criteria["check suite"]
-    assert suite["per_motion"][suite["worst_significant"]]["ratio"] <= 1.005, verdict.lines()
+    assert suite.per_motion[suite.worst_significant].ratio <= 1.005, verdict.lines()
 
 
 @pytest.mark.slow
@@ -243,7 +262,9 @@ def test_checking_a_shipped_model_leaves_its_files_as_shipped(tmp_path, monkeypa
     shipped = (DEFAULT_MODEL / "best_check.yaml").read_bytes()
     quick = tmp_path / "quick_standard.yaml"
     standard = yaml.safe_load((REPOSITORY / "configs" / "checks" / "standard.yaml").read_text())
-    quick.write_text(yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "risk_bound": 0.0}))
+    quick.write_text(
+        yaml.safe_dump(standard | {"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "risk_bound": 0.0})
+    )
     monkeypatch.chdir(tmp_path)
     result = CliRunner().invoke(app, ["check", "--standard", str(quick)])
     assert result.exit_code == 0, result.output
@@ -274,14 +295,19 @@ def test_a_controller_that_fails_safe_is_its_own_reference(config, fail_safe_act
     m = plant.building.n_actuators
     np.testing.assert_array_equal(reference.act(np.zeros(plant.layout.size)), np.full(m, fail_safe_action))
     assert words in description
-    verdict = safety_check(plant, ConstantCommand(fail_safe_action, m, "failed"), small_standard(motions=40), [])
-    suite = verdict.criteria["check suite"]
+    verdict = safety_check(
+        plant, ConstantCommand(fail_safe_action, m, "failed"), small_standard(motions=40), []
+    )
+    suite = verdict.criteria["check suite"].fields()
     assert verdict.passed and suite["reference"] == description
-    assert suite["mean_J1"] == pytest.approx(1.0, abs=1e-9) and suite["mean_J2"] == pytest.approx(1.0, abs=1e-9)
+    assert suite["mean_J1"] == pytest.approx(1.0, abs=1e-9) and suite["mean_J2"] == pytest.approx(
+        1.0, abs=1e-9
+    )
     if plant.building.devices:  # the driver's mass: its stroke is the reference's, reported in the verdict
         assert len(suite["peak_stroke_m"]) == 1 and suite["peak_stroke_m"][0] > 0.0
         assert (
-            f"peak stroke {suite['peak_stroke_m'][0]:.2f} m ({suite['peak_stroke_m'][0]:.2f} m for" in suite["summary"]
+            f"peak stroke {suite['peak_stroke_m'][0]:.2f} m ({suite['peak_stroke_m'][0]:.2f} m for"
+            in suite["summary"]
         )
 
 
@@ -297,10 +323,14 @@ def test_the_check_s_j2_is_each_motion_s_j2_against_the_reference():
     plant = Plant(Experiment())
     lqg = LQGController(design_lqg(plant.design), plant.design, "LQG")
     standard = small_standard()
-    suite = safety_check(plant, lqg, standard, []).criteria["check suite"]
+    suite = safety_check(plant, lqg, standard, []).criteria["check suite"].fields()
     motions = generate_suite(standard.generator, standard.motions, standard.seed)
     metrics = evaluate(plant, motions, [lqg], "", include_optimal=False).metrics
-    j2 = metrics[(metrics["controller"] == "LQG") & (metrics["metric"] == "J2")].groupby("record")["value"].mean()
+    j2 = (
+        metrics[(metrics["controller"] == "LQG") & (metrics["metric"] == "J2")]
+        .groupby("record")["value"]
+        .mean()
+    )
     per_motion = {name: row["J2"] for name, row in suite["per_motion"].items() if "J2" in row}
     assert len(per_motion) == standard.motions - suite["insignificant_motions"] > 5
     for name, value in per_motion.items():
@@ -329,7 +359,7 @@ def test_a_controller_that_trades_floor_accelerations_for_drift_fails_on_j2():
     )
     lqg = LQGController(design_lqg_ground_model(plant.design), plant.design, "LQG + ground model")
     verdict = safety_check(plant, lqg, small_standard(motions=40), [])
-    suite = verdict.criteria["check suite"]
+    suite = verdict.criteria["check suite"].fields()
     assert suite["failure_count"] == 0 and suite["mean_J1"] < 1.0 < suite["mean_J2"]
     assert not verdict.passed and f"mean J2 {suite['mean_J2']:.3f}" in suite["summary"]
 
@@ -345,7 +375,9 @@ def test_a_verdict_under_another_standard_does_not_replace_the_standard_s(tmp_pa
     standard_verdict = (folder / "best_check.yaml").read_bytes()
     quick = tmp_path / "quick.yaml"
     quick.write_text(
-        yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "rest_runs": 1, "rest_duration": 2.0})
+        yaml.safe_dump(
+            yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "rest_runs": 1, "rest_duration": 2.0}
+        )
     )
     result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(quick)])
     assert result.exit_code in (0, 1) and (folder / "best_check-quick.yaml").is_file(), result.output
@@ -361,7 +393,9 @@ def test_a_standard_that_names_a_reference_is_refused_in_one_line(tmp_path):
     folder = tmp_path / "model"
     shutil.copytree(NETWORK_POLICY, folder)
     old = tmp_path / "passive.yaml"
-    old.write_text(yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "uncontrolled"}))
+    old.write_text(
+        yaml.safe_dump(yaml.safe_load(STANDARD.read_text()) | {"motions": 2, "reference": "uncontrolled"})
+    )
     result = CliRunner().invoke(app, ["check", str(folder), "--standard", str(old)])
     assert result.exit_code == 2 and f"error: {old}: reference: unknown key" in result.output
 
@@ -382,7 +416,9 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     lies away from the first mode."""
     standard = load_safety_check(STANDARD)
     verdicts = [
-        passive_verdict(Plant(load_experiment(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")), standard)
+        passive_verdict(
+            Plant(load_experiment(REPOSITORY / "configs" / "experiments" / f"{name}.yaml")), standard
+        ).fields()
         for name in ("five_story_tmd", "five_story_amd")
     ]
     assert verdicts[0]["failures"] == verdicts[1]["failures"] and verdicts[0]["failure_count"] > 0
@@ -393,13 +429,17 @@ def test_the_passive_verdict_of_a_driver_switched_off_is_its_tuned_mass():
     assert f"median {failing:.1%} of their ground energy" in verdicts[0]["summary"]
     # the masses meet their 1 m end-stops on the strong motions: the verdict's figures say so, and re-derive
     assert verdicts[0]["stroke_limit_m"] == [1.0] and verdicts[0]["contacts"][0] > 0
-    assert verdicts[0]["peak_stroke_m"][0] < 1.25 and "on end-stops at 1 m:" in verdicts[0]["summary"]  # was 12 m
-    devices = {key: verdicts[0][key] for key in DEVICE_FIGURES if key in verdicts[0]}
-    periods = verdicts[0]["spectral_periods_s"]
+    # was 12
+    assert verdicts[0]["peak_stroke_m"][0] < 1.25 and "on end-stops at 1 m:" in verdicts[0]["summary"]
     again = suite_figures(
-        rows, verdicts[0]["reference"], "steel_moment_frame", standard, devices=devices, periods=periods
+        {name: MotionFigures.read(name, row) for name, row in rows.items()},
+        verdicts[0]["reference"],
+        "steel_moment_frame",
+        standard,
+        devices=DeviceFigures.read(verdicts[0]),
+        periods=verdicts[0]["spectral_periods_s"],
     )
-    assert again["summary"] == verdicts[0]["summary"].split("; the motions it fails")[0]
+    assert again.summary == verdicts[0]["summary"].split("; the motions it fails")[0]
 
 
 WIND_STANDARD = REPOSITORY / "configs" / "checks" / "wind.yaml"
@@ -420,8 +460,15 @@ def test_a_wind_standard_loads_the_experiment_s_own_site_with_its_own_speeds():
             own.duration,
         )
     )
-    assert generator.model_dump(exclude={"speed", "duration"}) == own.model_dump(exclude={"speed", "duration"})
-    assert (generator.width, generator.roughness, generator.dt) == (42.0, 1.0, 0.1)  # the benchmark's facade, city
+    assert generator.model_dump(exclude={"speed", "duration"}) == own.model_dump(
+        exclude={"speed", "duration"}
+    )
+    # the benchmark's facade, city
+    assert (generator.width, generator.roughness, generator.dt) == (
+        42.0,
+        1.0,
+        0.1,
+    )
     ground = load_safety_check(STANDARD)
     assert check_generator(ground, atmd) == ground.generator  # a ground-motion standard stays as it is
     assert check_generator(wind, Experiment()) == wind.generator  # no site of its own: the standard's
@@ -434,9 +481,11 @@ def test_under_a_wind_standard_the_failed_safe_building_is_its_own_reference():
     experiment = load_experiment(REPOSITORY / "configs" / "experiments" / "five_story_wind.yaml")
     standard = load_safety_check(WIND_STANDARD)
     generator = standard.generator.model_copy(update={"duration": (20.0, 30.0), "speed": (25.0, 40.0)})
-    small = standard.model_copy(update={"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "generator": generator})
+    small = standard.model_copy(
+        update={"motions": 3, "rest_runs": 1, "rest_duration": 5.0, "generator": generator}
+    )
     verdict = safety_check(Plant(experiment), Uncontrolled(5), small, [])
-    suite = verdict.criteria["check suite"]
+    suite = verdict.criteria["check suite"].fields()
     assert verdict.passed and suite["mean_J1"] == pytest.approx(1.0, abs=1e-9)
     assert suite["mean_J2"] == pytest.approx(1.0, abs=1e-9) and suite["insignificant_motions"] < 3
     worst = suite["per_motion"][suite["worst_significant"]]
@@ -452,10 +501,10 @@ SHIPPED = sorted(path.name for path in DEFAULT_MODEL.parent.iterdir() if (path /
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, name, kernel):
     """`rlc check` on a copy of each shipped controller, in a process whose OpenBLAS takes the kernel the
-    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), re-issues the shipped verdict: every
-    figure as `rlc check --verify` compares them (`evaluation.verdict.differences`: numbers within 0.1 % plus the
-    rounding, counts, levels, motions and outcomes exactly; the check's loads are the same on every CPU:
-    `physics.motions.excitation.same_on_every_cpu`)."""
+    machine is set up with or the generic one (OPENBLAS_CORETYPE=Prescott), re-issues the shipped verdict:
+    every figure as `rlc check --verify` compares them (`evaluation.verdict.differences`: numbers within 0.1 %
+    plus the rounding, counts, levels, motions and outcomes exactly; the check's loads are the same on every
+    CPU: `physics.motions.excitation.same_on_every_cpu`)."""
     import os
     import shutil
     import subprocess
@@ -479,20 +528,24 @@ def test_every_shipped_verdict_is_the_same_under_either_blas_kernel(tmp_path, na
 
 
 def test_the_project_s_standard_judges_one_step_of_delay_and_a_20_ms_lag_and_training_selects_on_them():
-    """configs/checks/standard.yaml names the two scenarios a real installation has; the check and the training's
-    selection (`robust_spectral_radius`) both find a policy stable at rest but unstable with one step of delay."""
+    """configs/checks/standard.yaml names the two scenarios a real installation has; the check and the
+    training's selection (`robust_spectral_radius`) both find a policy stable at rest but unstable with one
+    step of delay."""
     from rlcontroller.simulation.linearised import judged_plants, robust_spectral_radius
 
     standard = load_safety_check(STANDARD)
     assert standard.stable_on == ["actuator lag 20 ms", "delay 1 step (20 ms)"]
     plant = Plant(Experiment())
     judged = judged_plants(plant)
-    assert [(p.experiment.plant.actuators.time_constant, p.experiment.plant.actuators.delay_steps) for p in judged] == [
+    assert [
+        (p.experiment.plant.actuators.time_constant, p.experiment.plant.actuators.delay_steps) for p in judged
+    ] == [
         (0.02, 0),
         (0.0, 1),
     ]
     weights = np.zeros((3, plant.layout.size))
-    weights[range(3), range(3)] = 0.3  # each actuator on one floor's acceleration: stable, but not one step late
+    # each actuator on one floor's acceleration: stable, but not one step late
+    weights[range(3), range(3)] = 0.3
     policy = linear_policy(weights)
     nominal = spectral_radius(plant.design, policy)
     delayed = spectral_radius(judged[1], policy)
@@ -500,4 +553,4 @@ def test_the_project_s_standard_judges_one_step_of_delay_and_a_20_ms_lag_and_tra
     named = load_scenarios(standard_scenarios(plant.experiment), plant.experiment)
     criterion = safety_check(plant, policy, small_standard(), named)
     stability = criterion.criteria["closed-loop stability"]
-    assert not stability["passed"] and stability["judged_scenarios"] == standard.stable_on
+    assert not stability.passed and stability.judged_scenarios == standard.stable_on

@@ -6,6 +6,7 @@ import pytest
 from conftest import REPOSITORY
 
 from rlcontroller.config import load_safety_check
+from rlcontroller.evaluation.figures import MotionFigures
 from rlcontroller.evaluation.standard import DRIFT_LIMITS, level, risk_upper_bound, suite_figures
 
 STANDARD = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
@@ -13,12 +14,24 @@ STEEL = "steel_moment_frame"
 
 
 def row(ratio: float = 0.5, drift: float = 0.003, reference: float = 0.003, **more) -> dict:
-    return {"pga_g": 0.3, "J1": min(ratio, 0.5), "J2": 0.8, "ratio": ratio, "drift_ratio": drift,
-            "reference_drift_ratio": reference} | more  # fmt: skip
+    return {
+        "pga_g": 0.3,
+        "J1": min(ratio, 0.5),
+        "J2": 0.8,
+        "ratio": ratio,
+        "drift_ratio": drift,
+        "reference_drift_ratio": reference,
+    } | more
+
+
+def read(rows: dict[str, dict]) -> dict[str, MotionFigures]:
+    return {name: MotionFigures.read(name, item) for name, item in rows.items()}
 
 
 def figures(rows: list[dict], standard=STANDARD, system: str = STEEL) -> dict:
-    return suite_figures({f"m{index}": item for index, item in enumerate(rows)}, "no control", system, standard)
+    """The suite criterion of verdict-file rows, as the file's fields."""
+    rows = read({f"m{index}": item for index, item in enumerate(rows)})
+    return suite_figures(rows, "no control", system, standard).fields()
 
 
 def test_the_levels_are_fema_356_s_limits_for_the_lateral_system():
@@ -35,9 +48,9 @@ def test_the_levels_are_fema_356_s_limits_for_the_lateral_system():
 
 
 def test_a_motion_that_crosses_a_limit_the_reference_does_not_fails_beyond_the_tolerance():
-    """The reference at 0.69 % stays in Immediate Occupancy; the controlled building at 0.706 % is within 1 % of
-    the 0.7 % limit (IO still), at 0.708 % beyond it (Life Safety): one motion at a higher level fails the check,
-    though its ratio to the reference (1.026) alone would be one of the few allowed."""
+    """The reference at 0.69 % stays in Immediate Occupancy; the controlled building at 0.706 % is within 1 %
+    of the 0.7 % limit (IO still), at 0.708 % beyond it (Life Safety): one motion at a higher level fails the
+    check, though its ratio to the reference (1.026) alone would be one of the few allowed."""
     within = figures([row(1.02, 0.00706, 0.0069)] + [row()] * 319)
     beyond = figures([row(1.026, 0.00708, 0.0069)] + [row()] * 319)
     assert within["passed"] and within["higher_level"] == {}
@@ -85,13 +98,17 @@ def test_mean_j1_and_an_insignificant_motion_above_its_bound_still_fail():
     above_one = figures([{**row(), "J1": 1.02}] * 320)
     loud = figures([row()] * 320 + [{"pga_g": 0.002, "over_bound": 1.3}])
     assert not above_one["passed"] and above_one["failure_count"] == 0
-    assert not loud["passed"] and loud["insignificant_above_bound"] == ["m320"] and loud["insignificant_motions"] == 1
+    assert (
+        not loud["passed"]
+        and loud["insignificant_above_bound"] == ["m320"]
+        and loud["insignificant_motions"] == 1
+    )
 
 
 def test_a_yielding_plant_s_level_is_the_higher_of_its_transient_and_permanent_drift_s():
     """Steel moment frame: Life Safety allows 2.5 % transient and 1 % permanent drift. A controlled building
-    left leaning 1.2 % where the reference leans 0.8 %, both peaking near 2 %, is at Collapse Prevention by its
-    permanent drift, the reference at Life Safety: a higher level. Where the reference's peak already took
+    left leaning 1.2 % where the reference leans 0.8 %, both peaking near 2 %, is at Collapse Prevention by
+    its permanent drift, the reference at Life Safety: a higher level. Where the reference's peak already took
     it to Collapse Prevention (3 %), the same lean leaves the level as it was."""
     quiet = row(residual_ratio=0.0, reference_residual_ratio=0.0)
     leaning = row(0.9, 0.02, 0.022, residual_ratio=0.012, reference_residual_ratio=0.008)
@@ -105,9 +122,15 @@ def test_a_yielding_plant_s_level_is_the_higher_of_its_transient_and_permanent_d
 
 @pytest.mark.parametrize(
     ("figure", "value"),
-    [("ratio", float("nan")), ("drift_ratio", float("nan")), ("J1", -0.5), ("J2", float("inf")), ("ratio", True),
-     ("reference_drift_ratio", "0.01")],
-)  # fmt: skip
+    [
+        ("ratio", float("nan")),
+        ("drift_ratio", float("nan")),
+        ("J1", -0.5),
+        ("J2", float("inf")),
+        ("ratio", True),
+        ("reference_drift_ratio", "0.01"),
+    ],
+)
 def test_a_figure_no_run_can_give_is_named_and_never_judged(figure, value):
     with pytest.raises(ValueError, match=rf"m1\.{figure} .* is no possible figure"):
         figures([row(), row(**({"J1": 0.5} | {figure: value}))])
@@ -129,14 +152,15 @@ def test_a_boolean_is_no_number_in_a_standard(tmp_path):
 
 
 def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_periods():
-    """16 %, median and 84 % of each motion's Sa / PGA at each period, over every motion (quiet ones too: a shape is
-    the same at any scale), in the figures and the summary; a shape no motion can have is refused like any figure."""
+    """16 %, median and 84 % of each motion's Sa / PGA at each period, over every motion (quiet ones too: a
+    shape is the same at any scale), in the figures and the summary; a shape no motion can have is refused
+    like any figure."""
     import numpy as np
 
     shapes = [[0.2 + 0.1 * index, 1.0 + index, 2.0] for index in range(11)]
     rows = {f"m{index}": row(sa_over_pga=shape) for index, shape in enumerate(shapes[:10])}
     rows["quiet"] = {"pga_g": 0.001, "over_bound": 0.2, "sa_over_pga": shapes[10]}
-    derived = suite_figures(rows, "no control", STEEL, STANDARD, devices=None, periods=[1.44, 0.55, 0.35])
+    derived = suite_figures(read(rows), "no control", STEEL, STANDARD, periods=[1.44, 0.55, 0.35]).fields()
     expected = np.percentile(np.array(shapes), [16, 50, 84], axis=0)
     assert derived["spectral_periods_s"] == [1.44, 0.55, 0.35]
     for key, values in zip(("p16", "median", "p84"), expected, strict=True):
@@ -144,25 +168,34 @@ def test_a_suite_states_the_spread_of_its_spectral_shapes_at_the_building_s_peri
     assert "Sa/PGA (2% damped, median (16-84 %)) 0.70 (0.36-1.04) at 1.44 s" in derived["summary"]
     rows["m0"]["sa_over_pga"] = [float("nan"), 1.0, 2.0]
     with pytest.raises(ValueError, match=r"^m0\.sa_over_pga \[nan, 1\.0, 2\.0\] is no possible figure"):
-        suite_figures(rows, "no control", STEEL, STANDARD, devices=None, periods=[1.44, 0.55, 0.35])
+        suite_figures(read(rows), "no control", STEEL, STANDARD, periods=[1.44, 0.55, 0.35])
 
 
 def test_stability_is_judged_on_the_standard_s_scenarios_and_reported_on_the_rest():
-    """The design model and each scenario of `stable_on` must be below 1; another scenario's radius is reported;
-    a named scenario the experiment lacks is said, not judged; a radius no matrix has is refused."""
+    """The design model and each scenario of `stable_on` must be below 1; another scenario's radius is
+    reported; a named scenario the experiment lacks is said, not judged; a radius no matrix has is refused."""
     from rlcontroller.evaluation.standard import stability_figures
 
     radii = {"actuator lag 20 ms": 0.99, "delay 1 step (20 ms)": 1.0018, "delay 2 steps (40 ms)": 1.03}
     judged = ["actuator lag 20 ms", "delay 1 step (20 ms)"]
     reported = stability_figures(0.99, radii, False, 0.999)
-    assert reported["passed"] and "unstable on delay 1 step (20 ms), delay 2 steps (40 ms)" in reported["summary"]
+    assert reported.passed and "unstable on delay 1 step (20 ms), delay 2 steps (40 ms)" in reported.summary
     figures = stability_figures(0.99, radii, False, 0.999, stable_on=judged)
-    assert not figures["passed"] and figures["judged_scenarios"] == judged
-    assert "judged on actuator lag 20 ms, delay 1 step (20 ms): unstable on delay 1 step (20 ms)" in figures["summary"]
+    assert not figures.passed and figures.judged_scenarios == judged
+    assert (
+        "judged on actuator lag 20 ms, delay 1 step (20 ms): unstable on delay 1 step (20 ms)"
+        in figures.summary
+    )
     stable = stability_figures(0.99, radii | {"delay 1 step (20 ms)": 0.995}, False, 0.999, stable_on=judged)
-    assert stable["passed"] and stable["summary"].endswith("judged on actuator lag 20 ms, delay 1 step (20 ms): stable")
-    dampers = stability_figures(0.99999998, {"stiffness x 0.7": 0.99999998}, False, 0.99999998, stable_on=judged)
-    assert dampers["passed"] and dampers["judged_scenarios"] == []
-    assert "delay 1 step (20 ms): not among this experiment's linear scenarios" in dampers["summary"]
+    assert stable.passed and stable.summary.endswith(
+        "judged on actuator lag 20 ms, delay 1 step (20 ms): stable"
+    )
+    dampers = stability_figures(
+        0.99999998, {"stiffness x 0.7": 0.99999998}, False, 0.99999998, stable_on=judged
+    )
+    assert dampers.passed and dampers.judged_scenarios == []
+    assert "delay 1 step (20 ms): not among this experiment's linear scenarios" in dampers.summary
     with pytest.raises(ValueError, match="a spectral radius that no matrix has"):
-        stability_figures(0.99, radii | {"delay 1 step (20 ms)": float("nan")}, False, 0.999, stable_on=judged)
+        stability_figures(
+            0.99, radii | {"delay 1 step (20 ms)": float("nan")}, False, 0.999, stable_on=judged
+        )

@@ -1,6 +1,6 @@
-"""Verdicts that cannot lie: a verdict whose recorded outcome, counts, bound or means its own per-motion figures
-contradict is refused wherever it is read; `rlc check --verify` re-runs the check and names each figure a
-verdict records that the re-run does not reproduce."""
+"""Verdicts that cannot lie: a verdict whose recorded outcome, counts, bound or means its own per-motion
+figures contradict is refused wherever it is read; `rlc check --verify` re-runs the check and names each
+figure a verdict records that the re-run does not reproduce."""
 
 import shutil
 
@@ -65,9 +65,9 @@ def shape_softened(verdict):  # a suite made to look gentler at the building's p
     ],
 )
 def test_a_verdict_its_own_figures_contradict_is_refused_everywhere(tmp_path, source, edit, found):
-    """The issue's three edits: a passing verdict's criterion set to failed, a FAILED verdict flipped to passed,
-    a mean J1 set to 0.012. Each is read as no verdict, with the first contradiction, by check --show (exit 1,
-    no PASSED), by the note evaluate and export print, and by rlc models' reader."""
+    """The issue's three edits: a passing verdict's criterion set to failed, a FAILED verdict flipped to
+    passed, a mean J1 set to 0.012. Each is read as no verdict, with the first contradiction, by check --show
+    (exit 1, no PASSED), by the note evaluate and export print, and by rlc models' reader."""
     folder, state = tampered(tmp_path, source, edit)
     assert state.passed is None and "contradicts its own figures" in state.reason and found in state.reason
     shown = CliRunner().invoke(app, ["check", str(folder), "--show"])
@@ -94,7 +94,9 @@ def test_a_consistent_edit_is_found_by_verify(tmp_path):
         return name
 
     edited = []
-    folder, state = tampered(tmp_path, DEFAULT_MODEL, lambda verdict: edited.append(lowered_consistently(verdict)))
+    folder, state = tampered(
+        tmp_path, DEFAULT_MODEL, lambda verdict: edited.append(lowered_consistently(verdict))
+    )
     assert state.passed is True
     result = CliRunner().invoke(app, ["check", str(folder), "--verify", "--no-progress"])
     lines = [line for line in result.output.splitlines() if line.startswith("criteria.")]
@@ -123,11 +125,14 @@ def test_differences_allow_a_kernel_s_noise_and_nothing_more():
 
 
 def test_reported_scenario_radii_agree_within_two_percent_and_the_label_is_not_a_figure():
-    """The stability report's radii on the robustness scenarios are not judged, and their eigenvalues are defective
-    where a delay is modelled (another kernel moved the default's by 0.8 %): compared within 2 %."""
+    """The stability report's radii on the robustness scenarios are not judged, and their eigenvalues are
+    defective where a delay is modelled (another kernel moved the default's by 0.8 %): compared within 2 %."""
 
     def verdict(radius, label="LQG (a)"):
-        stability = {"spectral_radius_design_model": 0.96, "spectral_radius_scenarios": {"delay 2 steps": radius}}
+        stability = {
+            "spectral_radius_design_model": 0.96,
+            "spectral_radius_scenarios": {"delay 2 steps": radius},
+        }
         return {"controller": label, "criteria": {"closed-loop stability": stability}}
 
     assert differences(verdict(0.9767), verdict(0.9842, "LQG (b)")) == []

@@ -51,7 +51,10 @@ def test_the_recorded_forces_are_the_shaking_and_the_readings_carry_the_sensors_
             lambda lines: [line.rsplit(",", 1)[0] for line in lines],
             ":1: force_5: expected the number of a story the accelerations cover, 1 to 4",
         ),
-        (lambda lines: [lines[0].replace("force_3", "force_x")] + lines[1:], ":1: force_x: expected the number"),
+        (
+            lambda lines: [lines[0].replace("force_3", "force_x")] + lines[1:],
+            ":1: force_x: expected the number",
+        ),
     ],
 )
 def test_a_damaged_recording_is_refused_in_one_line(recording, tmp_path, edit, expected):
@@ -60,4 +63,8 @@ def test_a_damaged_recording_is_refused_in_one_line(recording, tmp_path, edit, e
     path.write_text("\n".join(edit(lines)) + "\n")
     with pytest.raises(RecordingError) as error:
         read_recording(path)
-    assert str(error.value).startswith(str(path)) and expected in str(error.value) and "\n" not in str(error.value)
+    assert (
+        str(error.value).startswith(str(path))
+        and expected in str(error.value)
+        and "\n" not in str(error.value)
+    )

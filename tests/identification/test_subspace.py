@@ -29,7 +29,9 @@ def ten_minutes(tmp_path_factory) -> Path:
     """`rlc simulate-test`'s default test (600 s of 0.1 m/s^2 ambient ground, actuators shaking at 5 %) and
     `rlc identify` of it, seeded."""
     folder = tmp_path_factory.mktemp("identified")
-    (folder / "test.csv").write_text(simulate_test(TRUE, ambient_ground(0.1, 600.0, 0.02, 0), 0.05, 0).to_csv())
+    (folder / "test.csv").write_text(
+        simulate_test(TRUE, ambient_ground(0.1, 600.0, 0.02, 0), 0.05, 0).to_csv()
+    )
     return identify([folder / "test.csv"], folder / "model", masses=MASSES)
 
 
@@ -87,7 +89,11 @@ def load_experiment_with(model: Path, folder: Path | None = None, true_plant: bo
 
 def recording(duration=600.0, noise=0.05, ground=0.1, shake=0.05):
     plant = Plant(
-        Experiment(sensors={"measurements": [{"quantity": "absolute_acceleration", "scale": 5.0, "noise_std": noise}]})
+        Experiment(
+            sensors={
+                "measurements": [{"quantity": "absolute_acceleration", "scale": 5.0, "noise_std": noise}]
+            }
+        )
     )
     return simulate_test(plant, ambient_ground(ground, duration, 0.02, 0), shake, 0)
 
@@ -96,8 +102,16 @@ def recording(duration=600.0, noise=0.05, ground=0.1, shake=0.05):
     ("test", "band", "expected"),
     [
         (lambda: recording(duration=30.0), 20.0, "30 s is too short to identify 5 modes"),
-        (lambda: recording(duration=60.0), 20.0, "holds 42 periods of the first mode (1.44 s); record at least 100"),
-        (lambda: recording(duration=120.0), 20.0, "holds 83 periods of the first mode (1.44 s); record at least 100"),
+        (
+            lambda: recording(duration=60.0),
+            20.0,
+            "holds 42 periods of the first mode (1.44 s); record at least 100",
+        ),
+        (
+            lambda: recording(duration=120.0),
+            20.0,
+            "holds 83 periods of the first mode (1.44 s); record at least 100",
+        ),
         (lambda: recording(), 30.0, "too coarse for modes up to 30 Hz"),
         (lambda: recording(noise=3.0), 20.0, "too quiet"),
         (lambda: recording(ground=1e-9, shake=0.0), 20.0, "too quiet"),

@@ -81,7 +81,9 @@ def test_steps_match_the_whole_record_simulation(records):
     samples, substeps = grid.ground, grid.substeps
     reference = simulate(env.building, env.plant.sampled(substeps).step, samples, forces=forces)
     np.testing.assert_allclose(drifts, reference.drift[1:], rtol=SAME_PHYSICS, atol=1e-12)
-    np.testing.assert_allclose(accelerations, reference.absolute_acceleration[1:], rtol=SAME_PHYSICS, atol=1e-9)
+    np.testing.assert_allclose(
+        accelerations, reference.absolute_acceleration[1:], rtol=SAME_PHYSICS, atol=1e-9
+    )
     np.testing.assert_allclose(shears, reference.base_shear[1:], rtol=SAME_PHYSICS, atol=1e-6)
 
 
@@ -233,7 +235,9 @@ def test_randomised_plants_are_drawn_per_episode_from_the_seed_within_the_ranges
     for seed in range(200):
         env.reset(seed=seed, options={"motion": motion})
         config = env.plant.config
-        draws.append((config.stiffness, config.mass, config.actuators.time_constant, config.actuators.delay_steps))
+        draws.append(
+            (config.stiffness, config.mass, config.actuators.time_constant, config.actuators.delay_steps)
+        )
     stiffness, mass, lag, delay = (np.array(values) for values in zip(*draws, strict=True))
     assert stiffness.min() >= 0.7 and stiffness.max() <= 1.3 and mass.min() >= 0.9 and mass.max() <= 1.1
     assert set(delay) == {0, 1, 2} and lag.min() >= 0.005 and lag.max() <= 0.05
@@ -241,7 +245,12 @@ def test_randomised_plants_are_drawn_per_episode_from_the_seed_within_the_ranges
     assert abs(np.mean(stiffness) - 1.0) < 0.03
     env.reset(seed=7, options={"motion": motion})  # the same seed draws the same plant again
     again = env.plant.config
-    assert draws[7] == (again.stiffness, again.mass, again.actuators.time_constant, again.actuators.delay_steps)
+    assert draws[7] == (
+        again.stiffness,
+        again.mass,
+        again.actuators.time_constant,
+        again.actuators.delay_steps,
+    )
 
 
 def test_without_randomize_the_env_runs_the_configured_plant():
@@ -288,7 +297,9 @@ def test_a_reward_per_motion_does_not_depend_on_the_motion_intensity():
     strong = Load("strong", weak.dt, 20.0 * weak.acceleration)
     returns = {}
     for per_motion in (True, False):
-        experiment = Experiment.model_validate({"sensors": quiet, "reward": {"terms": terms, "per_motion": per_motion}})
+        experiment = Experiment.model_validate(
+            {"sensors": quiet, "reward": {"terms": terms, "per_motion": per_motion}}
+        )
         plant = Plant(experiment)
         env = BuildingEnv(plant)
         lqg = LQGController(design_lqg(plant), plant)
@@ -304,7 +315,13 @@ def test_a_randomised_device_frequency_detunes_the_driver_per_episode():
     from rlcontroller.config import build_experiment
     from rlcontroller.physics.plant import Plant
 
-    driver = {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1.0e4, "stroke_limit": 1.0}
+    driver = {
+        "type": "active_mass",
+        "floor": 5,
+        "mass_ratio": 0.02,
+        "force_limit": 1.0e4,
+        "stroke_limit": 1.0,
+    }
     experiment = build_experiment(
         {
             "actuators": [],

@@ -11,7 +11,7 @@ from conftest import REPOSITORY
 from rlcontroller.config import ConfigError, build_experiment, load_experiment
 from rlcontroller.control.controllers import LQGController
 from rlcontroller.control.lqg import design_lqg_ground_model
-from rlcontroller.control.mpc import SemiActiveMPC
+from rlcontroller.control.mpc_controllers import SemiActiveMPC
 from rlcontroller.control.policy_file import read_policy
 from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.imitation import DAgger, imitation_loss
@@ -34,15 +34,18 @@ def small(**kwargs):
         "validation_generator": {"kind": "kanai_tajimi", "duration": [3.0, 4.0], "pga": [4.0, 8.0]},
         "validation_motions": 2,
     }
-    return experiment.model_validate(experiment.model_dump() | {"algorithm": algorithm, "excitation": excitation})
+    return experiment.model_validate(
+        experiment.model_dump() | {"algorithm": algorithm, "excitation": excitation}
+    )
 
 
 def test_the_loss_is_the_envs_action_error():
-    """The env's action is clip(clip(residual) + prior): the loss is its squared error, zero where the env's action
-    and MPC's are at the same limit."""
+    """The env's action is clip(clip(residual) + prior): the loss is its squared error, zero where the env's
+    action and MPC's are at the same limit."""
     expert = torch.tensor([[0.5, 1.0, -1.0, 1.0]])
     prior = torch.tensor([[0.2, 0.9, -0.5, 0.0]])
-    exact = torch.tensor([[0.3, 0.6, -0.8, 0.4]])  # 0.5; beyond 1 with MPC at 1; beyond -1 with MPC at -1; 0.4
+    # 0.5; beyond 1 with MPC at 1; beyond -1 with MPC at -1; 0.4
+    exact = torch.tensor([[0.3, 0.6, -0.8, 0.4]])
     assert float(imitation_loss(exact, prior, expert)) == pytest.approx(0.6**2 / 4)  # the last is off by 0.6
     assert float(imitation_loss(exact + torch.tensor([[0.0, 0.0, 0.0, 0.6]]), prior, expert)) == 0.0
     assert float(imitation_loss(torch.tensor([[0.3, -1.0, 1.0, 1.0]]), prior, expert)) == pytest.approx(
@@ -52,7 +55,10 @@ def test_the_loss_is_the_envs_action_error():
     beyond = imitation_loss(torch.tensor([[3.0]]), torch.tensor([[-0.5]]), torch.tensor([[1.0]]))
     assert float(beyond) == pytest.approx(0.5**2 + 2.0**2)
     # no prior: any action beyond the limit MPC is at costs nothing
-    assert float(imitation_loss(torch.tensor([[4.0, -2.0]]), torch.zeros(1, 2), torch.tensor([[1.0, -1.0]]))) == 0.0
+    assert (
+        float(imitation_loss(torch.tensor([[4.0, -2.0]]), torch.zeros(1, 2), torch.tensor([[1.0, -1.0]])))
+        == 0.0
+    )
 
 
 @pytest.mark.slow
@@ -92,13 +98,15 @@ def test_iterations_bring_the_policy_to_mpc_on_states_it_visits():
 
 @pytest.mark.slow
 def test_on_dampers_the_policy_learns_mpcs_commands(tmp_path):
-    """With MR dampers the expert is `SemiActiveMPC` (its commands switch each damper on or off); after cloning
-    and two iterations the policy's commands on fresh motions agree with MPC's switching on more steps than the
-    better constant command does (labels out of step with their observations would not)."""
+    """With MR dampers the expert is `SemiActiveMPC` (its commands switch each damper on or off); after
+    cloning and two iterations the policy's commands on fresh motions agree with MPC's switching on more steps
+    than the better constant command does (labels out of step with their observations would not)."""
     torch.manual_seed(0)
     study = load_experiment(REPOSITORY / "studies" / "mpc" / "five_story_mr_dagger.yaml")
     experiment = small().model_copy(
-        update={key: getattr(study, key) for key in ("devices", "actuators", "sensors", "reward", "supervisor")}
+        update={
+            key: getattr(study, key) for key in ("devices", "actuators", "sensors", "reward", "supervisor")
+        }
     )
     experiment = experiment.model_validate(experiment.model_dump())
     plant = Plant(experiment)
@@ -122,7 +130,10 @@ def test_on_dampers_the_policy_learns_mpcs_commands(tmp_path):
             return action
 
     batch_rollout(
-        plant, generate_suite(experiment.excitation.generator, 3, 99, plant.building), [Judge()], seeds=[5, 6, 7]
+        plant,
+        generate_suite(experiment.excitation.generator, 3, 99, plant.building),
+        [Judge()],
+        seeds=[5, 6, 7],
     )
     expert, learned = (np.concatenate(side) for side in zip(*pairs, strict=True))
     on = np.mean(expert > 0.0)
@@ -160,7 +171,10 @@ def test_a_stopped_run_resumes_to_the_same_policy_as_an_uninterrupted_one(tmp_pa
             {"name": "DAgger", "normalize_observations": True, "kwargs": {}},
             "algorithm.normalize_observations: not for DAgger",
         ),
-        ({"name": "DAgger", "kwargs": {"horizon": 0}}, "algorithm.kwargs.horizon: expected an integer in [1, 200]"),
+        (
+            {"name": "DAgger", "kwargs": {"horizon": 0}},
+            "algorithm.kwargs.horizon: expected an integer in [1, 200]",
+        ),
     ],
 )
 def test_what_dagger_refuses_is_refused_at_loading(algorithm, message):
@@ -171,11 +185,16 @@ def test_what_dagger_refuses_is_refused_at_loading(algorithm, message):
 
 def test_dagger_under_wind_takes_mpc_on_the_wind_model():
     """Under wind DAgger's expert plans on the wind model's map, from LQG + wind model's estimate."""
-    from rlcontroller.control.mpc import mpc_controller
+    from rlcontroller.control.mpc_controllers import mpc_controller
     from rlcontroller.physics.plant import Plant
 
     wind = {"kind": "wind", "dt": 0.02, "duration": [60.0, 60.0], "speed": [20.0, 20.0]}
-    experiment = build_experiment({"algorithm": {"name": "DAgger", "kwargs": {}}, "excitation": {"generator": wind}})
+    experiment = build_experiment(
+        {"algorithm": {"name": "DAgger", "kwargs": {}}, "excitation": {"generator": wind}}
+    )
     plant = Plant(experiment)
     expert = mpc_controller(plant.design)
-    assert plant.wind is not None and expert.problem.linear.shape[1] == plant.design.sampled().wind_model.phi.shape[0]
+    assert (
+        plant.wind is not None
+        and expert.problem.linear.shape[1] == plant.design.sampled().wind_model.phi.shape[0]
+    )

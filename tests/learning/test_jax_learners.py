@@ -53,7 +53,9 @@ def test_the_saved_actor_acts_as_sbx_s_deterministic_policy(tmp_path, name, acti
     normalize = model.get_vec_normalize_env()
     write_policy(policy_controller(model, None, normalize), Plant(experiment), tmp_path, "final")
     controller = read_policy(tmp_path, "final", Plant(experiment))  # the data a run folder keeps
-    raw = 5.0 * np.random.default_rng(0).normal(size=(64, vec_env.observation_space.shape[0])).astype(np.float32)
+    raw = 5.0 * np.random.default_rng(0).normal(size=(64, vec_env.observation_space.shape[0])).astype(
+        np.float32
+    )
     expected = np.asarray(model.policy.predict(normalize.normalize_obs(raw), deterministic=True)[0])
     got = np.clip(controller.actor(controller.normalizer(raw)), -1.0, 1.0)
     assert np.abs(expected).max() > 0.05  # a policy that acts, not the zero map
@@ -78,10 +80,13 @@ def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
     assert fresh.num_timesteps == model.num_timesteps == 400 and fresh._n_updates == model._n_updates > 0
     buffers = model.replay_buffer, fresh.replay_buffer
     assert buffers[1].pos == buffers[0].pos
-    assert np.array_equal(buffers[1].observations[: buffers[0].pos], buffers[0].observations[: buffers[0].pos])
+    assert np.array_equal(
+        buffers[1].observations[: buffers[0].pos], buffers[0].observations[: buffers[0].pos]
+    )
     saved_rms, loaded_rms = model.get_vec_normalize_env().obs_rms, fresh.get_vec_normalize_env().obs_rms
     assert np.array_equal(saved_rms.mean, loaded_rms.mean) and saved_rms.count == loaded_rms.count
-    # the same updates from the same batches: parameters, targets, optimiser moments, temperature and keys all came back
+    # the same updates from the same batches: parameters, targets, optimiser moments, temperature and keys all
+    # came back
     for learner in (model, fresh):
         np.random.seed(5)  # stable-baselines3's replay buffer samples with numpy's global generator
         learner.train(gradient_steps=3, batch_size=64)
@@ -97,14 +102,18 @@ def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
 def test_an_sbx_run_resumes_to_its_total_and_holds_no_pickle(tmp_path):
     run = tmp_path / "run"
     experiment = smoke(total_steps=600, checkpoint_every=300, eval_every=300)
-    summary = train(experiment=experiment, run_dir=run, time_limit_s=0.0)  # stops at the first step, with a checkpoint
+    # stops at the first step, with a checkpoint
+    summary = train(experiment=experiment, run_dir=run, time_limit_s=0.0)
     assert summary.time_limit_reached and RunFolder(run).checkpoints()
     assert train(resume=run).steps == 600
     files = [path.name for path in run.rglob("*") if path.is_file()]
     assert not [name for name in files if name.endswith((".pkl", ".zip"))], files
     assert {p.name for p in RunFolder(run).checkpoints()[-1].iterdir()} == {
-        "learner.npz", "learner.json", "replay_buffer.npz", "state.json"
-    }  # fmt: skip
+        "learner.npz",
+        "learner.json",
+        "replay_buffer.npz",
+        "state.json",
+    }
     assert read_policy(run, "best", Plant(experiment)).algorithm == "SAC"
 
 
@@ -113,7 +122,10 @@ def test_an_sbx_run_resumes_to_its_total_and_holds_no_pickle(tmp_path):
     ("damaged", "expected"),
     [
         ("learner.npz", "learner.npz: unreadable checkpoint file (ValueError: not a numpy .npz archive)"),
-        ("replay_buffer.npz", "replay_buffer.npz: unreadable checkpoint file (ValueError: not a numpy .npz archive)"),
+        (
+            "replay_buffer.npz",
+            "replay_buffer.npz: unreadable checkpoint file (ValueError: not a numpy .npz archive)",
+        ),
         ("learner.json", "learner.json: unreadable checkpoint file (JSONDecodeError"),
     ],
 )
@@ -145,8 +157,14 @@ def test_a_checkpoint_of_another_network_is_refused_naming_the_array(tmp_path):
     [
         ({"name": "PPO", "backend": "sbx"}, "algorithm.backend: sbx learns SAC, TQC, TD3, not PPO"),
         ({"name": "TQC"}, "algorithm.name: TQC is an sbx learner; add backend: sbx"),
-        ({"name": "SAC", "backend": "sbx", "kwargs": {"optimize_memory_usage": True}}, "not a keyword argument of SAC"),
-        ({"name": "SAC", "backend": "sbx", "policy": {"log_std_init": -1}}, "policy.log_std_init: not with backend"),
+        (
+            {"name": "SAC", "backend": "sbx", "kwargs": {"optimize_memory_usage": True}},
+            "not a keyword argument of SAC",
+        ),
+        (
+            {"name": "SAC", "backend": "sbx", "policy": {"log_std_init": -1}},
+            "policy.log_std_init: not with backend",
+        ),
     ],
 )
 def test_what_the_sbx_backend_refuses_is_refused_at_loading(algorithm, message):

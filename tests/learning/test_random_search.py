@@ -24,13 +24,16 @@ def tiny(config=MODEL_FREE, **algorithm):
     """A random search on 2-3 s motions: a run of a few seconds."""
     experiment = load_experiment(config)
     settings = experiment.algorithm.model_dump() | {"eval_every": 4000, "checkpoint_every": 8000} | algorithm
-    settings["kwargs"] = {"n_delta": 2, "n_motions": 2} | algorithm.get("kwargs", {})  # the learner's defaults
+    # the learner's defaults
+    settings["kwargs"] = {"n_delta": 2, "n_motions": 2} | algorithm.get("kwargs", {})
     excitation = experiment.excitation.model_dump() | {
         "generator": {"kind": "noise_impulses", "duration": [2.0, 3.0]},
         "validation_generator": {"kind": "noise_impulses", "duration": [2.0, 3.0]},
         "validation_motions": 2,
     }
-    return experiment.model_validate(experiment.model_dump() | {"algorithm": settings, "excitation": excitation})
+    return experiment.model_validate(
+        experiment.model_dump() | {"algorithm": settings, "excitation": excitation}
+    )
 
 
 def new_model(experiment, seed: int = 0):
@@ -49,7 +52,8 @@ def test_plus_and_minus_run_on_the_same_motions_and_noise():
     plus, minus, steps = model.paired_log_costs(direction, motions, seeds)
     swapped_plus, swapped_minus, _ = model.paired_log_costs(-direction, motions, seeds)
     assert plus[0] != minus[0]
-    assert swapped_plus[0] == minus[0] and swapped_minus[0] == plus[0]  # the same motion and noise in both lanes
+    # the same motion and noise in both lanes
+    assert swapped_plus[0] == minus[0] and swapped_minus[0] == plus[0]
     zero_plus, zero_minus, _ = model.paired_log_costs(np.zeros_like(direction), motions, seeds)
     assert zero_plus[0] == zero_minus[0]
     control_steps = sum(round(m.duration / 0.02) for m in motions)
@@ -82,8 +86,13 @@ def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe
     pushing = np.zeros((1, *model.weights.shape))
     pushing[0, :, 0] = 5.0  # every actuator driven by the first reading: energy in
     plus, minus, _ = model.paired_log_costs(pushing, motions, seeds)
-    runs = batch_rollout(model.plant, motions, [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
-                         seeds=seeds, randomize=True)  # fmt: skip
+    runs = batch_rollout(
+        model.plant,
+        motions,
+        [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
+        seeds=seeds,
+        randomize=True,
+    )
     assert plus[0] == pytest.approx(standard_cost(runs[0], runs[1]), rel=1e-12)
     assert max(plus[0], minus[0]) > 1.0 + STANDARD_PENALTY * 0.01  # priced beyond its J1
 
@@ -114,7 +123,8 @@ def test_a_run_learns_to_control_and_its_model_acts_as_clip_w_o(tmp_path):
 def test_a_network_search_on_dampers_starts_at_its_initial_bias_as_its_saved_policy_acts():
     dampers = REPOSITORY / "configs" / "experiments" / "five_story_mr.yaml"
     policy = {"actor_arch": [8], "odd": False}
-    model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": -1.0}))  # passive-off, any hidden layer
+    # passive-off, any hidden layer
+    model = new_model(tiny(dampers, policy=policy, kwargs={"initial_bias": -1.0}))
     motions, seeds = synthetic_suite(count=2), [4, 5]
     passive_off = batch_rollout(model.plant, motions, [ConstantCommand(-1.0, 3, "off")], seeds=seeds)[0]
     start = np.zeros((1, *model.weights.shape))
@@ -152,8 +162,11 @@ def test_a_residual_search_starts_at_its_prior_and_saves_a_residual_model(tmp_pa
     from rlcontroller.control.controllers import LinearFeedback, LQGController
     from rlcontroller.control.lqg import design_lqg_ground_model
 
-    robust = REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"  # its sensors hold the Kalman estimate
-    experiment = tiny(robust, name="RandomSearch", policy={"actor_arch": [], "odd": True}, normalize_rewards=False)
+    # its sensors hold the Kalman estimate
+    robust = REPOSITORY / "studies" / "robustness" / "five_story_robust.yaml"
+    experiment = tiny(
+        robust, name="RandomSearch", policy={"actor_arch": [], "odd": True}, normalize_rewards=False
+    )
     experiment = experiment.model_validate(experiment.model_dump() | {"plant_randomization": None})
     model = new_model(experiment)
     motions, seeds = synthetic_suite(count=2), [4, 5]
@@ -187,7 +200,9 @@ def test_a_network_search_starts_at_its_prior_and_its_saved_policy_acts_as_its_c
     model = new_model(experiment)
     observations = np.random.default_rng(2).standard_normal((6, model.plant.layout.size)).astype(np.float32)
     at_start = model.candidate(model.weights)
-    np.testing.assert_allclose(at_start.act(observations), np.clip(at_start.prior(observations), -1.0, 1.0), atol=1e-6)
+    np.testing.assert_allclose(
+        at_start.act(observations), np.clip(at_start.prior(observations), -1.0, 1.0), atol=1e-6
+    )
     hidden = model.weights.size - model.plant.building.n_actuators * 17  # all but the action layer's W and b
     assert hidden == 16 * model.plant.layout.size + 16 + 16 * 16 + 16
 
@@ -207,11 +222,15 @@ def test_a_network_search_starts_at_its_prior_and_its_saved_policy_acts_as_its_c
 def test_a_stopped_run_resumes_to_the_same_weights_as_an_uninterrupted_one(tmp_path):
     experiment = tiny(total_steps=24000)
     whole = train(experiment=experiment, run_dir=tmp_path / "whole")
-    stopped = train(experiment=experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)  # stops after one iteration
+    # stops after one iteration
+    stopped = train(experiment=experiment, run_dir=tmp_path / "stop", time_limit_s=0.0)
     assert stopped.time_limit_reached and stopped.steps < 24000
     resumed = train(resume=tmp_path / "stop")
     assert resumed.steps == whole.steps
-    final = [RandomSearch.load(tmp_path / run / "final_model.zip", device="cpu").weights for run in ("whole", "stop")]
+    final = [
+        RandomSearch.load(tmp_path / run / "final_model.zip", device="cpu").weights
+        for run in ("whole", "stop")
+    ]
     np.testing.assert_array_equal(final[0], final[1])
 
 
@@ -235,7 +254,10 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
         ("{kwargs: {initial_bias: 2}}", "algorithm.kwargs.initial_bias: expected a number in [-1.0, 1.0]"),
         ("{kwargs: {initial_bias: 0.5}}", "initial_bias 0.5 needs an affine policy (policy.odd: false)"),
         ("{kwargs: {batch_size: 64}}", "algorithm.kwargs.batch_size: not a keyword argument of RandomSearch"),
-        ("{kwargs: {objective: check}}", "algorithm.kwargs.objective: expected one of return, standard, got 'check'"),
+        (
+            "{kwargs: {objective: check}}",
+            "algorithm.kwargs.objective: expected one of return, standard, got 'check'",
+        ),
     ],
 )
 def test_bad_random_search_settings_exit_2_naming_the_key(tmp_path, algorithm, expected):

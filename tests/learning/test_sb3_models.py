@@ -28,9 +28,9 @@ from rlcontroller.physics.plant import Plant
 def test_the_numpy_actor_equals_predict_to_float32_rounding():
     model = algorithm_class("PPO")("MlpPolicy", BuildingEnv(), policy_kwargs={"net_arch": [64, 64]}, seed=0)
     controller = policy_controller(model, None)
-    observations = (np.random.default_rng(0).standard_normal((200, *model.observation_space.shape)) * 3.0).astype(
-        np.float32
-    )
+    observations = (
+        np.random.default_rng(0).standard_normal((200, *model.observation_space.shape)) * 3.0
+    ).astype(np.float32)
     expected, _ = model.predict(observations, deterministic=True)
     np.testing.assert_allclose(controller.act(observations), expected, rtol=1e-5, atol=1e-6)
     for observation, row in zip(observations[:5], expected, strict=False):
@@ -38,16 +38,21 @@ def test_the_numpy_actor_equals_predict_to_float32_rounding():
 
 
 @pytest.mark.parametrize(
-    ("name", "activation"), [("SAC", "ReLU"), ("PPO", "Tanh"), ("PPO", "GELU"), ("A2C", "ELU"), ("TD3", "ReLU")]
+    ("name", "activation"),
+    [("SAC", "ReLU"), ("PPO", "Tanh"), ("PPO", "GELU"), ("A2C", "ELU"), ("TD3", "ReLU")],
 )
 def test_the_numpy_actor_of_other_learners_and_activations(name, activation):
     import torch
 
     model = algorithm_class(name)(
-        "MlpPolicy", BuildingEnv(), policy_kwargs={"net_arch": [32, 16], "activation_fn": getattr(torch.nn, activation)}
+        "MlpPolicy",
+        BuildingEnv(),
+        policy_kwargs={"net_arch": [32, 16], "activation_fn": getattr(torch.nn, activation)},
     )
     actor = actor_of(model)
-    observations = np.random.default_rng(1).standard_normal((50, *model.observation_space.shape)).astype(np.float32)
+    observations = (
+        np.random.default_rng(1).standard_normal((50, *model.observation_space.shape)).astype(np.float32)
+    )
     expected, _ = model.predict(observations, deterministic=True)
     np.testing.assert_allclose(np.clip(actor(observations), -1.0, 1.0), expected, rtol=1e-5, atol=1e-6)
 
@@ -141,7 +146,9 @@ def test_a_payload_planted_in_a_model_folder_never_runs(tmp_path, records, where
         result = CliRunner().invoke(app, arguments)
         assert not marker.exists(), f"rlc {arguments[0]} ran the payload"
         if where == "beside":
-            assert result.exit_code in (0, 1) if arguments[0] == "check" else result.exit_code == 0, result.output
+            assert result.exit_code in (0, 1) if arguments[0] == "check" else result.exit_code == 0, (
+                result.output
+            )
         else:
             assert result.exit_code == 2 and "error: " in result.output, result.output
             assert "Traceback" not in result.output
@@ -154,7 +161,11 @@ def test_a_folder_with_only_a_stable_baselines3_zip_is_refused_with_the_way_to_c
     shutil.copy(NETWORK_POLICY / "config.yaml", folder)
     plant_payloads(folder, tmp_path / "payload_ran")
     result = CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(tmp_path / "out")])
-    assert result.exit_code == 2 and "--trust-pickle" in result.output and not (tmp_path / "payload_ran").exists()
+    assert (
+        result.exit_code == 2
+        and "--trust-pickle" in result.output
+        and not (tmp_path / "payload_ran").exists()
+    )
     refused = CliRunner().invoke(app, ["convert", str(folder)])
     assert refused.exit_code == 2 and "can run their author's code" in refused.output
     assert not (tmp_path / "payload_ran").exists()
@@ -168,8 +179,12 @@ def test_an_odd_policy_gives_no_force_without_readings_and_mirrors_its_action():
     experiment = Experiment.model_validate(
         {"algorithm": {"name": "PPO", "policy": {"net_arch": [32, 32], "odd": True}}}
     )
-    model = build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
-    observations = np.random.default_rng(2).standard_normal((20, *model.observation_space.shape)).astype(np.float32)
+    model = build_model(
+        experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None
+    )
+    observations = (
+        np.random.default_rng(2).standard_normal((20, *model.observation_space.shape)).astype(np.float32)
+    )
     zero = np.zeros((1, *model.observation_space.shape), dtype=np.float32)
     assert np.all(model.predict(zero, deterministic=True)[0] == 0.0)
     forward, _ = model.predict(observations, deterministic=True)
@@ -190,12 +205,16 @@ def test_an_empty_actor_arch_gives_a_linear_actor_and_keeps_the_critic(name):
 
     policy = {"net_arch": [32, 32], "actor_arch": [], "odd": name == "PPO", "log_std_init": -1.0}
     experiment = Experiment.model_validate({"algorithm": {"name": name, "policy": policy}})
-    model = build_model(experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None)
+    model = build_model(
+        experiment, make_vec_env(Plant(experiment), seed=0), seed=0, device="cpu", tensorboard=None
+    )
     actor = actor_of(model)
     assert len(actor.layers) == 1 and actor.layers[0].activation is None
     critic = model.policy.mlp_extractor.value_net if name == "PPO" else model.policy.critic.qf0
     assert sum(isinstance(layer, torch.nn.Linear) for layer in critic) == (2 if name == "PPO" else 3)
-    first, second = np.random.default_rng(4).standard_normal((2, 7, *model.observation_space.shape)).astype(np.float32)
+    first, second = (
+        np.random.default_rng(4).standard_normal((2, 7, *model.observation_space.shape)).astype(np.float32)
+    )
     if name == "PPO":  # odd and linear: the mean is W o, no bias
         np.testing.assert_allclose(actor(first + second), actor(first) + actor(second), rtol=1e-4, atol=1e-5)
 
@@ -206,7 +225,9 @@ def test_an_odd_policy_is_refused_at_loading_for_sac_and_with_centred_observatio
     with pytest.raises(ConfigError, match="policy.odd: only for PPO, A2C and RandomSearch"):
         build_experiment({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
     with pytest.raises(ConfigError, match="policy.odd: needs normalize_observations: false"):
-        build_experiment({"algorithm": {"name": "PPO", "normalize_observations": True, "policy": {"odd": True}}})
+        build_experiment(
+            {"algorithm": {"name": "PPO", "normalize_observations": True, "policy": {"odd": True}}}
+        )
 
 
 SHIPPED = sorted(path.name for path in (REPOSITORY / "models").iterdir() if path.is_dir())
@@ -228,7 +249,10 @@ def test_every_shipped_model_loads_and_acts_from_a_fresh_clone(name):
 @pytest.mark.parametrize(
     ("damage", "expected"),
     [
-        (lambda f: edit(f / "best_policy.yaml", "format_version: 1", "format_version: 7"), "format_version 7"),
+        (
+            lambda f: edit(f / "best_policy.yaml", "format_version: 1", "format_version: 7"),
+            "format_version 7",
+        ),
         (lambda f: edit(f / "best_policy.yaml", "size: 43", "size: 44"), "observation size 44"),
         (lambda f: edit(f / "best_policy.yaml", "network:", "network: 5\nx:"), "unknown key x"),
         (lambda f: (f / "best_policy.yaml").write_text("[1, 2"), "not readable YAML"),
@@ -248,7 +272,9 @@ def test_a_damaged_policy_file_is_one_line_naming_it(tmp_path, damage, expected)
     damage(folder)
     result = CliRunner().invoke(app, ["evaluate", str(folder), "--out", str(tmp_path / "out")])
     lines = result.output.strip().splitlines()
-    assert result.exit_code == 2 and lines[-1].startswith(f"error: {folder}") and expected in lines[-1], result.output
+    assert result.exit_code == 2 and lines[-1].startswith(f"error: {folder}") and expected in lines[-1], (
+        result.output
+    )
     assert "Traceback" not in result.output and not (tmp_path / "out").exists()
 
 

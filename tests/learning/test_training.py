@@ -39,7 +39,9 @@ def curve(run_dir: Path) -> list[dict[str, str]]:
 
 @pytest.mark.slow
 def test_a_run_folder_has_every_file(tmp_path):
-    summary = train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run")
+    summary = train(
+        experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=tmp_path / "run"
+    )
     run = tmp_path / "run"
     for name in (
         "config.yaml",
@@ -60,7 +62,9 @@ def test_a_run_folder_has_every_file(tmp_path):
     rows = curve(run)
     assert [int(r["steps"]) for r in rows] == [0, 300, 600]  # the starting policy is validated too
     assert all(
-        np.isfinite(float(r[k])) for r in rows for k in ("eval_reward", "eval_J1", "eval_J2", "eval_peak_drift_m")
+        np.isfinite(float(r[k]))
+        for r in rows
+        for k in ("eval_reward", "eval_J1", "eval_J2", "eval_peak_drift_m")
     )
     assert load_experiment(run / "config.yaml").algorithm.total_steps == 600
     assert json.loads((run / "run.json").read_text())["device"] == "cpu"  # the device used, not "auto"
@@ -72,7 +76,9 @@ def test_a_run_folder_has_every_file(tmp_path):
 def test_runs_are_never_overwritten(tmp_path):
     (tmp_path / "run").mkdir()
     (tmp_path / "run" / "keep.txt").write_text("work")
-    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--total-steps", "10"])
+    result = CliRunner().invoke(
+        app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--total-steps", "10"]
+    )
     assert result.exit_code == 2 and "never overwritten" in result.output
     assert (tmp_path / "run" / "keep.txt").read_text() == "work"
 
@@ -102,7 +108,16 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
     path = tmp_path / "long.yaml"
     path.write_text(yaml.safe_dump(config))
     run = tmp_path / "run"
-    command = [sys.executable, "-m", "rlcontroller", "train", str(path), "--run-dir", str(run), "--no-progress"]
+    command = [
+        sys.executable,
+        "-m",
+        "rlcontroller",
+        "train",
+        str(path),
+        "--run-dir",
+        str(run),
+        "--no-progress",
+    ]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     deadline = time.time() + 120
     while not (run / "checkpoints" / "step_0000000500").is_dir():
@@ -110,7 +125,10 @@ def test_killed_run_resumes_to_the_same_total_with_a_continuous_curve(tmp_path):
         time.sleep(0.1)
     busy = CliRunner().invoke(app, ["train", "--resume", str(run), "--no-progress"])  # while it trains
     assert busy.exit_code != 0
-    assert f"in use by rlc train on {socket.gethostname()} (pid {process.pid}, since" in busy.output.splitlines()[-1]
+    assert (
+        f"in use by rlc train on {socket.gethostname()} (pid {process.pid}, since"
+        in busy.output.splitlines()[-1]
+    )
     os.kill(process.pid, signal.SIGKILL)  # its lock stays behind, stale: the resume below takes it over
     process.wait()
     assert (run / ".lock").is_file()
@@ -171,7 +189,9 @@ def test_ctrl_c_saves_a_checkpoint_and_resume_finishes(tmp_path):
 )
 def test_other_learners_train(tmp_path, name, kwargs):
     summary = train(
-        experiment=smoke(name=name, kwargs=kwargs, n_envs=2, total_steps=256, checkpoint_every=128, eval_every=128),
+        experiment=smoke(
+            name=name, kwargs=kwargs, n_envs=2, total_steps=256, checkpoint_every=128, eval_every=128
+        ),
         run_dir=tmp_path / name,
     )
     assert summary.steps >= 256 and (tmp_path / name / "final_model.zip").is_file()
@@ -263,9 +283,12 @@ def test_a_run_that_fails_to_start_leaves_no_run_folder(tmp_path, monkeypatch):
 @pytest.mark.slow
 def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
     run = tmp_path / "run"
-    train(experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0)
+    train(
+        experiment=smoke(total_steps=600, checkpoint_every=300, eval_every=300), run_dir=run, time_limit_s=0.0
+    )
     state = RunFolder(run).checkpoints()[-1] / "state.json"
-    state.write_text(json.dumps({**json.loads(state.read_text()), "wall_time_s": 1.0e6}))  # a long first session
+    # a long first session
+    state.write_text(json.dumps({**json.loads(state.read_text()), "wall_time_s": 1.0e6}))
     summary = train(resume=run, time_limit_s=1.0e5)
     assert summary.steps == 600 and not summary.time_limit_reached
 
@@ -273,10 +296,22 @@ def test_the_time_limit_counts_this_invocation_not_the_whole_run(tmp_path):
 @pytest.mark.slow
 def test_a_stop_at_the_time_limit_prints_the_resume_command(tmp_path):
     run = tmp_path / "run"
-    arguments = ["train", str(SMOKE), "--run-dir", str(run), "--total-steps", "3000", "--time-limit", "0.0001"]
+    arguments = [
+        "train",
+        str(SMOKE),
+        "--run-dir",
+        str(run),
+        "--total-steps",
+        "3000",
+        "--time-limit",
+        "0.0001",
+    ]
     result = CliRunner().invoke(app, arguments)
     assert result.exit_code == 0, result.output
-    assert "stopped at the time limit" in result.output and f"resume with: rlc train --resume {run}" in result.output
+    assert (
+        "stopped at the time limit" in result.output
+        and f"resume with: rlc train --resume {run}" in result.output
+    )
 
 
 @pytest.fixture(scope="module")
@@ -294,7 +329,9 @@ def finished_run(tmp_path_factory):
         ("state.json", "state.json: unreadable checkpoint file (JSONDecodeError"),
     ],
 )
-def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(finished_run, tmp_path, damaged, expected):
+def test_a_damaged_checkpoint_stops_resume_with_one_line_and_the_way_out(
+    finished_run, tmp_path, damaged, expected
+):
     run = tmp_path / "run"
     shutil.copytree(finished_run, run)
     config = run / "config.yaml"
@@ -377,7 +414,9 @@ class ScriptedValidator:
     def __call__(self, model) -> dict[str, float]:
         self.calls += 1
         j1 = self.J1[self.calls - 1]
-        reference = {f"{name}_J{i}": 1.0 for name in ("lqg", "lqg_ground", "lqg_ground_model") for i in (1, 2)}
+        reference = {
+            f"{name}_J{i}": 1.0 for name in ("lqg", "lqg_ground", "lqg_ground_model") for i in (1, 2)
+        }
         worse = self.WORSE[self.calls - 1]
         results = {"eval_reward": float(self.calls), "eval_peak_drift_m": 0.01, "eval_J1": j1, "eval_J2": j1}
         return results | {"eval_worse": worse} | reference
@@ -397,7 +436,9 @@ def test_the_best_model_is_the_validation_chosen_by_select_by(tmp_path, monkeypa
     monkeypatch.setattr(training, "Validator", ScriptedValidator)
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": select_by}
-    experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
+    experiment = experiment.model_copy(
+        update={"algorithm": type(experiment.algorithm).model_validate(settings)}
+    )
     summary = train(experiment=experiment, run_dir=tmp_path / "run", device="cpu")
     assert summary.best_steps == best_steps
     best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
@@ -423,7 +464,9 @@ def test_a_run_that_only_gets_worse_keeps_its_starting_policy_as_best(tmp_path, 
     monkeypatch.setattr(training, "Validator", WorseningValidator)
     experiment = load_experiment(REPOSITORY / "configs" / "testing" / "tiny.yaml")
     settings = experiment.algorithm.model_dump() | {"total_steps": 1024, "select_by": "J1"}
-    experiment = experiment.model_copy(update={"algorithm": type(experiment.algorithm).model_validate(settings)})
+    experiment = experiment.model_copy(
+        update={"algorithm": type(experiment.algorithm).model_validate(settings)}
+    )
     summary = train(experiment=experiment, run_dir=tmp_path / "run", device="cpu")
     assert summary.best_steps == 0 and summary.best["eval_J1"] == 0.4
     best = PPO.load(tmp_path / "run" / "best_model.zip", device="cpu")
@@ -458,10 +501,18 @@ def test_tensorboard_gets_the_validation_row_and_a_resume_continues_it(tmp_path)
     train(resume=run, tensorboard=True)
     scalars = tensorboard_scalars(run)
     rows = curve(run)
-    for tag, column in (("validation/J1", "eval_J1"), ("validation/J2", "eval_J2"), ("validation/lqg_J1", "lqg_J1")):
+    for tag, column in (
+        ("validation/J1", "eval_J1"),
+        ("validation/J2", "eval_J2"),
+        ("validation/lqg_J1", "lqg_J1"),
+    ):
         assert [step for step, _ in scalars[tag]] == [int(row["steps"]) for row in rows]
-        assert [value for _, value in scalars[tag]] == pytest.approx([float(row[column]) for row in rows], rel=1e-6)
-    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "off"), "--total-steps", "300"])
+        assert [value for _, value in scalars[tag]] == pytest.approx(
+            [float(row[column]) for row in rows], rel=1e-6
+        )
+    result = CliRunner().invoke(
+        app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "off"), "--total-steps", "300"]
+    )
     assert result.exit_code == 0, result.output
     assert not (tmp_path / "off" / "tensorboard").exists()  # off unless asked for
 
@@ -470,11 +521,16 @@ def test_tensorboard_without_the_package_is_one_line(tmp_path, monkeypatch):
     import importlib.util
 
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "tensorboard" else real(name, *a))
-    result = CliRunner().invoke(app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--tensorboard"])
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "tensorboard" else real(name, *a)
+    )
+    result = CliRunner().invoke(
+        app, ["train", str(SMOKE), "--run-dir", str(tmp_path / "run"), "--tensorboard"]
+    )
     assert result.exit_code == 2
     assert result.output.strip() == (
-        "error: --tensorboard: the tensorboard package is not installed (pip install 'rlcontroller[tensorboard]')"
+        "error: --tensorboard: the tensorboard package is not installed (pip install "
+        "'rlcontroller[tensorboard]')"
     )
     assert not (tmp_path / "run").exists()
 
@@ -494,11 +550,14 @@ def test_training_under_generated_wind_validates_on_wind(tmp_path):
     from rlcontroller.learning.validation import Validator
 
     validator = Validator(Plant(experiment))
-    assert all(motion.floor_forces is not None and not motion.acceleration.any() for motion in validator.motions)
+    assert all(
+        motion.floor_forces is not None and not motion.acceleration.any() for motion in validator.motions
+    )
 
 
 def test_select_by_j1_plus_j2_weighs_floor_accelerations_alike():
-    """A validation that cuts drift a little more by raising floor accelerations wins on J1, loses on J1+J2."""
+    """A validation that cuts drift a little more by raising floor accelerations wins on J1, loses on
+    J1+J2."""
     from rlcontroller.learning.training import selection_score
 
     drift_only = {"eval_reward": -1.0, "eval_J1": 0.30, "eval_J2": 0.90}
@@ -509,23 +568,27 @@ def test_select_by_j1_plus_j2_weighs_floor_accelerations_alike():
 
 
 def test_auto_takes_the_cpu_for_rlc_s_mlp_policies_even_where_cuda_is_visible(tmp_path, monkeypatch):
-    """A GPU steps rlc's small MLPs slower than the CPU (docs/training.md): with CUDA reported visible, a run on
-    `auto` still trains on the CPU (stable-baselines3's own `auto` would take the GPU: here, one that is not there)."""
+    """A GPU steps rlc's small MLPs slower than the CPU (docs/training.md): with CUDA reported visible, a run
+    on `auto` still trains on the CPU (stable-baselines3's own `auto` would take the GPU: here, one that is
+    not there)."""
     import torch
 
     from rlcontroller.learning.training import training_device
 
     monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
     train(
-        experiment=smoke(total_steps=200, checkpoint_every=200, eval_every=200), run_dir=tmp_path / "run", device="auto"
+        experiment=smoke(total_steps=200, checkpoint_every=200, eval_every=200),
+        run_dir=tmp_path / "run",
+        device="auto",
     )
     assert json.loads((tmp_path / "run" / "run.json").read_text())["device"] == "cpu"
     assert training_device("cuda") == "cuda" and training_device("cpu") == "cpu"
 
 
 def test_selection_by_the_standard_takes_a_stable_closed_loop_first():
-    """`select_by: standard`: an unstable checkpoint (the check's stability criterion fails) is never preferred,
-    however few motions it makes worse; among stable ones, fewer motions worse, then lower J1 + J2."""
+    """`select_by: standard`: an unstable checkpoint (the check's stability criterion fails) is never
+    preferred, however few motions it makes worse; among stable ones, fewer motions worse, then lower J1 +
+    J2."""
     from rlcontroller.learning.training import selection_score
 
     def row(radius, worse, j):

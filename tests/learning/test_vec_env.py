@@ -70,7 +70,10 @@ def test_the_batched_vec_env_steps_as_a_dummy_vec_env(case):
         np.testing.assert_allclose(rewards, expected_rewards, rtol=1e-5, atol=1e-7)
         for env in np.flatnonzero(dones):
             np.testing.assert_allclose(
-                infos[env]["terminal_observation"], expected_infos[env]["terminal_observation"], rtol=1e-5, atol=1e-5
+                infos[env]["terminal_observation"],
+                expected_infos[env]["terminal_observation"],
+                rtol=1e-5,
+                atol=1e-5,
             )
             assert infos[env]["TimeLimit.truncated"] == expected_infos[env]["TimeLimit.truncated"]
         episodes += int(dones.sum())
@@ -85,5 +88,7 @@ def test_the_batched_vec_env_steps_as_a_dummy_vec_env(case):
 def test_the_algorithm_chooses_the_vec_env():
     experiment = Experiment.model_validate({"algorithm": {"name": "PPO", "n_envs": 3}})
     assert isinstance(make_vec_env(Plant(experiment), seed=0).unwrapped, BatchedVecEnv)
-    dummy = experiment.model_copy(update={"algorithm": experiment.algorithm.model_copy(update={"vec_env": "dummy"})})
+    dummy = experiment.model_copy(
+        update={"algorithm": experiment.algorithm.model_copy(update={"vec_env": "dummy"})}
+    )
     assert isinstance(make_vec_env(Plant(dummy), seed=0).unwrapped, DummyVecEnv)

@@ -57,7 +57,10 @@ def write_metrics(folder, values: dict[str, list[float]], records=("a", "b")):
 
 
 def test_scores_are_means_over_stories_and_statistics_are_over_runs(tmp_path):
-    runs = [write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.1 * s, 0.6], "LQG": [0.5, 0.5]}) for s in range(3)]
+    runs = [
+        write_metrics(tmp_path / f"seed{s}", {"RL": [0.4 + 0.1 * s, 0.6], "LQG": [0.5, 0.5]})
+        for s in range(3)
+    ]
     table = aggregate(scores(runs), reps=300)
     rl_j1 = table[(table["controller"] == "RL") & (table["metric"] == "J1")].iloc[0]
     run_means = [np.mean([0.42 + 0.1 * s, 0.62]) for s in range(3)]  # stories 1..3 add 0.01, 0.02, 0.03
@@ -86,9 +89,13 @@ def test_rlc_aggregate_writes_the_tables_and_the_plot(tmp_path):
     again = subprocess.run(command, capture_output=True, text=True)
     assert again.returncode == 2 and "never overwritten" in again.stderr and "Traceback" not in again.stderr
     missing = subprocess.run(
-        [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")], capture_output=True, text=True
+        [sys.executable, "-m", "rlcontroller", "aggregate", str(tmp_path / "nothing")],
+        capture_output=True,
+        text=True,
     )
-    assert missing.returncode == 2 and "no metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
+    assert (
+        missing.returncode == 2 and "no metrics.csv" in missing.stderr and "Traceback" not in missing.stderr
+    )
 
 
 def test_robustness_results_aggregate_per_scenario_and_over_all_scenarios(tmp_path):
@@ -128,7 +135,9 @@ def test_a_folder_of_runs_or_of_nothing_is_refused_with_the_way_out(tmp_path):
         ("sweep", "a folder of runs (seed0); give the runs: 'rlc aggregate"),
         ("empty", "no metrics.csv"),
     ):
-        result = CliRunner().invoke(app, ["aggregate", str(tmp_path / folder), "--out", str(tmp_path / "out")])
+        result = CliRunner().invoke(
+            app, ["aggregate", str(tmp_path / folder), "--out", str(tmp_path / "out")]
+        )
         assert result.exit_code == 2 and expected in result.output and "rlc evaluate" not in result.output
 
 

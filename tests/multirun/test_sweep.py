@@ -17,13 +17,19 @@ from conftest import REPOSITORY
 from rlcontroller.config import ConfigError, Experiment
 from rlcontroller.multirun.sweep import parse_seeds, parse_setting, plan, sweep
 
-TINY = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())  # a run of a few seconds
+# a run of a few seconds
+TINY = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
 
 
 def test_seeds_and_settings_parse_as_a_user_writes_them():
-    assert parse_seeds("0-3") == [0, 1, 2, 3] and parse_seeds("5,7,9") == [5, 7, 9] and parse_seeds("4") == [4]
+    assert (
+        parse_seeds("0-3") == [0, 1, 2, 3] and parse_seeds("5,7,9") == [5, 7, 9] and parse_seeds("4") == [4]
+    )
     assert parse_setting("algorithm.kwargs.gamma=0.99,0.999") == ("algorithm.kwargs.gamma", [0.99, 0.999])
-    assert parse_setting("algorithm.policy.net_arch=[64,64],[128]") == ("algorithm.policy.net_arch", [[64, 64], [128]])
+    assert parse_setting("algorithm.policy.net_arch=[64,64],[128]") == (
+        "algorithm.policy.net_arch",
+        [[64, 64], [128]],
+    )
     for bad in ("3-1", "a-b", "1,1", "-2"):
         with pytest.raises(ConfigError, match="--seeds"):
             parse_seeds(bad)
@@ -50,10 +56,15 @@ def test_the_plan_is_the_cartesian_product_and_checks_every_run_first(tmp_path):
 def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(tmp_path):
     pytest.importorskip("distributed", reason="the distributed extra: pip install -e '.[distributed]'")
     experiment = Experiment.model_validate(TINY)
-    settings = [("algorithm.kwargs.learning_rate", [0.0003, -1.0])]  # -1: the learner refuses it when it starts
+    # -1: the learner refuses it when it starts
+    settings = [("algorithm.kwargs.learning_rate", [0.0003, -1.0])]
     lines = []
-    results, written = sweep(experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append)
-    by_status = sorted((result.run.settings["algorithm.kwargs.learning_rate"], result.status) for result in results)
+    results, written = sweep(
+        experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append
+    )
+    by_status = sorted(
+        (result.run.settings["algorithm.kwargs.learning_rate"], result.status) for result in results
+    )
     assert by_status == [(-1.0, "failed"), (-1.0, "failed"), (0.0003, "trained"), (0.0003, "trained")]
     assert all("Invalid learning rate" in result.error for result in results if result.status == "failed")
     assert {path.name for path in written} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
@@ -61,7 +72,12 @@ def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(t
     model = tmp_path / "learning_rate=0.0003" / "seed0" / "final_model.zip"
     stamp = model.stat().st_mtime_ns
     again, _ = sweep(experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append)
-    assert sorted(result.status for result in again) == ["failed", "failed", "finished before", "finished before"]
+    assert sorted(result.status for result in again) == [
+        "failed",
+        "failed",
+        "finished before",
+        "finished before",
+    ]
     assert model.stat().st_mtime_ns == stamp  # nothing retrained
     assert "sweep.csv" in {path.name for path in tmp_path.iterdir()}
 
@@ -71,7 +87,17 @@ def test_rlc_sweep_on_local_processes(tmp_path):
     config = tmp_path / "tiny.yaml"
     config.write_text(yaml.safe_dump(TINY))
     out = tmp_path / "sweep"
-    command = [sys.executable, "-m", "rlcontroller", "sweep", str(config), "--seeds", "0-1", "--out", str(out)]
+    command = [
+        sys.executable,
+        "-m",
+        "rlcontroller",
+        "sweep",
+        str(config),
+        "--seeds",
+        "0-1",
+        "--out",
+        str(out),
+    ]
     done = subprocess.run(command, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "2 runs done, 0 failed" in done.stdout and (out / "seed1" / "evaluation" / "metrics.csv").is_file()
@@ -124,16 +150,21 @@ def long_sweep_training(tmp_path: Path, seeds: str) -> tuple[subprocess.Popen, P
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", seeds]
+    # background (CI) ignore SIGINT, and a child that inherits that ignores it too, as the shell intends
     sweep_process = subprocess.Popen(
         [*command, "--workers", "1", "--out", str(out)],
         stdout=subprocess.DEVNULL,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as at a terminal: tests run in the
-    )  # background (CI) ignore SIGINT, and a child that inherits that ignores it too, as the shell intends
+    )
     deadline = time.time() + 120
     while not list((out / "seed0" / "checkpoints").glob("step_*")):
         assert sweep_process.poll() is None and time.time() < deadline
         time.sleep(0.2)
-    workers = [pid for pid in children(sweep_process.pid) if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()]
+    workers = [
+        pid
+        for pid in children(sweep_process.pid)
+        if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes()
+    ]
     return sweep_process, out, workers
 
 
@@ -172,7 +203,15 @@ def test_a_second_sweep_into_the_same_folder_and_a_train_of_its_run_are_refused(
         lock = {"host": socket.gethostname(), "pid": holder.pid, "what": "rlc sweep", "started": "now"}
         (tmp_path / LOCK).write_text(json.dumps(lock))
         with pytest.raises(ConfigError, match=f"in use by rlc sweep on .* \\(pid {holder.pid}"):
-            sweep(Experiment.model_validate(TINY), [0], [], tmp_path, engine="local", workers=1, echo=lambda _: None)
+            sweep(
+                Experiment.model_validate(TINY),
+                [0],
+                [],
+                tmp_path,
+                engine="local",
+                workers=1,
+                echo=lambda _: None,
+            )
         assert sorted(p.name for p in tmp_path.iterdir()) == [LOCK]  # no run folder, no sweep.csv
         run = tmp_path / "seed0"
         run.mkdir()
@@ -193,13 +232,19 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     (which would leave the sweep one worker short until it finished)."""
     import json
 
-    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024))
+    config = dict(
+        TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024)
+    )
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-2"]
-    process = subprocess.Popen([*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True
+    )
     lock, sibling_lock, deadline = out / "seed0" / ".lock", out / "seed1" / ".lock", time.time() + 180
-    while not (lock.is_file() and sibling_lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))):
+    while not (
+        lock.is_file() and sibling_lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))
+    ):
         assert process.poll() is None and time.time() < deadline, process.communicate()[0]
         time.sleep(0.1)
     worker = json.loads(lock.read_text())["pid"]
@@ -220,7 +265,9 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
         run = out / f"seed{seed}"
         assert (run / "final_model.zip").is_file() and (run / "evaluation" / "metrics.csv").is_file()
         assert not (run / ".lock").exists() and not list(run.glob(".*incomplete*"))
-        steps = [int(line.split(",")[0]) for line in (run / "learning_curve.csv").read_text().splitlines()[1:]]
+        steps = [
+            int(line.split(",")[0]) for line in (run / "learning_curve.csv").read_text().splitlines()[1:]
+        ]
         assert steps == sorted(set(steps)), steps  # no row logged twice
     assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["seed0", "seed1", "seed2"]
 
@@ -263,7 +310,12 @@ def test_a_run_waiting_behind_its_dead_worker_s_lock_counts_that_death_once(tmp_
     dead.wait()
     run = sweeping.SweepRun(tmp_path / "seed0", 0, {}, "tiny", "")
     run.folder.mkdir()
-    lock = {"host": socket.gethostname(), "pid": dead.pid, "what": "rlc train", "started": "2026-01-01T00:00:00"}
+    lock = {
+        "host": socket.gethostname(),
+        "pid": dead.pid,
+        "what": "rlc train",
+        "started": "2026-01-01T00:00:00",
+    }
     (run.folder / ".lock").write_text(json.dumps(lock))
     pools = []
 
@@ -297,7 +349,9 @@ def test_a_dask_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     import json
 
     pytest.importorskip("distributed")
-    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024))
+    config = dict(
+        TINY, algorithm=dict(TINY["algorithm"], total_steps=6144, checkpoint_every=256, eval_every=1024)
+    )
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0-1"]
@@ -313,7 +367,9 @@ def test_a_dask_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
     rows = (out / "sweep.csv").read_text().splitlines()[1:]
     assert any(",resumed," in row and "seed0" in row for row in rows), rows
     for seed in (0, 1):
-        assert (out / f"seed{seed}" / "final_model.zip").is_file() and not (out / f"seed{seed}" / ".lock").exists()
+        assert (out / f"seed{seed}" / "final_model.zip").is_file() and not (
+            out / f"seed{seed}" / ".lock"
+        ).exists()
 
 
 @pytest.mark.slow
@@ -328,11 +384,18 @@ def test_a_sweep_whose_dask_scheduler_dies_says_so_in_one_line_and_continues_whe
         port = probe.getsockname()[1]
     address = f"tcp://127.0.0.1:{port}"
     dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-    scheduler = subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    scheduler = subprocess.Popen(
+        [*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     worker_command = [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1"]
-    worker = subprocess.Popen([*worker_command, "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    config = dict(TINY, algorithm=dict(TINY["algorithm"], total_steps=8192, checkpoint_every=256, eval_every=2048))
+    worker = subprocess.Popen(
+        [*worker_command, "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
+    config = dict(
+        TINY, algorithm=dict(TINY["algorithm"], total_steps=8192, checkpoint_every=256, eval_every=2048)
+    )
     (tmp_path / "long.yaml").write_text(yaml.safe_dump(config))
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "rlcontroller", "sweep", str(tmp_path / "long.yaml"), "--seeds", "0"]
@@ -352,7 +415,9 @@ def test_a_sweep_whose_dask_scheduler_dies_says_so_in_one_line_and_continues_whe
         scheduler.kill()
         worker.kill()
         worker.wait()
-    again = subprocess.run(command[: command.index("--address")] + ["--out", str(out)], capture_output=True, text=True)
+    again = subprocess.run(
+        command[: command.index("--address")] + ["--out", str(out)], capture_output=True, text=True
+    )
     assert again.returncode == 0 and "1 runs done, 0 failed" in again.stdout, again.stderr
     assert ",resumed," in (out / "sweep.csv").read_text()
 

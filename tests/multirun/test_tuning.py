@@ -17,7 +17,8 @@ from optuna.trial import TrialState
 from rlcontroller.config import Experiment, SearchRange
 from rlcontroller.multirun.tuning import storage, suggest
 
-TINY = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())  # a run of a few seconds
+# a run of a few seconds
+TINY = yaml.safe_load((REPOSITORY / "configs" / "testing" / "tiny.yaml").read_text())
 SEARCH = {
     "algorithm.kwargs.learning_rate": {"low": 1.0e-5, "high": 1.0e-2, "log": True},
     "algorithm.kwargs.gamma": {"low": 0.9, "high": 0.999},
@@ -27,7 +28,17 @@ TUNED = TINY | {"name": "tuned", "algorithm": TINY["algorithm"] | {"search": SEA
 
 
 def tune_command(config, out, trials):
-    return [sys.executable, "-m", "rlcontroller", "tune", str(config), "--trials", str(trials), "--out", str(out)]
+    return [
+        sys.executable,
+        "-m",
+        "rlcontroller",
+        "tune",
+        str(config),
+        "--trials",
+        str(trials),
+        "--out",
+        str(out),
+    ]
 
 
 def study_trials(out):
@@ -48,7 +59,9 @@ def test_the_search_space_is_checked_and_sampled():
     space = Experiment.model_validate(TUNED).algorithm.search
     trial = optuna.create_study().ask()
     values = suggest(trial, space)
-    assert 1e-5 <= values["algorithm.kwargs.learning_rate"] <= 1e-2 and values["algorithm.policy.net_arch"] in (
+    assert 1e-5 <= values["algorithm.kwargs.learning_rate"] <= 1e-2 and values[
+        "algorithm.policy.net_arch"
+    ] in (
         [16],
         [8, 8],
     )
@@ -60,7 +73,9 @@ def test_two_workers_on_one_study_run_exactly_the_trials_asked(tmp_path):
     config.write_text(yaml.safe_dump(TUNED))
     out = tmp_path / "study"
     workers = [
-        subprocess.Popen(tune_command(config, out, 6), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        subprocess.Popen(
+            tune_command(config, out, 6), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
         for _ in range(2)
     ]
     outputs = [worker.communicate(timeout=600) for worker in workers]
@@ -90,7 +105,9 @@ def test_a_killed_worker_s_trial_is_marked_failed_and_the_study_still_completes(
     config = tmp_path / "tuned.yaml"
     config.write_text(yaml.safe_dump(slow))
     out = tmp_path / "study"
-    victim = subprocess.Popen(tune_command(config, out, 2), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    victim = subprocess.Popen(
+        tune_command(config, out, 2), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         if (out / "study.journal").exists() and any(t.state == TrialState.RUNNING for t in study_trials(out)):

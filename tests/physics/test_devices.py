@@ -24,7 +24,9 @@ def primary_with_absorber(mass_ratio: float, frequency_ratio: float, damping_rat
     mass = np.diag([1.0, mass_ratio])
     stiffness = np.array([[1.0 + k, -k], [-k, k]])
     damping = np.array([[c, -c], [-c, c]])
-    a = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
+    a = np.block(
+        [[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]]
+    )
     return a, np.array([0.0, 0.0, -1.0, -1.0]), np.array([1.0, 0.0, 0.0, 0.0])
 
 
@@ -48,7 +50,11 @@ def test_warburtons_random_tuning_minimises_the_mean_square_displacement(mass_ra
     tuned = warburton_optimum(mass_ratio, "random")
     assert tuned[0] == pytest.approx(np.sqrt(1 - mass_ratio / 2) / (1 + mass_ratio), rel=1e-15)
     best = scipy.optimize.minimize(
-        mean_square, [1.0, 0.1], args=(mass_ratio,), method="Nelder-Mead", options={"xatol": 1e-9, "fatol": 1e-14}
+        mean_square,
+        [1.0, 0.1],
+        args=(mass_ratio,),
+        method="Nelder-Mead",
+        options={"xatol": 1e-9, "fatol": 1e-14},
     )
     np.testing.assert_allclose(tuned, best.x, rtol=1e-5)
 
@@ -59,7 +65,11 @@ def test_warburtons_harmonic_tuning_minimises_the_peak_response(mass_ratio):
     tuned = warburton_optimum(mass_ratio, "harmonic")
     at_tuning = peak_response(tuned, mass_ratio)
     frequency, damping = tuned
-    grid = [(frequency * (1 + df), damping * (1 + dz)) for df in (-0.02, -0.01, 0.01, 0.02) for dz in (-0.3, 0.0, 0.3)]
+    grid = [
+        (frequency * (1 + df), damping * (1 + dz))
+        for df in (-0.02, -0.01, 0.01, 0.02)
+        for dz in (-0.3, 0.0, 0.3)
+    ]
     grid += [(frequency, damping * 0.7), (frequency, damping * 1.3)]
     assert all(peak_response(other, mass_ratio) > at_tuning for other in grid)
     best = scipy.optimize.minimize(peak_response, tuned, args=(mass_ratio,), method="Nelder-Mead")
@@ -139,7 +149,9 @@ def test_mass_devices_match_an_independent_integration_of_their_equations(record
     drifts, strokes = [np.zeros(5)], [np.zeros(2)]
     for k in range(steps):
         span = (k * plant.control_dt, (k + 1) * plant.control_dt)
-        state = scipy.integrate.solve_ivp(rates, span, state, args=(forces[k],), rtol=1e-10, atol=1e-13).y[:, -1]
+        state = scipy.integrate.solve_ivp(rates, span, state, args=(forces[k],), rtol=1e-10, atol=1e-13).y[
+            :, -1
+        ]
         drifts.append(state[:5] - np.concatenate([[0.0], state[:4]]))
         strokes.append(state[5:7] - state[[2, 4]])
     np.testing.assert_allclose(result.drift, drifts, atol=1e-6 * np.max(np.abs(drifts)))
@@ -160,12 +172,16 @@ def test_the_tuning_is_the_design_models_so_a_softer_plant_detunes_it():
 
 
 def test_a_detuned_plant_changes_only_the_devices_spring_and_dashpot():
-    devices = [{"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1e4, "stroke_limit": 1.0}]
+    devices = [
+        {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1e4, "stroke_limit": 1.0}
+    ]
     raw = experiment_with(devices, actuators=[]).model_dump()
     nominal = Plant(Experiment.model_validate(raw)).building
     raw["plant"] = {"devices": {"frequency": 0.9, "damping": 2.0}}
     built = Plant(Experiment.model_validate(raw)).building
     (tuned,), (detuned,) = nominal.devices, built.devices
-    assert detuned.stiffness == pytest.approx(0.81 * tuned.stiffness) and detuned.damping == 2.0 * tuned.damping
+    assert (
+        detuned.stiffness == pytest.approx(0.81 * tuned.stiffness) and detuned.damping == 2.0 * tuned.damping
+    )
     assert detuned.mass == tuned.mass and np.array_equal(built.actuator_matrix, nominal.actuator_matrix)
     np.testing.assert_array_equal(built.mass, nominal.mass)

@@ -43,7 +43,11 @@ def test_sdof_free_vibration_matches_the_analytic_solution(method):
     states = iterate(substep.phi, np.array([0.05, 0.0]), 5000)
     t = np.arange(5001) * dt
     omega_d = omega * np.sqrt(1 - zeta**2)
-    analytic = 0.05 * np.exp(-zeta * omega * t) * (np.cos(omega_d * t) + zeta * omega / omega_d * np.sin(omega_d * t))
+    analytic = (
+        0.05
+        * np.exp(-zeta * omega * t)
+        * (np.cos(omega_d * t) + zeta * omega / omega_d * np.sin(omega_d * t))
+    )
     tolerance = 1e-12 if method == "exact" else 1e-5  # m; Newmark's period error is (omega dt)^2 / 12
     np.testing.assert_allclose(states[:, 0], analytic, atol=tolerance)
 
@@ -108,7 +112,9 @@ def test_newmark_error_falls_four_times_when_dt_halves(paper_building):
         substeps = round(0.02 / dt)
         runs = [
             simulate(
-                paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02, method=m), substeps), ground
+                paper_building,
+                step_map(paper_building, SimulationConfig(control_dt=0.02, method=m), substeps),
+                ground,
             )
             for m in ("exact", "newmark")
         ]
@@ -174,7 +180,9 @@ def test_substeps_never_decimate_a_fine_record(paper_building):
     grid = on_control_grid(Load("fine", ground_dt, ground), 0.02)
     samples, substeps = grid.ground, grid.substeps
     assert substeps == 4 and samples.size == ground.size
-    coarse = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02), substeps), samples)
+    coarse = simulate(
+        paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02), substeps), samples
+    )
     fine = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=ground_dt)), ground)
     np.testing.assert_allclose(coarse.drift, fine.drift[::4][: coarse.drift.shape[0]], atol=1e-12)
 
@@ -184,7 +192,9 @@ def test_held_force_is_the_same_at_both_ends_of_a_newmark_step(paper_building):
     rng = np.random.default_rng(0)
     forces = rng.uniform(-1e5, 1e5, (500, 3))
     ground = np.zeros(501)
-    exact = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02)), ground, forces=forces)
+    exact = simulate(
+        paper_building, step_map(paper_building, SimulationConfig(control_dt=0.02)), ground, forces=forces
+    )
     newmark = simulate(
         paper_building,
         step_map(paper_building, SimulationConfig(control_dt=0.02, method="newmark"), 16),
@@ -200,7 +210,9 @@ def test_base_shear_is_the_sum_of_floor_mass_times_absolute_acceleration(paper_b
     forces = rng.uniform(-5e4, 5e4, (ground.size - 1, 3))
     result = simulate(paper_building, step_map(paper_building, SimulationConfig()), ground, forces=forces)
     masses = paper_building.floor_masses
-    np.testing.assert_allclose(result.base_shear, result.absolute_acceleration @ masses, rtol=1e-10, atol=1e-6)
+    np.testing.assert_allclose(
+        result.base_shear, result.absolute_acceleration @ masses, rtol=1e-10, atol=1e-6
+    )
     top_story = masses[4] * result.absolute_acceleration[:, 4]
     np.testing.assert_allclose(result.story_shear[:, 4], top_story, rtol=1e-10, atol=1e-6)
 
@@ -211,7 +223,9 @@ def test_absolute_acceleration_is_relative_plus_ground_acceleration(paper_buildi
     result = simulate(paper_building, step_map(paper_building, SimulationConfig(control_dt=dt)), ground)
     relative = np.gradient(result.velocity, dt, axis=0)[1:-1]  # central differences, O(dt^2)
     absolute = relative + result.ground[1:-1, None]
-    np.testing.assert_allclose(result.absolute_acceleration[1:-1], absolute, atol=1e-3 * np.max(np.abs(absolute)))
+    np.testing.assert_allclose(
+        result.absolute_acceleration[1:-1], absolute, atol=1e-3 * np.max(np.abs(absolute))
+    )
 
 
 def test_constant_actuator_force_gives_the_static_drift(paper_building):

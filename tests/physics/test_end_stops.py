@@ -1,7 +1,7 @@
 """End-stops of mass devices: a free mass between two stops loses the restitution's square of its energy at
-each impact; the stopped building agrees with scipy's Radau on the equations written per floor and device, with
-the contacts located as events; below the stops every path steps exactly the linear plant; the stops' force
-reaches the floor accelerations."""
+each impact; the stopped building agrees with scipy's Radau on the equations written per floor and device,
+with the contacts located as events; below the stops every path steps exactly the linear plant; the stops'
+force reaches the floor accelerations."""
 
 import numpy as np
 import pytest
@@ -21,7 +21,9 @@ def driver_experiment(**plant) -> Experiment:
     """The five-story building with the roof's active mass driver (1 m stroke limit, 10 kN)."""
     raw = Experiment().model_dump()
     raw["actuators"] = []
-    raw["devices"] = [{"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1e4, "stroke_limit": 1.0}]
+    raw["devices"] = [
+        {"type": "active_mass", "floor": 5, "mass_ratio": 0.02, "force_limit": 1e4, "stroke_limit": 1.0}
+    ]
     if plant:
         raw["plant"] = plant
     return Experiment.model_validate(raw)
@@ -93,13 +95,17 @@ def radau_reference(plant: Plant, grid, forces: np.ndarray, steps: int):
     mass_inverse, contact = np.linalg.inv(building.mass), stops.contact_matrix()[:, 0]
     stroke_row = building.stroke_matrix()[0]
     limit, k, c = stops.limits[0], stops.stiffness[0], stops.damping[0]
-    floors = np.zeros((grid.ground.size, building.n_floors)) if grid.floor_forces is None else grid.floor_forces
+    floors = (
+        np.zeros((grid.ground.size, building.n_floors)) if grid.floor_forces is None else grid.floor_forces
+    )
     on_floors = np.eye(n)[:, : building.n_floors]
 
     def rates(t, z, u, start, slope, side):
         s, rate = stroke_row @ z[:n], stroke_row @ z[n:]
         f = -k * (s - side * limit) - c * rate if side else 0.0
-        force = building.actuator_matrix @ u + contact * f - building.damping @ z[n:] - building.stiffness @ z[:n]
+        force = (
+            building.actuator_matrix @ u + contact * f - building.damping @ z[n:] - building.stiffness @ z[:n]
+        )
         force = force + on_floors @ (start[1] + slope[1] * t)
         return np.concatenate([z[n:], mass_inverse @ force - (start[0] + slope[0] * t)])
 
@@ -190,7 +196,11 @@ def test_short_of_the_stops_every_plant_steps_as_its_linear_map(name):
     for k in range(300):
         action, window = rng.uniform(-0.1, 0.1, 1), ground[2 * k : 2 * k + 3]
         state = plant.integrator.step(state, action, window, plant.control_dt)
-        free = linear.phi @ free + linear.force_gain @ (action * plant.force_limits) + linear.ground_gain @ window
+        free = (
+            linear.phi @ free
+            + linear.force_gain @ (action * plant.force_limits)
+            + linear.ground_gain @ window
+        )
     np.testing.assert_allclose(state[: plant.n_linear], free, rtol=0, atol=1e-12 * np.max(np.abs(free)))
     assert np.all(state[plant.n_linear :] == 0.0)  # no contact: no force, no count
 
@@ -201,7 +211,9 @@ def test_the_inner_maps_end_where_the_linear_step_does():
     cases = [(part, "exact") for part in PLANT_PARTS.values()] + [({}, "newmark")]
     for part, method in cases:
         experiment = driver_experiment(**part)
-        experiment = experiment.model_copy(update={"simulation": SimulationConfig(control_dt=0.02, method=method)})
+        experiment = experiment.model_copy(
+            update={"simulation": SimulationConfig(control_dt=0.02, method=method)}
+        )
         plant = Plant(experiment)
         maps = plant.end_stops.maps(2, plant.control_dt)
         linear = plant.sampled(2).step
@@ -209,9 +221,14 @@ def test_the_inner_maps_end_where_the_linear_step_does():
         stroke[0, : plant.building.n_dofs] = plant.building.stroke_matrix()[0]
         size = stroke.shape[1]
         expected = np.hstack(
-            [stroke @ linear.phi[:size], stroke @ linear.force_gain[:size], stroke @ linear.ground_gain[:size]]
+            [
+                stroke @ linear.phi[:size],
+                stroke @ linear.force_gain[:size],
+                stroke @ linear.ground_gain[:size],
+            ]
         )
-        tolerance = 1e-9 if method == "exact" else 1e-3  # Newmark at the finer sub-step is a little off its step
+        # Newmark at the finer sub-step is a little off its step
+        tolerance = 1e-9 if method == "exact" else 1e-3
         np.testing.assert_allclose(maps.strokes[-1, :1], expected, atol=tolerance * np.max(np.abs(expected)))
 
 
@@ -245,8 +262,8 @@ def test_a_free_mass_says_so_and_has_no_stops():
 
 @pytest.mark.slow
 def test_under_floor_forces_the_stops_see_them_within_the_step():
-    """Wind-like floor forces (linear between their samples) push the roof's driver into its stops: its strokes
-    and contacts are Radau's, the forces taken inside the step as the ground is."""
+    """Wind-like floor forces (linear between their samples) push the roof's driver into its stops: its
+    strokes and contacts are Radau's, the forces taken inside the step as the ground is."""
     plant = Plant(driver_experiment())
     rng = np.random.default_rng(7)
     samples, dt = 401, 0.05  # 20 s
@@ -267,9 +284,11 @@ def test_under_floor_forces_the_stops_see_them_within_the_step():
     strokes, reference_strokes = states[:, :n] @ stroke_row, reference[:, :n] @ stroke_row
     assert contacts >= 2 and states[:, -1].sum() == contacts
     assert np.max(np.abs(strokes)) == pytest.approx(np.max(np.abs(reference_strokes)), rel=1e-3)
-    # the whole stroke history, through 100-odd impacts (a velocity at an instant mid-impact swings too fast to
-    # compare), and the floors' drifts
+    # the whole stroke history, through 100-odd impacts (a velocity at an instant mid-impact swings too fast
+    # to compare), and the floors' drifts
     np.testing.assert_allclose(strokes, reference_strokes, atol=2e-3 * np.max(np.abs(reference_strokes)))
     drifts = plant.building.drift_matrix()
     reference_drifts = reference[:, :n] @ drifts.T
-    np.testing.assert_allclose(states[:, :n] @ drifts.T, reference_drifts, atol=2e-4 * np.max(np.abs(reference_drifts)))
+    np.testing.assert_allclose(
+        states[:, :n] @ drifts.T, reference_drifts, atol=2e-4 * np.max(np.abs(reference_drifts))
+    )

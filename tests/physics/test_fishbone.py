@@ -8,7 +8,7 @@ import pytest
 import scipy.integrate
 
 from rlcontroller.physics.fishbone import ColumnLine, Fishbone
-from rlcontroller.physics.integrators import z_rate
+from rlcontroller.physics.integrators.yielding import z_rate
 
 H, EI = 3.5, 2.0e8  # m, N m^2
 
@@ -42,8 +42,14 @@ def frame(yield_rotation, ratio=0.05, exponent=2.0) -> tuple[ColumnLine, Fishbon
     column_line = line()
     damping = 0.01 * 2 * np.sqrt(1e5 * 5e7) / 1e5 * np.diag(column_line.masses)  # about 1 % in the first mode
     n = column_line.n
-    fishbone = Fishbone.of(column_line, damping, np.full(n, yield_rotation), np.full(n, ratio), np.full(n, exponent),
-                           np.full(n, 0.5))  # fmt: skip
+    fishbone = Fishbone.of(
+        column_line,
+        damping,
+        np.full(n, yield_rotation),
+        np.full(n, ratio),
+        np.full(n, exponent),
+        np.full(n, 0.5),
+    )
     return column_line, fishbone
 
 
@@ -52,22 +58,32 @@ def test_beams_that_never_yield_give_the_linear_building():
     t, ground = ground_motion()
     states = fishbone.history(ground, 1, 0.01)
     m, k, c = np.diag(column_line.masses), column_line.lateral(), fishbone.damping
-    rate = lambda time, s: np.concatenate([s[2:], np.linalg.solve(m, -c @ s[2:] - k @ s[:2]) - np.interp(time, t, ground)])  # noqa: E731, E501
+
+    def rate(time, s):
+        return np.concatenate(
+            [s[2:], np.linalg.solve(m, -c @ s[2:] - k @ s[:2]) - np.interp(time, t, ground)]
+        )
+
     exact = scipy.integrate.solve_ivp(rate, (0, t[-1]), np.zeros(4), t_eval=t, rtol=1e-10, atol=1e-12).y.T
     np.testing.assert_allclose(states[:, :2], exact[:, :2], atol=1e-6 * np.abs(exact[:, :2]).max())
 
 
 def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
-    """The integrator solves theta' = -(I + G Phi)^-1 A v at each stage; an independent model gives the rotations
-    an inertia J (their frequencies 50 times the first mode's) and integrates them as states with scipy."""
+    """The integrator solves theta' = -(I + G Phi)^-1 A v at each stage; an independent model gives the
+    rotations an inertia J (their frequencies 50 times the first mode's) and integrates them as states with
+    scipy."""
     column_line, fishbone = frame(yield_rotation=0.002, ratio=0.05, exponent=2.0)
     n, ratio, yield_rotation, beta = 2, 0.05, 0.002, 0.5
     t, ground = ground_motion()
     states = replace(fishbone, substeps=8).history(ground, 1, 0.01)
     xx, xt, tt = column_line.matrices(ratio)
     hinge = np.concatenate([[0.0], (1 - ratio) * column_line.beams * yield_rotation])
-    first = np.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(column_line.masses), column_line.lateral())).real.min())
-    inertia = np.diag(tt + np.diag(np.concatenate([[0.0], (1 - ratio) * column_line.beams]))) / (50 * first) ** 2
+    first = np.sqrt(
+        np.linalg.eigvals(np.linalg.solve(np.diag(column_line.masses), column_line.lateral())).real.min()
+    )
+    inertia = (
+        np.diag(tt + np.diag(np.concatenate([[0.0], (1 - ratio) * column_line.beams]))) / (50 * first) ** 2
+    )
     masses, damping = column_line.masses, fishbone.damping
 
     def rate(time, s):
@@ -78,8 +94,9 @@ def test_massless_rotations_agree_with_rotations_given_a_small_inertia():
         z_dot = [z_rate(z[j], omega[j + 1], yield_rotation, 2.0, beta, 1 - beta) for j in range(n)]
         return np.concatenate([v, omega, acceleration, -moments / inertia, z_dot])
 
-    independent = scipy.integrate.solve_ivp(rate, (0, t[-1]), np.zeros(5 * n + 2), t_eval=t, method="Radau",
-                                            rtol=1e-8, atol=1e-11).y.T  # fmt: skip
+    independent = scipy.integrate.solve_ivp(
+        rate, (0, t[-1]), np.zeros(5 * n + 2), t_eval=t, method="Radau", rtol=1e-8, atol=1e-11
+    ).y.T
     drift, expected = np.diff(states[:, :n], prepend=0.0), np.diff(independent[:, :n], prepend=0.0)
     assert np.abs(independent[:, 4 * n + 2 :]).max() > 0.9  # the hinges yielded
     np.testing.assert_allclose(drift, expected, atol=0.01 * np.abs(expected).max())
@@ -94,9 +111,15 @@ def fishbone_plant(yield_rotation=0.004, ratio=0.05, collapse_drift=None, column
     experiment = Experiment()
     building = experiment.building.model_copy(update={"story_heights": [3.0] * 5})
     hysteresis = HysteresisConfig(
-        model="fishbone", yield_drift=0.01, yield_rotation=yield_rotation, column_stiffness=[column] * 5,
-        beam_stiffness=[beams] * 5, base_stiffness=1e12, post_yield_ratio=ratio, collapse_drift=collapse_drift,
-    )  # fmt: skip
+        model="fishbone",
+        yield_drift=0.01,
+        yield_rotation=yield_rotation,
+        column_stiffness=[column] * 5,
+        beam_stiffness=[beams] * 5,
+        base_stiffness=1e12,
+        post_yield_ratio=ratio,
+        collapse_drift=collapse_drift,
+    )
     update = {"building": building, "plant": PlantConfig(hysteresis=hysteresis)}
     return Plant(experiment.model_copy(update=update))
 
@@ -111,21 +134,23 @@ def test_the_fishbone_is_refused_without_its_values_and_its_values_without_it():
 
 
 def test_a_frame_that_cannot_stand_or_a_collapse_past_the_story_is_refused_at_load():
-    """Column EI of 1 N m^2 (and weak beams): the floors' weight (P-Delta) beats the column line; a collapse drift
-    of 5 m on 3 m stories: a story cannot lean that far. Each one line, before any run."""
+    """Column EI of 1 N m^2 (and weak beams): the floors' weight (P-Delta) beats the column line; a collapse
+    drift of 5 m on 3 m stories: a story cannot lean that far. Each one line, before any run."""
     from rlcontroller.config import ConfigError
 
     with pytest.raises(ConfigError, match="hysteresis: the frame cannot stand under its own weight"):
         fishbone_plant(column=1.0, beams=1.0)
-    with pytest.raises(ConfigError, match=r"hysteresis: collapse_drift: 5 m in story 1, beyond its height 3 m"):
+    with pytest.raises(
+        ConfigError, match=r"hysteresis: collapse_drift: 5 m in story 1, beyond its height 3 m"
+    ):
         fishbone_plant(collapse_drift=5.0)
     assert fishbone_plant(collapse_drift=0.5).yielding is not None  # a frame that stands: as before
 
 
 @pytest.mark.parametrize("collapse_drift", [None, 0.018])
 def test_the_plant_steps_the_fishbone_as_its_history_runs_it(collapse_drift):
-    """Step by step or in one call, the same states; with a collapse drift the frame is still where it lay once a
-    story passes it (the motion's peak drift is 0.025 m), in both."""
+    """Step by step or in one call, the same states; with a collapse drift the frame is still where it lay
+    once a story passes it (the motion's peak drift is 0.025 m), in both."""
     plant = fishbone_plant(yield_rotation=0.004, collapse_drift=collapse_drift)
     t, ground = ground_motion(dt=0.02, amplitude=3.0)
     state, states = np.zeros(15), [np.zeros(15)]
@@ -164,9 +189,12 @@ def test_the_absolute_acceleration_output_is_the_floors_acceleration():
     ground = 3.0 * np.sin(2 * np.pi * 2.0 * t)
     states = [np.zeros(15)]
     for k in range(steps):
-        states.append(plant.integrator.step(states[-1], np.zeros(plant.force_limits.size), ground[k : k + 2], dt))
+        states.append(
+            plant.integrator.step(states[-1], np.zeros(plant.force_limits.size), ground[k : k + 2], dt)
+        )
     states = np.array(states)
-    relative = (states[2:, 5:10] - states[:-2, 5:10]) / (2 * dt)  # central differences of the floors' velocities
+    # central differences of the floors' velocities
+    relative = (states[2:, 5:10] - states[:-2, 5:10]) / (2 * dt)
     absolute = relative + ground[1:-1, None]
     assert np.abs(states[:, 10:]).max() > 0.5  # yielding on the way
     np.testing.assert_allclose(states[1:-1] @ c.T, absolute, atol=2e-3 * np.abs(absolute).max())
@@ -174,12 +202,13 @@ def test_the_absolute_acceleration_output_is_the_floors_acceleration():
 
 def test_the_kernels_take_their_arrays_in_the_order_the_named_tuples_give_them():
     """The numba kernels take their arrays positionally: each model hands them over as a named tuple whose
-    fields are the kernels' own parameter names, in order (a reordered field would swap two arrays silently)."""
+    fields are the kernels' own parameter names, in order (a reordered field would swap two arrays
+    silently)."""
     import inspect
 
-    from rlcontroller.physics import integrators
     from rlcontroller.physics.fishbone import FishboneArrays
     from rlcontroller.physics.hysteresis import BoucWenArrays
+    from rlcontroller.physics.integrators import yielding as integrators
 
     for kernel, arrays in (
         (integrators.fishbone_step, FishboneArrays),

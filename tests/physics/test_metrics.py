@@ -55,16 +55,21 @@ def test_wind_metrics_are_rms_about_the_mean_and_peaks_in_milli_g():
     def response(scale: float) -> Response:
         wave = scale * np.sin(2 * np.pi * time)[:, None] * np.ones((1, 2))
         fields = {name: wave + 5.0 for name in ("displacement", "velocity", "drift", "story_shear", "force")}
-        return Response(time=time, ground=0 * time, absolute_acceleration=wave + 5.0, base_shear=wave[:, 0], **fields)
+        return Response(
+            time=time, ground=0 * time, absolute_acceleration=wave + 5.0, base_shear=wave[:, 0], **fields
+        )
 
     controlled = response(0.5)
     controlled.absolute_acceleration[:, 1] *= 0.5  # the top floor moves less
     metrics = wind_metrics(controlled, response(1.0))
-    np.testing.assert_allclose(metrics["rms_acceleration"], [0.5, 0.25], rtol=1e-3)  # the constant 5 does not count
+    # the constant 5 does not count
+    np.testing.assert_allclose(metrics["rms_acceleration"], [0.5, 0.25], rtol=1e-3)
     np.testing.assert_allclose(metrics["rms_acceleration_top"], [0.25], rtol=1e-3)
     np.testing.assert_allclose(metrics["peak_acceleration_top_mg"], [2.75 / 9.80665 * 1e3], rtol=1e-6)
     np.testing.assert_allclose(metrics["rms_top_displacement"], [0.5], rtol=1e-3)
-    np.testing.assert_allclose(metrics["peak_acceleration_mg"], [5.5 / 9.80665 * 1e3, 2.75 / 9.80665 * 1e3], rtol=1e-6)
+    np.testing.assert_allclose(
+        metrics["peak_acceleration_mg"], [5.5 / 9.80665 * 1e3, 2.75 / 9.80665 * 1e3], rtol=1e-6
+    )
 
 
 def test_the_ratio_to_the_reference_is_the_larger_of_the_peak_ratio_and_the_mean_story_ratio():

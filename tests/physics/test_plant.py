@@ -13,7 +13,11 @@ from rlcontroller.physics.plant import Plant
 
 @pytest.mark.parametrize(
     ("sensors", "size", "estimate"),
-    [({}, 33, 0), ({"state_estimate": True}, 43, 10), ({"state_estimate": True, "ground_model": True}, 45, 12)],
+    [
+        ({}, 33, 0),
+        ({"state_estimate": True}, 43, 10),
+        ({"state_estimate": True, "ground_model": True}, 45, 12),
+    ],
 )
 def test_the_observation_layout(sensors, size, estimate):
     """H = 5 blocks of 5 floor accelerations + the ground, the estimate, then 3 actions."""
@@ -42,7 +46,9 @@ def test_a_plant_is_sampled_once_per_substep_count_and_shared():
     """`Plant.sampled(r)` is built once per r and every map of it once; the env steps with the plant's."""
     plant = Plant(Experiment())
     assert plant.sampled(4) is plant.sampled(4) and plant.sampled(1) is not plant.sampled(4)
-    assert plant.sampled(4).step is plant.sampled(4).step and plant.sampled(1).step is not plant.sampled(4).step
+    assert (
+        plant.sampled(4).step is plant.sampled(4).step and plant.sampled(1).step is not plant.sampled(4).step
+    )
     assert plant.sampled().ground_model is plant.sampled().ground_model
     env = BuildingEnv(plant)
     env.reset(seed=0, options={"motion": Load("quiet", 0.005, np.zeros(41))})  # four samples per control step
@@ -70,12 +76,16 @@ def test_a_plant_part_of_defaults_is_the_design_model_bit_for_bit():
 
 def test_stiffness_and_mass_factors_scale_the_periods_as_sqrt_m_over_k():
     periods = Plant(Experiment()).building.periods()
-    np.testing.assert_allclose(plant_with(stiffness=0.7).building.periods(), periods / np.sqrt(0.7), rtol=1e-12)
+    np.testing.assert_allclose(
+        plant_with(stiffness=0.7).building.periods(), periods / np.sqrt(0.7), rtol=1e-12
+    )
     np.testing.assert_allclose(plant_with(mass=1.15).building.periods(), periods * np.sqrt(1.15), rtol=1e-12)
     per_story = plant_with(stiffness=[0.5, 1, 1, 1, 1], damage=[{"story": 2, "stiffness": -0.4}]).building
     design = Plant(Experiment()).building
     np.testing.assert_allclose(
-        np.diag(per_story.stiffness) - np.diag(design.stiffness), [-2.5e6 - 1.6e6, -1.6e6, 0, 0, 0], rtol=1e-12
+        np.diag(per_story.stiffness) - np.diag(design.stiffness),
+        [-2.5e6 - 1.6e6, -1.6e6, 0, 0, 0],
+        rtol=1e-12,
     )
 
 
@@ -120,7 +130,9 @@ def test_a_delay_shifts_the_delivered_force_and_the_response_exactly(lag):
     delayed = plant_with(actuators={"delay_steps": 3, "time_constant": lag})
     prompt = plant_with(actuators={"time_constant": lag})
     shifted = np.vstack([np.zeros((3, 3)), commands[:-3]])
-    np.testing.assert_allclose(delivered_forces(delayed, commands), delivered_forces(prompt, shifted), atol=1e-6)
+    np.testing.assert_allclose(
+        delivered_forces(delayed, commands), delivered_forces(prompt, shifted), atol=1e-6
+    )
     motion = synthetic_suite(count=1)[0]
     runs = []
     for plant, sequence in ((delayed, commands), (prompt, shifted)):
@@ -131,7 +143,9 @@ def test_a_delay_shifts_the_delivered_force_and_the_response_exactly(lag):
 
 
 def test_sensor_faults_dead_floor_bias_and_noise():
-    plant = plant_with(sensors={"dead_floors": [3], "bias": [{"floor": 1, "value": 0.5}], "noise_factor": 4.0})
+    plant = plant_with(
+        sensors={"dead_floors": [3], "bias": [{"floor": 1, "value": 0.5}], "noise_factor": 4.0}
+    )
     env = BuildingEnv(plant)
     quiet = Load("quiet", 0.02, np.full(2001, 1e-9))
     observation, _ = env.reset(seed=1, options={"motion": quiet})

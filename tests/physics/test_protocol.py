@@ -39,7 +39,9 @@ class SolveIvpStep:
         def derivative(t, z):
             x, v = z[:n], z[n:]
             a_g = np.interp(t, times, ground)
-            return np.concatenate([v, self.mass_inverse @ (force - self.damping @ v - self.stiffness @ x) - a_g])
+            return np.concatenate(
+                [v, self.mass_inverse @ (force - self.damping @ v - self.stiffness @ x) - a_g]
+            )
 
         solution = solve_ivp(derivative, (0.0, control_dt), state, rtol=1e-10, atol=1e-13, method="DOP853")
         return solution.y[:, -1]
@@ -85,9 +87,13 @@ def test_an_outside_plant_gives_the_built_in_responses_through_env_and_batch(pla
     for (expected, reward), (got, got_reward) in zip(reference, batched, strict=True):
         for quantity in ("drift", "absolute_acceleration", "story_shear", "force"):
             peak = np.abs(expected.quantity(quantity)).max()
-            np.testing.assert_allclose(got.quantity(quantity), expected.quantity(quantity), atol=SAME_PHYSICS * peak)
+            np.testing.assert_allclose(
+                got.quantity(quantity), expected.quantity(quantity), atol=SAME_PHYSICS * peak
+            )
         assert got_reward == pytest.approx(reward, rel=SAME_PHYSICS)
-    np.testing.assert_allclose(env_run[0].drift, batched[0][0].drift, atol=1e-9 * np.abs(batched[0][0].drift).max())
+    np.testing.assert_allclose(
+        env_run[0].drift, batched[0][0].drift, atol=1e-9 * np.abs(batched[0][0].drift).max()
+    )
 
 
 @pytest.mark.slow

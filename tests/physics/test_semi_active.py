@@ -84,9 +84,9 @@ def test_mr_dampers_in_the_building_match_radau_on_spencers_equations(records):
     for k in range(steps):
         volts = 2.25 * (actions[k] + 1.0) / 2.0
         span = (k * plant.control_dt, (k + 1) * plant.control_dt)
-        state = scipy.integrate.solve_ivp(rates, span, state, method="Radau", args=(volts,), rtol=1e-8, atol=1e-11).y[
-            :, -1
-        ]
+        state = scipy.integrate.solve_ivp(
+            rates, span, state, method="Radau", args=(volts,), rtol=1e-8, atol=1e-11
+        ).y[:, -1]
         drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
         x, v = state[:5], state[5:10]
         drift = x[stories] - np.concatenate([[0.0], x])[stories]
@@ -148,7 +148,8 @@ def sinusoid_test(volts_action: float) -> tuple[np.ndarray, np.ndarray, np.ndarr
     plant = Plant(Experiment.model_validate(raw))
     dt, omega = 0.0005, 2 * np.pi * 2.5
     time = np.arange(0.0, 2.0 + dt / 2, dt)
-    envelope = np.minimum(time / 0.8, 1.0) ** 3  # a smooth start: the ground ends up at 1.5 cm sin(wt), no drift
+    # a smooth start: the ground ends up at 1.5 cm sin(wt), no drift
+    envelope = np.minimum(time / 0.8, 1.0) ** 3
     envelope = np.where(time < 0.8, envelope * (10 - 15 * (time / 0.8) + 6 * (time / 0.8) ** 2), 1.0)
     displacement = 0.015 * envelope * np.sin(omega * time)
     acceleration = np.gradient(np.gradient(displacement, dt), dt)
@@ -164,7 +165,8 @@ def test_mr_loops_have_a_voltage_dependent_plateau_and_hysteresis():
     damper's would be near zero): the hysteresis of the model."""
     off_force, stroke, _ = sinusoid_test(-1.0)
     on_force, _, velocity = sinusoid_test(1.0)
-    assert np.abs(stroke).max() == pytest.approx(0.015, rel=0.01)  # the floor stayed: the stroke is the ground's
+    # the floor stayed: the stroke is the ground's
+    assert np.abs(stroke).max() == pytest.approx(0.015, rel=0.01)
     assert np.abs(on_force).max() == pytest.approx(1620.0, rel=0.02)
     assert np.abs(off_force).max() == pytest.approx(545.0, rel=0.02)
     turning = np.where(np.diff(np.sign(velocity)) != 0)[0]  # the last sample before the velocity changes sign
@@ -176,7 +178,8 @@ def test_mr_loops_have_a_voltage_dependent_plateau_and_hysteresis():
 def test_variable_dampers_in_the_building_match_radau(records):
     """c = c_min + (c_max - c_min)(a + 1)/2 held over each control step, F = c d' on stories 2 and 4."""
     devices = [
-        {"type": "variable_damper", "story": s, "damping_min": 2e4, "damping_max": 8e5, "capacity": 1e5} for s in (2, 4)
+        {"type": "variable_damper", "story": s, "damping_min": 2e4, "damping_max": 8e5, "capacity": 1e5}
+        for s in (2, 4)
     ]
     plant = damper_plant(devices)
     motion = first_seconds(records, 6.0)
@@ -202,7 +205,9 @@ def test_variable_dampers_in_the_building_match_radau(records):
     for k in range(steps):
         c = 2e4 + (8e5 - 2e4) * (actions[k] + 1.0) / 2.0
         span = (k * plant.control_dt, (k + 1) * plant.control_dt)
-        state = scipy.integrate.solve_ivp(rates, span, state, method="Radau", args=(c,), rtol=1e-9, atol=1e-12).y[:, -1]
+        state = scipy.integrate.solve_ivp(
+            rates, span, state, method="Radau", args=(c,), rtol=1e-9, atol=1e-12
+        ).y[:, -1]
         drifts.append(np.diff(np.concatenate([[0.0], state[:5]])))
     drifts = np.array(drifts)
     np.testing.assert_allclose(result.drift, drifts, atol=0.01 * np.abs(drifts).max())

@@ -60,14 +60,18 @@ def test_a_discrete_model_evaluates_as_its_continuous_building(tmp_path):
     results = []
     for case in (experiment, discrete):
         plant = Plant(case)
-        results.append(run_evaluation(plant, motions, classical_controllers(plant), "case", include_optimal=False))
+        results.append(
+            run_evaluation(plant, motions, classical_controllers(plant), "case", include_optimal=False)
+        )
     reference, model = (result.responses for result in results)
     assert reference.keys() == model.keys() and len(reference) == 4 * 4  # uncontrolled and three LQGs
     for key, response in reference.items():
         for name in ("drift", "absolute_acceleration", "story_shear", "force"):
             peak = np.abs(response.quantity(name)).max()
             tolerance = 1e-9 if key[0] == "uncontrolled" else SAME_PHYSICS
-            np.testing.assert_allclose(model[key].quantity(name), response.quantity(name), atol=tolerance * peak)
+            np.testing.assert_allclose(
+                model[key].quantity(name), response.quantity(name), atol=tolerance * peak
+            )
 
 
 def test_an_undeclared_response_is_unavailable_not_invented(tmp_path):
@@ -85,7 +89,9 @@ def test_an_undeclared_response_is_unavailable_not_invented(tmp_path):
     for case in (experiment, model):
         plant = Plant(case)
         tables.append(
-            run_evaluation(plant, motions, classical_controllers(plant)[:1], "case", include_optimal=False).summary()
+            run_evaluation(
+                plant, motions, classical_controllers(plant)[:1], "case", include_optimal=False
+            ).summary()
         )
     reference, table = tables
     assert table[["J3", "J4"]].isna().all().all() and not reference[["J3", "J4"]].isna().any().any()

@@ -77,8 +77,8 @@ def test_a_shear_building_written_as_matrices_is_the_same_building(tmp_path):
     shear = build(BuildingConfig(), [ActuatorConfig(story=1)])
     np.savez(tmp_path / "five.npz", M=shear.mass / 1e3, K=shear.stiffness / 1e3, C=shear.damping / 1e3)
     (tmp_path / "e.yaml").write_text(
-        "building: {matrices: five.npz, units: {mass: t, force: kN, length: m}, story_heights: [3, 3, 3, 3, 3]}\n"
-        "actuators: [{story: 1}]\n"
+        "building: {matrices: five.npz, units: {mass: t, force: kN, length: m}, story_heights: [3, 3, 3, 3, "
+        "3]}\nactuators: [{story: 1}]\n"
     )
     matrices = build(load_experiment(tmp_path / "e.yaml").building, [ActuatorConfig(story=1)])
     for name in ("mass", "stiffness", "damping", "actuator_matrix"):

@@ -47,7 +47,9 @@ def mixed_motions():
     shortened = replace(motions[1], acceleration=motions[1].acceleration[:601])
     time = np.arange(motions[2].acceleration.size) * motions[2].dt
     fine_time = np.arange(0.0, 0.3 * motions[2].duration, motions[2].dt / 4)
-    finer = replace(motions[2], dt=motions[2].dt / 4, acceleration=np.interp(fine_time, time, motions[2].acceleration))
+    finer = replace(
+        motions[2], dt=motions[2].dt / 4, acceleration=np.interp(fine_time, time, motions[2].acceleration)
+    )
     coarser = replace(motions[0], dt=motions[0].dt * 2, acceleration=motions[0].acceleration[::2])
     return [shortened, finer, coarser]
 
@@ -64,7 +66,9 @@ def test_a_batch_of_records_gives_each_record_s_rollout(case):
         LQGController(design_lqg(design, known_ground=True), design),
         LQGController(design_lqg_ground_model(design), design, "LQG + ground model"),
     ]
-    assert_batch_is_env(plant, motions, controllers, ("drift", "absolute_acceleration", "base_shear", "force"))
+    assert_batch_is_env(
+        plant, motions, controllers, ("drift", "absolute_acceleration", "base_shear", "force")
+    )
 
 
 def assert_batch_is_env(plant, motions, controllers, quantities, seeds=(5, 6, 7)):
@@ -79,7 +83,10 @@ def assert_batch_is_env(plant, motions, controllers, quantities, seeds=(5, 6, 7)
             for quantity in quantities:
                 expected = alone.quantity(quantity)
                 np.testing.assert_allclose(
-                    result.quantity(quantity), expected, rtol=SAME_PHYSICS, atol=SAME_PHYSICS * np.abs(expected).max()
+                    result.quantity(quantity),
+                    expected,
+                    rtol=SAME_PHYSICS,
+                    atol=SAME_PHYSICS * np.abs(expected).max(),
                 )
 
 

@@ -1,4 +1,5 @@
-"""Runs fanned out over processes (`simulation.fanout`): the local and Dask engines give what one process gives."""
+"""Runs fanned out over processes (`simulation.fanout`): the local and Dask engines give what one process
+gives."""
 
 import os
 import signal
@@ -38,7 +39,8 @@ def test_an_address_needs_the_dask_engine():
 
 @pytest.mark.slow
 def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
-    """Each controller on each record alone, in processes forked here or in Dask's workers: the same numbers."""
+    """Each controller on each record alone, in processes forked here or in Dask's workers: the same
+    numbers."""
     pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
     pytest.importorskip("distributed", reason="the Dask engine needs the distributed extra")
     from rlcontroller.config import load_experiment
@@ -49,7 +51,9 @@ def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
     from rlcontroller.simulation.rollout import batch_rollout
 
     plant = Plant(load_experiment(FIVE_STORY_FE))
-    motions = [replace(m, acceleration=m.acceleration[: int(5.0 / m.dt)]) for m in load_records(records)[0][:3]]
+    motions = [
+        replace(m, acceleration=m.acceleration[: int(5.0 / m.dt)]) for m in load_records(records)[0][:3]
+    ]
     lqg = LQGController(design_lqg_ground_model(plant.design), plant)
     controllers = [Uncontrolled(plant.building.n_actuators), lqg]
     runs = {}
@@ -64,7 +68,8 @@ def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
 
 
 def test_local_workers_end_with_their_parent(tmp_path):
-    """A SIGTERM to the command that fanned runs out ends its workers too (they were left running an FE model)."""
+    """A SIGTERM to the command that fanned runs out ends its workers too (they were left running an FE
+    model)."""
     script = (
         "import os, time\n"
         "from rlcontroller.simulation.fanout import fanned_map\n"

@@ -19,7 +19,10 @@ pytestmark = pytest.mark.slow
 
 def short_motions() -> list[Load]:
     time = np.arange(0.0, 2.0, 0.01)
-    return [Load(f"m{i}", 0.01, a * np.sin(2 * np.pi * f * time)) for i, (a, f) in enumerate([(1.0, 1.5), (2.0, 0.8)])]
+    return [
+        Load(f"m{i}", 0.01, a * np.sin(2 * np.pi * f * time))
+        for i, (a, f) in enumerate([(1.0, 1.5), (2.0, 0.8)])
+    ]
 
 
 def test_kept_responses_read_back_and_follow_the_model_folder(tmp_path, monkeypatch):
@@ -71,19 +74,25 @@ def test_a_model_the_ground_does_not_move_is_refused_in_one_line(tmp_path, monke
     plant = Plant(api.load(Path("studies/opensees/five_story_opensees.yaml"))).bare
     moving = kept.uncontrolled_responses
 
-    def standing(plant, motions, on_motions=None):  # the FE runs at 1e-4 of their drift: the benchmark frame's
+    # the FE runs at 1e-4 of their drift: the benchmark frame's
+    def standing(plant, motions, on_motions=None):
         scale = 1.0e-4 if plant.fe_model is not None else 1.0  # (0.006 mm against 56 mm), well above 1e-12 m
-        return [replace(response, drift=scale * response.drift) for response in moving(plant, motions, on_motions)]
+        return [
+            replace(response, drift=scale * response.drift) for response in moving(plant, motions, on_motions)
+        ]
 
     monkeypatch.setattr(kept, "uncontrolled_responses", standing)
-    with pytest.raises(ModelError, match=r"five_story_shear\.py: the model stands still under m0's ground motion"):
+    with pytest.raises(
+        ModelError, match=r"five_story_shear\.py: the model stands still under m0's ground motion"
+    ):
         kept.uncontrolled(plant, short_motions())
     assert not (tmp_path / "cache").exists()
 
 
 def test_a_model_that_stands_still_is_refused_before_any_run_and_by_rlc_info(tmp_path, monkeypatch):
     """A unit ground pulse, stepped in this process, finds the stand-still before a single motion runs (the
-    benchmark frame had run a whole suite and printed 24 OpenSees failures first), and `rlc info` says it too."""
+    benchmark frame had run a whole suite and printed 24 OpenSees failures first), and `rlc info` says it
+    too."""
     from rlcontroller.api.describe import describe
     from rlcontroller.errors import ModelError
     from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
@@ -92,7 +101,8 @@ def test_a_model_that_stands_still_is_refused_before_any_run_and_by_rlc_info(tmp
     experiment = api.load(Path("studies/opensees/five_story_opensees.yaml"))
     moving, true_state = OpenSeesIntegrator.step, {}
 
-    def standing(self, state, *arguments):  # the FE model's floors at 1e-4 of their motion, as the frame's stood
+    # the FE model's floors at 1e-4 of their motion, as the frame's stood
+    def standing(self, state, *arguments):
         state = moving(self, true_state[id(self)] if state.any() else state, *arguments)
         true_state[id(self)] = state
         return 1e-4 * state
@@ -107,4 +117,5 @@ def test_a_model_that_stands_still_is_refused_before_any_run_and_by_rlc_info(tmp
         kept.uncontrolled(Plant(experiment).bare, short_motions())
     with pytest.raises(ModelError, match=message):
         describe(experiment)
-    assert runs and not any(plant.fe_model is not None for plant in runs)  # the design model's pulse, no FE run
+    # the design model's pulse, no FE run
+    assert runs and not any(plant.fe_model is not None for plant in runs)

@@ -1,12 +1,14 @@
-"""Building an FE model in the OpenSees domain, and its reduced model (the design model controllers are designed on).
+"""Building an FE model in the OpenSees domain, and its reduced model (the design model controllers are
+designed on).
 
-A model file is code (not data: `docs/opensees.md`, "The trust boundary"), Python or Tcl. A Python file defines
-a function (default `build_model`) that takes the `openseespy.opensees` module, builds the model in its domain
-(nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe.description`: floors,
-direction, story heights, damping, units, solver options). A Tcl file (`.tcl`, a published model run
-unmodified) is sourced, from its own folder, in OpenSees' own Tcl interpreter (the `opensees` package, STAIRlab's
-xara build, whose `opensees.openseespy` module drives the same domain), and what `rlc` needs of it is in the YAML
-file beside it of the same name. A model that calls `exit` is refused in one line (it would end rlc).
+A model file is code (not data: `docs/opensees.md`, "The trust boundary"), Python or Tcl. A Python file
+defines a function (default `build_model`) that takes the `openseespy.opensees` module, builds the model in
+its domain (nodes, masses, elements, damping) and returns what `rlc` needs of it (`physics.fe.description`:
+floors, direction, story heights, damping, units, solver options). A Tcl file (`.tcl`, a published model run
+unmodified) is sourced, from its own folder, in OpenSees' own Tcl interpreter (the `opensees` package,
+STAIRlab's xara build, whose `opensees.openseespy` module drives the same domain), and what `rlc` needs of it
+is in the YAML file beside it of the same name. A model that calls `exit` is refused in one line (it would end
+rlc).
 
 The reduced model (`reduced_building`): the floor masses, the lateral stiffness condensed statically to the
 control nodes, and the file's damping matched mode by mode at the FE model's frequencies.
@@ -40,13 +42,13 @@ from rlcontroller.physics.fe.opensees import (
 )
 
 EXITED, BUILT = "rlc: the model called exit", "rlc: the model stands after gravity (loadConst)"
-# What a published script does beyond building its model, made harmless in the interpreter that builds it: `exit`
-# (it would end rlc, exit code 0) is an error; `recorder` writes nothing (rlc reads the domain itself; the files
-# went into the model's folder, from every worker); the display commands of OpenSees' own build are no-ops; and
-# `loadConst`, which holds the gravity loads before the script's own analyses, ends the build there (unless the
-# description's build_until is end). OpenSees registers its commands anew at `model` and `wipe`: wrapped again.
-# A script that never holds its loads would leave a Linear pattern growing with rlc's time: rlc holds them
-# itself (`loadConst -time 0.0`, where they stand) and says so.
+# What a published script does beyond building its model, made harmless in the interpreter that builds it:
+# `exit` (it would end rlc, exit code 0) is an error; `recorder` writes nothing (rlc reads the domain itself;
+# the files went into the model's folder, from every worker); the display commands of OpenSees' own build are
+# no-ops; and `loadConst`, which holds the gravity loads before the script's own analyses, ends the build
+# there (unless the description's build_until is end). OpenSees registers its commands anew at `model` and
+# `wipe`: wrapped again. A script that never holds its loads would leave a Linear pattern growing with rlc's
+# time: rlc holds them itself (`loadConst -time 0.0`, where they stand) and says so.
 TCL_PRELUDE = """
 proc ::rlc_wrap {name body} {
     if {[info commands ::$name] eq {} || [info procs ::$name] ne {}} { return }
@@ -57,7 +59,10 @@ proc ::rlc_wrap {name body} {
 proc ::rlc_prelude {} {
     rlc_wrap wipe {::rlc_tcl_wipe {*}$args; ::rlc_prelude}
     rlc_wrap model {::rlc_tcl_model {*}$args; ::rlc_prelude}
-    rlc_wrap loadConst {::rlc_tcl_loadConst {*}$args; set ::rlc_held 1; if {$::rlc_stop_at_load_const} {error "BUILT"}}
+    rlc_wrap loadConst {
+        ::rlc_tcl_loadConst {*}$args; set ::rlc_held 1
+        if {$::rlc_stop_at_load_const} {error "BUILT"}
+    }
     rlc_wrap recorder {}
     rlc_wrap exit {error "EXITED"}
     foreach name {vup vrp vpn prp viewWindow plane port projection fill display} {
@@ -77,8 +82,8 @@ def _tcl_error(path: Path, message: str) -> ModelError:
     package = re.search(r"can't find package (\S+)", message)
     if package:
         return ModelError(
-            f"{path}: the model needs the Tcl package {package.group(1)}, which OpenSees' interpreter lacks: install "
-            "it (e.g. tcllib) and name the folder that holds it in TCLLIBPATH"
+            f"{path}: the model needs the Tcl package {package.group(1)}, which OpenSees' interpreter lacks: "
+            "install it (e.g. tcllib) and name the folder that holds it in TCLLIBPATH"
         )
     return ModelError(f"{path}: Tcl error: {message}")
 
@@ -113,7 +118,9 @@ def build_model(path: Path, function: str) -> FEDescription:
     except ModelError:
         raise
     except SystemExit:  # exit() would end rlc itself, silently and with its code
-        raise ModelError(f"{path}: {function}: the model calls exit; return its description instead") from None
+        raise ModelError(
+            f"{path}: {function}: the model calls exit; return its description instead"
+        ) from None
     except Exception as error:  # the user's code: whatever it raises is a fault of the model
         raise ModelError(f"{path}: {function}: {type(error).__name__}: {error}") from None
     description = FEDescription.of(built, f"{path}: {function}")
@@ -124,8 +131,10 @@ def build_model(path: Path, function: str) -> FEDescription:
 def _build_tcl_model(path: Path) -> FEDescription:
     sidecar = path.with_suffix(".yaml")
     if not sidecar.is_file():
-        raise ModelError(f"{path}: a Tcl model needs {sidecar.name} beside it (its floors, direction, story heights, "
-                         "damping and units: docs/opensees.md)")  # fmt: skip
+        raise ModelError(
+            f"{path}: a Tcl model needs {sidecar.name} beside it (its floors, direction, story heights, "
+            "damping and units: docs/opensees.md)"
+        )
     description = FEDescription.of(read_yaml(sidecar), str(sidecar))
     ops, folder = opensees(), os.getcwd()
     ops.wipe()
@@ -144,8 +153,13 @@ def _build_tcl_model(path: Path) -> FEDescription:
     finally:
         os.chdir(folder)
     check_in_domain(description, str(sidecar))
-    if str(ops.eval("set ::rlc_held")).strip() != "1":  # its loads would grow with rlc's time: held where they stand
-        held = "::rlc_tcl_loadConst" if str(ops.eval("info commands ::rlc_tcl_loadConst")).strip() else "loadConst"
+    # its loads would grow with rlc's time: held where they stand
+    if str(ops.eval("set ::rlc_held")).strip() != "1":
+        held = (
+            "::rlc_tcl_loadConst"
+            if str(ops.eval("info commands ::rlc_tcl_loadConst")).strip()
+            else "loadConst"
+        )
         ops.eval(f"{held} -time 0.0")  # the model's own command, not rlc's wrapper (which ends a build)
         description = replace(description, loads_held_by_rlc=True)
     if description.rayleigh_modes is not None:  # what the model's own analysis script would give it
@@ -180,8 +194,8 @@ def reduced_building(path: Path, function: str) -> dict:
     warn_story_heights(description, path)
     if description.loads_held_by_rlc:
         print(
-            f"note: {path} never holds its loads with loadConst: rlc holds them where they stand once it has run "
-            "(loadConst -time 0.0), or a Linear pattern would grow with time through the motion",
+            f"note: {path} never holds its loads with loadConst: rlc holds them where they stand once it has "
+            "run (loadConst -time 0.0), or a Linear pattern would grow with time through the motion",
             file=sys.stderr,
         )
     return {

@@ -1,14 +1,14 @@
-"""The member ends of an FE model where it may yield ("connections"), read each control step for the benchmark's
-criteria (Ohtori et al. 2004: ductility, dissipated energy, plastic connections; `evaluation.benchmark`).
+"""The member ends of an FE model where it may yield ("connections"), read each control step for the
+benchmark's criteria (Ohtori et al. 2004: ductility, dissipated energy, plastic connections;
+`evaluation.benchmark`).
 
 A connection is either an end section of a beam-column with sections (its first and last integration points:
-the member's ends under Lobatto integration), read as (curvature, moment, flexural tangent stiffness) about the
-section's z axis (a 2-D frame's only one), or one
-material of a zero-length element (a concentrated hinge or spring), read as (deformation, force, tangent). Both
-in the model's units: the criteria use them only as ratios to the connection's own yield values. Elements of
-other kinds (elastic members, trusses) cannot yield here and are not connections. Which of these do yield is
-decided by the criteria from the histories (the tangent falling below half its initial value), so rigid links
-and elastic springs drop out there.
+the member's ends under Lobatto integration), read as (curvature, moment, flexural tangent stiffness) about
+the section's z axis (a 2-D frame's only one), or one material of a zero-length element (a concentrated hinge
+or spring), read as (deformation, force, tangent). Both in the model's units: the criteria use them only as
+ratios to the connection's own yield values. Elements of other kinds (elastic members, trusses) cannot yield
+here and are not connections. Which of these do yield is decided by the criteria from the histories (the
+tangent falling below half its initial value), so rigid links and elastic springs drop out there.
 """
 
 from __future__ import annotations
@@ -38,7 +38,8 @@ def read_connections(ops, probes: list[tuple]) -> np.ndarray:
     """(connections, 3): deformation, force, tangent of each probe now (model units)."""
     values = np.empty((len(probes), 3))
     for row, (kind, element, index) in enumerate(probes):
-        if kind == "section":  # deformations (axial strain, curvature about z, ...), then forces (N, M_z, ...)
+        # deformations (axial strain, curvature about z, ...), then forces (N, M_z, ...)
+        if kind == "section":
             deformation_force = ops.eleResponse(element, "section", index, "forceAndDeformation")
             tangent = ops.eleResponse(element, "section", index, "stiffness")  # k x k, row by row
             k = len(deformation_force) // 2

@@ -1,7 +1,8 @@
 """What `rlc` must know of a finite-element model that the model itself does not say (`physics.fe.build`).
 
-A Python model file's function returns it as a mapping; a Tcl model (a published OpenSees model, run unmodified)
-has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> `benchmark_9st_model.yaml`):
+A Python model file's function returns it as a mapping; a Tcl model (a published OpenSees model, run
+unmodified) has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` ->
+`benchmark_9st_model.yaml`):
 
 - `floors`: per floor from the first up, the nodes of its level (the first is its control node: where the
   actuators push and the sensors read; the masses of all are the floor's mass);
@@ -9,15 +10,16 @@ has it in a YAML file beside it, of the same name (`benchmark_9st_model.tcl` -> 
 - `story_heights`: per story, in the model's length unit;
 - `modal_damping` (ratios per mode, the last repeated) or `rayleigh` ([a0, a1], C = a0 M + a1 K): the
   damping the file gave the model, for the reduced model to match; or for a published model that leaves its
-  damping to an analysis script, `rayleigh_modes` ([[mode, ratio], [mode, ratio]]): Rayleigh damping that `rlc`
-  gives the model once built, with those ratios at those modes of the FE model (as such scripts do);
+  damping to an analysis script, `rayleigh_modes` ([[mode, ratio], [mode, ratio]]): Rayleigh damping that
+  `rlc` gives the model once built, with those ratios at those modes of the FE model (as such scripts do);
 - optionally `units: {length: m | cm | mm | ft | in, force: N | kN | MN | kip | lbf}` (default m and N; mass
   is force / (length / s^2), time is s): many published models are in kip and inch or foot, `rlc` in SI;
-- optionally `build_until` (a Tcl script): `loadConst` (the default), the model as it stands when the script holds
-  its gravity loads with `loadConst`, what follows (its own pushover or time history, `wipe`) skipped; or `end`;
-- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the time steps; the test's
-  tolerance in SI (m for NormDispIncr and the other displacement tests, N for force tests, J for energy ones),
-  converted into the model's units (default NormDispIncr 1e-10 m).
+- optionally `build_until` (a Tcl script): `loadConst` (the default), the model as it stands when the script
+  holds its gravity loads with `loadConst`, what follows (its own pushover or time history, `wipe`) skipped;
+  or `end`;
+- optionally `constraints`, `system`, `test` and `algorithm`: OpenSees' arguments for the time steps; the
+  test's tolerance in SI (m for NormDispIncr and the other displacement tests, N for force tests, J for energy
+  ones), converted into the model's units (default NormDispIncr 1e-10 m).
 """
 
 from __future__ import annotations
@@ -77,8 +79,8 @@ class FEDescription:
 
     @property
     def test_in_model_units(self) -> tuple[str | float, ...]:
-        """The convergence test with its tolerance, given in SI (m for displacement norms, N for force norms, J
-        for energy), in the model's own units."""
+        """The convergence test with its tolerance, given in SI (m for displacement norms, N for force norms,
+        J for energy), in the model's own units."""
         name, *rest = self.test
         unit = {"Disp": self.length, "Unbalance": self.force, "Energy": self.force * self.length}
         scale = next((value for key, value in unit.items() if key in str(name)), 1.0)
@@ -98,13 +100,17 @@ class FEDescription:
     @classmethod
     def of(cls, raw: object, where: str) -> FEDescription:
         if not isinstance(raw, dict):
-            raise ModelError(f"{where}: expected a mapping (floors, direction, story_heights, ...), "
-                             f"got {type(raw).__name__}")  # fmt: skip
+            raise ModelError(
+                f"{where}: expected a mapping (floors, direction, story_heights, ...), "
+                f"got {type(raw).__name__}"
+            )
         unknown = [key for key in raw if key not in DESCRIPTION_KEYS]
         if unknown:  # a typo (unit: for units:) would otherwise read a kip-foot model in metres and newtons
             close = difflib.get_close_matches(str(unknown[0]), DESCRIPTION_KEYS, n=1)
             hint = f"did you mean {close[0]}? " if close else ""
-            raise ModelError(f"{where}: unknown key {unknown[0]!r}: {hint}expected {', '.join(DESCRIPTION_KEYS)}")
+            raise ModelError(
+                f"{where}: unknown key {unknown[0]!r}: {hint}expected {', '.join(DESCRIPTION_KEYS)}"
+            )
         missing = sorted({"floors", "direction", "story_heights"} - set(raw))
         if missing:
             raise ModelError(f"{where}: the mapping lacks {', '.join(missing)}")
@@ -113,23 +119,33 @@ class FEDescription:
             heights = tuple(float(h) for h in raw["story_heights"])
         except (TypeError, ValueError):
             heights_given = raw["story_heights"]
-            raise ModelError(f"{where}: story_heights: expected a list of numbers, got {heights_given!r}") from None
+            raise ModelError(
+                f"{where}: story_heights: expected a list of numbers, got {heights_given!r}"
+            ) from None
         if len(heights) != len(floors) or not all(np.isfinite(h) and h > 0.0 for h in heights):
-            raise ModelError(f"{where}: story_heights: expected one positive height per floor ({len(floors)}), "
-                             f"got {list(heights)}")  # fmt: skip
+            raise ModelError(
+                f"{where}: story_heights: expected one positive height per floor ({len(floors)}), "
+                f"got {list(heights)}"
+            )
         direction = raw["direction"]
         if not isinstance(direction, int) or isinstance(direction, bool) or not 1 <= direction <= 3:
-            raise ModelError(f"{where}: direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) "
-                             f"or 3 (z), got {direction!r}")  # fmt: skip
+            raise ModelError(
+                f"{where}: direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) "
+                f"or 3 (z), got {direction!r}"
+            )
         damping = [key for key in ("modal_damping", "rayleigh", "rayleigh_modes") if raw.get(key) is not None]
         if len(damping) != 1:
-            raise ModelError(f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has) "
-                             "or rayleigh_modes (the damping rlc gives it)")  # fmt: skip
+            raise ModelError(
+                f"{where}: give exactly one of modal_damping and rayleigh (the damping the model has) "
+                "or rayleigh_modes (the damping rlc gives it)"
+            )
         modal, rayleigh = raw.get("modal_damping"), raw.get("rayleigh")
         build_until = raw.get("build_until", "loadConst")
         if build_until not in ("loadConst", "end"):
-            raise ModelError(f"{where}: build_until: expected loadConst (the model as it stands after its gravity "
-                             f"analysis) or end (the whole script), got {build_until!r}")  # fmt: skip
+            raise ModelError(
+                f"{where}: build_until: expected loadConst (the model as it stands after its gravity "
+                f"analysis) or end (the whole script), got {build_until!r}"
+            )
         solver = ("constraints", "system", "test", "algorithm")
         options = {key: _arguments(raw[key], f"{where}: {key}") for key in solver if key in raw}
         return cls(
@@ -152,7 +168,9 @@ def _floors(raw: object, where: str) -> tuple[tuple[int, ...], ...]:
     floors = [[tags] if _is_tag(tags) else tags for tags in raw]
     for floor, tags in enumerate(floors, start=1):
         if not isinstance(tags, list) or not tags or not all(_is_tag(tag) for tag in tags):
-            raise ModelError(f"{where}: floor {floor}: expected node tags (whole numbers), got {raw[floor - 1]!r}")
+            raise ModelError(
+                f"{where}: floor {floor}: expected node tags (whole numbers), got {raw[floor - 1]!r}"
+            )
     seen: dict[int, int] = {}
     for floor, tags in enumerate(floors, start=1):
         for tag in tags:
@@ -168,7 +186,9 @@ def _is_tag(value: object) -> bool:
 
 def _ratios(raw: object, where: str) -> tuple[float, ...]:
     if not isinstance(raw, list) or not raw or not all(_is_number(r) and 0.0 <= r < 1.0 for r in raw):
-        raise ModelError(f"{where}: expected damping ratios in [0, 1) per mode (the last repeated), got {raw!r}")
+        raise ModelError(
+            f"{where}: expected damping ratios in [0, 1) per mode (the last repeated), got {raw!r}"
+        )
     return tuple(float(r) for r in raw)
 
 
@@ -192,9 +212,13 @@ def _modes(raw: object, where: str, floors: int) -> tuple[tuple[int, float], tup
     except (TypeError, ValueError):
         pairs = None
     if pairs is None or not 1 <= pairs[0][0] < pairs[1][0] or not all(0.0 < zeta < 1.0 for _, zeta in pairs):
-        raise ModelError(f"{where}: expected [[mode, ratio], [mode, ratio]], two modes in rising order, got {raw!r}")
+        raise ModelError(
+            f"{where}: expected [[mode, ratio], [mode, ratio]], two modes in rising order, got {raw!r}"
+        )
     if pairs[1][0] > floors:
-        raise ModelError(f"{where}: mode {pairs[1][0]}: a model of {floors} floors has {floors} lateral modes")
+        raise ModelError(
+            f"{where}: mode {pairs[1][0]}: a model of {floors} floors has {floors} lateral modes"
+        )
     return pairs
 
 

@@ -1,14 +1,15 @@
 """An FE model stepped one control step at a time (`physics.protocol.Integrator`).
 
-`rlc` owns the time loop: each control step the ground acceleration enters as a uniform excitation (its samples
-over the step, linear between them), the actuator forces as nodal loads held over the step (on the floors the
-design building's actuator matrix puts them), and the model's own analysis advances Newmark average-acceleration
-steps of at most `analysis_dt` (s), on every ground sample, with the model's algorithm (Newton-Raphson by
-default), falling back to Newton, modified Newton on the initial tangent, Newton with line search, then smaller
-steps; a step that still does not converge raises `NonConvergence` (the evaluation reports the record, never a
-silent zero). The solver options default to `["Transformation"]`, `["UmfPack"]`, `["NormDispIncr", 1e-10, 30]`
-(its tolerance in SI, converted) and `["Newton"]`: any model (a model whose only multi-point constraints are
-`equalDOF` may take `["Plain"]`, one whose tangent is symmetric `["SparseSYM"]`; docs/opensees.md, "Speed").
+`rlc` owns the time loop: each control step the ground acceleration enters as a uniform excitation (its
+samples over the step, linear between them), the actuator forces as nodal loads held over the step (on the
+floors the design building's actuator matrix puts them), and the model's own analysis advances Newmark
+average-acceleration steps of at most `analysis_dt` (s), on every ground sample, with the model's algorithm
+(Newton-Raphson by default), falling back to Newton, modified Newton on the initial tangent, Newton with line
+search, then smaller steps; a step that still does not converge raises `NonConvergence` (the evaluation
+reports the record, never a silent zero). The solver options default to `["Transformation"]`, `["UmfPack"]`,
+`["NormDispIncr", 1e-10, 30]` (its tolerance in SI, converted) and `["Newton"]`: any model (a model whose only
+multi-point constraints are `equalDOF` may take `["Plain"]`, one whose tangent is symmetric `["SparseSYM"]`;
+docs/opensees.md, "Speed").
 """
 
 from __future__ import annotations
@@ -43,9 +44,12 @@ class OpenSeesIntegrator:
     OpenSees domain per process: it steps one run at a time, starting afresh from a zero state.
     """
 
-    def __init__(self, path: Path, function: str, analysis_dt: float, placement: np.ndarray, force_limits: np.ndarray):
+    def __init__(
+        self, path: Path, function: str, analysis_dt: float, placement: np.ndarray, force_limits: np.ndarray
+    ):
         self.path, self.function, self.analysis_dt = path, function, analysis_dt
-        self.placement = placement  # the floor forces of a unit command (the design building's actuator matrix)
+        # the floor forces of a unit command (the design building's actuator matrix)
+        self.placement = placement
         self.force_limits = force_limits
         self._last: np.ndarray | None = None
         self.description: FEDescription | None = None
@@ -65,7 +69,8 @@ class OpenSeesIntegrator:
         check_floors(self.description, self.placement.shape[0], self.path)
         ops = opensees()  # the module of the model just built
         ops.timeSeries("Constant", FORCE_SERIES)
-        self.series = GROUND_SERIES  # the ground's series of the last step (each its own: the Tcl build removes none)
+        # the ground's series of the last step (each its own: the Tcl build removes none)
+        self.series = GROUND_SERIES
         ops.numberer("RCM")
         set_solver(self.description, self.path)
         ops.integrator("Newmark", 0.5, 0.25)
@@ -75,7 +80,9 @@ class OpenSeesIntegrator:
             self._probes = connection_probes(ops)
             self._connections = [read_connections(ops, self._probes)]
 
-    def step(self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float) -> np.ndarray:
+    def step(
+        self, state: np.ndarray, action: np.ndarray, ground: np.ndarray, control_dt: float
+    ) -> np.ndarray:
         """The state after one control step with the forces `action` * force limits (N) held and `ground`
         the ground accelerations (m/s^2) over the step (its first and last sample at its ends)."""
         continuing = self._last is not None and np.array_equal(state, self._last)
@@ -90,15 +97,21 @@ class OpenSeesIntegrator:
         values = np.asarray(ground, dtype=float) / description.length  # in the model's units
         # the last sample held beyond the step: the analysis' time may pass its end by a rounding
         interval = control_dt / (values.size - 1)
-        ops.timeSeries("Path", self.series, "-dt", interval, "-values", *values, "-startTime", time, "-useLast")
+        ops.timeSeries(
+            "Path", self.series, "-dt", interval, "-values", *values, "-startTime", time, "-useLast"
+        )
         ops.pattern("UniformExcitation", GROUND_PATTERN, description.direction, "-accel", self.series)
         ops.remove("loadPattern", FORCE_PATTERN)
         ops.pattern("Plain", FORCE_PATTERN, FORCE_SERIES)
         nodes = description.control_nodes
-        floor_forces = self.placement @ (np.asarray(action) * self.force_limits) / description.force  # per floor
+        # per floor
+        floor_forces = self.placement @ (np.asarray(action) * self.force_limits) / description.force
         for node, force in zip(nodes, floor_forces, strict=True):
             if force != 0.0:
-                ops.load(node, *[float(force) if d == description.direction else 0.0 for d in range(1, self.ndf + 1)])
+                ops.load(
+                    node,
+                    *[float(force) if d == description.direction else 0.0 for d in range(1, self.ndf + 1)],
+                )
         intervals = values.size - 1
         steps = intervals * math.ceil(interval / self.analysis_dt - 1e-9)  # on every ground sample
         for _ in range(steps):
@@ -119,8 +132,9 @@ def check_floors(description: FEDescription, floors: int, path: Path) -> None:
     """ModelError unless the FE model has the design building's number of floors."""
     if len(description.floors) != floors:
         raise ModelError(
-            f"{path}: the model has {len(description.floors)} floors, the experiment's building {floors}: name no "
-            "building (the design model is then the FE model's reduced one) or one with as many floors"
+            f"{path}: the model has {len(description.floors)} floors, the experiment's building {floors}: "
+            "name no building (the design model is then the FE model's reduced one) or one with as many "
+            "floors"
         )
 
 

@@ -1,9 +1,11 @@
-"""OpenSees in this process: its library (OpenSeesPy, or OpenSees' own Tcl interpreter for a Tcl model) and what
-rlc reads of a model built in its domain: the floors' masses, the periods, the stiffness condensed to the floors
-(the inverse of the flexibility under unit floor loads, about the gravity state) and the damping in each mode.
+"""OpenSees in this process: its library (OpenSeesPy, or OpenSees' own Tcl interpreter for a Tcl model) and
+what rlc reads of a model built in its domain: the floors' masses, the periods, the stiffness condensed to the
+floors (the inverse of the flexibility under unit floor loads, about the gravity state) and the damping in
+each mode.
 
-Building a model is `physics.fe.build` (a model file is code: docs/opensees.md, "The trust boundary"); stepping it
-`physics.fe.integrator`. Everything rlc passes in or reads out is converted between SI and the model's units.
+Building a model is `physics.fe.build` (a model file is code: docs/opensees.md, "The trust boundary");
+stepping it `physics.fe.integrator`. Everything rlc passes in or reads out is converted between SI and the
+model's units.
 """
 
 from __future__ import annotations
@@ -24,7 +26,9 @@ MISSING = (
     'the OpenSees plant needs openseespy: pip install -e ".[opensees]" (on Linux also the system\'s BLAS and '
     "LAPACK: apt-get install libblas3 liblapack3)"
 )
-MISSING_TCL = 'a Tcl model needs OpenSees\' Tcl interpreter, the opensees package: pip install -e ".[opensees]"'
+MISSING_TCL = (
+    'a Tcl model needs OpenSees\' Tcl interpreter, the opensees package: pip install -e ".[opensees]"'
+)
 HALVINGS = 4  # after the algorithms, a step is retried in halves, down to 1/16
 GROUND_SERIES, GROUND_PATTERN, FORCE_SERIES, FORCE_PATTERN = 101, 101, 102, 102
 
@@ -35,7 +39,8 @@ class NonConvergence(ModelError):
 
 def opensees():
     """The OpenSees module of the model last built in this process (`build_model`): `openseespy.opensees`,
-    or for a Tcl model the `opensees` package's module of the same commands; one line saying what to install."""
+    or for a Tcl model the `opensees` package's module of the same commands; one line saying what to
+    install."""
     if _TCL:
         return _TCL[0]
     _one_library("opensees.tcl", "a Tcl model")
@@ -61,7 +66,8 @@ def use_library(tcl: bool) -> None:
 
 
 def refusal(ops) -> type[BaseException]:
-    """What the module raises for a command OpenSees refuses (openseespy's OpenSeesError; the Tcl build's own)."""
+    """What the module raises for a command OpenSees refuses (openseespy's OpenSeesError; the Tcl build's
+    own)."""
     error = getattr(ops, "OpenSeesError", None)
     return error if isinstance(error, type) and issubclass(error, BaseException) else Exception
 
@@ -70,8 +76,10 @@ def _one_library(other: str, what: str) -> None:
     """ConfigError (one line) when this process already loaded the other OpenSees library (`other` in its
     modules): the two builds abort a process that steps both."""
     if other in sys.modules:
-        raise ConfigError(f"this process already ran {what}: OpenSeesPy and OpenSees' Tcl build cannot share a "
-                          "process; run Python and Tcl models in processes of their own")  # fmt: skip
+        raise ConfigError(
+            f"this process already ran {what}: OpenSeesPy and OpenSees' Tcl build cannot share a "
+            "process; run Python and Tcl models in processes of their own"
+        )
 
 
 def _quiet_at_exit() -> None:
@@ -102,23 +110,28 @@ def check_in_domain(description: FEDescription, where: str) -> None:
     except Exception:  # the Tcl build raises TclError where no model is left (the script ended with wipe)
         nodes = set()
     if not nodes:
-        raise ModelError(f"{where}: no model is left in the domain once the file has run (does it end with wipe? "
-                         "a Tcl script's description may say build_until: loadConst)")  # fmt: skip
+        raise ModelError(
+            f"{where}: no model is left in the domain once the file has run (does it end with wipe? "
+            "a Tcl script's description may say build_until: loadConst)"
+        )
     for floor, tags in enumerate(description.floors, start=1):
         missing = [tag for tag in tags if tag not in nodes]
         if missing:
-            raise ModelError(f"{where}: floors: floor {floor} names node {missing[0]}, which the model does not have")
+            raise ModelError(
+                f"{where}: floors: floor {floor} names node {missing[0]}, which the model does not have"
+            )
         freedoms = min(int(np.atleast_1d(ops.getNDF(tag))[0]) for tag in tags)
         if not 1 <= description.direction <= freedoms:
             raise ModelError(
-                f"{where}: direction {description.direction}: expected a degree of freedom of the floor nodes, "
-                f"1 to {freedoms}"
+                f"{where}: direction {description.direction}: expected a degree of freedom of the floor "
+                f"nodes, 1 to {freedoms}"
             )
     for floor, mass in enumerate(floor_masses(description), start=1):
         if not mass > 0.0:
             raise ModelError(
-                f"{where}: floors: floor {floor} (nodes {list(description.floors[floor - 1])}) has no mass in "
-                f"direction {description.direction}: a floor is a level with mass (a fixed base node has none)"
+                f"{where}: floors: floor {floor} (nodes {list(description.floors[floor - 1])}) has no mass "
+                f"in direction {description.direction}: a floor is a level with mass (a fixed base node has "
+                "none)"
             )
 
 
@@ -130,8 +143,8 @@ def floor_masses(description: FEDescription) -> np.ndarray:
 
 
 def periods(count: int, path: Path) -> np.ndarray:
-    """The first `count` natural periods (s) of the model in the domain; a ModelError naming `path` where it has
-    fewer modes with stiffness and mass (no element, or a floor nothing holds)."""
+    """The first `count` natural periods (s) of the model in the domain; a ModelError naming `path` where it
+    has fewer modes with stiffness and mass (no element, or a floor nothing holds)."""
     ops = opensees()
     ops.wipeAnalysis()  # an eigen analysis of its own (one the model file ran may be left over)
     with quiet():
@@ -142,8 +155,8 @@ def periods(count: int, path: Path) -> np.ndarray:
     eigenvalues = np.asarray(eigenvalues, dtype=float)
     if eigenvalues.size < count or not np.all(np.isfinite(eigenvalues) & (eigenvalues > 0.0)):
         raise ModelError(
-            f"{path}: the eigen analysis finds {int(np.sum(eigenvalues > 0.0))} of {count} modes with stiffness and "
-            "mass: an element missing, or a floor nothing holds"
+            f"{path}: the eigen analysis finds {int(np.sum(eigenvalues > 0.0))} of {count} modes with "
+            "stiffness and mass: an element missing, or a floor nothing holds"
         )
     return 2.0 * np.pi / np.sqrt(eigenvalues)
 
@@ -184,8 +197,8 @@ def condensed_stiffness(description: FEDescription, path: Path) -> np.ndarray:
             failed = ops.analyze(1) != 0
         if failed:
             raise ModelError(
-                f"{path}: a unit load on floor {j + 1} (node {node}, direction {dof}) finds no static equilibrium: "
-                "no element holds that floor, or the model is a mechanism"
+                f"{path}: a unit load on floor {j + 1} (node {node}, direction {dof}) finds no static "
+                "equilibrium: no element holds that floor, or the model is a mechanism"
             )
         flexibility[:, j] = np.array([ops.nodeDisp(n, dof) for n in nodes]) - at_rest
         ops.remove("loadPattern", FORCE_PATTERN)
@@ -216,7 +229,11 @@ def damping_ratios(description: FEDescription, circular_frequencies: np.ndarray)
     return [float(a0 / (2.0 * w) + a1 * w / 2.0) for w in circular_frequencies]
 
 
-PLAUSIBLE_STORY = (1.5, 12.0)  # m: a story's height in buildings; far outside it, the length unit is likely wrong
+# m: a story's height in buildings; far outside it, the length unit is likely wrong
+PLAUSIBLE_STORY = (
+    1.5,
+    12.0,
+)
 
 
 def warn_story_heights(description: FEDescription, path: Path) -> None:
@@ -230,5 +247,3 @@ def warn_story_heights(description: FEDescription, path: Path) -> None:
             f"(units.length), are outside {low:g} to {high:g} m: is the model's length unit {unit}?",
             file=sys.stderr,
         )
-
-

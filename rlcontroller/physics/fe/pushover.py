@@ -1,10 +1,11 @@
 """A first-mode pushover of an FE model, and each story's bilinear idealisation of it.
 
-The model (a Python or Tcl file, `physics.fe.opensees`) is built at rest under its gravity loads; lateral forces
-in the shape M phi_1 (its reduced model's first mode, at the floors' control nodes) are raised by displacement
-control of the roof, in `steps` equal increments up to `roof_drift` of the building's height (Newton, then the
-fallbacks of a time step; the push stops early where none converges, past the frame's capacity). Each story's
-shear is the sum of the lateral forces above it; its drift the difference of its floors' displacements.
+The model (a Python or Tcl file, `physics.fe.opensees`) is built at rest under its gravity loads; lateral
+forces in the shape M phi_1 (its reduced model's first mode, at the floors' control nodes) are raised by
+displacement control of the roof, in `steps` equal increments up to `roof_drift` of the building's height
+(Newton, then the fallbacks of a time step; the push stops early where none converges, past the frame's
+capacity). Each story's shear is the sum of the lateral forces above it; its drift the difference of its
+floors' displacements.
 
 Each story's shear-drift curve is idealised as bilinear by equal energy (FEMA 356's method): the initial
 stiffness k_0 (the reduced model's story spring, `physics.hysteresis.story_springs`), then the line to the
@@ -58,7 +59,13 @@ def bilinear(drift: np.ndarray, shear: np.ndarray, stiffness: float) -> tuple[fl
 
 
 def pushover(
-    path: Path, function: str, mass: np.ndarray, stiffness: np.ndarray, *, roof_drift: float = 0.04, steps: int = 200
+    path: Path,
+    function: str,
+    mass: np.ndarray,
+    stiffness: np.ndarray,
+    *,
+    roof_drift: float = 0.04,
+    steps: int = 200,
 ) -> Pushover:
     """Push the FE model of `path` in its first mode's shape to `roof_drift` (of its height) and idealise
     each story's curve (module docstring); `mass` (kg) and `stiffness` (N/m) are its reduced model's floor
@@ -91,7 +98,9 @@ def pushover(
         factors.append(float(ops.getTime()))
     ops.wipe()
     if len(factors) < 3:
-        raise NonConvergence(f"{path}: the pushover did not converge at its first steps (of {increment:g} at the roof)")
+        raise NonConvergence(
+            f"{path}: the pushover did not converge at its first steps (of {increment:g} at the roof)"
+        )
     floors = np.array(displacements) * description.length
     story_shear = np.outer(factors, np.cumsum(pattern[::-1])[::-1]) * description.force
     story_drift = floors @ drift_matrix(len(nodes)).T

@@ -1,1 +1,2 @@
-"""What loads a building: ground motions (records, generators, the site-based model), wind, and their spectra."""
+"""What loads a building: ground motions (records, generators, the site-based model), wind, and their
+spectra."""

@@ -81,7 +81,9 @@ def checked(motion: Load, where: str) -> Load:
     if count < 2:
         raise MotionError(f"{where}: {count} samples, expected at least 2")
     if not (math.isfinite(motion.dt) and MIN_TIME_STEP <= motion.dt <= MAX_TIME_STEP):
-        raise MotionError(f"{where}: time step {motion.dt!r} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
+        raise MotionError(
+            f"{where}: time step {motion.dt!r} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s"
+        )
     if motion.duration > MAX_DURATION:
         raise MotionError(f"{where}: lasts {motion.duration:.0f} s, expected at most {MAX_DURATION:.0f} s")
     if not np.all(np.isfinite(motion.acceleration)):
@@ -116,7 +118,9 @@ def read_at2(path: str | Path) -> Load:
     except ValueError:
         raise MotionError(f"{path}:4: DT must be a number, got {header.group(2)!r}") from None
     if not (math.isfinite(dt) and MIN_TIME_STEP <= dt <= MAX_TIME_STEP):
-        raise MotionError(f"{path}:4: DT = {header.group(2)} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
+        raise MotionError(
+            f"{path}:4: DT = {header.group(2)} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s"
+        )
     if npts < 2 or npts * dt > MAX_DURATION:
         raise MotionError(
             f"{path}:4: NPTS = {npts}, expected at least 2 samples and at most {MAX_DURATION:.0f} s of record"
@@ -154,10 +158,15 @@ def read_csv(path: str | Path, unit: str | None = None) -> Load:
     if len(header) > 2:
         return read_force_csv(path, rows)
     if unit is None:
-        found = [u for u in UNITS_TO_SI if len(header) > 1 and re.search(rf"[\s_\[(]{re.escape(u)}[\])]?$", header[1])]
+        found = [
+            u
+            for u in UNITS_TO_SI
+            if len(header) > 1 and re.search(rf"[\s_\[(]{re.escape(u)}[\])]?$", header[1])
+        ]
         if not found:
             raise MotionError(
-                f"{path}:1: cannot tell the acceleration unit from {rows[0]!r}; expected e.g. 'acceleration [g]'"
+                f"{path}:1: cannot tell the acceleration unit from {rows[0]!r}; expected e.g. 'acceleration "
+                "[g]'"
             )
         unit = max(found, key=len)
     if unit not in UNITS_TO_SI:
@@ -186,7 +195,9 @@ def read_csv(path: str | Path, unit: str | None = None) -> Load:
     dt = float(np.median(steps))
     motion = checked(Load(name=path.stem, dt=dt, acceleration=values), str(path))
     if times[-1] - times[0] > MAX_DURATION:
-        raise MotionError(f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s")
+        raise MotionError(
+            f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s"
+        )
     if np.allclose(steps, dt, rtol=1e-6, atol=0.0):
         return motion
     uniform = np.arange(0.0, times[-1] - times[0] + 0.5 * dt, dt)
@@ -240,9 +251,13 @@ def read_force_csv(path: Path, rows: list[list[str]]) -> Load:
     if not (MIN_TIME_STEP <= dt <= MAX_TIME_STEP):
         raise MotionError(f"{path}: time step {dt:g} s, expected {MIN_TIME_STEP:g} to {MAX_TIME_STEP:g} s")
     if times[-1] - times[0] > MAX_DURATION:
-        raise MotionError(f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s")
+        raise MotionError(
+            f"{path}: lasts {times[-1] - times[0]:.0f} s, expected at most {MAX_DURATION:.0f} s"
+        )
     if np.max(np.abs(forces)) > MAX_FLOOR_FORCE:
-        raise MotionError(f"{path}: a force of {np.max(np.abs(forces)):.3g} N, expected at most {MAX_FLOOR_FORCE:g} N")
+        raise MotionError(
+            f"{path}: a force of {np.max(np.abs(forces)):.3g} N, expected at most {MAX_FLOOR_FORCE:g} N"
+        )
     if not np.any(forces):
         raise MotionError(f"{path}: every force is zero: nothing loads the building")
     zero = np.zeros(times.size)
@@ -269,7 +284,9 @@ def resample(motion: Load, dt: float) -> Load:
     forces = motion.floor_forces
     if forces is not None:
         forces = np.stack([np.interp(grid, motion.time, column) for column in forces.T], axis=1)
-    return replace(motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration), floor_forces=forces)
+    return replace(
+        motion, dt=dt, acceleration=np.interp(grid, motion.time, motion.acceleration), floor_forces=forces
+    )
 
 
 def scale_to_pga(motion: Load, pga: float) -> Load:
@@ -314,20 +331,24 @@ class LoadGrid:
         return None if self.floor_forces is None else self.floor_forces[:: self.substeps][: self.n_steps + 1]
 
     def step_windows(self) -> tuple[np.ndarray, np.ndarray | None]:
-        """What a plant's own integrator takes per control step (views): the r + 1 ground samples spanning each
-        step (steps, r + 1), and the floor forces' (steps, r + 1, floors) or None."""
+        """What a plant's own integrator takes per control step (views): the r + 1 ground samples spanning
+        each step (steps, r + 1), and the floor forces' (steps, r + 1, floors) or None."""
         r = self.substeps
         ground = sliding_window_view(self.ground, r + 1)[::r][: self.n_steps]
         if self.floor_forces is None:
             return ground, None
-        return ground, sliding_window_view(self.floor_forces, r + 1, axis=0)[::r][: self.n_steps].swapaxes(1, 2)
+        return ground, sliding_window_view(self.floor_forces, r + 1, axis=0)[::r][: self.n_steps].swapaxes(
+            1, 2
+        )
 
 
 def on_control_grid(load: Load, control_dt: float) -> LoadGrid:
     """The load sampled at control_dt / r with r = ceil(control_dt / load.dt): never decimated; resampled
     only if its step does not divide control_dt."""
     if load.duration < control_dt:
-        raise MotionError(f"{load.name}: lasts {load.duration:g} s, shorter than one control step ({control_dt:g} s)")
+        raise MotionError(
+            f"{load.name}: lasts {load.duration:g} s, shorter than one control step ({control_dt:g} s)"
+        )
     substeps = max(1, math.ceil(control_dt / load.dt - 1e-9))
     resampled = resample(load, control_dt / substeps)
     return LoadGrid(resampled.acceleration, resampled.floor_forces, substeps)
@@ -339,10 +360,10 @@ SAME_BITS = 16  # a generated load's resolution: 2^-16 of the power of two above
 def same_on_every_cpu(samples: np.ndarray) -> np.ndarray:
     """Generated samples rounded to a multiple of 2^-SAME_BITS of the power of two above their peak (at most
     3e-5 of the peak: far below any sensor's noise). A BLAS kernel changes the last bits of a generator's
-    float64 arithmetic from one CPU to another (by about 1e-13 of the peak for wind), and `content_seed` hashes
-    the samples, so a load's sensor noise would change with the CPU (a check motion's J1 moved by up to 0.2 that
-    way, float32 rounding still left 44 of 13.9 million wind samples different); rounded this coarsely they are
-    the same on every CPU but for about one sample in 10^8."""
+    float64 arithmetic from one CPU to another (by about 1e-13 of the peak for wind), and `content_seed`
+    hashes the samples, so a load's sensor noise would change with the CPU (a check motion's J1 moved by up to
+    0.2 that way, float32 rounding still left 44 of 13.9 million wind samples different); rounded this
+    coarsely they are the same on every CPU but for about one sample in 10^8."""
     samples = np.asarray(samples, dtype=np.float64)
     peak = float(np.max(np.abs(samples), initial=0.0))
     if peak == 0.0:
@@ -354,7 +375,10 @@ def same_on_every_cpu(samples: np.ndarray) -> np.ndarray:
 def content_seed(motion: Load, seed: int = 0) -> int:
     """A seed fixed by the motion's samples and time step and by `seed`, not by its name, file or
     position in a suite: the same record gets the same sensor noise wherever it is evaluated."""
-    content = np.float64(motion.dt).tobytes() + np.ascontiguousarray(motion.acceleration, dtype=np.float64).tobytes()
+    content = (
+        np.float64(motion.dt).tobytes()
+        + np.ascontiguousarray(motion.acceleration, dtype=np.float64).tobytes()
+    )
     if motion.floor_forces is not None:
         content += np.ascontiguousarray(motion.floor_forces, dtype=np.float64).tobytes()
     digest = hashlib.sha256(content + int(seed).to_bytes(8, "little", signed=False)).digest()

@@ -49,7 +49,9 @@ def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
     return float(rng.uniform(bounds[0], bounds[1]))
 
 
-def noise_impulses(config: NoiseImpulsesConfig, rng: np.random.Generator, name: str = "noise_impulses") -> Load:
+def noise_impulses(
+    config: NoiseImpulsesConfig, rng: np.random.Generator, name: str = "noise_impulses"
+) -> Load:
     """The paper's training motion: Gaussian white noise plus random half-sine impulses."""
     duration = _uniform(rng, config.duration)
     time = np.arange(int(duration / config.dt) + 1) * config.dt
@@ -80,7 +82,9 @@ def kanai_tajimi(config: KanaiTajimiConfig, rng: np.random.Generator, name: str 
         ([2 * zeta * omega, omega**2], [1.0, 2 * zeta * omega, omega**2]), config.dt, method="zoh"
     )
     filtered = scipy.signal.lfilter(numerator.ravel(), denominator, rng.normal(size=time.size))
-    envelope = np.where(time < rise, (time / rise) ** 2, np.exp(-decay * np.maximum(time - rise - strong, 0.0)))
+    envelope = np.where(
+        time < rise, (time / rise) ** 2, np.exp(-decay * np.maximum(time - rise - strong, 0.0))
+    )
     acceleration = filtered * envelope
     peak = np.max(np.abs(acceleration))
     if peak > 0:

@@ -11,7 +11,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rlcontroller.config import ConfigError, GeneratorConfig, WindGeneratorConfig, load_wind_suite, names_wind_suite
+from rlcontroller.config import (
+    ConfigError,
+    GeneratorConfig,
+    WindGeneratorConfig,
+    load_wind_suite,
+    names_wind_suite,
+)
 from rlcontroller.errors import MotionError
 from rlcontroller.physics.motions import generators
 from rlcontroller.physics.motions.excitation import FLOOR_FORCES, Load
@@ -23,7 +29,9 @@ if TYPE_CHECKING:
     from rlcontroller.physics.plant import Plant
 
 
-def generate(config: GeneratorConfig, rng: np.random.Generator, building: Building, name: str | None = None) -> Load:
+def generate(
+    config: GeneratorConfig, rng: np.random.Generator, building: Building, name: str | None = None
+) -> Load:
     """One load record from the configured generator, on `building` (whose floors wind loads)."""
     if isinstance(config, WindGeneratorConfig):
         return generated_wind(config, building, rng, name or "wind")
@@ -58,14 +66,18 @@ def load_suite(
         motions, label = wind_suite(suite, plant.building), suite_label(suite, str(records))
     else:
         if records is None and not os.environ.get(RECORDS_VARIABLE) and echo is not None:
-            echo("no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)")
+            echo(
+                "no --records given: using the embedded synthetic suite (labelled SYNTHETIC in every output)"
+            )
         motions, label = choose_motions(records, scale_pga)
     if plant is not None:
         check_loads(plant, motions, records, echo)
     return motions, label
 
 
-def check_loads(plant: Plant, motions: list[Load], records: Path | None, echo: Callable[[str], None] | None) -> None:
+def check_loads(
+    plant: Plant, motions: list[Load], records: Path | None, echo: Callable[[str], None] | None
+) -> None:
     """Refuse, in one line, floor loads the plant cannot take or on another number of floors; say through
     `echo` when the loads are not the kind its experiment is made for."""
     floor_loads = [motion for motion in motions if motion.kind == FLOOR_FORCES]
@@ -74,12 +86,17 @@ def check_loads(plant: Plant, motions: list[Load], records: Path | None, echo: C
     for motion in floor_loads:
         floors, building = motion.floor_forces.shape[1], plant.building
         if floors != building.n_floors:
-            raise MotionError(f"{motion.name}: forces on {floors} floors, the building has {building.n_floors}")
+            raise MotionError(
+                f"{motion.name}: forces on {floors} floors, the building has {building.n_floors}"
+            )
     made_for = plant.experiment.load_kind
     given = "wind" if motions and len(floor_loads) == len(motions) else "ground motion"
     if given != made_for and echo is not None:
         loads = "floor forces (wind)" if given == "wind" else "ground motions"
-        echo(f"note: the controllers were made for {made_for}; these loads are {loads}: judged on loads not their own")
+        echo(
+            f"note: the controllers were made for {made_for}; these loads are {loads}: judged on loads not "
+            "their own"
+        )
 
 
 def refuse_floor_forces(plant: Plant, records: Path | None) -> None:

@@ -48,7 +48,9 @@ def read_manifest(path: Path) -> list[dict[str, str]]:
         if not name:
             raise MotionError(f"{path}:{number}: empty 'file'")
         if not inside(path.parent, name):
-            raise MotionError(f"{path}:{number}: file {name!r} is outside the records folder; expected a file in it")
+            raise MotionError(
+                f"{path}:{number}: file {name!r} is outside the records folder; expected a file in it"
+            )
     return rows
 
 
@@ -66,8 +68,9 @@ def _folder_motions(folder: Path) -> list[Load]:
             rsns = ", ".join(row["rsn"] for row in missing if row.get("rsn"))
             source = f" (PEER NGA-West2 RSN {rsns}: https://ngawest2.berkeley.edu, see records/README.md)"
             raise MotionError(
-                f"{folder}: {len(missing)} of {len(rows)} records of {MANIFEST} missing: {names}; put them in that "
-                f"folder{source if rsns else ''}, or point --records (or ${RECORDS_VARIABLE}) at the right folder"
+                f"{folder}: {len(missing)} of {len(rows)} records of {MANIFEST} missing: {names}; put them "
+                f"in that folder{source if rsns else ''}, or point --records (or ${RECORDS_VARIABLE}) at the "
+                "right folder"
             )
         return [replace(read_motion(folder / row["file"]), description=_description(row)) for row in rows]
     files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in MOTION_SUFFIXES)
@@ -90,10 +93,14 @@ def load_records(path: Path, scale_pga_g: float | None = None) -> tuple[list[Loa
         motions = [read_motion(path)]
         label = f"record {display_path(path)}"
     else:
-        raise MotionError(f"{path}: no such file or folder (--records or ${RECORDS_VARIABLE}: a folder or a record)")
+        raise MotionError(
+            f"{path}: no such file or folder (--records or ${RECORDS_VARIABLE}: a folder or a record)"
+        )
     if scale_pga_g is not None:
         motions = [scale_to_pga(motion, scale_pga_g * STANDARD_GRAVITY) for motion in motions]
-    return motions, label + (f", scaled to PGA {scale_pga_g:g} g" if scale_pga_g is not None else ", as recorded")
+    return motions, label + (
+        f", scaled to PGA {scale_pga_g:g} g" if scale_pga_g is not None else ", as recorded"
+    )
 
 
 def synthetic_suite(count: int = 7, seed: int = SYNTHETIC_SEED) -> list[Load]:

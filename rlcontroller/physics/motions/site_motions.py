@@ -1,29 +1,31 @@
-"""Site-based stochastic ground motions: the model of Rezaeian & Der Kiureghian (2010, "Simulation of synthetic
-ground motions for specified earthquake and site characteristics", EESD 39, 1155-1180), whose six parameters are
-predicted from an earthquake scenario (magnitude, rupture distance, Vs30, faulting) with their record-to-record
-variability, as fitted to NGA strong-motion records. A motion is modulated, filtered white noise:
+"""Site-based stochastic ground motions: the model of Rezaeian & Der Kiureghian (2010, "Simulation of
+synthetic ground motions for specified earthquake and site characteristics", EESD 39, 1155-1180), whose six
+parameters are predicted from an earthquake scenario (magnitude, rupture distance, Vs30, faulting) with their
+record-to-record variability, as fitted to NGA strong-motion records. A motion is modulated, filtered white
+noise:
 
     a(t) = q(t) * sum_i h(t - tau_i; w_f(tau_i)) w_i / sigma_h(t),   then high-passed,
 
-| parameter | what it is                                            | unit | marginal (the 2010 paper)          |
-|-----------|-------------------------------------------------------|------|------------------------------------|
-| `arias`   | Arias intensity                                       | s g  | lognormal(-4.8255, 1.4318)         |
-| `d595`    | significant duration, 5 % to 95 % of Arias intensity  | s    | 5 + 40 Beta(1.1314, 2.4474)        |
-| `tmid`    | time at 45 % of Arias intensity                       | s    | 0.5 + 39.5 Beta(1.5792, 3.6405)    |
-| `wmid`    | the filter's frequency at tmid                        | Hz   | Gamma(4.0982, scale 1.4330)        |
-| `wslope`  | its rate of change, w_f(t) = wmid + wslope (t - tmid) | Hz/s | two-sided exponential on [-2, 0.5] |
-| `zeta`    | the filter's damping ratio                            | -    | 0.02 + 0.98 Beta(1.4250, 5.7208)   |
+| parameter | what it is                                         | unit | marginal (the 2010 paper)          |
+|-----------|----------------------------------------------------|------|------------------------------------|
+| `arias`   | Arias intensity                                    | s g  | lognormal(-4.8255, 1.4318)         |
+| `d595`    | significant duration, 5 % to 95 % of Arias         | s    | 5 + 40 Beta(1.1314, 2.4474)        |
+| `tmid`    | time at 45 % of Arias intensity                    | s    | 0.5 + 39.5 Beta(1.5792, 3.6405)    |
+| `wmid`    | the filter's frequency at tmid                     | Hz   | Gamma(4.0982, scale 1.4330)        |
+| `wslope`  | its rate, w_f(t) = wmid + wslope (t - tmid)        | Hz/s | two-sided exponential on [-2, 0.5] |
+| `zeta`    | the filter's damping ratio                         | -    | 0.02 + 0.98 Beta(1.4250, 5.7208)   |
 
-q(t) is the gamma modulating function  t^(a2 - 1) exp(-a3 t), fixed by tmid and d595; h is the impulse response of
-a damped oscillator (its pseudo-acceleration) with the frequency the filter has when the pulse arrives; a critically
-damped second-order high-pass with corner f_c removes the long-period drift real records' processing removes.
+q(t) is the gamma modulating function t^(a2 - 1) exp(-a3 t), fixed by tmid and d595; h is the impulse response
+of a damped oscillator (its pseudo-acceleration) with the frequency the filter has when the pulse arrives; a
+critically damped second-order high-pass with corner f_c removes the long-period drift real records'
+processing removes.
 
-The predictive equations (each parameter's standard-normal image linear in M (u1: M/7), F, R (u1: ln(R/25)) and
-Vs30 (u1: ln(Vs30/750)), with inter- and intra-event errors and the correlation of their totals) are the
-coefficients the SCEC Broadband Platform publishes for this model (module `rzz2015_gmpe`, Rezaeian, Zhong & Zareian
-2015's fit). Two choices are this project's, stated: the filter's frequency is held above `FLOOR_HZ` (a steep
-negative slope would take it through zero in a long motion's tail), and f_c is drawn per motion (Su, Dabaghi &
-Broccardo 2024 show it governs the spectrum beyond 1 s and varies from record to record)."""
+The predictive equations (each parameter's standard-normal image linear in M (u1: M/7), F, R (u1: ln(R/25))
+and Vs30 (u1: ln(Vs30/750)), with inter- and intra-event errors and the correlation of their totals) are the
+coefficients the SCEC Broadband Platform publishes for this model (module `rzz2015_gmpe`, Rezaeian, Zhong &
+Zareian 2015's fit). Two choices are this project's, stated: the filter's frequency is held above `FLOOR_HZ`
+(a steep negative slope would take it through zero in a long motion's tail), and f_c is drawn per motion (Su,
+Dabaghi & Broccardo 2024 show it governs the spectrum beyond 1 s and varies from record to record)."""
 
 from __future__ import annotations
 
@@ -65,7 +67,8 @@ LONGEST = 90.0  # s: a motion ends at 99.9 % of its Arias intensity, or here
 
 @dataclass(frozen=True)
 class Scenario:
-    """An earthquake and a site: moment magnitude, rupture distance (km), Vs30 (m/s), reverse faulting or not."""
+    """An earthquake and a site: moment magnitude, rupture distance (km), Vs30 (m/s), reverse faulting or
+    not."""
 
     magnitude: float
     distance: float
@@ -119,7 +122,8 @@ def physical(normals: np.ndarray) -> SiteParameters:
 
 
 def slope_quantile(p: float) -> float:
-    """The inverse of wslope's distribution: density c exp(b x) below 0 and c exp(-a x) above, on [low, high]."""
+    """The inverse of wslope's distribution: density c exp(b x) below 0 and c exp(-a x) above, on [low,
+    high]."""
     a, b, c, low, high = SLOPE_CDF
     at_zero = c / b * (1.0 - math.exp(b * low))
     if p < at_zero:
@@ -128,7 +132,8 @@ def slope_quantile(p: float) -> float:
 
 
 def draw(config: SiteBasedConfig, rng: np.random.Generator) -> tuple[Scenario, SiteParameters, float]:
-    """A scenario from the config's ranges, its parameters with their variability, and a corner frequency (Hz)."""
+    """A scenario from the config's ranges, its parameters with their variability, and a corner frequency
+    (Hz)."""
     low, high = config.distance
     scenario = Scenario(
         magnitude=float(rng.uniform(*config.magnitude)),
@@ -144,7 +149,8 @@ def draw(config: SiteBasedConfig, rng: np.random.Generator) -> tuple[Scenario, S
 
 def gamma_envelope(parameters: SiteParameters) -> tuple[float, float]:
     """The shape k and rate (1/s) of the gamma law the modulating function's cumulative energy follows
-    (q^2 ~ t^(k-1) exp(-rate t), k = 2 a2 - 1, rate = 2 a3): its 45 % point at tmid, 5 % to 95 % lasting d595."""
+    (q^2 ~ t^(k-1) exp(-rate t), k = 2 a2 - 1, rate = 2 a3): its 45 % point at tmid, 5 % to 95 % lasting
+    d595."""
     from scipy import optimize, special
 
     def quantile(p: float, k: float) -> float:
@@ -157,7 +163,13 @@ def gamma_envelope(parameters: SiteParameters) -> tuple[float, float]:
         return (quantile(0.95, k) - quantile(0.05, k)) / quantile(0.45, k) - target
 
     low, high = math.log(0.05), math.log(5000.0)  # the ratio falls from about 90 to 0.05 over these shapes
-    log_k = low if excess(low) < 0 else high if excess(high) > 0 else optimize.brentq(excess, low, high, xtol=1e-10)
+    log_k = (
+        low
+        if excess(low) < 0
+        else high
+        if excess(high) > 0
+        else optimize.brentq(excess, low, high, xtol=1e-10)
+    )
     k = math.exp(log_k)
     return k, quantile(0.45, k) / parameters.tmid
 
@@ -210,7 +222,11 @@ def site_based(config: SiteBasedConfig, rng: np.random.Generator, name: str = "s
     time = np.arange(int(end / config.dt) + 1) * config.dt
     acceleration = high_pass(modulated_noise(parameters, time, rng), config.dt, corner)
     low, high = config.pga
-    pga = float(np.exp(rng.uniform(math.log(low), math.log(high)))) if config.pga_log else float(rng.uniform(low, high))
+    pga = (
+        float(np.exp(rng.uniform(math.log(low), math.log(high))))
+        if config.pga_log
+        else float(rng.uniform(low, high))
+    )
     acceleration *= pga / np.max(np.abs(acceleration))
     words = (
         f"{scenario.describe()}; D5-95 {parameters.d595:.1f} s, tmid {parameters.tmid:.1f} s, "

@@ -158,7 +158,9 @@ def load_model(field: WindField, frequency: float) -> WindLoadModel:
     omega = 2.0 * np.pi * frequency
     discriminant = 16.0 * variance**2 - 4.0 * target**2 * omega**2
     if discriminant < 0.0:  # cannot happen with Kaimal's spectrum (n S / sigma^2 <= 0.22 < 1 / pi)
-        raise ValueError("no first-order spectrum of Kaimal's variance reaches Kaimal's level at the frequency")
+        raise ValueError(
+            "no first-order spectrum of Kaimal's variance reaches Kaimal's level at the frequency"
+        )
     time_constant = (4.0 * variance + np.sqrt(discriminant)) / (2.0 * target * omega**2)
     per_speed = force_per_speed(field)
     covariance = np.outer(per_speed, per_speed) * variance * field.coherence(np.array([frequency]))[0]
@@ -186,13 +188,19 @@ def floor_field(config: WindSuiteConfig | WindGeneratorConfig, building: Buildin
     )
 
 
-def generated_wind(config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str) -> Load:
+def generated_wind(
+    config: WindGeneratorConfig, building: Building, rng: np.random.Generator, name: str
+) -> Load:
     """One wind load record for training: a mean speed and a duration drawn in the generator's ranges."""
     speed = float(rng.uniform(*config.speed))
     duration = float(rng.uniform(*config.duration))
-    forces = fluctuating_forces(floor_field(config, building, speed), duration, config.dt, rng, cutoff=config.cutoff)
+    forces = fluctuating_forces(
+        floor_field(config, building, speed), duration, config.dt, rng, cutoff=config.cutoff
+    )
     zero = np.zeros(forces.shape[0])
-    return Load(name, config.dt, zero, synthetic=True, description=f"wind {speed:.1f} m/s", floor_forces=forces)
+    return Load(
+        name, config.dt, zero, synthetic=True, description=f"wind {speed:.1f} m/s", floor_forces=forces
+    )
 
 
 def wind_suite(suite: WindSuiteConfig, building: Building) -> list[Load]:

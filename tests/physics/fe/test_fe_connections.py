@@ -17,7 +17,7 @@ from rlcontroller.physics.fe.opensees import opensees  # noqa: E402
 CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 E, FY = 200.0e9, 250.0e6  # Pa
 WIDTH, DEPTH, LENGTH = 0.1, 0.2, 2.0  # m
-CANTILEVER = f'''
+CANTILEVER = f"""
 def build_model(ops):
     ops.model("basic", "-ndm", 2, "-ndf", 3)
     ops.node(1, 0.0, 0.0)
@@ -31,12 +31,12 @@ def build_model(ops):
     ops.beamIntegration("Lobatto", 1, 1, 5)
     ops.element("forceBeamColumn", 1, 1, 2, 1, 1)
     return {{"floors": [[2]], "direction": 1, "story_heights": [{LENGTH}], "rayleigh": [0.0, 0.0]}}
-'''
+"""
 
 
 def _push(ops, node: int, load: float, steps: int, read, displacement: float = 0.0) -> list:
-    """A lateral load at `node` raised to `load` (N) in `steps` equal steps, or (with `displacement`, m) as much
-    as moves the node that far; `read()` after each."""
+    """A lateral load at `node` raised to `load` (N) in `steps` equal steps, or (with `displacement`, m) as
+    much as moves the node that far; `read()` after each."""
     ops.timeSeries("Linear", 901)
     ops.pattern("Plain", 901, 901)
     ops.load(node, load, 0.0, 0.0)
@@ -79,7 +79,8 @@ def test_a_fibre_sections_curvature_moment_and_knee_are_beam_theorys(tmp_path):
     knee = int(np.argmax(base[:, 2] < YIELDED * base[0, 2]))
     core = 0.5 ** (1.0 / 3.0)
     assert base[knee, 1] == pytest.approx(1.5 * yield_moment * (1.0 - core**2 / 3.0), rel=0.02)
-    assert np.all(readings[:, 1, 1] == pytest.approx(0.0, abs=1e-6 * yield_moment))  # the free end carries none
+    # the free end carries none
+    assert np.all(readings[:, 1, 1] == pytest.approx(0.0, abs=1e-6 * yield_moment))
 
 
 def test_the_frames_hinges_yield_at_their_beams_plastic_moments():

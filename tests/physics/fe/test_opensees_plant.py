@@ -1,5 +1,5 @@
-"""The OpenSees plant (`physics.fe.opensees`): the five-story model against rlc's own integration, the nine-story
-frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
+"""The OpenSees plant (`physics.fe.opensees`): the five-story model against rlc's own integration, the
+nine-story frame against its published periods, the reduced model, non-convergence, and the trust boundary."""
 
 import re
 import warnings
@@ -62,9 +62,13 @@ def test_condensed_stiffness_of_the_shear_model_is_its_stiffness_matrix():
     building = reduced_building(CONFIGS / "opensees" / "five_story_shear.py", "build_model")
     stiffness = np.array([5.0e6, 4.0e6, 4.0e6, 3.0e6, 3.0e6])  # N/m, story 1 first (the file's)
     drift = np.eye(5) - np.eye(5, k=-1)
-    np.testing.assert_allclose(building["stiffness_matrix"], drift.T @ np.diag(stiffness) @ drift, rtol=1e-9, atol=1e-3)
+    np.testing.assert_allclose(
+        building["stiffness_matrix"], drift.T @ np.diag(stiffness) @ drift, rtol=1e-9, atol=1e-3
+    )
     np.testing.assert_allclose(np.diag(building["mass_matrix"]), [25e3, 20e3, 20e3, 18e3, 15e3])
-    assert building["modal_damping"][0] == pytest.approx(0.01) and building["modal_damping"][4] == pytest.approx(0.05)
+    assert building["modal_damping"][0] == pytest.approx(0.01) and building["modal_damping"][
+        4
+    ] == pytest.approx(0.05)
 
 
 def test_nine_story_frame_reproduces_its_published_periods():
@@ -74,14 +78,16 @@ def test_nine_story_frame_reproduces_its_published_periods():
 
 
 def test_frame_experiment_is_designed_on_the_reduced_model_of_the_frame():
-    """Loaded as the commands load it (`api.load` hands config the FE reduction; config imports no physics)."""
+    """Loaded as the commands load it (`api.load` hands config the FE reduction; config imports no
+    physics)."""
     with pytest.raises(ConfigError, match="opensees: no building: its design model is reduced"):
         load_experiment(CONFIGS / "experiments" / "nine_story_frame.yaml")
     experiment = api.load(CONFIGS / "experiments" / "nine_story_frame.yaml")
     design = Plant(experiment).design.building
     periods, _ = fe_modes(FRAME_MODEL, "build_model", 9)
     assert design.n_dofs == 9
-    np.testing.assert_allclose(design.periods(), periods, rtol=1e-6)  # floor masses only: condensation is exact
+    # floor masses only: condensation is exact
+    np.testing.assert_allclose(design.periods(), periods, rtol=1e-6)
 
 
 def test_a_run_folder_never_runs_a_model_file(tmp_path):
@@ -111,8 +117,8 @@ def test_a_model_that_does_not_converge_names_the_record(tmp_path, records):
         "def build_model(ops):\n"
         "    ops.model('basic', '-ndm', 1, '-ndf', 1)\n"
         "    ops.node(0, 0.0); ops.fix(0, 1)\n"
-        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n"
-        "    ops.node(2, 2.0)\n"  # not a floor, massless and held by nothing: the first step's system is singular
+        "    ops.node(1, 1.0); ops.mass(1, 1.0e4)\n    ops.node(2, "
+        "2.0)\n"  # not a floor, massless and held by nothing: the first step's system is singular
         "    ops.uniaxialMaterial('Elastic', 1, 1.0e6)\n"
         "    ops.element('truss', 1, 0, 1, 1.0, 1)\n"
         "    return {'floors': [[1]], 'direction': 1, 'story_heights': [3.0], 'modal_damping': [0.02]}\n"
@@ -160,7 +166,8 @@ def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_
 
 
 def _learning_on_fe_model(tmp_path: Path) -> Path:
-    """The five-story OpenSees experiment learning on the FE model itself: SAC, a few hundred steps on short motions."""
+    """The five-story OpenSees experiment learning on the FE model itself: SAC, a few hundred steps on short
+    motions."""
     raw = yaml.safe_load(FIVE_STORY.read_text())
     smoke = yaml.safe_load((CONFIGS / "testing" / "smoke.yaml").read_text())
     for part in ("building", "actuators", "sensors", "reward", "excitation", "supervisor"):
@@ -184,7 +191,9 @@ def test_train_on_fe_learns_on_the_fe_model_and_resumes_only_with_it_named(tmp_p
 
     steps = []
     original = OpenSeesIntegrator.step
-    monkeypatch.setattr(OpenSeesIntegrator, "step", lambda self, *args: steps.append(1) or original(self, *args))
+    monkeypatch.setattr(
+        OpenSeesIntegrator, "step", lambda self, *args: steps.append(1) or original(self, *args)
+    )
     config = _learning_on_fe_model(tmp_path)
     summary = train(experiment=load_experiment(config), run_dir=tmp_path / "run")
     assert summary.steps == 300 and len(steps) >= 300  # the training env stepped the FE model here
@@ -223,7 +232,10 @@ def one_story_model(folder: Path, returned: str) -> Path:
 
 @pytest.mark.parametrize(
     ("given", "message"),
-    [("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"), ("'test': 'NormUnbalance'", "test: expected")],
+    [
+        ("'system': ['Foo']", "system ['Foo']: OpenSees does not take it"),
+        ("'test': 'NormUnbalance'", "test: expected"),
+    ],
 )
 def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
     from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
@@ -237,7 +249,10 @@ def test_a_model_files_solver_options_are_checked(tmp_path, given, message):
     ("returned", "message"),
     [
         ("'floors': [[7]], 'direction': 1", "floors: floor 1 names node 7, which the model does not have"),
-        ("'floors': [[1]], 'direction': 2", "direction 2: expected a degree of freedom of the floor nodes, 1 to 1"),
+        (
+            "'floors': [[1]], 'direction': 2",
+            "direction 2: expected a degree of freedom of the floor nodes, 1 to 1",
+        ),
     ],
 )
 def test_a_description_the_model_does_not_match_is_one_line(tmp_path, returned, message):
@@ -255,7 +270,9 @@ def test_a_model_that_calls_exit_is_one_line_and_rlc_goes_on(tmp_path):
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
     model.write_text(model.read_text().replace("    return", "    raise SystemExit(0)\n    return"))
-    with pytest.raises(ModelError, match=re.escape(f"{model}: build_model: the model calls exit; return its")):
+    with pytest.raises(
+        ModelError, match=re.escape(f"{model}: build_model: the model calls exit; return its")
+    ):
         build_model(model, "build_model")
 
 
@@ -274,7 +291,9 @@ def test_a_model_with_other_floors_than_the_building_is_one_line(tmp_path):
     from rlcontroller.physics.fe.integrator import OpenSeesIntegrator
 
     model = one_story_model(tmp_path, "'floors': [[1]], 'direction': 1")
-    with pytest.raises(ModelError, match=re.escape(f"{model}: the model has 1 floors, the experiment's building 5")):
+    with pytest.raises(
+        ModelError, match=re.escape(f"{model}: the model has 1 floors, the experiment's building 5")
+    ):
         OpenSeesIntegrator(model, "build_model", 0.005, np.ones((5, 1)), np.ones(1)).reset()
 
 
@@ -303,9 +322,11 @@ def test_the_frame_reports_ductility_and_residual_drift_where_it_yields():
 
 
 @pytest.mark.slow
-def test_what_the_model_prints_during_its_runs_goes_to_a_log_in_the_output_folder(tmp_path, capfd, monkeypatch):
-    """A model that prints (as OpenSees' FAILURE lines do, from C, on descriptor 2) in every run: the terminal gets
-    one line counting them, the output folder the lines themselves (opensees.log)."""
+def test_what_the_model_prints_during_its_runs_goes_to_a_log_in_the_output_folder(
+    tmp_path, capfd, monkeypatch
+):
+    """A model that prints (as OpenSees' FAILURE lines do, from C, on descriptor 2) in every run: the terminal
+    gets one line counting them, the output folder the lines themselves (opensees.log)."""
     import os
 
     folder = tmp_path / "model"

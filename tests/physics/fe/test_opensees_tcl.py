@@ -1,9 +1,9 @@
 """A Tcl OpenSees model as the plant (`physics.fe.opensees`, OpenSees' own Tcl interpreter from the `opensees`
-package): the five-story building written in Tcl in kip and foot units reduces to the paper's building in SI and
-moves as rlc's exact integration of it; what a Tcl model lacks or gets wrong is one line naming the file.
+package): the five-story building written in Tcl in kip and foot units reduces to the paper's building in SI
+and moves as rlc's exact integration of it; what a Tcl model lacks or gets wrong is one line naming the file.
 
-OpenSeesPy and OpenSees' Tcl build abort a process that steps both, so every Tcl model here runs in a process of
-its own (as `rlc` itself runs one model per process), and this module's own process loads neither."""
+OpenSeesPy and OpenSees' Tcl build abort a process that steps both, so every Tcl model here runs in a process
+of its own (as `rlc` itself runs one model per process), and this module's own process loads neither."""
 
 import json
 import shutil
@@ -26,17 +26,20 @@ TCL_EXPERIMENT = REPOSITORY / "studies" / "opensees" / "five_story_tcl.yaml"
 
 def in_own_process(code: str) -> dict:
     """`code` run in a fresh interpreter; what it prints last, read as JSON."""
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=REPOSITORY)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=REPOSITORY
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def model_error_in_own_process(call: str) -> subprocess.CompletedProcess:
-    """`call` (build_model, pushover, ...) in a fresh interpreter: the ModelError it raises printed on stdout."""
+    """`call` (build_model, pushover, ...) in a fresh interpreter: the ModelError it raises printed on
+    stdout."""
     code = (
         "import numpy as np; from pathlib import Path; from rlcontroller.errors import ModelError\n"
-        "from rlcontroller.physics.fe.build import build_model; from rlcontroller.physics.fe.pushover import pushover\n"
-        f"try: {call}\nexcept ModelError as error: print(error)"
+        "from rlcontroller.physics.fe.build import build_model; from rlcontroller.physics.fe.pushover import "
+        f"pushover\ntry: {call}\nexcept ModelError as error: print(error)"
     )
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
 
@@ -53,7 +56,9 @@ def test_a_tcl_model_in_kip_and_foot_reduces_to_the_paper_building_in_si():
     k, n = np.asarray(paper.stiffnesses), 5
     drift = np.eye(n) - np.eye(n, k=-1)
     np.testing.assert_allclose(np.diag(reduced["mass_matrix"]), paper.masses, rtol=1e-12)
-    np.testing.assert_allclose(reduced["stiffness_matrix"], drift.T @ np.diag(k) @ drift, rtol=1e-9, atol=1e-3)
+    np.testing.assert_allclose(
+        reduced["stiffness_matrix"], drift.T @ np.diag(k) @ drift, rtol=1e-9, atol=1e-3
+    )
     assert reduced["modal_damping"][0] == pytest.approx(0.01, rel=1e-9)
     assert reduced["modal_damping"][4] == pytest.approx(0.05, rel=1e-9)
     np.testing.assert_allclose(reduced["story_heights"], [3.0] * 5, rtol=1e-9)
@@ -92,16 +97,22 @@ wipe all
 
 
 def test_a_published_script_runs_unmodified_as_it_stands_after_gravity(tmp_path):
-    """Display commands, a recorder, the script's gravity analysis, then its own pushover and a wipe: rlc takes the
-    model at loadConst (the same reduced model as the bare file), and nothing is written beside the model."""
+    """Display commands, a recorder, the script's gravity analysis, then its own pushover and a wipe: rlc
+    takes the model at loadConst (the same reduced model as the bare file), and nothing is written beside the
+    model."""
     shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
     (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
     model = tmp_path / TCL_MODEL.name
-    reduce = ("import json; from pathlib import Path; from rlcontroller.physics.fe.build import reduced_building; "
-              "print(json.dumps(reduced_building(Path({!r}), 'build_model')['stiffness_matrix']))")  # fmt: skip
+    reduce = (
+        "import json; from pathlib import Path; from rlcontroller.physics.fe.build import "
+        "reduced_building; "
+        "print(json.dumps(reduced_building(Path({!r}), 'build_model')['stiffness_matrix']))"
+    )
     published, bare = (in_own_process(reduce.format(str(path))) for path in (model, TCL_MODEL))
     np.testing.assert_allclose(published, bare, rtol=1e-9)
-    assert sorted(path.name for path in tmp_path.iterdir()) == sorted([TCL_MODEL.name, TCL_MODEL.stem + ".yaml"])
+    assert sorted(path.name for path in tmp_path.iterdir()) == sorted(
+        [TCL_MODEL.name, TCL_MODEL.stem + ".yaml"]
+    )
 
 
 def test_a_script_run_to_its_end_that_wipes_its_model_is_one_line(tmp_path):
@@ -110,15 +121,19 @@ def test_a_script_run_to_its_end_that_wipes_its_model_is_one_line(tmp_path):
     )
     (tmp_path / TCL_MODEL.name).write_text(TCL_MODEL.read_text() + PUBLISHED_TAIL)
     done = model_error_in_own_process(f"build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')")
-    assert done.stdout.strip().endswith("no model is left in the domain once the file has run (does it end with "
-                                        "wipe? a Tcl script's description may say build_until: loadConst)")  # fmt: skip
+    assert done.stdout.strip().endswith(
+        "no model is left in the domain once the file has run (does it end "
+        "with wipe? a Tcl script's description may say build_until: loadConst)"
+    )
 
 
 def test_a_missing_tcl_package_is_one_line_naming_it_and_tcllibpath(tmp_path):
     shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
     (tmp_path / TCL_MODEL.name).write_text("package require math::nosuchpackage\n" + TCL_MODEL.read_text())
     done = model_error_in_own_process(f"build_model(Path({str(tmp_path / TCL_MODEL.name)!r}), 'build_model')")
-    assert "needs the Tcl package math::nosuchpackage, which OpenSees' interpreter lacks" in done.stdout, done.stderr
+    assert "needs the Tcl package math::nosuchpackage, which OpenSees' interpreter lacks" in done.stdout, (
+        done.stderr
+    )
     assert "TCLLIBPATH" in done.stdout and len(done.stdout.strip().splitlines()) == 1
 
 
@@ -129,13 +144,21 @@ def test_a_wrong_but_valid_length_unit_warns_with_the_unit(tmp_path):
     (tmp_path / TCL_MODEL.with_suffix(".yaml").name).write_text(sidecar)
     model = tmp_path / TCL_MODEL.name
     done = subprocess.run(
-        [sys.executable, "-c", "from pathlib import Path; from rlcontroller.physics.fe.build import reduced_building; "
-         f"reduced_building(Path({str(model)!r}), 'build_model')"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-c",
+            "from pathlib import Path; from rlcontroller.physics.fe.build import "
+            "reduced_building; "
+            f"reduced_building(Path({str(model)!r}), 'build_model')",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr
-    assert f"warning: {model}: story heights 0.25 to 0.25 m, read in in (units.length), are outside 1.5 to 12 m" in (
-        done.stderr
+    assert (
+        f"warning: {model}: story heights 0.25 to 0.25 m, read in in (units.length), are outside 1.5 to 12 m"
+        in (done.stderr)
     )
 
 
@@ -151,9 +174,9 @@ def test_a_pushover_given_a_system_opensees_does_not_take_is_one_line(tmp_path):
 
 @pytest.mark.slow
 def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(records):
-    """The ground (m/s^2 -> ft/s^2), the actuators' forces (N -> kip) and the floors' response (ft -> m): under a
-    record and held pushes, the Tcl plant's drifts and absolute accelerations are those of rlc's exact integration
-    of the paper's building (a wrong unit or sign is tens of per cent)."""
+    """The ground (m/s^2 -> ft/s^2), the actuators' forces (N -> kip) and the floors' response (ft -> m):
+    under a record and held pushes, the Tcl plant's drifts and absolute accelerations are those of rlc's exact
+    integration of the paper's building (a wrong unit or sign is tens of per cent)."""
     errors = in_own_process(
         "import json, numpy as np\n"
         "from rlcontroller import api\n"
@@ -175,7 +198,8 @@ def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(record
     for quantity, (peak_error, rms_error, peak) in errors.items():
         assert peak > (1e-2 if quantity == "drift" else 1.0), quantity  # it moves (m, m/s^2)
         assert peak_error <= 1e-3, quantity  # peaks as the Python model's (test_opensees_plant.py)
-        assert rms_error <= (2e-3 if quantity == "drift" else 5e-3), quantity  # Newmark's period error, 2.5 ms
+        # Newmark's period error, 2.5 ms
+        assert rms_error <= (2e-3 if quantity == "drift" else 5e-3), quantity
 
 
 @pytest.mark.parametrize(
@@ -184,15 +208,30 @@ def test_a_tcl_plant_in_kip_and_foot_moves_as_rlc_integrates_the_building(record
         (None, "five_story_shear_kip_ft.tcl: a Tcl model needs five_story_shear_kip_ft.yaml beside it"),
         ("units: {length: furlong, force: kip}", "units: expected length in m, cm, mm, ft, in and force in"),
         ("floors: [[1], [2], [3], [4], [9]]", "floors: floor 5 names node 9, which the model does not have"),
-        ("tcl: node 1 oops", 'Tcl error: expected'),
+        ("tcl: node 1 oops", "Tcl error: expected"),
         ("tcl: exit", "the model calls exit (line 27), which would end rlc: remove it"),
-        ("direction: x", "direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) or 3 (z)"),
-        ("rayleigh: [0.0145]", "rayleigh: expected [a0, a1], two coefficients >= 0 of C = a0 M + a1 K, got [0.0145]"),
-        ("floors: [[1], [2], [3], [4], [1.5]]", "floors: floor 5: expected node tags (whole numbers), got [1.5]"),
+        (
+            "direction: x",
+            "direction: expected the lateral degree of freedom as a number, 1 (x), 2 (y) or 3 (z)",
+        ),
+        (
+            "rayleigh: [0.0145]",
+            "rayleigh: expected [a0, a1], two coefficients >= 0 of C = a0 M + a1 K, got [0.0145]",
+        ),
+        (
+            "floors: [[1], [2], [3], [4], [1.5]]",
+            "floors: floor 5: expected node tags (whole numbers), got [1.5]",
+        ),
         ("floors: [[1], [2], [3], [4], [4]]", "floors: node 4 is named twice (floor 4 and floor 5)"),
         ("floors: [[0], [2], [3], [4], [5]]", "floors: floor 1 (nodes [0]) has no mass in direction 1"),
-        ("rayleigh: null\nrayleigh_modes: [[1, 0.02], [9, 0.02]]", "rayleigh_modes: mode 9: a model of 5 floors has 5"),
-        ("story_heights: [3, 3, 3, 3]", "story_heights: expected one positive height per floor (5), got [3.0, 3.0"),
+        (
+            "rayleigh: null\nrayleigh_modes: [[1, 0.02], [9, 0.02]]",
+            "rayleigh_modes: mode 9: a model of 5 floors has 5",
+        ),
+        (
+            "story_heights: [3, 3, 3, 3]",
+            "story_heights: expected one positive height per floor (5), got [3.0, 3.0",
+        ),
     ],
 )
 def test_what_a_tcl_model_lacks_or_gets_wrong_is_one_line_naming_the_file(tmp_path, change, message):
@@ -211,8 +250,12 @@ def test_what_a_tcl_model_lacks_or_gets_wrong_is_one_line_naming_the_file(tmp_pa
         .replace("../../configs/opensees/five_story_shear_kip_ft.tcl", str(tmp_path / TCL_MODEL.name))
         .replace("../../configs/", f"{REPOSITORY}/configs/")
     )
-    done = subprocess.run([sys.executable, "-m", "rlcontroller", "info", str(experiment)], capture_output=True,
-                          text=True, timeout=300)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "rlcontroller", "info", str(experiment)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     lines = done.stderr.strip().splitlines()
     assert done.returncode != 0 and len(lines) == 1 and message in lines[0], done.stderr
     assert str(tmp_path / TCL_MODEL.name.replace(".tcl", "")) in lines[0]
@@ -226,11 +269,13 @@ def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
     outcome = in_own_process(
         "import json; from pathlib import Path; from rlcontroller.errors import ConfigError\n"
         "from rlcontroller.physics.fe.build import reduced_building\n"
-        f"reduced_building(Path({str(REPOSITORY / 'configs' / 'opensees' / 'five_story_shear.py')!r}), 'build_model')\n"
-        f"try: reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')\n"
+        f"reduced_building(Path({str(REPOSITORY / 'configs' / 'opensees' / 'five_story_shear.py')!r}), "
+        f"'build_model')\ntry: reduced_building(Path({str(TCL_MODEL)!r}), 'build_model')\n"
         "except ConfigError as error: print(json.dumps({'error': str(error)}))"
     )
-    assert outcome["error"].startswith("this process already ran an OpenSeesPy (Python) model: OpenSeesPy and")
+    assert outcome["error"].startswith(
+        "this process already ran an OpenSeesPy (Python) model: OpenSeesPy and"
+    )
 
 
 NEVER_HELD_TAIL = """
@@ -241,9 +286,9 @@ integrator LoadControl 0.1; analysis Static; analyze 10
 
 
 def test_a_script_that_never_holds_its_loads_has_them_held_where_they_stand_and_is_told(tmp_path):
-    """A script that applies a load with a Linear pattern and never calls loadConst: rlc holds it (loadConst -time
-    0.0) and says so in one line; through 4 s of motion the roof stays where the held load put it (a Linear pattern
-    left on would push it 1 kip more each second: about 0.5 mm a second on this building)."""
+    """A script that applies a load with a Linear pattern and never calls loadConst: rlc holds it (loadConst
+    -time 0.0) and says so in one line; through 4 s of motion the roof stays where the held load put it (a
+    Linear pattern left on would push it 1 kip more each second: about 0.5 mm a second on this building)."""
     shutil.copy(TCL_MODEL.with_suffix(".yaml"), tmp_path)
     model = tmp_path / TCL_MODEL.name
     model.write_text(TCL_MODEL.read_text() + NEVER_HELD_TAIL)
@@ -261,7 +306,9 @@ def test_a_script_that_never_holds_its_loads_has_them_held_where_they_stand_and_
         "    roof.append(state[4])\n"
         "print(json.dumps([min(roof), max(roof)]))"
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=REPOSITORY)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=REPOSITORY
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     low, high = json.loads(done.stdout.strip().splitlines()[-1])
     assert high - low < 1e-6  # m: held, not growing (25 mm more over the 4 s were it left on)

@@ -43,7 +43,9 @@ def test_the_frame_pushover_starts_at_its_condensed_story_stiffness_and_yields_e
     floors = np.array(reduced["mass_matrix"]), np.array(reduced["stiffness_matrix"])
     push = pushover(model, "build_model", *floors, roof_drift=0.04, steps=200)
     first = push.shear[1] / push.drift[1]  # the first increment, 0.02 % of the height: elastic
-    np.testing.assert_allclose(first, push.stiffness, rtol=0.01)  # the FE push against the static condensation
+    # the FE push against the static condensation
+    np.testing.assert_allclose(first, push.stiffness, rtol=0.01)
     assert push.yielded.all() and np.all(push.drift[-1] > push.yield_drift)
-    assert np.all((push.yield_drift / 3.96 > 0.005) & (push.yield_drift / 3.96 < 0.015))  # 0.5-1.5 % of a story
+    # 0.5-1.5 % of a story
+    assert np.all((push.yield_drift / 3.96 > 0.005) & (push.yield_drift / 3.96 < 0.015))
     assert np.all((push.post_yield_ratio > -0.1) & (push.post_yield_ratio < 0.2))

@@ -16,7 +16,10 @@ from rlcontroller.physics.motions.excitation import (
 )
 from rlcontroller.physics.motions.generators import GroundModel, generate_suite, kanai_tajimi, noise_impulses
 
-WEST2 = "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\nACCELERATION TIME SERIES IN UNITS OF G\n"
+WEST2 = (
+    "PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Station, 0\n"
+    "ACCELERATION TIME SERIES IN UNITS OF G\n"
+)
 
 
 def write(path, text, newline="\n"):
@@ -37,7 +40,8 @@ def test_the_seven_records_match_the_manifest(records):
 
 @pytest.mark.parametrize("newline", ["\n", "\r\n"])
 @pytest.mark.parametrize(
-    "header", ["NPTS=      4, DT=   .0100 SEC,", "NPTS =      4 , DT =   .010 SEC ,", "    4    0.0100    NPTS, DT"]
+    "header",
+    ["NPTS=      4, DT=   .0100 SEC,", "NPTS =      4 , DT =   .010 SEC ,", "    4    0.0100    NPTS, DT"],
 )
 def test_at2_header_variants_and_line_endings(tmp_path, header, newline):
     path = write(tmp_path / "r.AT2", WEST2 + header + "\n  .1E+00  -.2E+00\n   .3E+00\n  -.5E-01\n", newline)
@@ -49,8 +53,14 @@ def test_at2_header_variants_and_line_endings(tmp_path, header, newline):
 @pytest.mark.parametrize(
     ("body", "expected"),
     [
-        ("NPTS=      5, DT=   .0100 SEC\n .1 .2 .3\n .4\n", "NPTS=5 but the file holds 4 values (truncated?)"),
-        ("NPTS=      3, DT=   .0100 SEC\n .1 .2 .3\n .4\n", "NPTS=3 but the file holds 4 values (extra values?)"),
+        (
+            "NPTS=      5, DT=   .0100 SEC\n .1 .2 .3\n .4\n",
+            "NPTS=5 but the file holds 4 values (truncated?)",
+        ),
+        (
+            "NPTS=      3, DT=   .0100 SEC\n .1 .2 .3\n .4\n",
+            "NPTS=3 but the file holds 4 values (extra values?)",
+        ),
         ("NPTS=      4, DT=   .0100 SEC\n .1 .2\n .3 abc\n", "r.AT2:6: expected a number, got 'abc'"),
         ("GARBAGE\n .1 .2\n", "r.AT2:4: expected 'NPTS=..., DT=...'"),
         ("NPTS=      0, DT=   .0100 SEC\n", "r.AT2:4: NPTS = 0, expected at least 2 samples"),
@@ -59,7 +69,10 @@ def test_at2_header_variants_and_line_endings(tmp_path, header, newline):
         ("NPTS=      2, DT=   1.2.3 SEC\n .1 .2\n", "r.AT2:4: DT must be a number, got '1.2.3'"),
         ("NPTS=      2, DT=   1e-300 SEC\n .1 .2\n", "r.AT2:4: DT = 1e-300 s, expected 0.0001 to 1 s"),
         ("NPTS=      2, DT=   1000 SEC\n .1 .2\n", "r.AT2:4: DT = 1000 s, expected 0.0001 to 1 s"),
-        ("NPTS= 400000, DT=   .0100 SEC\n .1 .2\n", "r.AT2:4: NPTS = 400000, expected at least 2 samples and at most"),
+        (
+            "NPTS= 400000, DT=   .0100 SEC\n .1 .2\n",
+            "r.AT2:4: NPTS = 400000, expected at least 2 samples and at most",
+        ),
         ("NPTS=      3, DT=   .0100 SEC\n 0 0 0\n", "every sample is zero"),
         ("NPTS=      3, DT=   .0100 SEC\n 0 1e6 0\n", "PGA 1e+06 g, expected at most 10.2 g (wrong unit?)"),
         ("NPTS=      3, DT=   .0100 SEC\n 0 nan 0\n", "non-finite values"),
@@ -74,7 +87,9 @@ def test_broken_at2_files_give_clear_errors(tmp_path, body, expected):
 
 
 def test_at2_in_other_units_is_refused(tmp_path):
-    path = write(tmp_path / "r.AT2", WEST2.replace("UNITS OF G", "UNITS OF CM/S/S") + "NPTS= 1, DT= .01 SEC\n .1\n")
+    path = write(
+        tmp_path / "r.AT2", WEST2.replace("UNITS OF G", "UNITS OF CM/S/S") + "NPTS= 1, DT= .01 SEC\n .1\n"
+    )
     with pytest.raises(MotionError, match=r"r.AT2:3: expected"):
         read_at2(path)
 
@@ -239,8 +254,8 @@ def test_ground_model_spectrum_is_its_filters_power_gain():
 
 def test_generated_samples_are_the_same_when_the_arithmetic_differs_in_its_last_bits():
     """Two CPUs' BLAS kernels give a generator's float64 samples that differ by about 1e-13 of the peak; after
-    `same_on_every_cpu` they are the same bits (so the same noise seed), within 2^-16 of the power of two above
-    the peak of the unrounded samples."""
+    `same_on_every_cpu` they are the same bits (so the same noise seed), within 2^-16 of the power of two
+    above the peak of the unrounded samples."""
     from rlcontroller.physics.motions.excitation import SAME_BITS, content_seed, same_on_every_cpu
 
     samples = np.random.default_rng(3).normal(size=20_000) * 3.7

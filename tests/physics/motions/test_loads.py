@@ -37,7 +37,9 @@ def test_random_floor_loads_match_solve_ivp_with_two_samples_per_step():
     def rates(t, s):
         f = np.array([np.interp(t, time, column) for column in forces.T])
         x, v = s[:5], s[5:]
-        return np.concatenate([v, np.linalg.solve(building.mass, f - building.stiffness @ x - building.damping @ v)])
+        return np.concatenate(
+            [v, np.linalg.solve(building.mass, f - building.stiffness @ x - building.damping @ v)]
+        )
 
     solution = scipy.integrate.solve_ivp(
         rates, (0.0, time[-1]), np.zeros(10), t_eval=time[::2], rtol=1e-10, atol=1e-13, max_step=dt / 4
@@ -91,10 +93,16 @@ def test_a_batch_under_wind_gives_each_records_env_rollout():
             assert reward == alone_reward or abs(reward - alone_reward) <= 1e-9 * abs(alone_reward)
             for quantity in ("drift", "absolute_acceleration"):
                 expected = alone.quantity(quantity)
-                np.testing.assert_allclose(result.quantity(quantity), expected, atol=1e-9 * np.abs(expected).max())
+                np.testing.assert_allclose(
+                    result.quantity(quantity), expected, atol=1e-9 * np.abs(expected).max()
+                )
     samples = motions[0]
-    open_loop = simulate(plant.building, plant.sampled(2).step, samples.acceleration, floor_forces=samples.floor_forces)
-    np.testing.assert_allclose(batched[0][0][0].drift, open_loop.drift, atol=1e-9 * np.abs(open_loop.drift).max())
+    open_loop = simulate(
+        plant.building, plant.sampled(2).step, samples.acceleration, floor_forces=samples.floor_forces
+    )
+    np.testing.assert_allclose(
+        batched[0][0][0].drift, open_loop.drift, atol=1e-9 * np.abs(open_loop.drift).max()
+    )
     np.testing.assert_allclose(
         batched[0][0][0].absolute_acceleration, open_loop.absolute_acceleration, atol=1e-9 * 10.0
     )
@@ -116,5 +124,9 @@ def test_a_measured_floor_force_record_loads_the_floors_in_si(tmp_path):
     rows += [f"{0.01 * k:.2f},{k % 7},{-(k % 5)},0,1.5,{k % 3}" for k in range(50)]
     (tmp_path / "gust.csv").write_text("\n".join(rows) + "\n")
     record = read_motion(tmp_path / "gust.csv")
-    assert abs(record.dt - 0.01) < 1e-12 and record.floor_forces.shape == (50, 5) and not record.acceleration.any()
+    assert (
+        abs(record.dt - 0.01) < 1e-12
+        and record.floor_forces.shape == (50, 5)
+        and not record.acceleration.any()
+    )
     np.testing.assert_array_equal(record.floor_forces[8], [1e3, -3e3, 0.0, 1.5e3, 2e3])  # kN to N

@@ -10,7 +10,12 @@ from typer.testing import CliRunner
 
 from rlcontroller.cli import app
 from rlcontroller.physics.motions.excitation import STANDARD_GRAVITY, MotionError
-from rlcontroller.physics.motions.records import RECORDS_VARIABLE, SYNTHETIC_LABEL, choose_motions, load_records
+from rlcontroller.physics.motions.records import (
+    RECORDS_VARIABLE,
+    SYNTHETIC_LABEL,
+    choose_motions,
+    load_records,
+)
 
 HEADER = "PEER NGA STRONG MOTION DATABASE RECORD\n{title}\nACCELERATION TIME SERIES IN UNITS OF G\n"
 
@@ -18,7 +23,9 @@ HEADER = "PEER NGA STRONG MOTION DATABASE RECORD\n{title}\nACCELERATION TIME SER
 def write_at2(path: Path, acceleration_g: np.ndarray, dt: float, title: str = "Test event, station") -> Path:
     """A PEER NGA-West2 .AT2 file, five values a line."""
     lines = [f"NPTS= {acceleration_g.size:7d}, DT= {dt:.4f} SEC"]
-    lines += ["  ".join(f"{v: .7E}" for v in acceleration_g[i : i + 5]) for i in range(0, acceleration_g.size, 5)]
+    lines += [
+        "  ".join(f"{v: .7E}" for v in acceleration_g[i : i + 5]) for i in range(0, acceleration_g.size, 5)
+    ]
     path.write_text(HEADER.format(title=title) + "\n".join(lines) + "\n")
     return path
 
@@ -58,7 +65,8 @@ def test_a_folder_without_manifest_takes_every_at2_and_csv_file_in_name_order(my
 
 def test_a_manifest_chooses_orders_and_describes_the_records(my_records):
     (my_records / "manifest.csv").write_text(
-        "file,event,year,station,component\nc_array.csv,Test Quake,2001,Array 7,EW\nb_station.AT2,Other,1999,B,N\n"
+        "file,event,year,station,component\nc_array.csv,Test Quake,2001,Array "
+        "7,EW\nb_station.AT2,Other,1999,B,N\n"
     )
     motions, label = load_records(my_records)
     assert [m.name for m in motions] == ["c_array", "b_station"]

@@ -1,5 +1,6 @@
-"""Rezaeian & Der Kiureghian's site-based motions: the drawn parameters are what the motions carry, the predictive
-equations move with the scenario as real motions do, and the family's spectral shapes are those of real records."""
+"""Rezaeian & Der Kiureghian's site-based motions: the drawn parameters are what the motions carry, the
+predictive equations move with the scenario as real motions do, and the family's spectral shapes are those of
+real records."""
 
 import math
 
@@ -49,7 +50,8 @@ def test_the_filter_frequency_is_the_zero_crossing_rate():
 
 
 def test_the_predictions_move_with_the_scenario_as_real_motions_do():
-    """Larger earthquakes shake harder, longer and at lower frequencies; farther sites more weakly and longer."""
+    """Larger earthquakes shake harder, longer and at lower frequencies; farther sites more weakly and
+    longer."""
 
     def median(**scenario) -> SiteParameters:
         values = {"magnitude": 6.5, "distance": 30.0, "vs30": 600.0, "reverse": False} | scenario
@@ -62,7 +64,8 @@ def test_the_predictions_move_with_the_scenario_as_real_motions_do():
 
 
 def test_the_slope_distribution_is_a_distribution():
-    """wslope's quantile function inverts its two-sided exponential density, which integrates to one on [-2, 0.5]."""
+    """wslope's quantile function inverts its two-sided exponential density, which integrates to one on [-2,
+    0.5]."""
     a, b, c, low, high = site_motions.SLOPE_CDF
 
     def density(x: float) -> float:
@@ -72,7 +75,9 @@ def test_the_slope_distribution_is_a_distribution():
     assert total == pytest.approx(1.0, abs=1e-3)
     for p in (0.01, 0.3, 0.7, 0.72, 0.9, 0.999):
         x = site_motions.slope_quantile(p)
-        mass = integrate.quad(density, low, min(x, 0.0))[0] + (integrate.quad(density, 0.0, x)[0] if x > 0 else 0.0)
+        mass = integrate.quad(density, low, min(x, 0.0))[0] + (
+            integrate.quad(density, 0.0, x)[0] if x > 0 else 0.0
+        )
         assert mass == pytest.approx(p, abs=1e-6)
 
 
@@ -86,18 +91,19 @@ def test_the_high_pass_removes_drift_and_keeps_shaking():
 
 
 def test_a_response_spectrum_at_resonance():
-    """Under a harmonic ground acceleration at its own period, a 5 %-damped oscillator's steady pseudo-acceleration
-    is the amplitude over 2 zeta."""
+    """Under a harmonic ground acceleration at its own period, a 5 %-damped oscillator's steady
+    pseudo-acceleration is the amplitude over 2 zeta."""
     time = np.arange(0.0, 80.0, DT)
     motion = Load("sine", DT, np.sin(2 * np.pi * time))
     assert pseudo_acceleration(motion, np.array([1.0]), 0.05)[0] == pytest.approx(10.0, rel=2e-3)
 
 
 def test_a_response_spectrum_against_an_ode_solver():
-    """On a random record, the same peaks as scipy's RK45 (tight tolerances) on the oscillator's equation with the
-    ground acceleration linear between samples."""
+    """On a random record, the same peaks as scipy's RK45 (tight tolerances) on the oscillator's equation with
+    the ground acceleration linear between samples."""
     rng = np.random.default_rng(3)
-    motion = Load("noise", DT, np.concatenate([[0.0], rng.normal(size=1000)]))  # from rest, as a record starts
+    # from rest, as a record starts
+    motion = Load("noise", DT, np.concatenate([[0.0], rng.normal(size=1000)]))
     periods, zeta = np.array([0.3, 1.0, 3.0]), 0.02
     for period, sa in zip(periods, pseudo_acceleration(motion, periods, zeta), strict=True):
         omega = 2.0 * np.pi / period
@@ -107,16 +113,22 @@ def test_a_response_spectrum_against_an_ode_solver():
             return [state[1], -ground - 2.0 * zeta * omega * state[1] - omega**2 * state[0]]
 
         solution = integrate.solve_ivp(
-            rate, (0.0, motion.duration), [0.0, 0.0], t_eval=motion.time, rtol=1e-10, atol=1e-12, max_step=DT / 4
+            rate,
+            (0.0, motion.duration),
+            [0.0, 0.0],
+            t_eval=motion.time,
+            rtol=1e-10,
+            atol=1e-12,
+            max_step=DT / 4,
         )
         assert sa == pytest.approx(omega**2 * np.max(np.abs(solution.y[0])), rel=1e-4)
 
 
 @pytest.mark.slow
 def test_the_family_has_real_records_spectral_shape():
-    """The check suite's family, median Sa/PGA (2 % damped): near what issue 77 measured on 233 real strong motions
-    held back from the project (0.48 at 2 s, 0.07 at 6.25 s), where round 6's Kanai-Tajimi family gave twice and
-    three times as much; at short periods above 1, as every real record's."""
+    """The check suite's family, median Sa/PGA (2 % damped): near what issue 77 measured on 233 real strong
+    motions held back from the project (0.48 at 2 s, 0.07 at 6.25 s), where round 6's Kanai-Tajimi family gave
+    twice and three times as much; at short periods above 1, as every real record's."""
     config = SiteBasedConfig(pga=(0.0196, 14.71), pga_log=True)
     periods = np.array([6.25, 2.0, 0.2])
     shapes = np.array([spectral_shape(motion, periods) for motion in generate_suite(config, 160, 31337)])
@@ -129,7 +141,10 @@ def test_the_family_has_real_records_spectral_shape():
 @pytest.mark.parametrize(
     ("generator", "message"),
     [
-        ({"magnitude": [9, 10]}, "excitation.generator.magnitude[0]: Input should be less than or equal to 8"),
+        (
+            {"magnitude": [9, 10]},
+            "excitation.generator.magnitude[0]: Input should be less than or equal to 8",
+        ),
         ({"distance": [50, 10]}, "excitation.generator.distance: expected [low, high] with low <= high"),
         ({"vs": [300, 800]}, "excitation.generator.vs: unknown key; did you mean 'vs30'?"),
     ],

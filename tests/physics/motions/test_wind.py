@@ -6,9 +6,17 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from rlcontroller.physics.motions.wind import WindField, fluctuating_forces, load_model, mean_force, turbulence
+from rlcontroller.physics.motions.wind import (
+    WindField,
+    fluctuating_forces,
+    load_model,
+    mean_force,
+    turbulence,
+)
 
-FIELD = WindField(heights=np.array([40.0, 80.0, 160.0, 300.0]), speed=25.0, reference_height=10.0, roughness=0.3)
+FIELD = WindField(
+    heights=np.array([40.0, 80.0, 160.0, 300.0]), speed=25.0, reference_height=10.0, roughness=0.3
+)
 DT, DURATION, REALISATIONS = 0.25, 1800.0, 24
 
 
@@ -54,7 +62,8 @@ def test_the_variance_is_the_spectrum_integral_and_the_mean_is_zero():
     expected = FIELD.spectrum(frequencies).sum(axis=0) * dn
     np.testing.assert_allclose(u.var(axis=(0, 1)), expected, rtol=0.08)
     assert np.all(np.abs(u.mean(axis=(0, 1))) < 0.1 * np.sqrt(expected))
-    assert expected[-1] / FIELD.friction_velocity**2 == pytest.approx(6.0, rel=0.1)  # Kaimal: sigma_u^2 ~ 6 u*^2
+    # Kaimal: sigma_u^2 ~ 6 u*^2
+    assert expected[-1] / FIELD.friction_velocity**2 == pytest.approx(6.0, rel=0.1)
 
 
 def test_the_fluctuating_force_has_zero_mean_and_a_seed_fixes_the_record():
@@ -76,7 +85,10 @@ def test_the_load_model_matches_kaimal_at_the_first_mode_and_davenport_between_f
     t = model.time_constant
     first_order = 4.0 * variance * t / (1.0 + (2.0 * np.pi * frequency * t) ** 2)
     reference = WindField(
-        heights=np.array([200.0]), speed=FIELD.speed, reference_height=FIELD.reference_height, roughness=FIELD.roughness
+        heights=np.array([200.0]),
+        speed=FIELD.speed,
+        reference_height=FIELD.reference_height,
+        roughness=FIELD.roughness,
     )
     assert first_order == pytest.approx(reference.spectrum(np.array([frequency]))[0, 0], rel=1e-9)
     assert 1.0 / (2.0 * np.pi * t) < frequency
