@@ -56,7 +56,11 @@ def python_step(plant: Plant, controller: PolicyController):
         observation[layout.readings] = readings[0] / layout.reading_scale
         observation[layout.ground] = ground[0, 0] / layout.ground_scale
         memory["estimate"] = kalman.update(
-            memory["estimate"], readings[0], held, ground[0, 0], memory["ground"]
+            memory["estimate"],
+            readings[0],
+            held_action=held,
+            ground=ground[0, 0],
+            previous_ground=memory["ground"],
         )
         memory["ground"] = ground[0, 0]
         observation[layout.estimate] = memory["estimate"] / layout.estimate_scale

@@ -3,7 +3,7 @@ its arguments, calls one of these and prints). Each takes paths as the command d
 to hear how the work goes (default `QUIET`); user mistakes raise `rlcontroller.config.ConfigError`
 with a one-line message. docs/architecture.md has an example per command."""
 
-from rlcontroller.api.common import QUIET, Report, load, model_folder
+from rlcontroller.api.common import QUIET, Judging, Report, load, model_folder
 from rlcontroller.api.describe import describe
 from rlcontroller.api.identification import identify, reduce, simulate_test
 from rlcontroller.api.judging import compare_lqg, compare_passive, evaluate, robustness, summary_text
@@ -14,6 +14,7 @@ from rlcontroller.api.training import demo, train
 
 __all__ = [
     "QUIET",
+    "Judging",
     "aggregate",
     "sweep",
     "tune",

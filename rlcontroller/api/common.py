@@ -6,6 +6,7 @@ from __future__ import annotations
 import datetime as dt
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 from rlcontroller.assets import (
@@ -35,6 +36,22 @@ class Report:
 
 
 QUIET = Report()
+
+
+@dataclass(frozen=True)
+class Judging:
+    """What a judging command (`evaluate`, `compare_lqg`) runs the controllers on and writes: the `records` (a
+    folder or a loads YAML; None: the embedded synthetic suite), their PGA scaled to `scale_pga` (g; None: as
+    recorded), the run's `model` policy ("best" or "final") and the `criteria` ("paper": J1-J4; "benchmark":
+    the nonlinear benchmark's J1-J17 too, `evaluation.benchmark`)."""
+
+    records: Path | None = None
+    scale_pga: float | None = None  # g
+    model: str = "best"
+    criteria: str = "paper"
+
+
+DEFAULT_JUDGING = Judging()  # the embedded suite, as recorded, the best policy, J1-J4
 
 
 def load(config: Path | None) -> Experiment:

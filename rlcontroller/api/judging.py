@@ -11,7 +11,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rlcontroller.api.common import (
+    DEFAULT_JUDGING,
     QUIET,
+    Judging,
     Report,
     folder_experiment,
     keep_model_messages,
@@ -37,22 +39,20 @@ CRITERIA = (
 def comparison(
     experiment: Experiment,
     run_dir: Path | None,
-    model: str,
-    records: Path | None,
     *,
-    scale_pga: float | None,
+    judging: Judging,
     report: Report = QUIET,
     mpc: int | None = None,
-    criteria: str = "paper",
 ):
-    """The plant, the loads and the evaluation of every controller (the run's policy if given; MPC with a
-    horizon of `mpc` control steps if given); with `criteria` "benchmark" an FE plant's member ends are read
-    too (`physics.fe.connections`)."""
+    """The plant, the loads and the evaluation of every controller on `judging`'s records (the run's policy
+    if given; MPC with a horizon of `mpc` control steps if given); with the criteria "benchmark" an FE plant's
+    member ends are read too (`physics.fe.connections`)."""
     from rlcontroller.control.policy_file import read_policy
     from rlcontroller.evaluation.evaluation import compare, progress_total
     from rlcontroller.physics.motions.loads import load_suite
     from rlcontroller.physics.plant import Plant
 
+    criteria = judging.criteria
     if criteria not in CRITERIA:
         raise ConfigError(f"--criteria {criteria}: expected one of {', '.join(CRITERIA)}")
     plant = Plant(experiment)
@@ -66,13 +66,13 @@ def comparison(
             f"plant: the OpenSees model {plant.fe_model.path} (designed on: {experiment.building.name})"
         )
         plant.fe_model.record_connections = plant.bare.fe_model.record_connections = criteria == "benchmark"
-    policy = read_policy(run_dir, model, plant) if run_dir is not None else None
+    policy = read_policy(run_dir, judging.model, plant) if run_dir is not None else None
     extra = ()
     if mpc is not None:
         from rlcontroller.control.mpc_controllers import mpc_controller
 
         extra = (mpc_controller(plant.design, mpc),)
-    motions, label = load_suite(records, scale_pga, plant, report.note)
+    motions, label = load_suite(judging.records, judging.scale_pga, plant, report.note)
     with report.progress(
         f"evaluating {motions_text(len(motions))}", progress_total(plant, motions)
     ) as advance:
@@ -89,19 +89,16 @@ def comparison(
 def evaluate(
     *,
     run_dir: Path | None = None,
-    records: Path | None = None,
+    judging: Judging = DEFAULT_JUDGING,
     out: Path | None = None,
-    scale_pga: float | None = None,
-    model: str = "best",
-    report: Report = QUIET,
     config: Path | None = None,
-    criteria: str = "paper",
+    report: Report = QUIET,
 ):
-    """A run's (default: the default model's) policy against LQG and no control on the records: returns
-    the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to. `config`: the
-    experiment to judge it in instead of its own (another plant, e.g. an OpenSees model, for the same
-    design: its building, actuators and sensors). `criteria` "benchmark": the nonlinear benchmark's J1-J17
-    too (`evaluation.benchmark`: benchmark_criteria.csv and .md)."""
+    """A run's (default: the default model's) policy against LQG and no control on `judging`'s records:
+    returns the `Evaluation` and the folder its J1-J4 tables and the paper's plots were written to (with the
+    criteria "benchmark" benchmark_criteria.csv and .md too). `config`: the experiment to judge it in instead
+    of its own (another plant, e.g. an OpenSees model, for the same design: its building, actuators and
+    sensors)."""
     from rlcontroller.api.safety import unchecked_note
     from rlcontroller.evaluation.benchmark import write_benchmark
     from rlcontroller.evaluation.report import write_report
@@ -115,13 +112,13 @@ def evaluate(
         drawing() as plots,
         model_messages() as messages,
     ):
-        plant, _, evaluation = comparison(
-            experiment, folder, model, records, scale_pga=scale_pga, report=report, criteria=criteria
-        )
-        report.note(unchecked_note(folder, model))  # once the records are read (a bad one is its only line)
+        plant, _, evaluation = comparison(experiment, folder, judging=judging, report=report)
+        report.note(
+            unchecked_note(folder, judging.model)
+        )  # once the records are read (a bad one is its only line)
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
-            if criteria == "benchmark":
+            if judging.criteria == "benchmark":
                 write_benchmark(evaluation, plant.building, staging)
             keep_model_messages(messages, staging, report)
     return evaluation, out
@@ -154,20 +151,18 @@ def compare_lqg(
     *,
     run_dir: Path | None = None,
     config: Path | None = None,
-    records: Path | None = None,
+    judging: Judging = DEFAULT_JUDGING,
     out: Path | None = None,
-    scale_pga: float | None = None,
     sweep: bool = False,
     preview: bool = False,
-    model: str = "best",
-    report: Report = QUIET,
     mpc: int | None = None,
-    criteria: str = "paper",
+    report: Report = QUIET,
 ) -> LQGComparison:
-    """LQG with the reward's cost (and its variants) against no control and, given a run, its policy;
-    with `sweep` LQG's trade-off over force weights (dampers: passive levels and clipped-optimal weights),
-    with `preview` full-state LQR knowing the ground ahead, with `mpc` MPC over that many control steps
-    (docs/mpc.md); with `criteria` "benchmark" the nonlinear benchmark's J1-J17 too (`evaluate`)."""
+    """LQG with the reward's cost (and its variants) against no control and, given a run, its policy, on
+    `judging`'s records; with `sweep` LQG's trade-off over force weights (dampers: passive levels and
+    clipped-optimal weights), with `preview` full-state LQR knowing the ground ahead, with `mpc` MPC over
+    that many control steps (docs/mpc.md); with the criteria "benchmark" the nonlinear benchmark's J1-J17 too
+    (`evaluate`)."""
     import numpy as np
 
     from rlcontroller.evaluation.benchmark import write_benchmark
@@ -202,20 +197,11 @@ def compare_lqg(
     out = output_folder(out, f"compare_lqg-{run_dir.resolve().name if run_dir else experiment.name}")
     check_new_folder(out)
     with model_messages() as messages:  # what an FE model prints goes to opensees.log
-        plant, motions, evaluation = comparison(
-            experiment,
-            run_dir,
-            model,
-            records,
-            scale_pga=scale_pga,
-            report=report,
-            mpc=mpc,
-            criteria=criteria,
-        )
+        plant, motions, evaluation = comparison(experiment, run_dir, judging=judging, report=report, mpc=mpc)
         label = evaluation.label
         with new_folder(out) as staging:
             write_report(evaluation, staging)
-            if criteria == "benchmark":
+            if judging.criteria == "benchmark":
                 write_benchmark(evaluation, plant.building, staging)
             if sweep and experiment.has_dampers:
                 levels, multipliers = DAMPER_LEVELS, np.logspace(-2, 2, 9)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rlcontroller.api.common import QUIET, Report, folder_experiment, load
+from rlcontroller.api.common import QUIET, Judging, Report, folder_experiment, load
 from rlcontroller.api.safety import check
 from rlcontroller.assets import DEMO_CONFIG
 from rlcontroller.config import ConfigError, Experiment, load_experiment, with_overrides
@@ -140,7 +140,9 @@ def demo(records: Path | None = None, progress_bar: bool = False, report: Report
     report.line(summary.line())
     report.line(learned_line(summary.run_dir))
     experiment = folder_experiment(summary.run_dir)
-    _, _, evaluation = comparison(experiment, summary.run_dir, "best", records, scale_pga=None, report=report)
+    _, _, evaluation = comparison(
+        experiment, summary.run_dir, judging=Judging(records=records), report=report
+    )
     out = summary.run_dir / "evaluation"
     with new_folder(out) as staging:
         write_report(evaluation, staging)

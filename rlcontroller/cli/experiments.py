@@ -32,6 +32,7 @@ def info(
 @app.command(short_help="Train a controller on generated motions.")
 @user_errors
 def train(
+    *,
     config: Annotated[
         Path | None,
         typer.Argument(

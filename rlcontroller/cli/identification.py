@@ -25,6 +25,7 @@ def parsed_list(text: str | None, option: str) -> list[float] | None:
 @app.command("simulate-test", short_help="A vibration test on an experiment's plant, recorded as a CSV.")
 @user_errors
 def simulate_test(
+    *,
     config: Annotated[
         Path, typer.Argument(help="Experiment YAML whose plant is tested (its plant part included).")
     ],
@@ -62,6 +63,7 @@ def simulate_test(
 @app.command(short_help="A building's state-space model from its test recordings.")
 @user_errors
 def identify(
+    *,
     recordings: Annotated[
         list[Path], typer.Argument(help="Recording CSVs of one set of sensors (rlc simulate-test).")
     ],

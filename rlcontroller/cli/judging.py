@@ -33,6 +33,7 @@ RunOption = Annotated[Path | None, typer.Argument(help=RUN_HELP)]
 @app.command(short_help="A controller against LQG and no control on records.")
 @user_errors
 def evaluate(
+    *,
     run_dir: RunOption = None,
     records: RecordsOption = None,
     out: OutOption = None,
@@ -53,15 +54,9 @@ def evaluate(
     from rlcontroller import api
 
     with fan_out(engine.value, address):
+        judging = api.Judging(records=records, scale_pga=scale_pga, model=model, criteria=criteria)
         evaluation, out = api.evaluate(
-            run_dir=run_dir,
-            records=records,
-            out=out,
-            scale_pga=scale_pga,
-            model=model,
-            report=Printed(progress),
-            config=config,
-            criteria=criteria,
+            run_dir=run_dir, judging=judging, out=out, config=config, report=Printed(progress)
         )
     typer.echo(api.summary_text(evaluation, out))
 
@@ -78,6 +73,7 @@ app.add_typer(compare_app, name="compare")
 @compare_app.command("lqg", short_help="LQG with the same cost: its J tables and trade-off curve.")
 @user_errors
 def compare_lqg(
+    *,
     run_dir: Annotated[
         Path | None, typer.Argument(help=f"Whose policy joins: {RUN_HELP[0].lower()}{RUN_HELP[1:]}")
     ] = None,
@@ -113,18 +109,16 @@ def compare_lqg(
     from rlcontroller import api
 
     with fan_out(engine.value, address):
+        judging = api.Judging(records=records, scale_pga=scale_pga, model=model, criteria=criteria)
         compared = api.compare_lqg(
             run_dir=run_dir,
             config=config,
-            records=records,
+            judging=judging,
             out=out,
-            scale_pga=scale_pga,
             sweep=sweep,
             preview=preview,
-            model=model,
-            report=Printed(progress),
             mpc=mpc,
-            criteria=criteria,
+            report=Printed(progress),
         )
     typer.echo(api.summary_text(compared.evaluation, compared.out))
     for text in (compared.sweep, compared.preview):
@@ -135,6 +129,7 @@ def compare_lqg(
 @compare_app.command("passive", short_help="The building with its mass devices passive, and without them.")
 @user_errors
 def compare_passive(
+    *,
     config: Annotated[Path, typer.Argument(help="Experiment YAML with a devices part.")],
     records: RecordsOption = None,
     out: OutOption = None,
@@ -158,6 +153,7 @@ def compare_passive(
 @app.command(short_help="Every controller on plants that differ from the design.")
 @user_errors
 def robustness(
+    *,
     run_dir: RunOption = None,
     records: RecordsOption = None,
     scenarios: Annotated[
@@ -193,6 +189,7 @@ def robustness(
 @app.command(short_help="The safety check: never worse than failed safe.")
 @user_errors
 def check(
+    *,
     run_dir: Annotated[Path | None, typer.Argument(help=RUN_HELP)] = None,
     model: ModelOption = "best",
     standard: Annotated[

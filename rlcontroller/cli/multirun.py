@@ -21,6 +21,7 @@ from rlcontroller.cli.app import (
 @app.command(short_help="Search hyperparameters with Optuna.")
 @user_errors
 def tune(
+    *,
     config: Annotated[
         Path, typer.Argument(help="Experiment YAML whose algorithm part has a 'search' space.")
     ],
@@ -51,6 +52,7 @@ def tune(
 @app.command(short_help="Train and evaluate seeds x settings, then aggregate.")
 @user_errors
 def sweep(
+    *,
     config: Annotated[Path, typer.Argument(help="Experiment YAML.")],
     seeds: Annotated[str, typer.Option(help="Seeds: a range 0-9 or a list 0,3,5.")] = "0-2",
     set_: Annotated[

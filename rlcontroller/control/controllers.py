@@ -226,7 +226,9 @@ class ClippedOptimal:
         if self.estimate is None:
             self.estimate = np.zeros(observation.shape[:-1] + (design.filter.size,))
         held = measured / self.capacity
-        self.estimate = design.filter.update(self.estimate, readings, held, ground, self._previous_ground)
+        self.estimate = design.filter.update(
+            self.estimate, readings, held_action=held, ground=ground, previous_ground=self._previous_ground
+        )
         self._previous_ground = ground
         return measured
 

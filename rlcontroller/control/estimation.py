@@ -73,6 +73,7 @@ class KalmanFilter:
         self,
         estimate: np.ndarray,
         readings: np.ndarray,
+        *,
         held_action: np.ndarray,
         ground: np.ndarray,
         previous_ground: np.ndarray,

@@ -61,5 +61,5 @@ def optimal_responses(
             k = t.shape[0]
             held = np.vstack([np.zeros((1, building.n_actuators)), actions[:k, row] * building.force_limits])
             time = np.arange(k + 1) * step.control_dt
-            results[i] = sampled.response(states[: k + 1, row], held, time, grids[i].ground_at_steps)
+            results[i] = sampled.response(states[: k + 1, row], held, time, ground=grids[i].ground_at_steps)
     return results

@@ -75,7 +75,7 @@ def assured(g, plant: Plant, stored: str, action: str, *, start: int) -> tuple[s
         ),
         -1.0,
         1.0,
-        "recovery_action",
+        output="recovery_action",
     )
     action = g.node("Where", [engaged, action, recovery], "assured_action")
     new_difference = g.node(

@@ -75,7 +75,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         centred = g.node("Sub", [observation, g.constant("observation_mean", normalizer.mean)], "centred")
         spread = np.sqrt(normalizer.var + normalizer.epsilon)
         divided = g.node("Div", [centred, g.constant("observation_spread", spread)], "divided")
-        network_input = g.clip(divided, -normalizer.clip, normalizer.clip, "normalised")
+        network_input = g.clip(divided, -normalizer.clip, normalizer.clip, output="normalised")
     x = g.node("Cast", [network_input], "network_input", to=FLOAT)
     x = network(g, controller.actor, x, "")
     if controller.actor.odd:  # (g(o) - g(-o)) / 2
@@ -84,7 +84,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         )
         difference = g.node("Sub", [x, mirrored], "odd_difference")
         x = g.node("Mul", [difference, g.constant("one_half", 0.5, np.float32)], "odd_action")
-    action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, "policy_action")
+    action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, output="policy_action")
     if controller.prior is not None:
         estimate = g.columns(stored, layout.estimate.start, layout.estimate.stop, "prior_estimate")
         feedback = g.affine(estimate, controller.prior.feedback, "prior_feedback")
@@ -92,7 +92,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
             "Mul", [ground, g.constant("prior_gain", controller.prior.feedforward[None])], "prior_ff"
         )
         prior = g.node("Neg", [g.node("Add", [feedback, feedforward], "prior_sum")], "prior_action")
-        action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, "action")
+        action = g.clip(g.node("Add", [action, prior], "residual_sum"), -1.0, 1.0, output="action")
     supervisor = experiment.supervisor
     trigger = supervisor is not None and supervisor.trigger is not None
     measured, assurance = [], []
@@ -182,7 +182,7 @@ def _supervised(
                 "Div", [g.node("Abs", [stroke], "stroke_speed"), g.constant("fade", fade)], "fade_ratio"
             )
             kept = g.clip(
-                g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, "fade_factor"
+                g.node("Sub", [g.constant("one", 1.0), speed], "fade_left"), 0.0, 1.0, output="fade_factor"
             )
             blocked = g.node("Mul", [action, kept], "faded_action")
         else:
@@ -214,7 +214,7 @@ def _supervised(
     else:
         rise = g.node("Sub", [peak, g.constant("trigger_start", start)], "above_start")
         ramp = g.node("Div", [rise, g.constant("trigger_span", full - start)], "ramp")
-        gain = g.clip(ramp, 0.0, 1.0, "gain")
+        gain = g.clip(ramp, 0.0, 1.0, output="gain")
     return g.node("Mul", [action, gain], "supervised_action"), peak, kept
 
 

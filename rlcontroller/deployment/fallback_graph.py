@@ -70,7 +70,7 @@ def fallen_back(g, plant: Plant, stored: str, action: str, *, velocity: str, sta
     )
     # one Clip, not Relu then Clip: onnxruntime's Relu-Clip fusion refuses double bounds
     kept = (
-        g.clip(speed, 0.0, rule.saturation, "speed_kept")
+        g.clip(speed, 0.0, rule.saturation, output="speed_kept")
         if np.isfinite(rule.saturation)
         else g.node("Relu", [speed], "speed_kept")
     )

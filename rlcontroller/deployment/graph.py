@@ -37,7 +37,7 @@ class Graph:
         """source @ matrix.T"""
         return self.node("MatMul", [source, self.constant(f"{output}_matrix", matrix.T)], output)
 
-    def clip(self, source: str, low: float, high: float, output: str, dtype=np.float64) -> str:
+    def clip(self, source: str, low: float, high: float, *, output: str, dtype=np.float64) -> str:
         low_name = self.constant(f"{output}_low", low, dtype)
         high_name = self.constant(f"{output}_high", high, dtype)
         return self.node("Clip", [source, low_name, high_name], output)

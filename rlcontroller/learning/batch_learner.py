@@ -65,6 +65,7 @@ class BatchLearner(BaseAlgorithm):
     def learn(
         self,
         total_timesteps: int,
+        *,
         callback=None,
         log_interval: int = 1,
         tb_log_name: str = "",

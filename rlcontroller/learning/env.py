@@ -154,7 +154,7 @@ class BuildingEnv(gym.Env):
             state = self.plant.integrator.step(state, clipped, self._windows[k], self.control_dt)
         else:  # floor forces: a plant that takes them in its own step (end-stops)
             state = self.plant.integrator.step(
-                state, clipped, self._windows[k], self.control_dt, self._load_windows[k]
+                state, clipped, self._windows[k], self.control_dt, floor_forces=self._load_windows[k]
             )
         return np.concatenate([state, state @ self._output_ct + clipped @ self._output_dt]) + self._forcing[k]
 
@@ -258,4 +258,6 @@ def rollout(env: BuildingEnv, motion: Load, controller: Controller, seed: int = 
         states[k] = env.plant_state
         commands[k] = env.command
     time = np.arange(n_steps + 1) * env.control_dt
-    return env.sampled.response(states, commands, time, env.ground_samples, env.floor_forces), total_reward
+    return env.sampled.response(
+        states, commands, time, ground=env.ground_samples, floor_forces=env.floor_forces
+    ), total_reward

@@ -103,7 +103,9 @@ def counted(study) -> int:
     return sum(1 for t in study.get_trials(deepcopy=False, states=states) if not t.user_attrs.get("surplus"))
 
 
-def worker(experiment: Experiment, trials: int, storage_url: str | None, study_name: str, out: Path) -> int:
+def worker(
+    experiment: Experiment, trials: int, *, storage_url: str | None, study_name: str, out: Path
+) -> int:
     """Run trials of the study until `trials` count in all (from every worker); the number run here."""
     import optuna
     from optuna.trial import TrialState
@@ -240,7 +242,7 @@ def tune(
     with_overrides(experiment, {}, "rlc tune")
     storage(storage_url, out)  # a bad URL stops here, before any worker starts
     if jobs == 1:
-        return worker(experiment, trials, storage_url, study_name, out)
+        return worker(experiment, trials, storage_url=storage_url, study_name=study_name, out=out)
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 

@@ -244,13 +244,14 @@ class EndStops:
         action: np.ndarray,
         ground: np.ndarray,
         control_dt: float,
+        *,
         floor_forces: np.ndarray | None = None,
     ) -> np.ndarray:
         """The state after one control step with `action` (forces / force limits) held, `ground` the r + 1
         ground samples (m/s^2) spanning it and `floor_forces` the r + 1 floor-force samples (r + 1, floors;
         N), if the load has them."""
         forces = None if floor_forces is None else floor_forces[None]
-        return self.step_many(state[None], action[None], ground[None], control_dt, forces)[0]
+        return self.step_many(state[None], action[None], ground[None], control_dt, floor_forces=forces)[0]
 
     def step_many(
         self,
@@ -258,6 +259,7 @@ class EndStops:
         actions: np.ndarray,
         grounds: np.ndarray,
         control_dt: float,
+        *,
         floor_forces: np.ndarray | None = None,
     ) -> np.ndarray:
         """`step` for many buildings of this plant at once (states (N, S), actions (N, m), grounds (N, r + 1),
@@ -266,10 +268,17 @@ class EndStops:
         loads = [actions * self.building.force_limits, grounds]
         if floor_forces is not None:
             loads.append(floor_forces.reshape(len(states), -1))
-        from rlcontroller.physics.integrators.stops import stop_step_many  # numba: imported when first needed
+        # numba: imported when first needed; its arguments named, so that no two can swap
+        from rlcontroller.physics.integrators.stops import stop_step_many
 
-        stops = (self.limits, self.stiffness, self.damping)
-        loads = np.ascontiguousarray(np.hstack(loads))
         return stop_step_many(
-            np.ascontiguousarray(states), loads, maps.linear, maps.strokes, maps.response, maps.end, *stops
+            states=np.ascontiguousarray(states),
+            loads=np.ascontiguousarray(np.hstack(loads)),
+            linear=maps.linear,
+            strokes=maps.strokes,
+            response=maps.response,
+            end=maps.end,
+            limits=self.limits,
+            stiffness=self.stiffness,
+            damping=self.damping,
         )

@@ -137,6 +137,7 @@ class Fishbone:
         cls,
         line: ColumnLine,
         damping: np.ndarray,
+        *,
         yield_rotation: np.ndarray,
         post_yield_ratio: np.ndarray,
         exponent: np.ndarray,
@@ -181,10 +182,10 @@ class Fishbone:
         fishbone = cls.of(
             line,
             building.damping[:n, :n],
-            per_story(config.yield_rotation, n),
-            per_story(config.post_yield_ratio, n),
-            per_story(config.exponent, n),
-            per_story(config.beta, n),
+            yield_rotation=per_story(config.yield_rotation, n),
+            post_yield_ratio=per_story(config.post_yield_ratio, n),
+            exponent=per_story(config.exponent, n),
+            beta=per_story(config.beta, n),
         )
         collapse = np.inf if config.collapse_drift is None else config.collapse_drift
         gain = building.actuator_matrix[:n] * building.force_limits

@@ -225,6 +225,7 @@ class SampledPlant:
         states: np.ndarray,
         held_forces: np.ndarray,
         time: np.ndarray,
+        *,
         ground: np.ndarray,
         floor_forces: np.ndarray | None = None,
     ) -> Response:

@@ -91,22 +91,21 @@ class SemiActiveDampers:
         first, building = self.first_command, self.building
         active = actions[:, :first] @ (building.actuator_matrix[:, :first] * building.force_limits[:first]).T
         h = control_dt / ((grounds.shape[1] - 1) * per_interval)
-        from rlcontroller.physics.integrators.dampers import (
-            damper_step_many,  # numba: imported when first needed
-        )
+        # numba: imported when first needed; its arguments named, so that no two can swap
+        from rlcontroller.physics.integrators.dampers import damper_step_many
 
         return damper_step_many(
-            states,
-            active,
-            np.ascontiguousarray(actions[:, first:]),
-            grounds,
-            per_interval,
-            h,
-            phi,
-            force_gain,
-            ground_start,
-            ground_end,
-            self.stories,
-            self.kinds,
-            self.parameters,
+            states=states,
+            active=active,
+            actions=np.ascontiguousarray(actions[:, first:]),
+            grounds=grounds,
+            per_interval=per_interval,
+            h=h,
+            phi=phi,
+            force_gain=force_gain,
+            ground_start=ground_start,
+            ground_end=ground_end,
+            stories=self.stories,
+            kinds=self.kinds,
+            parameters=self.parameters,
         )

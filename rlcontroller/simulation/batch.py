@@ -277,7 +277,7 @@ class BuildingBatch:
             state = (
                 plant.integrator.step(*arguments)
                 if loads is None
-                else plant.integrator.step(*arguments, loads[k])
+                else plant.integrator.step(*arguments, floor_forces=loads[k])
             )
             rows = self._member_rows[member]
             new[member, :n] = state
@@ -298,7 +298,7 @@ class BuildingBatch:
             arguments = (self.states[members, :n], clipped[members], grounds, self.control_dt)
             if loaded:
                 forces = np.stack([self._load_windows[m][k] for m, k in zip(members, at, strict=True)])
-                states = plant.integrator.step_many(*arguments, forces)
+                states = plant.integrator.step_many(*arguments, floor_forces=forces)
             else:
                 states = plant.integrator.step_many(*arguments)
             new[members, :n] = states

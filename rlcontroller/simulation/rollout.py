@@ -133,8 +133,8 @@ def _rollout_chunk(
                 states[: steps + 1, member, : member_plant.n_state],
                 commands[: steps + 1, member],
                 np.arange(steps + 1) * plant.control_dt,
-                batch.ground_samples[member],
-                batch.floor_forces[member],
+                ground=batch.ground_samples[member],
+                floor_forces=batch.floor_forces[member],
             )
             if plant.fe_model is not None and plant.fe_model.record_connections:  # one run per process
                 response = replace(response, connections=plant.fe_model.connection_history())

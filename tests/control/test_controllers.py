@@ -123,7 +123,7 @@ def test_clipped_optimal_switches_a_damper_on_only_to_push_toward_the_desired_fo
     feedback = np.zeros((3, size))
     feedback[:, 0] = -desired / controller.capacity
     controller.design = SimpleNamespace(
-        filter=SimpleNamespace(size=size, update=lambda *args: estimate), feedback=feedback
+        filter=SimpleNamespace(size=size, update=lambda *args, **named: estimate), feedback=feedback
     )
     observation = np.zeros(plant.layout.size)
     observation[controller.force_rows] = measured / plant.layout.reading_scale[controller.force_rows]

@@ -52,7 +52,13 @@ def test_the_estimate_converges_to_the_true_state_from_noise_free_readings():
         observation, *_ = env.step(np.zeros(3))
         ground = float(observation[layout.ground]) * layout.ground_scale
         readings = observation[layout.readings] * layout.reading_scale
-        estimate = kalman.update(estimate, readings, observation[layout.action], ground, previous)
+        estimate = kalman.update(
+            estimate,
+            readings,
+            held_action=observation[layout.action],
+            ground=ground,
+            previous_ground=previous,
+        )
         previous = ground
         errors.append(np.linalg.norm(estimate - env.state) / max(np.linalg.norm(env.state), 1e-12))
     assert np.mean(errors[:20]) > 100 * np.mean(errors[-100:])
@@ -73,9 +79,11 @@ def test_a_batch_of_estimates_updates_as_each_one_alone():
     rng = np.random.default_rng(1)
     estimates, readings = rng.standard_normal((4, 10)), rng.standard_normal((4, 5))
     actions, ground, previous = rng.uniform(-1, 1, (4, 3)), rng.standard_normal(4), rng.standard_normal(4)
-    batch = kalman.update(estimates, readings, actions, ground, previous)
+    batch = kalman.update(estimates, readings, held_action=actions, ground=ground, previous_ground=previous)
     for i in range(4):
-        alone = kalman.update(estimates[i], readings[i], actions[i], ground[i], previous[i])
+        alone = kalman.update(
+            estimates[i], readings[i], held_action=actions[i], ground=ground[i], previous_ground=previous[i]
+        )
         np.testing.assert_allclose(batch[i], alone, rtol=1e-12, atol=1e-15)
 
 
@@ -96,9 +104,9 @@ def test_the_update_on_raw_observations_is_the_update_on_si_readings(design):
     expected = kalman.update(
         estimates,
         observations[:, layout.readings] * layout.reading_scale,
-        observations[:, layout.action].astype(float),
-        ground,
-        previous * layout.ground_scale,
+        held_action=observations[:, layout.action].astype(float),
+        ground=ground,
+        previous_ground=previous * layout.ground_scale,
     )
     folded = estimates @ free + observations @ observed
     if previous_ground_gain is not None:

@@ -79,7 +79,9 @@ def test_kalman_estimate_converges_on_a_noise_free_free_vibration():
     errors, estimate = [], np.zeros(kalman.size)
     for _ in range(300):
         state = kalman.phi @ state
-        estimate = kalman.update(estimate, kalman.sensor_c @ state, np.zeros(3), 0.0, 0.0)
+        estimate = kalman.update(
+            estimate, kalman.sensor_c @ state, held_action=np.zeros(3), ground=0.0, previous_ground=0.0
+        )
         errors.append(np.linalg.norm(estimate - state) / np.linalg.norm(state))
     assert errors[-1] < 1e-3 * errors[0] and errors[-1] < 1e-4
 

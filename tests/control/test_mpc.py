@@ -119,7 +119,7 @@ def test_under_strong_wind_mpc_is_ahead_of_lqg_wind_model_which_clips(tmp_path):
 
     evaluation = api.compare_lqg(
         config=CONFIGS / "experiments" / "five_story_wind.yaml",
-        records=CONFIGS / "loads" / "wind.yaml",
+        judging=api.Judging(records=CONFIGS / "loads" / "wind.yaml"),
         out=tmp_path / "out",
         mpc=20,
     ).evaluation

@@ -48,7 +48,13 @@ def velocity_error(plant: Plant, design, motion) -> float:
     readings = states @ plant.sensors.c.T + forces @ plant.sensors.load.T
     estimate, velocities = np.zeros(design.filter.size), []
     for reading in readings:
-        estimate = design.filter.update(estimate, reading, np.zeros(plant.building.n_actuators), 0.0, 0.0)
+        estimate = design.filter.update(
+            estimate,
+            reading,
+            held_action=np.zeros(plant.building.n_actuators),
+            ground=0.0,
+            previous_ground=0.0,
+        )
         velocities.append(estimate[n : 2 * n])
     error = np.array(velocities)[200:] - states[200:, n:]
     return float(np.linalg.norm(error) / np.linalg.norm(states[200:, n:]))
@@ -75,7 +81,9 @@ def earthquake_velocity_error(plant: Plant, design, motion, ground_noise: float)
     ground = grid.ground + np.random.default_rng(1).normal(0.0, ground_noise, grid.ground.shape)
     estimate, velocities, zero = np.zeros(design.filter.size), [], np.zeros(plant.building.n_actuators)
     for k, reading in enumerate(readings):
-        estimate = design.filter.update(estimate, reading, zero, ground[k], ground[max(k - 1, 0)])
+        estimate = design.filter.update(
+            estimate, reading, held_action=zero, ground=ground[k], previous_ground=ground[max(k - 1, 0)]
+        )
         velocities.append(estimate[n : 2 * n])
     error = np.array(velocities)[100:] - states[100:, n:]
     return float(np.linalg.norm(error) / np.linalg.norm(states[100:, n:]))

@@ -45,10 +45,10 @@ def frame(yield_rotation, ratio=0.05, exponent=2.0) -> tuple[ColumnLine, Fishbon
     fishbone = Fishbone.of(
         column_line,
         damping,
-        np.full(n, yield_rotation),
-        np.full(n, ratio),
-        np.full(n, exponent),
-        np.full(n, 0.5),
+        yield_rotation=np.full(n, yield_rotation),
+        post_yield_ratio=np.full(n, ratio),
+        exponent=np.full(n, exponent),
+        beta=np.full(n, 0.5),
     )
     return column_line, fishbone
 

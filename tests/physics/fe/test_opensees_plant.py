@@ -157,8 +157,10 @@ def test_the_default_judged_on_the_fe_plant_scores_as_on_rlc_plant(records, tmp_
     from rlcontroller import api
     from rlcontroller.assets import DEFAULT_MODEL
 
-    on_fe, _ = api.evaluate(run_dir=DEFAULT_MODEL, records=records, out=tmp_path / "fe", config=FIVE_STORY)
-    on_rlc, _ = api.evaluate(run_dir=DEFAULT_MODEL, records=records, out=tmp_path / "rlc")
+    on_fe, _ = api.evaluate(
+        run_dir=DEFAULT_MODEL, judging=api.Judging(records), out=tmp_path / "fe", config=FIVE_STORY
+    )
+    on_rlc, _ = api.evaluate(run_dir=DEFAULT_MODEL, judging=api.Judging(records), out=tmp_path / "rlc")
     fe, exact = on_fe.summary(), on_rlc.summary()
     name = "RL"  # the default model, the learned MPC
     assert fe.loc[name, "J1"] == pytest.approx(exact.loc[name, "J1"], rel=0.02)
@@ -358,7 +360,9 @@ def test_what_the_model_prints_during_its_runs_goes_to_a_log_in_the_output_folde
             lines.append(text)
 
     experiment = tmp_path / "experiment.yaml"
-    _, out = api.evaluate(config=experiment, records=records, out=tmp_path / "out", report=Listening())
+    _, out = api.evaluate(
+        config=experiment, judging=api.Judging(records), out=tmp_path / "out", report=Listening()
+    )
     log = out / "opensees.log"
     assert log.is_file() and log.read_text().count("the model speaks in a run") >= 3  # once per run at least
     assert "the model speaks" not in capfd.readouterr().err  # not on the terminal
