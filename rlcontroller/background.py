@@ -6,6 +6,7 @@ worker), the call runs at once, here."""
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import sys
 import traceback
@@ -18,7 +19,6 @@ class Background:
     """The pending result of `in_background`; `result()` waits for it (once)."""
 
     def __init__(self, call: Callable[[], Any]) -> None:
-        import multiprocessing
 
         self._value, self._process = None, None
         if (os.cpu_count() or 1) < 2 or not hasattr(os, "fork") or multiprocessing.current_process().daemon:

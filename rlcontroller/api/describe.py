@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import hashlib
+
+import numpy as np
+import yaml
+
 from rlcontroller.config import Experiment
 
 SHOWN_MODES = 10  # rows of a mode table unless in full
@@ -110,7 +115,6 @@ def hardware_label(experiment: Experiment) -> str:
 def resolved_text(experiment: Experiment, full: bool = False) -> str:
     """The resolved experiment as YAML. Unless `full`: a matrix as its shape, source and digest, a long list
     as its first and last entries and its length (a building of 76 floors fits on a screen)."""
-    import yaml
 
     raw = experiment.model_dump(mode="json")
     if full:
@@ -141,9 +145,6 @@ def resolved_text(experiment: Experiment, full: bool = False) -> str:
 def _summarised(value, source: str):
     """`value` with every matrix (a list of lists) and long list replaced by a line saying what it is, and
     numbers to 6 significant digits."""
-    import hashlib
-
-    import numpy as np
 
     if isinstance(value, dict):
         return {key: _summarised(item, source) for key, item in value.items()}
@@ -168,7 +169,6 @@ def _summarised(value, source: str):
 
 def device_lines(experiment: Experiment, building) -> list[str]:
     """One line per device of `experiment` as built in `building` (the design model), in config order."""
-    import numpy as np
 
     total = float(np.sum(building.floor_masses))
     labels = experiment.command_labels()

@@ -10,6 +10,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from rlcontroller.api.common import (
     DEFAULT_JUDGING,
     QUIET,
@@ -163,7 +165,6 @@ def compare_lqg(
     clipped-optimal weights), with `preview` full-state LQR knowing the ground ahead, with `mpc` MPC over
     that many control steps (docs/mpc.md); with the criteria "benchmark" the nonlinear benchmark's J1-J17 too
     (`evaluate`)."""
-    import numpy as np
 
     from rlcontroller.evaluation.benchmark import write_benchmark
     from rlcontroller.evaluation.evaluation import (

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import yaml
+
 from rlcontroller.api.common import QUIET, Report, folder_experiment, keep_model_messages, load, output_folder
 from rlcontroller.assets import MODELS
 from rlcontroller.config import ConfigError
@@ -83,7 +85,6 @@ def verify(
     """`rlc check FOLDER --verify`: re-run the check of a folder's verdict under the project's standard and
     return each recorded figure the re-run does not reproduce (`evaluation.verdict.differences`; empty:
     they agree). The recorded verdict must exist; whether it judged these files is one of the figures."""
-    import yaml
 
     from rlcontroller.config import display_path
     from rlcontroller.evaluation.verdict import differences, verdict_path
@@ -151,7 +152,6 @@ def unchecked_note(folder: Path, model: str) -> str:
 def verdict_lines(folder: Path, model: str) -> tuple[list[str], bool]:
     """`rlc check --show`: the verdict's lines when it judged the folder's files as they are and agrees with
     its own figures, and whether it passed (False too when there is no such verdict)."""
-    import yaml
 
     from rlcontroller.evaluation.verdict import Verdict, verdict_path
 

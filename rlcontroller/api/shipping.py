@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import yaml
+
 from rlcontroller.api.common import QUIET, Report, folder_experiment, load, model_folder, shipped_folders
 from rlcontroller.api.safety import unchecked_note, verdict_state
 from rlcontroller.assets import CONFIGS, DEFAULT_MODEL
@@ -15,7 +17,6 @@ def shipped_models() -> list[str]:
     """The shipped controllers under models/ grouped by what they are made for (building, load, actuators,
     devices), one line each: how it was made, its safety verdict, the default marked; then what the
     experiments under configs/experiments are made for that no controller ships for."""
-    import yaml
 
     from rlcontroller.api.describe import hardware_label
 

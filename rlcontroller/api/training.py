@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -153,7 +154,6 @@ def demo(records: Path | None = None, progress_bar: bool = False, report: Report
 def learned_line(run: Path) -> str:
     """What training changed, from the run's learning curve: validation J1 at the start and at the best
     model, beside the LQGs' on the same validation motions."""
-    import csv
 
     with (run / "learning_curve.csv").open(newline="") as file:
         rows = list(csv.DictReader(file))

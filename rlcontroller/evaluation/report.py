@@ -8,6 +8,9 @@ the records. Plots show drift in cm and forces in kN for readability; the CSVs a
 from __future__ import annotations
 
 import contextlib
+import multiprocessing
+import sys
+import traceback
 from pathlib import Path
 
 import numpy as np
@@ -249,8 +252,6 @@ class Drawing:
     through a pipe); nothing read from a file. Use as a context manager: leaving it ends the process."""
 
     def __init__(self) -> None:
-        import multiprocessing
-        import sys
 
         sys.stdout.flush()  # the child must not write its copy of unflushed output again
         sys.stderr.flush()
@@ -288,7 +289,6 @@ class Drawing:
 
 
 def _draw_jobs(connection) -> None:
-    import traceback
 
     pyplot()  # the import, while the parent simulates
     while True:

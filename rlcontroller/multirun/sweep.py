@@ -12,6 +12,7 @@ At the end, one aggregate table over seeds per group (`multirun.aggregate`) in O
 from __future__ import annotations
 
 import itertools
+import multiprocessing
 import os
 import signal
 import threading
@@ -19,6 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures import as_completed as local_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -204,8 +206,6 @@ def _local(runs: list[SweepRun], records: str | None, workers: int) -> Iterator[
     holder's lock is stale and taken over). A run whose own worker died (its lock left behind, each
     dead holder counted once: the lock stays while the run waits in the queue) more than
     WORKER_LOSSES times is reported failed."""
-    import multiprocessing
-    from concurrent.futures.process import BrokenProcessPool
 
     from rlcontroller.files import lock_pid
 

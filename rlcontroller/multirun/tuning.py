@@ -19,6 +19,7 @@ trial's experiment, ready for `rlc train`), optimization_history.png and param_i
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import socket
 import sys
@@ -243,7 +244,6 @@ def tune(
     storage(storage_url, out)  # a bad URL stops here, before any worker starts
     if jobs == 1:
         return worker(experiment, trials, storage_url=storage_url, study_name=study_name, out=out)
-    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
