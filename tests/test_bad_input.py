@@ -137,6 +137,11 @@ CONFIG_CASES = {
         "excitation: {generator: {kind: near_fault, background: {duration: [0.01, 0.02]}}}\n",
         "excitation.generator.background.duration: 0.01 s is shorter than one control step",
     ),
+    "baseline_without_the_batch": (
+        "reward: {baseline: uncontrolled}\nalgorithm: {vec_env: dummy}\n",
+        "reward.baseline: taken by a learner stepping the batched vector env "
+        "(algorithm.vec_env: batched; not SAC with vec_env: dummy)",
+    ),
     "n_envs_1e6": (
         "algorithm: {n_envs: 1000000}\n",
         "algorithm.n_envs: Input should be less than or equal to 256",

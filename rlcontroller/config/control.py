@@ -39,7 +39,12 @@ class RewardConfig(StrictModel):
     ground acceleration (in m/s^2) to each term's power: a linear building's reward then does not
     depend on the motion's intensity, so weak and strong motions count alike, as in J1-J4 (where the
     plain reward is dominated by the strongest motions and a learner may act on noise in weak ones).
-    LQG's design is unchanged (every quadratic term is scaled alike)."""
+    LQG's design is unchanged (every quadratic term is scaled alike).
+
+    With `baseline: uncontrolled` each step's reward is the uncontrolled building's cost at that step
+    (the same ground, no force) less the controlled one's: the added part does not depend on the actions,
+    so no policy's ranking changes, but most of the variance the ground brings into a critic's targets
+    cancels. Learning in the batched vector env on a linear plant (`algorithm.vec_env: batched`)."""
 
     terms: list[RewardTerm] = Field(
         default_factory=lambda: [
@@ -51,6 +56,7 @@ class RewardConfig(StrictModel):
         max_length=50,
     )
     per_motion: bool = False
+    baseline: Literal["none", "uncontrolled"] = "none"
 
     @model_validator(mode="after")
     def _something_to_learn(self) -> RewardConfig:

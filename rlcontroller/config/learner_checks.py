@@ -29,6 +29,13 @@ def check_algorithm(experiment: Experiment) -> None:
             f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not "
             f"{algorithm.name}"
         )
+    batched = algorithm.vec_env == "batched" and algorithm.name not in ("RandomSearch", "DAgger")
+    if experiment.reward.baseline != "none" and not batched:
+        reward_file, reward_prefix = experiment.origin("reward")
+        raise ConfigError(
+            f"{location(reward_file, reward_prefix, 'baseline')}: taken by a learner stepping the batched "
+            f"vector env (algorithm.vec_env: batched; not {algorithm.name} with vec_env: {algorithm.vec_env})"
+        )
     if algorithm.name == "RandomSearch":
         _check_random_search(experiment)
     if algorithm.name == "DAgger":

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rlcontroller.config import PlantConfig
+from rlcontroller.config import ConfigError, PlantConfig
+from rlcontroller.config.base import location
 from rlcontroller.control.estimation import observation_filter, update_on_block
 from rlcontroller.control.supervisor import supervisor
 from rlcontroller.control.twin import FailSafeTwin
@@ -66,6 +67,8 @@ class BuildingBatch:
         self.ground_samples: list[np.ndarray] = [np.zeros(1)] * size
         self.floor_forces: list[np.ndarray | None] = [None] * size  # the floor loads at the control steps (N)
         self.term_factors = np.ones((size, len(self.rows.reward_names)))  # `reward.per_motion`
+        self.baseline = experiment.reward.baseline == "uncontrolled"
+        self._uncontrolled_cost = np.zeros((size, 1))  # `reward.baseline`: per member and step
         self.observations = np.zeros((size, layout.size), dtype=np.float32)
         self.previous_action = np.zeros((size, self.m))
         self._n_outputs = self.rows.c.shape[0]
@@ -95,6 +98,9 @@ class BuildingBatch:
         forcing[:, :old_length, :old_size] = self._forcing[:, :, :old_size]
         forcing[:, :old_length, state_size:] = self._forcing[:, :, old_size:]
         self._state_size, self.states, self._forcing = state_size, states, forcing
+        cost = np.zeros((self.size, length))
+        cost[:, :old_length] = self._uncontrolled_cost[:, :old_length]
+        self._uncontrolled_cost = cost
         self._stacked = None
 
     def _drawn_plant(self, drawn: PlantConfig) -> tuple[Plant, StepOutputs, dict[int, np.ndarray]]:
@@ -163,6 +169,11 @@ class BuildingBatch:
         self._member_rows[member] = rows
         self.ground_samples[member] = ground
         self.term_factors[member] = self.rows.term_factors(ground)
+        if self.baseline:
+            self._uncontrolled_cost[member] = 0.0
+            self._uncontrolled_cost[member, :n_steps] = self._cost_left_alone(
+                member, plant, transition, n_steps
+            )
         self.steps[member], self.k[member] = n_steps, 0
         self.states[member] = 0.0
         self.previous_action[member] = 0.0
@@ -220,8 +231,31 @@ class BuildingBatch:
         outputs = self.advance(actions)
         held = self.held_actions()
         rewards = self.rewards(outputs[:, self.rows.reward], held, self.previous_action)
+        if self.baseline:  # `reward.baseline`: the cost of the step left uncontrolled, added back
+            rewards += self._uncontrolled_cost[self._members, np.minimum(self.k, self.steps) - 1]
         self.previous_action[:] = held
         return self.observations, rewards, self.k == self.steps
+
+    def _cost_left_alone(
+        self, member: int, plant: Plant, transition: np.ndarray | None, n_steps: int
+    ) -> np.ndarray:
+        """Each step's cost (the reward's terms, their sum) of `member`'s building under its load with no
+        force: the same linear step map and forcing, the action zero (`reward.baseline`)."""
+        if transition is None:
+            where = location(*self.plant.experiment.origin("reward"), "baseline")
+            raise ConfigError(
+                f"{where}: uncontrolled needs a linear plant (no yielding stories, dampers or end-stops)"
+            )
+        n, size = plant.n_state, self._state_size
+        forcing = self._forcing[member]
+        state, outputs = np.zeros(n), np.empty((n_steps, self._n_outputs))
+        for k in range(n_steps):
+            new = state @ transition[:n]
+            state = new[:n] + forcing[k, :n]
+            outputs[k] = new[n:] + forcing[k, size:]
+        zero = np.zeros((n_steps, self.m))
+        terms = self.rows.reward_terms(outputs[:, self.rows.reward], zero, zero)
+        return (terms * self.term_factors[member]).sum(axis=-1)
 
     def rewards(self, reward_rows: np.ndarray, held: np.ndarray, previous_held: np.ndarray) -> np.ndarray:
         """The rewards (..., N) of steps whose outputs' reward rows are `reward_rows` (..., N, rows),

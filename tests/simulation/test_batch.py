@@ -134,3 +134,34 @@ def test_an_episode_generator_is_gymnasiums_for_the_same_seed():
 
     for seed in (0, 7, 2**32 - 1):
         np.testing.assert_array_equal(episode_generator(seed).random(5), seeding.np_random(seed)[0].random(5))
+
+
+def test_a_reward_with_the_uncontrolled_baseline_adds_back_the_cost_of_the_step_left_alone():
+    """`reward.baseline: uncontrolled`: with no force every step's reward is zero (to rounding); with any
+    actions it is the plain reward less the plain reward of the same motion and noise with no force, step by
+    step (the same ground, the same linear map); a plant that is not linear is refused in one line."""
+    from rlcontroller.config import ConfigError
+    from rlcontroller.simulation.batch import BuildingBatch, episode_generator
+
+    terms = PLANTS["a 4th-power, a force-change term, per motion"]["reward"]["terms"]
+    motions = synthetic_suite(count=3)
+
+    def rewards(baseline: str, actions) -> np.ndarray:
+        plant = Plant(Experiment.model_validate({"reward": {"terms": terms, "baseline": baseline}}))
+        batch = BuildingBatch(plant, 3)
+        for member, motion in enumerate(motions):
+            batch.start(member, episode_generator(member), motion)
+        steps = int(batch.steps.min())
+        return np.array([batch.step(actions(k))[1] for k in range(steps)])
+
+    rng = np.random.default_rng(0)
+    pushes = rng.uniform(-1.0, 1.0, (4000, 3, 3))
+    alone = rewards("none", lambda k: np.zeros((3, 3)))
+    assert np.max(np.abs(rewards("uncontrolled", lambda k: np.zeros((3, 3))))) < 1e-9 * np.max(np.abs(alone))
+    relative, plain = rewards("uncontrolled", lambda k: pushes[k]), rewards("none", lambda k: pushes[k])
+    np.testing.assert_allclose(relative, plain - alone, rtol=1e-9, atol=1e-12 * np.max(np.abs(alone)))
+    yielding = Experiment.model_validate(
+        PLANTS["yielding"] | {"reward": {"terms": terms, "baseline": "uncontrolled"}}
+    )
+    with pytest.raises(ConfigError, match="reward.baseline: uncontrolled needs a linear plant"):
+        BuildingBatch(Plant(yielding), 1).start(0, episode_generator(0), motions[0])
