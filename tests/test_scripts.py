@@ -197,11 +197,7 @@ def test_accelerations_in_lqg_s_cost_lower_j2_and_weight_zero_is_the_experiment_
     plant = Plant(experiment)
     unweighted = sweep.with_acceleration_term(experiment, 0.0, 5.0)
     # the agent-only terms dropped
-    assert [t.quantity for t in unweighted.terms] == [
-        "drift",
-        "base_shear",
-        "force",
-    ]
+    assert [t.quantity for t in unweighted.terms] == ["drift", "base_shear", "force"]
     ours = design_lqg_ground_model(plant.design, reward=unweighted).feedback
     np.testing.assert_allclose(ours, design_lqg_ground_model(plant.design).feedback, rtol=1e-9)
     motions = synthetic_suite(count=3)

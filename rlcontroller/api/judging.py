@@ -32,10 +32,7 @@ from rlcontroller.files import check_new_folder, new_folder
 from rlcontroller.simulation.fanout import model_messages
 
 # J1-J4 always; "benchmark" adds Ohtori et al.'s J1-J17 (evaluation.benchmark)
-CRITERIA = (
-    "paper",
-    "benchmark",
-)
+CRITERIA = ("paper", "benchmark")
 
 
 def comparison(
@@ -110,14 +107,10 @@ def evaluate(
     check_new_folder(out)
     experiment = folder_experiment(folder) if config is None else load(config)
     # matplotlib's import and the plots on the other core
-    with (
-        drawing() as plots,
-        model_messages() as messages,
-    ):
+    with drawing() as plots, model_messages() as messages:
         plant, _, evaluation = comparison(experiment, folder, judging=judging, report=report)
-        report.note(
-            unchecked_note(folder, judging.model)
-        )  # once the records are read (a bad one is its only line)
+        # once the records are read (a bad one is its only line)
+        report.note(unchecked_note(folder, judging.model))
         with new_folder(out) as staging:
             write_report(evaluation, staging, plots)
             if judging.criteria == "benchmark":

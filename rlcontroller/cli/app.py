@@ -33,12 +33,7 @@ app = typer.Typer(
 )
 
 # a design that cannot be made on a model is a ConfigError too
-USER_ERRORS = (
-    ConfigError,
-    MotionError,
-    ModelError,
-    RecordingError,
-)
+USER_ERRORS = (ConfigError, MotionError, ModelError, RecordingError)
 INTERNAL_ERROR = 3  # exit code of a failure that is not the user's (user mistakes: 2, file system: 1)
 DEBUG_VARIABLE = "RLC_DEBUG"  # set to 1: tracebacks on screen, as with --debug
 debugging = False  # set for each invocation by the --debug option or the variable

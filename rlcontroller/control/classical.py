@@ -26,14 +26,7 @@ LAWS = {  # a classical law: its name in tables
 }
 PASSIVE_COMMANDS = {"passive-on": 1.0, "passive-off": -1.0}  # a passive law's held action
 # MPCDesign's, as mpc_*
-MPC_ARRAYS = (
-    "phi",
-    "action_gain",
-    "cost_state",
-    "cost_action",
-    "terminal",
-    "strokes",
-)
+MPC_ARRAYS = ("phi", "action_gain", "cost_state", "cost_action", "terminal", "strokes")
 MAX_HORIZON = 200  # control steps of a file's MPC (the experiment's kwargs.horizon range)
 # an MPC file's model against its design model's, of the largest entry (any CPU's arithmetic)
 MODEL_TOLERANCE = 1e-6

@@ -50,15 +50,7 @@ OPTIMAL = "optimal (clairvoyant)"
 # the mass devices with no command: tuned masses as tuned, drivers as tuned masses
 PASSIVE = "passive devices"
 # passive command levels of a damper sweep, of its range
-DAMPER_LEVELS = (
-    0.0,
-    0.1,
-    0.2,
-    0.35,
-    0.5,
-    0.75,
-    1.0,
-)
+DAMPER_LEVELS = (0.0, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 LQG_VARIANTS = ("LQG", "LQG + ground", "LQG + ground model", "LQG + wind model")  # names in every table
 PREVIEW_SECONDS = (0.0, 0.02, 0.04, 0.1, 0.2, 0.5, 1.0, None)
 

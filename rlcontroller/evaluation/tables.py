@@ -73,13 +73,7 @@ def improvement_table(evaluation: Evaluation, candidate: str = "RL") -> pd.DataF
 
 
 # weak motions, where sensor noise is as large as the signal, first
-PGA_BANDS_G = (
-    0.0,
-    0.02,
-    0.1,
-    0.3,
-    np.inf,
-)
+PGA_BANDS_G = (0.0, 0.02, 0.1, 0.3, np.inf)
 
 
 def by_pga(evaluation: Evaluation, metric: str = "J1") -> pd.DataFrame:

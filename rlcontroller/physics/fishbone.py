@@ -69,12 +69,7 @@ class ColumnLine:
                 )
             )
             # x below (-1: the ground, fixed), theta below, x above, theta above
-            dofs = [
-                i - 1,
-                n + i,
-                i,
-                n + i + 1,
-            ]
+            dofs = [i - 1, n + i, i, n + i + 1]
             for a, p in enumerate(dofs):
                 for b, q in enumerate(dofs):
                     if p >= 0 and q >= 0:

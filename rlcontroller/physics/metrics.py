@@ -18,12 +18,7 @@ from rlcontroller.physics.response import Response
 
 METRICS = ("J1", "J2", "J3", "J4")
 # per story, yielding plants
-YIELDING_METRICS = (
-    "ductility",
-    "residual_drift_m",
-    "hysteretic_energy_J",
-    "collapsed",
-)
+YIELDING_METRICS = ("ductility", "residual_drift_m", "hysteretic_energy_J", "collapsed")
 WIND_METRICS = (  # under floor loads
     "rms_acceleration",
     "rms_acceleration_top",

@@ -134,12 +134,7 @@ def test_supervised_lqg_passes_a_check_it_fails_without_the_supervisor():
     suite too, but its force steps raise mean J2 above 1 (1.22 on these 40 motions: docs/safety_check.md)."""
     standard = load_safety_check(REPOSITORY / "configs" / "checks" / "standard.yaml")
     # too few for 5 %: strict
-    small = {
-        "motions": 40,
-        "rest_runs": 2,
-        "rest_duration": 20.0,
-        "risk_bound": 0.0,
-    }
+    small = {"motions": 40, "rest_runs": 2, "rest_duration": 20.0, "risk_bound": 0.0}
     standard = standard.model_copy(update=small)
     free, supervised = Plant(experiment(None)), Plant(experiment(FADED))
     failed = safety_check(free, lqg(free), standard, [])

@@ -464,11 +464,7 @@ def test_a_wind_standard_loads_the_experiment_s_own_site_with_its_own_speeds():
         exclude={"speed", "duration"}
     )
     # the benchmark's facade, city
-    assert (generator.width, generator.roughness, generator.dt) == (
-        42.0,
-        1.0,
-        0.1,
-    )
+    assert (generator.width, generator.roughness, generator.dt) == (42.0, 1.0, 0.1)
     ground = load_safety_check(STANDARD)
     assert check_generator(ground, atmd) == ground.generator  # a ground-motion standard stays as it is
     assert check_generator(wind, Experiment()) == wind.generator  # no site of its own: the standard's

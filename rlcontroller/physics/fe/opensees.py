@@ -230,10 +230,7 @@ def damping_ratios(description: FEDescription, circular_frequencies: np.ndarray)
 
 
 # m: a story's height in buildings; far outside it, the length unit is likely wrong
-PLAUSIBLE_STORY = (
-    1.5,
-    12.0,
-)
+PLAUSIBLE_STORY = (1.5, 12.0)
 
 
 def warn_story_heights(description: FEDescription, path: Path) -> None:
