@@ -87,7 +87,7 @@ def verify(
     they agree). The recorded verdict must exist; whether it judged these files is one of the figures."""
 
     from rlcontroller.config import display_path
-    from rlcontroller.evaluation.verdict import differences, verdict_path
+    from rlcontroller.evaluation.verdict import differences, verdict_data, verdict_path
 
     path = verdict_path(folder, model)
     if not path.is_file():
@@ -95,7 +95,7 @@ def verify(
             f"{display_path(path)}: no verdict to verify; run 'rlc check {display_path(folder)}'"
         )
     try:
-        recorded = yaml.safe_load(path.read_text(encoding="utf-8"))
+        recorded = verdict_data(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
         raise ConfigError(
             f"{display_path(path)}: unreadable ({type(error).__name__}); nothing to verify"
@@ -153,12 +153,12 @@ def verdict_lines(folder: Path, model: str) -> tuple[list[str], bool]:
     """`rlc check --show`: the verdict's lines when it judged the folder's files as they are and agrees with
     its own figures, and whether it passed (False too when there is no such verdict)."""
 
-    from rlcontroller.evaluation.verdict import Verdict, verdict_path
+    from rlcontroller.evaluation.verdict import Verdict, verdict_data, verdict_path
 
     state = verdict_state(folder, model)
     if state.passed is None:
         return [f"{folder}'s {model} policy counts as never safety-checked: {state.reason}"], False
     path = verdict_path(folder, model)
-    lines = Verdict.read(yaml.safe_load(path.read_text(encoding="utf-8"))).lines()
+    lines = Verdict.read(verdict_data(path.read_text(encoding="utf-8"))).lines()
     lines.append(f"verdict in {path}: it judged these files and agrees with its own figures; {claim(folder)}")
     return lines, bool(state.passed)

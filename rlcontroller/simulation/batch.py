@@ -68,7 +68,7 @@ class BuildingBatch:
         self.floor_forces: list[np.ndarray | None] = [None] * size  # the floor loads at the control steps (N)
         self.term_factors = np.ones((size, len(self.rows.reward_names)))  # `reward.per_motion`
         self.baseline = experiment.reward.baseline == "uncontrolled"
-        self._uncontrolled_cost = np.zeros((size, 1))  # `reward.baseline`: per member and step
+        self._uncontrolled_cost = np.zeros((size, 1) if self.baseline else (0, 0))  # per member and step
         self.observations = np.zeros((size, layout.size), dtype=np.float32)
         self.previous_action = np.zeros((size, self.m))
         self._n_outputs = self.rows.c.shape[0]
@@ -98,9 +98,10 @@ class BuildingBatch:
         forcing[:, :old_length, :old_size] = self._forcing[:, :, :old_size]
         forcing[:, :old_length, state_size:] = self._forcing[:, :, old_size:]
         self._state_size, self.states, self._forcing = state_size, states, forcing
-        cost = np.zeros((self.size, length))
-        cost[:, :old_length] = self._uncontrolled_cost[:, :old_length]
-        self._uncontrolled_cost = cost
+        if self.baseline:
+            cost = np.zeros((self.size, length))
+            cost[:, :old_length] = self._uncontrolled_cost[:, :old_length]
+            self._uncontrolled_cost = cost
         self._stacked = None
 
     def _drawn_plant(self, drawn: PlantConfig) -> tuple[Plant, StepOutputs, dict[int, np.ndarray]]:
