@@ -281,4 +281,4 @@ def test_a_trigger_is_chosen_on_other_suites_and_a_margin_at_rest(capsys, monkey
         module.main()
     assert "seed 31337 is the check suite's" in capsys.readouterr().err
     *suites, rest = module.judged(default / "config.yaml", "", (50.0, 100.0), 777, model=default)
-    assert suites[0]["mean_J1"] == pytest.approx(1.0, abs=1e-3) and rest["peak_drift_over_bound"] == 0.0
+    assert suites[0].mean_J1 == pytest.approx(1.0, abs=1e-3) and rest.peak_drift_over_bound == 0.0

@@ -119,7 +119,7 @@ def run_filter(filter_, accelerations: np.ndarray) -> np.ndarray:
     """The filter's states after each sample of one channel (through the ground input)."""
     state, states, none = np.zeros(filter_.size), [], np.zeros(filter_.action_gain.shape[1])
     for value in accelerations:
-        state = filter_.update(state, np.zeros(0), none, value, 0.0)
+        state = filter_.update(state, np.zeros(0), held_action=none, ground=value, previous_ground=0.0)
         states.append(state)
     return np.array(states)
 

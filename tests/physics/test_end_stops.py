@@ -276,7 +276,9 @@ def test_under_floor_forces_the_stops_see_them_within_the_step():
     actions = np.zeros((steps, 1))
     states = [np.zeros(plant.n_state)]
     for k in range(steps):
-        states.append(plant.integrator.step(states[-1], actions[k], ground[k], plant.control_dt, loads[k]))
+        states.append(
+            plant.integrator.step(states[-1], actions[k], ground[k], plant.control_dt, floor_forces=loads[k])
+        )
     states = np.array(states)
     reference, contacts = radau_reference(plant, grid, actions * plant.force_limits, steps)
     n = plant.building.n_dofs

@@ -7,7 +7,7 @@ import scipy.signal
 import yaml
 from conftest import REPOSITORY, SAME_PHYSICS
 
-from rlcontroller.api import evaluate
+from rlcontroller.api import Judging, evaluate
 from rlcontroller.assets import DEFAULT_MODEL
 from rlcontroller.config import Experiment, load_experiment
 from rlcontroller.evaluation.evaluation import classical_controllers
@@ -41,8 +41,8 @@ def test_the_default_model_evaluates_bit_for_bit_on_its_state_space_building(tmp
     the seven records: every number of every table identical with the building given as A, B, C, D."""
     experiment = load_experiment(DEFAULT_MODEL / "config.yaml")
     as_state_space(experiment, tmp_path)
-    reference, _ = evaluate(records=records, out=tmp_path / "mkc")
-    model, _ = evaluate(records=records, out=tmp_path / "ss", config=tmp_path / "experiment.yaml")
+    reference, _ = evaluate(judging=Judging(records), out=tmp_path / "mkc")
+    model, _ = evaluate(judging=Judging(records), out=tmp_path / "ss", config=tmp_path / "experiment.yaml")
     assert model.metrics.equals(reference.metrics)
     assert model.summary().equals(reference.summary())
 
