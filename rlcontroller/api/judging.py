@@ -109,10 +109,14 @@ def evaluate(
     # matplotlib's import and the plots on the other core
     with drawing() as plots, model_messages() as messages:
         plant, _, evaluation = comparison(experiment, folder, judging=judging, report=report)
-        # once the records are read (a bad one is its only line)
-        report.note(unchecked_note(folder, judging.model))
         with new_folder(out) as staging:
-            write_report(evaluation, staging, plots)
+            # once the records are read (a bad one is its only line), while the plots are drawn
+            write_report(
+                evaluation,
+                staging,
+                plots,
+                meanwhile=lambda: report.note(unchecked_note(folder, judging.model)),
+            )
             if judging.criteria == "benchmark":
                 write_benchmark(evaluation, plant.building, staging)
             keep_model_messages(messages, staging, report)

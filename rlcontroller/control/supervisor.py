@@ -69,7 +69,10 @@ class Supervisor:
 
     def gain(self, observations: np.ndarray) -> np.ndarray:
         """The trigger's gain per building, (size,), after taking in the newest readings it watches."""
-        newest = np.max(np.abs(observations[:, self.trigger_indices] * self.trigger_scales), axis=1)
+        if self.trigger_indices.size == 1:  # the ground reading: a column, no copy through an index array
+            newest = np.abs(observations[:, self.trigger_indices[0]]) * self.trigger_scales[0]
+        else:
+            newest = np.max(np.abs(observations[:, self.trigger_indices] * self.trigger_scales), axis=1)
         np.maximum(self.peak_ground, newest, out=self.peak_ground)
         start, full = self.trigger
         if full == start:
@@ -84,11 +87,14 @@ class Supervisor:
                 stroke_velocity = observations[:, self.velocity] @ self.actuator_matrix
             else:
                 stroke_velocity = measured
+            # every entry times 1 where the force takes energy out, else its fade factor: arithmetic on every
+            # entry costs less per step than writing through a boolean mask
             feeding = actions * stroke_velocity > 0.0
             if self.fade > 0.0:
-                actions[feeding] *= np.maximum(1.0 - np.abs(stroke_velocity[feeding]) / self.fade, 0.0)
+                faded = np.maximum(1.0 - np.abs(stroke_velocity) / self.fade, 0.0)
+                actions *= np.where(feeding, faded, 1.0)
             else:
-                actions[feeding] = 0.0
+                np.copyto(actions, 0.0, where=feeding)
         if self.fallback is not None:
             self.fallback(observations, measured, actions)
         if self.trigger is not None:

@@ -11,6 +11,7 @@ import contextlib
 import multiprocessing
 import sys
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -231,18 +232,29 @@ def draw_metrics_per_story(data: dict, path: Path) -> Path:
 DRAWINGS = {draw.__name__: draw for draw in (draw_time_histories, draw_metrics_per_story)}
 
 
-def write_report(evaluation: Evaluation, out: Path, drawing: Drawing | None = None) -> list[Path]:
+def write_report(
+    evaluation: Evaluation,
+    out: Path,
+    drawing: Drawing | None = None,
+    *,
+    meanwhile: Callable[[], None] | None = None,
+) -> list[Path]:
     """Tables and plots of one evaluation into `out`; the plots by `drawing`'s process while the tables
-    are written, when one is given."""
+    are written and `meanwhile` runs (the caller's own work, off the path while the plots take longer),
+    when one is given."""
     out.mkdir(parents=True, exist_ok=True)
     jobs = [
         (draw_time_histories, time_history_data(evaluation), out / "time_histories.png"),
         (draw_metrics_per_story, per_story_data(evaluation), out / "metrics_per_story.png"),
     ]
+    if drawing is not None:
+        drawing.submit(jobs)
+    if meanwhile is not None:
+        meanwhile()
+    tables = write_tables(evaluation, out)
     if drawing is None:
-        return write_tables(evaluation, out) + [draw(data, path) for draw, data, path in jobs]
-    drawing.submit(jobs)
-    return write_tables(evaluation, out) + drawing.results()
+        return tables + [draw(data, path) for draw, data, path in jobs]
+    return tables + drawing.results()
 
 
 class Drawing:

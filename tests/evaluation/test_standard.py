@@ -68,7 +68,7 @@ def test_the_bound_is_clopper_pearson_s():
     assert risk_upper_bound(9, 320, 0.95) == pytest.approx(0.04856, abs=1e-5)
     from scipy.stats import beta  # the textbook's form
 
-    for n, k in ((11, 1), (273, 3), (320, 9), (1000, 40)):
+    for n, k in ((11, 0), (320, 0), (5000, 0), (11, 1), (273, 3), (320, 9), (1000, 40)):
         assert risk_upper_bound(k, n, 0.95) == pytest.approx(beta.ppf(0.95, k + 1, n - k), rel=1e-12)
 
 
