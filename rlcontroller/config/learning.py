@@ -76,6 +76,8 @@ class AlgorithmConfig(StrictModel):
     `backend: sbx` trains SAC, TQC or TD3 with sbx-rl (Stable Baselines Jax: the same interface, the updates
     compiled by JAX; the `fast` extra), about 2x the steps/s of stable-baselines3's torch learners on the
     paper's small networks (docs/training.md); its run folders hold no pickle (`learning.jax_learners`).
+    `learning_rate_schedule: linear` lowers `kwargs.learning_rate` linearly to 0 at `total_steps` (the
+    zoo's `lin_` schedule; a run stopped by `--time-limit` ends above 0).
     `search` is `rlc tune`'s
     search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`,
     `algorithm.policy.net_arch`, `reward.terms.0.weight`, ...) and their ranges; training ignores it.
@@ -95,6 +97,7 @@ class AlgorithmConfig(StrictModel):
     checkpoint_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 50_000
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
     select_by: Literal["reward", "J1", "J1+J2", "standard"] = "reward"
+    learning_rate_schedule: Literal["constant", "linear"] = "constant"
     search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 
@@ -196,4 +199,5 @@ NUMERIC_KWARGS = {
     "max_samples": (1, 10_000_000, True),
     "policy_delay": (1, 2**31, True),
     "qf_learning_rate": (0.0, 1.0, False),
+    "learning_rate": (0.0, 1.0, False),
 }

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import gymnasium as gym
 
-from rlcontroller.config import ConfigError, Experiment, location
+from rlcontroller.config import AlgorithmConfig, ConfigError, Experiment, location
 from rlcontroller.control.controllers import LQGPrior
 from rlcontroller.learning.env import BuildingEnv
 from rlcontroller.learning.sb3_models import ResidualAction, algorithm_class
@@ -59,11 +59,13 @@ def make_vec_env(plant: Plant, seed: int):
 def _gamma(experiment: Experiment) -> float:
     """The learner's discount (the return whose spread scales the rewards)."""
     algorithm = experiment.algorithm
-    gamma = algorithm.kwargs.get("gamma")
-    if gamma is None:
-        learner = algorithm_class(algorithm.name, algorithm.backend)
-        gamma = inspect.signature(learner.__init__).parameters["gamma"].default
-    return float(gamma)
+    return float(algorithm.kwargs.get("gamma", _default(algorithm, "gamma")))
+
+
+def _default(algorithm: AlgorithmConfig, keyword: str):
+    """The learner's own default for one keyword argument of its constructor."""
+    learner = algorithm_class(algorithm.name, algorithm.backend)
+    return inspect.signature(learner.__init__).parameters[keyword].default
 
 
 def build_model(experiment: Experiment, vec_env, seed: int, device: str, *, tensorboard: Path | None):
@@ -104,6 +106,12 @@ def _constructed(
 ):
     """The learner of the experiment's algorithm and backend; what its constructor refuses is one line."""
     algorithm = experiment.algorithm
+    kwargs = dict(algorithm.kwargs)
+    if algorithm.learning_rate_schedule == "linear":
+        from stable_baselines3.common.utils import LinearSchedule
+
+        start = kwargs.get("learning_rate", _default(algorithm, "learning_rate"))
+        kwargs["learning_rate"] = LinearSchedule(start=float(start), end=0.0, end_fraction=1.0)
     try:
         return algorithm_class(algorithm.name, algorithm.backend)(
             policy,
@@ -113,7 +121,7 @@ def _constructed(
             tensorboard_log=str(tensorboard) if tensorboard else None,
             verbose=0,
             **extra,
-            **algorithm.kwargs,
+            **kwargs,
         )
     except (TypeError, ValueError, AssertionError) as error:
         file, prefix = experiment.origin("algorithm")

@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 from rlcontroller.cli import app
 from rlcontroller.config import PlantRandomization, load_experiment
 from rlcontroller.control.policy_file import read_policy
+from rlcontroller.learning.algorithms import build_model, make_vec_env
 from rlcontroller.learning.run_folder import RunFolder
 from rlcontroller.learning.training import train
 from rlcontroller.physics.plant import Plant
@@ -197,6 +198,17 @@ def test_other_learners_train(tmp_path, name, kwargs):
     assert summary.steps >= 256 and (tmp_path / name / "final_model.zip").is_file()
 
 
+@pytest.mark.parametrize(("name", "kwargs"), [("PPO", {"learning_rate": 0.002}), ("SAC", {})])
+def test_a_linear_schedule_lowers_the_learning_rate_to_zero_at_total_steps(name, kwargs):
+    experiment = smoke(name=name, kwargs=kwargs, learning_rate_schedule="linear")
+    plant = Plant(experiment)
+    model = build_model(experiment, make_vec_env(plant, 0), 0, "cpu", tensorboard=None)
+    start = kwargs.get("learning_rate", 3e-4)  # SAC's own default where the experiment names none
+    progress_remaining = np.array([1.0, 0.75, 0.1, 0.0])
+    rates = [model.lr_schedule(float(progress)) for progress in progress_remaining]
+    np.testing.assert_allclose(rates, start * progress_remaining, rtol=1e-12, atol=0.0)
+
+
 @pytest.mark.slow
 def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
     train(
@@ -216,6 +228,11 @@ def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
         ("{kwargs: {policy_kwargs: {}}}", "algorithm.kwargs.policy_kwargs: set by rlc"),
         ("{kwargs: {batch_size: -1}}", "algorithm.kwargs.batch_size: expected an integer in [1, "),
         ("{kwargs: {gamma: 1.5}}", "algorithm.kwargs.gamma: expected a number in [0.0, 1.0]"),
+        (
+            "{kwargs: {learning_rate: -0.001}}",
+            "algorithm.kwargs.learning_rate: expected a number in [0.0, 1.0]",
+        ),
+        ("{learning_rate_schedule: cosine}", "algorithm.learning_rate_schedule: Input should be"),
         ("{kwargs: {train_freq: often}}", "algorithm.kwargs: SAC refused them"),
         ("{policy: {activation: swish}}", "algorithm.policy.activation: Input should be"),
     ],
