@@ -282,3 +282,27 @@ def test_a_trigger_is_chosen_on_other_suites_and_a_margin_at_rest(capsys, monkey
     assert "seed 31337 is the check suite's" in capsys.readouterr().err
     *suites, rest = module.judged(default / "config.yaml", "", (50.0, 100.0), 777, model=default)
     assert suites[0].mean_J1 == pytest.approx(1.0, abs=1e-3) and rest.peak_drift_over_bound == 0.0
+
+
+@pytest.mark.slow
+def test_validation_rewards_reproduce_the_run_s_own_curve(tmp_path):
+    """The kept policy, read back from its file and validated again, scores what the curve recorded when it was
+    kept; LQG scores the curve's reference."""
+    import csv
+
+    from rlcontroller.config import load_experiment
+    from rlcontroller.learning.training import train
+
+    experiment = load_experiment(SCRIPTS.parent / "configs" / "testing" / "smoke.yaml")
+    algorithm = experiment.algorithm.model_copy(
+        update={"total_steps": 600, "checkpoint_every": 300, "eval_every": 300}
+    )
+    train(experiment=experiment.model_copy(update={"algorithm": algorithm}), run_dir=tmp_path / "run")
+    with open(tmp_path / "run" / "learning_curve.csv", newline="") as handle:
+        curve = list(csv.DictReader(handle))
+    kept = max(curve, key=lambda row: float(row["eval_reward"]))
+    rows = load_script("validation_rewards").validation_rows(tmp_path / "run")
+    for key in ("eval_reward", "eval_J1", "eval_J2"):
+        assert rows["run's best"][key] == pytest.approx(float(kept[key]), rel=1e-6)
+    assert rows["LQG"]["eval_J1"] == pytest.approx(float(kept["lqg_J1"]), rel=1e-9)
+    assert rows["LQG + ground model"]["eval_J2"] == pytest.approx(float(kept["lqg_ground_model_J2"]), rel=1e-9)
