@@ -286,8 +286,8 @@ def test_a_trigger_is_chosen_on_other_suites_and_a_margin_at_rest(capsys, monkey
 
 @pytest.mark.slow
 def test_validation_rewards_reproduce_the_run_s_own_curve(tmp_path):
-    """The kept policy, read back from its file and validated again, scores what the curve recorded when it was
-    kept; LQG scores the curve's reference."""
+    """The kept policy, read back from its file and validated again, scores what the curve recorded when
+    it was kept; LQG scores the curve's reference."""
     import csv
 
     from rlcontroller.config import load_experiment
@@ -305,4 +305,6 @@ def test_validation_rewards_reproduce_the_run_s_own_curve(tmp_path):
     for key in ("eval_reward", "eval_J1", "eval_J2"):
         assert rows["run's best"][key] == pytest.approx(float(kept[key]), rel=1e-6)
     assert rows["LQG"]["eval_J1"] == pytest.approx(float(kept["lqg_J1"]), rel=1e-9)
-    assert rows["LQG + ground model"]["eval_J2"] == pytest.approx(float(kept["lqg_ground_model_J2"]), rel=1e-9)
+    assert rows["LQG + ground model"]["eval_J2"] == pytest.approx(
+        float(kept["lqg_ground_model_J2"]), rel=1e-9
+    )
