@@ -56,20 +56,22 @@ def test_the_plan_is_the_cartesian_product_and_checks_every_run_first(tmp_path):
 def test_a_sweep_on_a_dask_cluster_of_two_workers_reports_failures_and_resumes(tmp_path):
     pytest.importorskip("distributed", reason="the distributed extra: pip install -e '.[distributed]'")
     experiment = Experiment.model_validate(TINY)
-    # -1: the learner refuses it when it starts
-    settings = [("algorithm.kwargs.learning_rate", [0.0003, -1.0])]
+    # 1: the configuration allows it (a whole number >= 1); PPO refuses it when it starts (its advantages are
+    # normalised per minibatch)
+    settings = [("algorithm.kwargs.batch_size", [64, 1])]
     lines = []
     results, written = sweep(
         experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append
     )
     by_status = sorted(
-        (result.run.settings["algorithm.kwargs.learning_rate"], result.status) for result in results
+        (result.run.settings["algorithm.kwargs.batch_size"], result.status) for result in results
     )
-    assert by_status == [(-1.0, "failed"), (-1.0, "failed"), (0.0003, "trained"), (0.0003, "trained")]
-    assert all("Invalid learning rate" in result.error for result in results if result.status == "failed")
+    assert by_status == [(1, "failed"), (1, "failed"), (64, "trained"), (64, "trained")]
+    failed = [result.error for result in results if result.status == "failed"]
+    assert all("batch_size` must be greater than 1" in error for error in failed), failed
     assert {path.name for path in written} == {"aggregate.csv", "aggregate.md", "aggregate.png"}
-    assert "| learning_rate=0.0003 | RL | 2 |" in (tmp_path / "aggregate.md").read_text()
-    model = tmp_path / "learning_rate=0.0003" / "seed0" / "final_model.zip"
+    assert "| batch_size=64 | RL | 2 |" in (tmp_path / "aggregate.md").read_text()
+    model = tmp_path / "batch_size=64" / "seed0" / "final_model.zip"
     stamp = model.stat().st_mtime_ns
     again, _ = sweep(experiment, [0, 1], settings, tmp_path, engine="dask", workers=2, echo=lines.append)
     assert sorted(result.status for result in again) == [
