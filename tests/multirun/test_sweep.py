@@ -244,13 +244,20 @@ def test_a_local_sweep_whose_worker_is_killed_finishes_every_run(tmp_path):
         [*command, "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, text=True
     )
     lock, sibling_lock, deadline = out / "seed0" / ".lock", out / "seed1" / ".lock", time.time() + 180
+
+    def holder(path: Path) -> int | None:
+        """The pid a lock names, or None while it is absent or still being written (created empty first)."""
+        try:
+            return json.loads(path.read_text())["pid"]
+        except (OSError, ValueError):
+            return None
+
     while not (
-        lock.is_file() and sibling_lock.is_file() and list((out / "seed0" / "checkpoints").glob("step_*"))
+        holder(lock) and holder(sibling_lock) and list((out / "seed0" / "checkpoints").glob("step_*"))
     ):
         assert process.poll() is None and time.time() < deadline, process.communicate()[0]
         time.sleep(0.1)
-    worker = json.loads(lock.read_text())["pid"]
-    sibling = json.loads(sibling_lock.read_text())["pid"]
+    worker, sibling = holder(lock), holder(sibling_lock)
     subprocess.run(["kill", "-9", str(worker)], check=True)
     holders_of_seed2 = set()
     while process.poll() is None:
