@@ -59,7 +59,8 @@ def make_vec_env(plant: Plant, seed: int):
 def _gamma(experiment: Experiment) -> float:
     """The learner's discount (the return whose spread scales the rewards)."""
     algorithm = experiment.algorithm
-    return float(algorithm.kwargs.get("gamma", _default(algorithm, "gamma")))
+    gamma = algorithm.kwargs.get("gamma")
+    return float(_default(algorithm, "gamma") if gamma is None else gamma)
 
 
 def _default(algorithm: AlgorithmConfig, keyword: str):
@@ -110,7 +111,7 @@ def _constructed(
     if algorithm.learning_rate_schedule == "linear":
         from stable_baselines3.common.utils import LinearSchedule
 
-        start = kwargs.get("learning_rate", _default(algorithm, "learning_rate"))
+        start = kwargs["learning_rate"] if "learning_rate" in kwargs else _default(algorithm, "learning_rate")
         kwargs["learning_rate"] = LinearSchedule(start=float(start), end=0.0, end_fraction=1.0)
     try:
         return algorithm_class(algorithm.name, algorithm.backend)(
