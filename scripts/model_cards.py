@@ -16,6 +16,7 @@ from pathlib import Path
 
 import yaml
 
+from rlcontroller.api.certify import certificate_card_lines
 from rlcontroller.config import load_experiment, load_scenarios
 from rlcontroller.config.scenarios import standard_scenarios
 from rlcontroller.control.mpc import DEFAULT_HORIZON
@@ -213,6 +214,7 @@ def card(folder: Path, records: Path) -> str:
         f"- **Safety check** (`rlc check`): **{verdict.lines()[0].split(': ', 1)[1]}** (the folder's claim "
         f"until re-run: `rlc check models/{folder.name} --verify`)",
         *(f"  -{line[1:]}" for line in verdict.lines()[1:]),
+        *certificate_card_lines(folder),
     ]
     columns = WIND_COLUMNS if wind else ("J1", "J2", "J3", "J4")
     title = f"{label}" if wind else RECORDS_TITLE

@@ -5,6 +5,7 @@ import select
 import subprocess
 import sys
 import time
+from ctypes.util import find_library
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,13 @@ REPOSITORY = Path(__file__).resolve().parents[1]
 # wrong step, noise draw, delay or force limit changes peaks by 1e-3 or more). Bit-for-bit (==) is kept where
 # the same code path runs; single-step identities keep their own tighter tolerance.
 SAME_PHYSICS = 1e-5
+# OpenSeesPy's Linux wheel without the system's BLAS and LAPACK fails to import with a RuntimeError ("Failed
+# to import openseespy on Linux"), not an ImportError: its tests skip on either.
+OPENSEES_MISSING = "the OpenSees plant needs the opensees extra (and on Linux the system's BLAS and LAPACK)"
+OPENSEES_FAILURES = (ImportError, RuntimeError)
+# Whether OpenSeesPy can load here, without loading it (a process that loads it may not load OpenSees' Tcl
+# build): on Linux it needs the system's BLAS and LAPACK, as .ci/run checks.
+NO_SYSTEM_BLAS = sys.platform == "linux" and not (find_library("blas") and find_library("lapack"))
 # A PPO residual network policy with its config and failing verdict: the retired `five_story` model (worse
 # than no control on 73 of the safety check's 320 motions), kept only as a fixture of the policy file format.
 NETWORK_POLICY = REPOSITORY / "tests" / "data" / "retired_five_story"

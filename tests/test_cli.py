@@ -142,7 +142,7 @@ def test_progress_asked_for_into_a_file_is_a_line_per_step(tmp_path, records):
 def test_top_level_help_cuts_nothing_and_says_where_to_start():
     result = CliRunner().invoke(app, ["--help"], terminal_width=80)
     commands = result.output.split("Commands:")[1].strip().splitlines()
-    assert result.exit_code == 0 and "…" not in result.output and len(commands) == 17
+    assert result.exit_code == 0 and "…" not in result.output and len(commands) == 18
     assert not any(line.endswith("...") for line in commands) and "Start with 'rlc demo'" in result.output
 
 
@@ -214,6 +214,9 @@ def test_the_specifications_commands_run_as_written(tmp_path, monkeypatch):
     assert train.returncode == 0 and "trained: 2048 steps" in train.stdout, train.stderr
     (run,) = (tmp_path / "runs").iterdir()
     assert (run / "config.yaml").is_file() and (run / "best_policy.npz").is_file()
+    certified = rlc(f"certify {run} --design-only")  # a controller trained by rlc train, certified
+    assert certified.returncode == 0 and "design model: " in certified.stdout, certified.stderr
+    assert (run / "best_certificate.yaml").is_file()
     missing = rlc("evaluate --records records/")
     assert missing.returncode == 2 and missing.stdout == ""
     assert missing.stderr.startswith(

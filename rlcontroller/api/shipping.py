@@ -18,6 +18,7 @@ def shipped_models() -> list[str]:
     devices), one line each: how it was made, its safety verdict, the default marked; then what the
     experiments under configs/experiments are made for that no controller ships for."""
 
+    from rlcontroller.api.certify import certificate_summary
     from rlcontroller.api.describe import hardware_label
 
     groups: dict[str, list[str]] = {}
@@ -33,13 +34,17 @@ def shipped_models() -> list[str]:
             if policy.get("kind") == "classical"
             else f"{policy['algorithm']}, {policy['training_steps']:,} steps"
         )
-        line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}"
+        line = f"  {folder.name}{mark}: {made}, {verdict or f'never checked ({state.reason})'}; "
+        line += certificate_summary(folder)
         groups.setdefault(hardware_label(experiment), []).append(line)
     lines = [text for label, members in groups.items() for text in [f"{label}:", *members]]
     lines.append("each verdict is its folder's claim until re-run: 'rlc check models/NAME --verify'")
     unshipped, passive = unshipped_experiments()
     unserved: dict[str, list[str]] = {}
     for name, experiment in unshipped.items():
+        if isinstance(experiment, str):
+            lines.append(f"{name}: not read here: {experiment}")
+            continue
         unserved.setdefault(hardware_label(experiment), []).append(name)
     if unserved:
         lines.append("none ships yet (models/README.md says why) for:")
@@ -49,14 +54,19 @@ def shipped_models() -> list[str]:
     return lines
 
 
-def unshipped_experiments() -> tuple[dict[str, Experiment], list[str]]:
+def unshipped_experiments() -> tuple[dict[str, Experiment | str], list[str]]:
     """The experiments under configs/experiments (by name) with something to command that no shipped
-    controller is made for, and the names of those with nothing to command."""
+    controller is made for (or, where one cannot be read here, e.g. an FE model without OpenSees, why), and
+    the names of those with nothing to command."""
     served = [folder_experiment(folder).hardware() for folder in shipped_folders()]
-    unshipped: dict[str, Experiment] = {}
+    unshipped: dict[str, Experiment | str] = {}
     passive: list[str] = []
     for config in sorted((CONFIGS / "experiments").glob("*.yaml")):
-        experiment = load(config)
+        try:
+            experiment = load(config)
+        except ConfigError as error:
+            unshipped[config.stem] = str(error)
+            continue
         if not experiment.command_labels():
             passive.append(config.stem)
         elif experiment.hardware() not in served:

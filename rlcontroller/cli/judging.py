@@ -254,6 +254,31 @@ def check(
                 folder, model=model, standard=standard, scenarios=scenarios, report=report, config=config
             )
         print_verdict(verdict, path)
+        typer.echo(api.certificate_line(folder, model))
         passed = verdict.passed
     if not passed:
         raise typer.Exit(1)
+
+
+@app.command(short_help="A proven region of stability for a controller.")
+@user_errors
+def certify(
+    *,
+    run_dir: Annotated[Path | None, typer.Argument(help=RUN_HELP)] = None,
+    model: ModelOption = "best",
+    design_only: Annotated[
+        bool, typer.Option("--design-only", help="Certify on the design model only, not the scenario plants.")
+    ] = False,
+) -> None:
+    """Prove a region of starts from which the controller brings the building back to rest: quadratic
+    constraints on every unit of its network (tanh, ReLU, the clips) and a linear matrix inequality, on the
+    design model and on each linear plant of the standard's scenarios (stiffness, mass, damping, actuator
+    lag, delay), with a bound on the response to ground motion inside it. Every region is checked by
+    simulations from its boundary. Writes MODEL_certificate.yaml in the folder (docs/certificate.md)."""
+    from rlcontroller import api
+    from rlcontroller.config import display_path
+
+    report = Printed(None)
+    folder = api.model_folder(run_dir, report)
+    path = api.certify(folder, model=model, robust=not design_only, report=report)
+    typer.echo(f"certificate written to {display_path(path)}")

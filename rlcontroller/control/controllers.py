@@ -175,6 +175,11 @@ class LQGPrior:
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         return np.asarray(observation, dtype=float) @ self._gain
 
+    @property
+    def observation_gain(self) -> np.ndarray:
+        """The prior as one matrix (m, observation size): action = gain @ observation."""
+        return self._gain.T
+
 
 class ConstantCommand:
     """Every commanded device held at one action (`value`: one for all, or one per command): for

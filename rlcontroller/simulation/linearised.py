@@ -4,6 +4,8 @@ what `select_by: standard` asks of a checkpoint)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from rlcontroller.config import Scenario
@@ -45,6 +47,40 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
     return ((after[:size] - after[size:]) / (2.0 * step)).T
 
 
+@dataclass(frozen=True)
+class OpenLoop:
+    """s_{k+1} = state s_k + action a_k + ground g_k: one noise-free control step of a linear plant without
+    supervisor, s = [plant state; observation], a the action in [-1, 1], g the ground acceleration (m/s^2)
+    held over the step."""
+
+    state: np.ndarray  # (n, n)
+    action: np.ndarray  # (n, m)
+    ground: np.ndarray  # (n,)
+    n_plant: int
+    dt: float  # the control step (s)
+
+
+def open_loop(plant: Plant) -> OpenLoop:
+    """`plant`'s control step as matrices (exact for a linear plant: unit steps from zero, one batch)."""
+    if plant.experiment.supervisor is not None:
+        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
+    n_x, size, m = plant.n_state, plant.n_state + plant.layout.size, plant.building.n_actuators
+    rows = size + m + 1
+    batch = BuildingBatch(plant, rows)
+    still = Load("at rest", plant.control_dt, np.zeros(3), synthetic=True)
+    pushed = Load("ground held at 1 m/s^2", plant.control_dt, np.ones(3), synthetic=True)
+    for member in range(rows):
+        batch.start(member, _Silent(), pushed if member == rows - 1 else still)
+    states = np.vstack([np.eye(size), np.zeros((m + 1, size))])
+    actions = np.vstack([np.zeros((size, m)), np.eye(m), np.zeros((1, m))])
+    batch.plant_states()[:] = states[:, :n_x]
+    batch.observations[:] = states[:, n_x:]
+    batch.read_back_estimates()
+    observations, _, _ = batch.step(actions)
+    after = np.hstack([batch.plant_states(), observations]).astype(float)
+    return OpenLoop(after[:size].T, after[size : size + m].T, after[-1], n_x, plant.control_dt)
+
+
 def spectral_radius(plant: Plant, controller: PolicyController) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(closed_loop_matrix(plant, controller)))))
 
@@ -75,3 +111,24 @@ def robust_spectral_radius(plant: Plant, controller: PolicyController, judged: l
     """The largest spectral radius of the closed loop on the design model and on each of the `judged` plants
     (`judged_plants`): what the safety check's stability criterion asks to be below 1."""
     return max([spectral_radius(plant.design, controller)] + [spectral_radius(p, controller) for p in judged])
+
+
+def boundary_runs(plant: Plant, controller: PolicyController, starts: np.ndarray, steps: int) -> np.ndarray:
+    """The closed loop's states (steps + 1, starts, n) from each start s = [plant state; observation],
+    noise-free, without ground motion or supervisor: the controller as it acts, stepped by the simulator."""
+    if plant.experiment.supervisor is not None:
+        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
+    n_x, count = plant.n_state, starts.shape[0]
+    batch = BuildingBatch(plant, count)
+    still = Load("at rest", plant.control_dt, np.zeros(steps + 2), synthetic=True)
+    for member in range(count):
+        batch.start(member, _Silent(), still)
+    batch.plant_states()[:] = starts[:, :n_x]
+    batch.observations[:] = starts[:, n_x:]
+    batch.read_back_estimates()
+    controller.reset()
+    states = [np.hstack([batch.plant_states(), batch.observations]).astype(float)]
+    for _ in range(steps):
+        observations, _, _ = batch.step(controller.act(batch.observations.copy()))
+        states.append(np.hstack([batch.plant_states(), observations]).astype(float))
+    return np.stack(states)

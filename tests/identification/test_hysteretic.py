@@ -14,6 +14,7 @@ from rlcontroller.identification.hysteretic import accuracy, calibration_motions
 from rlcontroller.physics.fe.pushover import Pushover
 from rlcontroller.physics.motions.excitation import scale_to_pga
 from rlcontroller.physics.plant import Plant
+from tests.conftest import OPENSEES_FAILURES, OPENSEES_MISSING
 
 DESIGN = Plant(Experiment())  # the five-story building: a shear building, its story springs its stiffnesses
 TRUE = HysteresisConfig(
@@ -102,7 +103,7 @@ def test_reduce_refuses_an_experiment_without_an_fe_plant(tmp_path):
 
 def test_reduce_refuses_a_linear_fe_model_in_one_line_before_its_runs(tmp_path):
     """The five-story OpenSees shear model never yields: a Bouc-Wen fit of it was 21-838 % off."""
-    pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+    pytest.importorskip("openseespy.opensees", reason=OPENSEES_MISSING, exc_type=OPENSEES_FAILURES)
     done = subprocess.run(
         [
             sys.executable,

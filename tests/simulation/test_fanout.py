@@ -14,6 +14,7 @@ import pytest
 
 from rlcontroller.config import ConfigError
 from rlcontroller.simulation.fanout import engine, fanned_map
+from tests.conftest import OPENSEES_FAILURES, OPENSEES_MISSING
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 FIVE_STORY_FE = CONFIGS.parent / "studies" / "opensees" / "five_story_opensees.yaml"
@@ -41,7 +42,7 @@ def test_an_address_needs_the_dask_engine():
 def test_an_fe_plant_fanned_out_on_dask_equals_local_processes(records):
     """Each controller on each record alone, in processes forked here or in Dask's workers: the same
     numbers."""
-    pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+    pytest.importorskip("openseespy.opensees", reason=OPENSEES_MISSING, exc_type=OPENSEES_FAILURES)
     pytest.importorskip("distributed", reason="the Dask engine needs the distributed extra")
     from rlcontroller.config import load_experiment
     from rlcontroller.control.controllers import LQGController, Uncontrolled

@@ -46,7 +46,10 @@ def opensees():
     _one_library("opensees.tcl", "a Tcl model")
     try:
         import openseespy.opensees as ops
-    except ImportError as error:  # also "libblas.so.3: cannot open shared object file"
+    except (
+        ImportError,
+        RuntimeError,
+    ) as error:  # "libblas.so.3: cannot open ..."; "Failed to import openseespy"
         raise ConfigError(f"{MISSING} ({error})") from None
     _quiet_at_exit()
     return ops

@@ -7,7 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+from tests.conftest import OPENSEES_FAILURES, OPENSEES_MISSING
+
+pytest.importorskip("openseespy.opensees", reason=OPENSEES_MISSING, exc_type=OPENSEES_FAILURES)
 
 from rlcontroller.evaluation.benchmark import YIELDED  # noqa: E402
 from rlcontroller.physics.fe.build import build_model  # noqa: E402

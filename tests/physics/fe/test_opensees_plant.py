@@ -13,8 +13,9 @@ from rlcontroller import api
 from rlcontroller.config import ConfigError, load_experiment, with_overrides
 from rlcontroller.config.loading import UNTRUSTED_MODEL
 from rlcontroller.errors import ModelError
+from tests.conftest import OPENSEES_FAILURES, OPENSEES_MISSING
 
-ops = pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+ops = pytest.importorskip("openseespy.opensees", reason=OPENSEES_MISSING, exc_type=OPENSEES_FAILURES)
 
 from rlcontroller.physics.fe.build import fe_modes, reduced_building  # noqa: E402
 from rlcontroller.physics.fe.opensees import NonConvergence  # noqa: E402

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.config import Experiment
+from tests.conftest import NO_SYSTEM_BLAS, OPENSEES_MISSING
 
 pytestmark = pytest.mark.skipif(find_spec("opensees") is None, reason="a Tcl model needs the opensees extra")
 
@@ -264,6 +265,7 @@ def test_what_a_tcl_model_lacks_or_gets_wrong_is_one_line_naming_the_file(tmp_pa
         assert f'"node 1 oops" (file "five_story_shear_kip_ft.tcl" line {line})' in lines[0]
 
 
+@pytest.mark.skipif(NO_SYSTEM_BLAS, reason=OPENSEES_MISSING)
 def test_a_process_that_ran_a_python_model_refuses_a_tcl_one_in_one_line():
     """The two OpenSees builds abort a process that steps both: the second is refused before it loads."""
     outcome = in_own_process(

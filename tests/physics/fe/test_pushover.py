@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from rlcontroller.physics.fe.pushover import bilinear
+from tests.conftest import OPENSEES_FAILURES, OPENSEES_MISSING
 
 
 def test_a_bilinear_curve_is_idealised_as_itself():
@@ -34,7 +35,7 @@ def test_equal_energy_holds_for_a_rounded_curve_and_an_elastic_one_never_yields(
 
 @pytest.mark.slow
 def test_the_frame_pushover_starts_at_its_condensed_story_stiffness_and_yields_every_story():
-    pytest.importorskip("openseespy.opensees", reason="the OpenSees plant needs the opensees extra")
+    pytest.importorskip("openseespy.opensees", reason=OPENSEES_MISSING, exc_type=OPENSEES_FAILURES)
     from rlcontroller.physics.fe.build import reduced_building
     from rlcontroller.physics.fe.pushover import pushover
 
