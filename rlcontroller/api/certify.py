@@ -120,9 +120,10 @@ def certified_plants(folder: Path, model: str, *, robust: bool, report: Report =
             f"{folder}: an MPC law solves a quadratic program every step: no network to certify"
         )
     design = plant.design
-    if design.semi_active is not None or design.end_stops is not None:
+    if design.semi_active is not None:
         raise OutsideMethod(
-            "semi-active dampers (hysteretic, not linear in the command) are outside the method (a linear plant)"
+            "semi-active dampers (hysteretic, not linear in the command) are outside the method "
+            "(a linear plant)"
         )
     plants, nominal = [("design model", design)], open_loop(design)
     if robust:  # each linear scenario plant whose loop differs from the design model's (noise does not enter)
