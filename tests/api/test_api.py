@@ -108,20 +108,23 @@ def test_shipped_models_are_grouped_by_what_they_are_made_for_and_mark_the_defau
     group = "paper five-story under ground motion, actuators on stories 1, 2, 3, 4, 5:"
     assert lines[lines.index(group) + 1].startswith("  five_story_every_story (default): ")
     assert all("never checked" not in line for line in lines)
-    assert lines[lines.index(group) + 1].endswith("safety check passed, dominates")  # the default dominates
+    verdict, certificate = lines[lines.index(group) + 1].split("; ")
+    assert verdict.endswith("safety check passed, dominates")  # the default dominates
+    assert certificate.startswith("certified region: story drifts up to ")  # its certificate's X
     unserved = lines[lines.index("none ships yet (models/README.md says why) for:") + 1 : -1]
     # the FE frame, and the two mass drivers withdrawn when they met their end-stops (models/README.md)
     assert sorted(line.rsplit("(", 1)[1] for line in unserved) == sorted(
         ["nine_story_frame)", "five_story_amd)", "seventy_six_story_atmd)"]
     )
     wind = lines.index("paper five-story under wind, actuators on stories 1, 2, 3, 4, 5:")
-    assert lines[wind + 1].startswith("  five_story_wind: DAgger, ") and lines[wind + 1].endswith(
-        "check passed"
-    )
+    assert lines[wind + 1].startswith("  five_story_wind: DAgger, ") and lines[wind + 1].split("; ")[
+        0
+    ].endswith("check passed")
     mr = lines.index("paper five-story under ground motion, mr_damper on stories 1, 3, 5:")
     learned = lines[mr + 1]
     assert learned.startswith("  five_story_mr_standard: RandomSearch, ")
-    assert learned.endswith("check passed, dominates")
+    assert learned.split("; ")[0].endswith("check passed, dominates")
+    assert learned.split("; ")[1].startswith("none certified (semi-active dampers")
     assert "each verdict is its folder's claim until re-run: 'rlc check models/NAME --verify'" in lines
     assert lines[-1] == "nothing to command, its verdict from 'rlc compare passive': five_story_tmd"
 
