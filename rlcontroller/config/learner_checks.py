@@ -45,6 +45,16 @@ def check_algorithm(experiment: Experiment) -> None:
             f"{location(file, prefix, 'policy.odd')}: needs normalize_observations: false "
             "(centring the observation breaks a(-o) = -a(o)); scale the readings in the sensors part instead"
         )
+    if algorithm.exploration_noise and algorithm.name not in ("TD3", "DDPG"):
+        raise ConfigError(
+            f"{location(file, prefix, 'exploration_noise')}: only for TD3 and DDPG (deterministic actors), "
+            f"not {algorithm.name}"
+        )
+    if "action_noise" in algorithm.kwargs:
+        raise ConfigError(
+            f"{location(file, prefix, 'kwargs.action_noise')}: an object, not a value a file can hold; use "
+            "algorithm.exploration_noise (the standard deviation of Gaussian noise on the action)"
+        )
     if algorithm.backend == "sbx":
         _check_jax_backend(experiment)
     elif algorithm.name == "TQC":

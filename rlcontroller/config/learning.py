@@ -77,7 +77,10 @@ class AlgorithmConfig(StrictModel):
     compiled by JAX; the `fast` extra), about 2x the steps/s of stable-baselines3's torch learners on the
     paper's small networks (docs/training.md); its run folders hold no pickle (`learning.jax_learners`).
     `learning_rate_schedule: linear` lowers `kwargs.learning_rate` linearly to 0 at `total_steps` (the
-    zoo's `lin_` schedule; a run stopped by `--time-limit` ends above 0).
+    zoo's `lin_` schedule; a run stopped by `--time-limit` ends above 0). `exploration_noise` (TD3 and DDPG):
+    the standard deviation of Gaussian noise added to their deterministic action (in [-1, 1] units) while
+    they collect (stable-baselines3's `NormalActionNoise`); without it they explore only before
+    `learning_starts`.
     `search` is `rlc tune`'s
     search space: dotted paths into the experiment (`algorithm.kwargs.learning_rate`,
     `algorithm.policy.net_arch`, `reward.terms.0.weight`, ...) and their ranges; training ignores it.
@@ -98,6 +101,7 @@ class AlgorithmConfig(StrictModel):
     eval_every: Annotated[int, Field(ge=1, le=MAX_TOTAL_STEPS)] = 25_000
     select_by: Literal["reward", "J1", "J1+J2", "standard"] = "reward"
     learning_rate_schedule: Literal["constant", "linear"] = "constant"
+    exploration_noise: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
     search: dict[str, SearchRange] = Field(default_factory=dict, max_length=100)
 
 

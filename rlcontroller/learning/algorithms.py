@@ -113,6 +113,12 @@ def _constructed(
 
         start = kwargs["learning_rate"] if "learning_rate" in kwargs else _default(algorithm, "learning_rate")
         kwargs["learning_rate"] = LinearSchedule(start=float(start), end=0.0, end_fraction=1.0)
+    if algorithm.exploration_noise:
+        import numpy as np
+        from stable_baselines3.common.noise import NormalActionNoise
+
+        size = vec_env.action_space.shape[-1]
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(size), np.full(size, algorithm.exploration_noise))
     try:
         return algorithm_class(algorithm.name, algorithm.backend)(
             policy,

@@ -209,6 +209,19 @@ def test_a_linear_schedule_lowers_the_learning_rate_to_zero_at_total_steps(name,
     np.testing.assert_allclose(rates, start * progress_remaining, rtol=1e-12, atol=0.0)
 
 
+@pytest.mark.parametrize("backend", ["sb3", "sbx"])
+def test_td3_explores_with_the_gaussian_noise_it_is_given(backend):
+    if backend == "sbx":
+        pytest.importorskip("sbx")
+    experiment = smoke(name="TD3", backend=backend, exploration_noise=0.2, kwargs={})
+    model = build_model(experiment, make_vec_env(Plant(experiment), 0), 0, "cpu", tensorboard=None)
+    noise = model.action_noise
+    m = Plant(experiment).building.n_actuators
+    np.testing.assert_array_equal(noise._sigma, np.full(m, 0.2))
+    np.testing.assert_array_equal(noise._mu, np.zeros(m))
+    assert smoke(name="TD3", kwargs={}).algorithm.exploration_noise == 0.0  # none unless asked, as before
+
+
 @pytest.mark.slow
 def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
     train(
@@ -233,6 +246,12 @@ def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
             "algorithm.kwargs.learning_rate: expected a number in [0.0, 1.0]",
         ),
         ("{learning_rate_schedule: cosine}", "algorithm.learning_rate_schedule: Input should be"),
+        ("{exploration_noise: 0.1}", "algorithm.exploration_noise: only for TD3 and DDPG"),
+        (
+            "{name: TD3, exploration_noise: 2}",
+            "algorithm.exploration_noise: Input should be less than or equal to 1",
+        ),
+        ("{name: TD3, kwargs: {action_noise: 0.1}}", "algorithm.kwargs.action_noise: an object, not a value"),
         ("{kwargs: {train_freq: often}}", "algorithm.kwargs: SAC refused them"),
         ("{policy: {activation: swish}}", "algorithm.policy.activation: Input should be"),
     ],
