@@ -4,7 +4,6 @@ standard's linear scenario plants, checked by simulation from its boundary and w
 
 from __future__ import annotations
 
-import hashlib
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,7 +12,7 @@ import numpy as np
 import yaml
 
 from rlcontroller.api.common import QUIET, Report, folder_experiment
-from rlcontroller.config import ConfigError
+from rlcontroller.config import ConfigError, display_path
 
 FORMAT = "rlcontroller-certificate"
 FORMAT_VERSION = 1
@@ -67,11 +66,6 @@ class PlantCertificate:
 
     def line(self) -> str:
         return _line_from_fields(self.fields())
-
-
-def digests(folder: Path, model: str) -> dict[str, str]:
-    names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
-    return {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
 
 
 def _certify_plant(name: str, plant, controller, report: Report) -> PlantCertificate:
@@ -142,7 +136,7 @@ def _same_loop(loop, other) -> bool:
 
 def certify(folder: Path, *, model: str = "best", robust: bool = True, report: Report = QUIET) -> Path:
     """Certify the folder's controller and write MODEL_certificate.yaml beside it; returns the path."""
-    from rlcontroller.config import display_path
+    from rlcontroller.evaluation.verdict import policy_digests
     from rlcontroller.files import atomic_write
 
     report.line(f"certifying {display_path(folder)}'s {model} policy (supervisor left out)...")
@@ -155,7 +149,7 @@ def certify(folder: Path, *, model: str = "best", robust: bool = True, report: R
     data = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "certified": digests(folder, model),
+        "certified": policy_digests(folder, model),
         "method": "quadratic constraints on every unit (local sectors from interval bounds on the region), "
         "fixed Lyapunov matrix, LMI in the multipliers by eigenvalue minimisation, re-checked by eigvalsh "
         "(docs/certificate.md)",
@@ -171,11 +165,13 @@ def certify(folder: Path, *, model: str = "best", robust: bool = True, report: R
 
 def certificate_summary(folder: Path, model: str = "best") -> str:
     """One line for `rlc models` and the card: the design model's X, or why there is none."""
+    from rlcontroller.evaluation.verdict import policy_digests
+
     path = folder / f"{model}_certificate.yaml"
     if not path.is_file():
         return "no certificate ('rlc certify')"
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    if not isinstance(data, dict) or data.get("certified") != digests(folder, model):
+    if not isinstance(data, dict) or data.get("certified") != policy_digests(folder, model):
         return "certificate out of date ('rlc certify')"
     if data.get("reason"):
         return f"none certified ({data['reason']})"
@@ -188,24 +184,20 @@ def certificate_summary(folder: Path, model: str = "best") -> str:
 def certificate_line(folder: Path, model: str = "best", report: Report = QUIET) -> str:
     """What `rlc check` reports of the certificate (a criterion reported, not yet judged): the design model's
     region from the folder's current MODEL_certificate.yaml, else certified now on the design model alone."""
+    from rlcontroller.evaluation.verdict import policy_digests
+
     path = folder / f"{model}_certificate.yaml"
     data = yaml.safe_load(path.read_text(encoding="utf-8")) if path.is_file() else None
-    if isinstance(data, dict) and data.get("certified") == digests(folder, model):
+    if isinstance(data, dict) and data.get("certified") == policy_digests(folder, model):
         if data.get("reason"):
             return f"certificate (reported, not judged): none certified: {data['reason']}"
         nominal = data["plants"][0]
-        return f"certificate (reported, not judged, {display(path)}): {_line_from_fields(nominal)}"
+        return f"certificate (reported, not judged, {display_path(path)}): {_line_from_fields(nominal)}"
     try:
         (nominal,) = certified_plants(folder, model, robust=False, report=QUIET)
     except (OutsideMethod, ConfigError) as error:
         return f"certificate (reported, not judged): none certified: {error}"
     return f"certificate (reported, not judged; 'rlc certify' writes it): {nominal.line()}"
-
-
-def display(path: Path) -> str:
-    from rlcontroller.config import display_path
-
-    return display_path(path)
 
 
 def _line_from_fields(fields: dict) -> str:

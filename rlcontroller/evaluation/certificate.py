@@ -121,6 +121,12 @@ def sectors(graph: FeedbackGraph, rest: np.ndarray, inverse: np.ndarray, level: 
     return np.concatenate(alphas), np.concatenate(betas), np.concatenate(reaches)
 
 
+def _following(loop: OpenLoop, graph: FeedbackGraph) -> np.ndarray:
+    """Ns: the next state as a map of zeta, ds+ = A ds + B da with da = G dzeta."""
+    n = graph.n_state
+    return np.hstack([loop.state, np.zeros((n, graph.size - n))]) + loop.action @ graph.output
+
+
 class _Feasible(Exception):
     pass
 
@@ -133,7 +139,7 @@ def decrease_lmi(
     sector's mid slope m_j, scaled by its largest size (`reach` = the largest |dv_j|). The LMI is the same in
     any coordinates; in these a narrow sector needs no large multiplier, so the search is well conditioned."""
     n, size = graph.n_state, graph.size
-    following = np.hstack([loop.state, np.zeros((n, size - n))]) + loop.action @ graph.output
+    following = _following(loop, graph)
     rows = np.vstack([stage.weight for stage in graph.stages])  # F_j on zeta
     middle = (alpha + beta) / 2.0
     spread = np.maximum((beta - alpha) / 2.0 * reach, 1e-12)
@@ -297,8 +303,8 @@ def response_bound(loop: OpenLoop, graph: FeedbackGraph, lyapunov, level, matrix
     then sum |story drifts|^2 <= gamma^2 sum g_k^2: the dissipation inequality
     sigma (V+ - V) + |z|^2 - gamma^2 g^2 <= 0 on the proven LMI's multipliers (sigma scales them), by a Schur
     complement, the best sigma on a log grid. (nan, 0) where no sigma gives one."""
-    n, size = graph.n_state, graph.size
-    following = np.hstack([loop.state, np.zeros((n, size - n))]) + loop.action @ graph.output
+    n = graph.n_state
+    following = _following(loop, graph)
     cross = scale.T @ following.T @ lyapunov @ loop.ground / level
     own = float(loop.ground @ lyapunov @ loop.ground) / level
     drifts = np.zeros((drift.shape[0], n))

@@ -109,12 +109,17 @@ def verdict_path(folder: Path, model: str, standard: str = "") -> Path:
     return folder / f"{model}_check{'-' + standard if standard else ''}.yaml"
 
 
+def policy_digests(folder: Path, model: str) -> dict[str, str]:
+    """sha256 of a folder's policy files and the experiment it runs in (the run's config.yaml)."""
+    names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
+    return {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
+
+
 def judged_digests(folder: Path, model: str, standard) -> dict[str, str]:
     """sha256 of what a verdict judges: the policy's files, the experiment it runs in (the run's
     config.yaml) and the standard (its resolved settings, so a comment does not count; `also` when it has
     one)."""
-    names = (f"{model}_policy.yaml", f"{model}_policy.npz", "config.yaml")
-    digests = {name: hashlib.sha256((folder / name).read_bytes()).hexdigest() for name in names}
+    digests = policy_digests(folder, model)
     settings = standard.model_dump(mode="json", exclude={"also"} if standard.also is None else None)
     digests["standard"] = hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()
     return digests

@@ -22,6 +22,27 @@ class _Silent:
         return np.zeros(size)
 
 
+def _started(plant: Plant, states: np.ndarray, grounds: list[float] | None = None, steps: int = 1):
+    """A noise-free batch of `plant` without its supervisor, one member per row of `states` (s = [plant
+    state; observation]) started there, under a ground acceleration held at `grounds[i]` m/s^2 (0 without)
+    for `steps` control steps; and the plant it steps."""
+    if plant.experiment.supervisor is not None:
+        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
+    count, n_x = states.shape[0], plant.n_state
+    batch = BuildingBatch(plant, count)
+    for member, ground in enumerate(grounds or [0.0] * count):
+        held = Load("held", plant.control_dt, np.full(steps + 2, ground), synthetic=True)
+        batch.start(member, _Silent(), held)
+    batch.plant_states()[:] = states[:, :n_x]
+    batch.observations[:] = states[:, n_x:]
+    batch.read_back_estimates()
+    return batch
+
+
+def _state(batch: BuildingBatch, observations: np.ndarray) -> np.ndarray:
+    return np.hstack([batch.plant_states(), observations]).astype(float)
+
+
 def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float = 1e-4) -> np.ndarray:
     """A with s_{k+1} = A s_k for the closed loop linearised at rest without ground motion, noise or
     supervisor (`control.supervisor`: its trigger keeps a policy off at rest, its dissipative rule is
@@ -29,21 +50,11 @@ def closed_loop_matrix(plant: Plant, controller: PolicyController, step: float =
     history, the filter's estimate and the last actions, so it is the controller's whole state). Central
     differences of one batched control step from +/- `step` along each coordinate (exact for a linear
     policy)."""
-    if plant.experiment.supervisor is not None:
-        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
-    n_x, n_o = plant.n_state, plant.layout.size
-    size = n_x + n_o
-    batch = BuildingBatch(plant, 2 * size)
-    still = Load("at rest", plant.control_dt, np.zeros(3), synthetic=True)
-    for member in range(2 * size):
-        batch.start(member, _Silent(), still)
-    basis = np.vstack([np.eye(size), -np.eye(size)]) * step
-    batch.plant_states()[:] = basis[:, :n_x]
-    batch.observations[:] = basis[:, n_x:]
-    batch.read_back_estimates()
+    size = plant.n_state + plant.layout.size
+    batch = _started(plant, np.vstack([np.eye(size), -np.eye(size)]) * step)
     controller.reset()
     observations, _, _ = batch.step(controller.act(batch.observations.copy()))
-    after = np.hstack([batch.plant_states(), observations])
+    after = _state(batch, observations)
     return ((after[:size] - after[size:]) / (2.0 * step)).T
 
 
@@ -62,23 +73,13 @@ class OpenLoop:
 
 def open_loop(plant: Plant) -> OpenLoop:
     """`plant`'s control step as matrices (exact for a linear plant: unit steps from zero, one batch)."""
-    if plant.experiment.supervisor is not None:
-        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
-    n_x, size, m = plant.n_state, plant.n_state + plant.layout.size, plant.building.n_actuators
-    rows = size + m + 1
-    batch = BuildingBatch(plant, rows)
-    still = Load("at rest", plant.control_dt, np.zeros(3), synthetic=True)
-    pushed = Load("ground held at 1 m/s^2", plant.control_dt, np.ones(3), synthetic=True)
-    for member in range(rows):
-        batch.start(member, _Silent(), pushed if member == rows - 1 else still)
-    states = np.vstack([np.eye(size), np.zeros((m + 1, size))])
+    size, m = plant.n_state + plant.layout.size, plant.building.n_actuators
+    states = np.zeros((size + m + 1, size))
+    states[:size] = np.eye(size)
     actions = np.vstack([np.zeros((size, m)), np.eye(m), np.zeros((1, m))])
-    batch.plant_states()[:] = states[:, :n_x]
-    batch.observations[:] = states[:, n_x:]
-    batch.read_back_estimates()
-    observations, _, _ = batch.step(actions)
-    after = np.hstack([batch.plant_states(), observations]).astype(float)
-    return OpenLoop(after[:size].T, after[size : size + m].T, after[-1], n_x, plant.control_dt)
+    batch = _started(plant, states, grounds=[0.0] * (size + m) + [1.0])
+    after = _state(batch, batch.step(actions)[0])
+    return OpenLoop(after[:size].T, after[size : size + m].T, after[-1], plant.n_state, plant.control_dt)
 
 
 def spectral_radius(plant: Plant, controller: PolicyController) -> float:
@@ -116,19 +117,10 @@ def robust_spectral_radius(plant: Plant, controller: PolicyController, judged: l
 def boundary_runs(plant: Plant, controller: PolicyController, starts: np.ndarray, steps: int) -> np.ndarray:
     """The closed loop's states (steps + 1, starts, n) from each start s = [plant state; observation],
     noise-free, without ground motion or supervisor: the controller as it acts, stepped by the simulator."""
-    if plant.experiment.supervisor is not None:
-        plant = Plant(plant.experiment.model_copy(update={"supervisor": None}))
-    n_x, count = plant.n_state, starts.shape[0]
-    batch = BuildingBatch(plant, count)
-    still = Load("at rest", plant.control_dt, np.zeros(steps + 2), synthetic=True)
-    for member in range(count):
-        batch.start(member, _Silent(), still)
-    batch.plant_states()[:] = starts[:, :n_x]
-    batch.observations[:] = starts[:, n_x:]
-    batch.read_back_estimates()
+    batch = _started(plant, starts, steps=steps)
     controller.reset()
-    states = [np.hstack([batch.plant_states(), batch.observations]).astype(float)]
+    states = [_state(batch, batch.observations)]
     for _ in range(steps):
         observations, _, _ = batch.step(controller.act(batch.observations.copy()))
-        states.append(np.hstack([batch.plant_states(), observations]).astype(float))
+        states.append(_state(batch, observations))
     return np.stack(states)
