@@ -24,10 +24,12 @@ def check_algorithm(experiment: Experiment) -> None:
     """Refuse keyword arguments the learner does not take, naming the file and key."""
     algorithm = experiment.algorithm
     file, prefix = experiment.origin("algorithm")
-    if algorithm.policy.odd and algorithm.name not in ("PPO", "A2C", "RandomSearch"):
+    odd_learners = ("SAC", "TQC") if algorithm.backend == "sbx" else ("PPO", "A2C", "RandomSearch")
+    if algorithm.policy.odd and algorithm.name not in odd_learners:
         raise ConfigError(
-            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C and RandomSearch, not "
-            f"{algorithm.name}"
+            f"{location(file, prefix, 'policy.odd')}: only for PPO, A2C, RandomSearch, and SAC or TQC with "
+            f"backend: sbx, not {algorithm.name}"
+            + (" with backend: sbx" if algorithm.backend == "sbx" else "")
         )
     batched = algorithm.vec_env == "batched" and algorithm.name not in ("RandomSearch", "DAgger")
     if experiment.reward.baseline != "none" and not batched:

@@ -18,7 +18,8 @@ class PolicyConfig(StrictModel):
     """The MLP; `net_arch` are the hidden layers of actor and critic, `actor_arch` (if given) the
     actor's own ([]: a linear actor, the action mean a linear map of the observation);
     `log_std_init` sets the initial exploration noise of Gaussian policies (log of std); `odd`
-    makes the action odd in the observation, a(-o) = -a(o) and a(0) = 0 (PPO and A2C)."""
+    makes the action odd in the observation, a(-o) = -a(o) and a(0) = 0 (PPO, A2C, RandomSearch, and SAC or
+    TQC with `backend: sbx`)."""
 
     net_arch: list[Annotated[int, Field(ge=1, le=4096)]] = Field([128, 128, 128], min_length=1, max_length=16)
     actor_arch: list[Annotated[int, Field(ge=1, le=4096)]] | None = Field(None, max_length=16)

@@ -7,7 +7,7 @@ coordinates are zeta = [s; w_1; ...; w_L]: each stage k computes pre-activations
 a = G zeta + g.
 The observation normalisation's clip, the network's activations, SAC's squashing, a residual's two clips and
 the final clip to [-1, 1] are all units; a clip to [-c, c] is a unit saturation of v / c, scaled by c after.
-An odd network is two copies of the network, on o and on -o."""
+An odd network is two copies of the network, on o and on -o; tanh squashes their half difference."""
 
 from __future__ import annotations
 
@@ -153,7 +153,7 @@ def feedback_graph(controller: PolicyController, *, n_plant: int, n_observation:
             signal = build.affine(layer.weight.astype(float), signal, layer.bias.astype(float))
             if layer.activation is not None:
                 signal = build.unit(signal, layer.activation)
-        return build.unit(signal, "Tanh") if actor.squash else signal
+        return signal
 
     if actor.odd:
         plus = network(observation)
@@ -161,6 +161,8 @@ def feedback_graph(controller: PolicyController, *, n_plant: int, n_observation:
         action = (0.5 * (build.pad(plus[0]) - build.pad(minus[0])), 0.5 * (plus[1] - minus[1]))
     else:
         action = network(observation)
+    if actor.squash:
+        action = build.unit(action, "Tanh")
     action = build.unit(action, SATURATION)
     if controller.prior is not None:
         gain = controller.prior.observation_gain  # (m, observation)

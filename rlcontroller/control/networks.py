@@ -38,20 +38,21 @@ class Actor:
 
     layers: tuple[Layer, ...]
     squash: bool  # tanh on the output (SAC's squashed Gaussian, TD3's actor)
-    odd: bool = False  # the action is (g(o) - g(-o)) / 2 (`OddActorCriticPolicy`)
+    odd: bool = (
+        False  # the output before tanh is (g(o) - g(-o)) / 2 (`OddActorCriticPolicy`, sbx's odd actor)
+    )
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         x = np.asarray(observation, dtype=np.float32)
-        if self.odd:
-            return 0.5 * (self._network(x) - self._network(-x))
-        return self._network(x)
+        x = 0.5 * (self._layers(x) - self._layers(-x)) if self.odd else self._layers(x)
+        return np.tanh(x) if self.squash else x
 
-    def _network(self, x: np.ndarray) -> np.ndarray:
+    def _layers(self, x: np.ndarray) -> np.ndarray:
         for layer in self.layers:
             x = x @ layer.weight.T + layer.bias
             if layer.activation is not None:
                 x = ACTIVATIONS[layer.activation](x).astype(x.dtype, copy=False)
-        return np.tanh(x) if self.squash else x
+        return x
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from rlcontroller.control.policy_file import policy_paths, read_policy
 from rlcontroller.control.supervisor import trigger_readings
 from rlcontroller.deployment.assurance_graph import assurance_state_size, assured
 from rlcontroller.deployment.fallback_graph import fallback_state_size, fallen_back, measured_velocity
-from rlcontroller.deployment.graph import DOUBLE, FLOAT, OPSET, Graph, network
+from rlcontroller.deployment.graph import DOUBLE, FLOAT, OPSET, Graph, network, squashed
 from rlcontroller.deployment.runtime import FAITHFUL, graph_deviation
 from rlcontroller.deployment.twin_graph import twin_block
 from rlcontroller.files import atomic_write
@@ -84,6 +84,7 @@ def controller_graph(plant: Plant, controller: PolicyController, source: str = "
         )
         difference = g.node("Sub", [x, mirrored], "odd_difference")
         x = g.node("Mul", [difference, g.constant("one_half", 0.5, np.float32)], "odd_action")
+    x = squashed(g, controller.actor, x)
     action = g.clip(g.node("Cast", [x], "network_action", to=DOUBLE), -1.0, 1.0, output="policy_action")
     if controller.prior is not None:
         estimate = g.columns(stored, layout.estimate.start, layout.estimate.stop, "prior_estimate")

@@ -44,7 +44,7 @@ class Graph:
 
 
 def network(g: Graph, actor, x: str, prefix: str) -> str:
-    """The actor's layers on `x` (float32), node names starting with `prefix`."""
+    """The actor's layers on `x` (float32), node names starting with `prefix`; its tanh is `squashed`'s."""
     for index, layer in enumerate(actor.layers):
         weight = (
             g.constant(f"layer{index}_weight", layer.weight, np.float32)
@@ -57,7 +57,12 @@ def network(g: Graph, actor, x: str, prefix: str) -> str:
         x = g.node("Gemm", [x, weight, bias], f"{prefix}layer{index}", transB=1)
         if layer.activation is not None:
             x = activation(g, layer.activation, x, f"{prefix}layer{index}_{layer.activation.lower()}")
-    return g.node("Tanh", [x], f"{prefix}squashed") if actor.squash else x
+    return x
+
+
+def squashed(g: Graph, actor, x: str) -> str:
+    """tanh on the actor's output if it squashes (after the odd combination)."""
+    return g.node("Tanh", [x], "squashed") if actor.squash else x
 
 
 def activation(g: Graph, name: str, x: str, output: str) -> str:

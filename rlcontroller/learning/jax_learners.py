@@ -79,13 +79,18 @@ def jax_policy_kwargs(experiment: Experiment) -> dict[str, Any]:
     net_arch: list[int] | dict[str, list[int]] = list(policy.net_arch)
     if policy.actor_arch is not None:
         net_arch = {"pi": list(policy.actor_arch), "qf": list(net_arch)}
-    return {"net_arch": net_arch, "activation_fn": _activation(policy.activation)}
+    kwargs: dict[str, Any] = {"net_arch": net_arch, "activation_fn": _activation(policy.activation)}
+    if policy.odd:
+        from rlcontroller.learning.jax_odd_actor import OddSquashedGaussianActor
+
+        kwargs["actor_class"] = OddSquashedGaussianActor
+    return kwargs
 
 
 def jax_actor(model) -> Actor:
     """The deterministic actor of an sbx SAC/TQC (tanh of the Gaussian's mean) or TD3 (its tanh output) as
     plain float32 layers: flax's Dense layers in order, the hidden ones followed by the policy's
-    activation."""
+    activation; odd for `jax_odd_actor.OddSquashedGaussianActor`."""
     policy = model.policy
     params = policy.actor_state.params["params"]
     dense = sorted((name for name in params if name.startswith("Dense_")), key=lambda n: int(n.split("_")[1]))
@@ -98,7 +103,9 @@ def jax_actor(model) -> Actor:
         weight = np.asarray(params[name]["kernel"], dtype=np.float32).T.copy()  # flax: (in, out)
         bias = np.asarray(params[name]["bias"], dtype=np.float32).copy()
         layers.append(Layer(weight, bias, activation if index < hidden else None))
-    return Actor(tuple(layers), squash=True)
+    from rlcontroller.learning.jax_odd_actor import OddSquashedGaussianActor
+
+    return Actor(tuple(layers), squash=True, odd=isinstance(policy.actor, OddSquashedGaussianActor))
 
 
 def _states(model) -> dict[str, Any]:
@@ -149,23 +156,28 @@ def save_jax_learner(model, folder: Path) -> None:
         save_normalization(normalize, folder / NORMALIZE_FILE)
 
 
+def _statistics(normalize) -> dict[str, Any]:
+    """VecNormalize's running statistics by prefix: the observations' (kept only when it normalises them)
+    and the returns'."""
+    kept = {"ret": normalize.ret_rms}
+    return {"obs": normalize.obs_rms} | kept if normalize.norm_obs else kept
+
+
 def save_normalization(normalize, path: Path) -> None:
     """VecNormalize's running statistics as arrays."""
-    obs, ret = normalize.obs_rms, normalize.ret_rms
-    np.savez(
-        path,
-        obs_mean=obs.mean,
-        obs_var=obs.var,
-        obs_count=np.float64(obs.count),
-        ret_mean=ret.mean,
-        ret_var=ret.var,
-        ret_count=np.float64(ret.count),
-    )
+    arrays = {}
+    for prefix, rms in _statistics(normalize).items():
+        arrays |= {
+            f"{prefix}_mean": rms.mean,
+            f"{prefix}_var": rms.var,
+            f"{prefix}_count": np.float64(rms.count),
+        }
+    np.savez(path, **arrays)
 
 
 def load_normalization(normalize, path: Path) -> None:
     with _open_npz(path) as saved:
-        for rms, prefix in ((normalize.obs_rms, "obs"), (normalize.ret_rms, "ret")):
+        for prefix, rms in _statistics(normalize).items():
             mean, var = saved[f"{prefix}_mean"], saved[f"{prefix}_var"]
             if mean.shape != np.shape(rms.mean) or var.shape != np.shape(rms.var):
                 raise ValueError(f"{prefix} statistics of shape {mean.shape}, expected {np.shape(rms.mean)}")

@@ -350,7 +350,9 @@ def _load_checkpoint(experiment: Experiment, checkpoints: list[Path], vec_env, d
     try:
         if path.is_file():
             statistics = VecNormalize.load(str(path), vec_env.venv)
-            vec_env.obs_rms, vec_env.ret_rms = statistics.obs_rms, statistics.ret_rms
+            vec_env.ret_rms = statistics.ret_rms
+            if vec_env.norm_obs:  # VecNormalize keeps no observation statistics without it
+                vec_env.obs_rms = statistics.obs_rms
         path = checkpoint / "model.zip"
         model = algorithm_class(experiment.algorithm.name).load(path, env=vec_env, device=device)
         path = checkpoint / "replay_buffer.pkl"

@@ -413,8 +413,10 @@ def test_rlc_export_refuses_unknown_formats():
     assert done.returncode == 2 and "--format" in done.stderr
 
 
-@pytest.mark.parametrize("actor_arch", [None, []])
-def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch):
+@pytest.mark.parametrize(("actor_arch", "squash"), [(None, False), ([], False), (None, True)])
+def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch, squash):
+    from rlcontroller.control.networks import Actor, Layer
+    from rlcontroller.control.policy_controller import PolicyController
     from rlcontroller.learning.algorithms import build_model, make_vec_env
 
     policy = {"net_arch": [32, 32], "actor_arch": actor_arch, "odd": True, "log_std_init": -1.0}
@@ -422,6 +424,9 @@ def test_an_odd_policy_exports_with_its_symmetry(tmp_path, actor_arch):
     plant = Plant(experiment)
     model = build_model(experiment, make_vec_env(plant, seed=0), seed=0, device="cpu", tensorboard=None)
     controller = policy_controller(model, None)
+    if squash:  # sbx's odd SAC: tanh of the half difference; biases the difference must cancel
+        layers = [Layer(x.weight, np.full_like(x.bias, 0.3), x.activation) for x in controller.actor.layers]
+        controller = PolicyController(Actor(tuple(layers), squash=True, odd=True), None)
     path = tmp_path / "odd.onnx"
     path.write_bytes(controller_graph(plant, controller).SerializeToString())
     exported = OnnxController(path)

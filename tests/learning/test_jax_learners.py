@@ -62,6 +62,31 @@ def test_the_saved_actor_acts_as_sbx_s_deterministic_policy(tmp_path, name, acti
     assert np.allclose(got, expected, atol=2e-5), np.abs(got - expected).max()
 
 
+@pytest.mark.parametrize(("name", "actor_arch"), [("SAC", []), ("TQC", [16])])
+def test_an_odd_sbx_actor_gives_no_force_without_readings_mirrors_its_action_and_saves_as_data(
+    tmp_path, name, actor_arch
+):
+    policy = {"net_arch": [32, 32], "actor_arch": actor_arch, "odd": True}
+    experiment = smoke(name, policy=policy, normalize_observations=False, kwargs={"learning_starts": 50})
+    model, vec_env = learned(experiment, steps=100)
+    write_policy(policy_controller(model, None, None), Plant(experiment), tmp_path, "final")
+    controller = read_policy(tmp_path, "final", Plant(experiment))
+    size = vec_env.observation_space.shape[0]
+    readings = np.random.default_rng(1).normal(size=(64, size)).astype(np.float32)
+    forward = np.asarray(model.policy.predict(readings, deterministic=True)[0])
+    mirrored = np.asarray(model.policy.predict(-readings, deterministic=True)[0])
+    assert np.abs(forward).max() > 0.05  # a policy that acts
+    np.testing.assert_allclose(mirrored, -forward, atol=1e-6)
+    assert np.all(model.policy.predict(np.zeros((1, size), np.float32), deterministic=True)[0] == 0.0)
+    assert controller.actor.odd  # the data a run folder keeps acts as sbx's policy
+    np.testing.assert_allclose(np.clip(controller.actor(readings), -1.0, 1.0), forward, atol=2e-5)
+    if not actor_arch:  # odd and linear: tanh(W o), no bias
+        first, second = readings[:32], readings[32:]
+        pre = np.arctanh(np.clip(controller.actor(first + second), -0.999999, 0.999999))
+        parts = np.arctanh(controller.actor(first)) + np.arctanh(controller.actor(second))
+        np.testing.assert_allclose(pre, parts, rtol=1e-3, atol=1e-4)
+
+
 @pytest.mark.slow
 def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
     experiment = smoke(normalize_observations=True)
@@ -96,6 +121,20 @@ def test_a_checkpoint_restores_the_whole_learner_without_pickle(tmp_path):
         strict=True,
     ):
         assert np.array_equal(np.asarray(before), np.asarray(after))
+
+
+def test_return_statistics_alone_are_checkpointed_and_restored(tmp_path):
+    # normalize_rewards without normalize_observations (an odd actor's setting): VecNormalize keeps no
+    # observation statistics then, and the checkpoint holds the returns' alone
+    experiment = smoke(normalize_observations=False, normalize_rewards=True, kwargs={"learning_starts": 50})
+    model, _ = learned(experiment, steps=100)
+    save_jax_learner(model, tmp_path)
+    with np.load(tmp_path / "vecnormalize.npz") as saved:
+        assert sorted(saved.files) == ["ret_count", "ret_mean", "ret_var"]
+    fresh = build_model(experiment, make_vec_env(Plant(experiment), 1), 1, "cpu", tensorboard=None)
+    load_jax_learner(fresh, tmp_path)
+    kept, restored = model.get_vec_normalize_env().ret_rms, fresh.get_vec_normalize_env().ret_rms
+    assert kept.count > 100 and restored.count == kept.count and restored.var == kept.var
 
 
 @pytest.mark.slow
@@ -164,6 +203,11 @@ def test_a_checkpoint_of_another_network_is_refused_naming_the_array(tmp_path):
         (
             {"name": "SAC", "backend": "sbx", "policy": {"log_std_init": -1}},
             "policy.log_std_init: not with backend",
+        ),
+        ({"name": "TD3", "backend": "sbx", "policy": {"odd": True}}, "policy.odd: only for .* not TD3 with"),
+        (
+            {"name": "SAC", "backend": "sbx", "normalize_observations": True, "policy": {"odd": True}},
+            "policy.odd: needs normalize_observations: false",
         ),
     ],
 )

@@ -222,7 +222,10 @@ def test_an_empty_actor_arch_gives_a_linear_actor_and_keeps_the_critic(name):
 def test_an_odd_policy_is_refused_at_loading_for_sac_and_with_centred_observations():
     from rlcontroller.config import ConfigError, build_experiment
 
-    with pytest.raises(ConfigError, match="policy.odd: only for PPO, A2C and RandomSearch"):
+    with pytest.raises(
+        ConfigError,
+        match="policy.odd: only for PPO, A2C, RandomSearch, and SAC or TQC with backend: sbx, not SAC$",
+    ):
         build_experiment({"algorithm": {"name": "SAC", "policy": {"odd": True}}})
     with pytest.raises(ConfigError, match="policy.odd: needs normalize_observations: false"):
         build_experiment(

@@ -223,6 +223,17 @@ def test_td3_explores_with_the_gaussian_noise_it_is_given(backend):
 
 
 @pytest.mark.slow
+def test_a_run_normalising_rewards_alone_resumes(tmp_path):
+    # without normalize_observations VecNormalize keeps no observation statistics; resume must not need them
+    run = tmp_path / "run"
+    experiment = smoke(normalize_rewards=True, total_steps=600, checkpoint_every=300, eval_every=300)
+    assert train(experiment=experiment, run_dir=run, time_limit_s=0.0).time_limit_reached
+    assert (RunFolder(run).checkpoints()[-1] / "vecnormalize.pkl").is_file()
+    assert train(resume=run).steps == 600
+    assert read_policy(run, "final", Plant(experiment)).normalizer is None
+
+
+@pytest.mark.slow
 def test_observation_normalisation_is_checkpointed_and_used(tmp_path):
     train(
         experiment=smoke(normalize_observations=True, total_steps=300, checkpoint_every=300, eval_every=300),
