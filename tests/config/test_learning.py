@@ -43,7 +43,7 @@ def test_the_table_of_keyword_arguments_is_the_learners_own(backend, name):
         ({"name": "SAC", "kwargs": {"seed": 3}}, "algorithm.kwargs.seed: set by rlc"),
         (
             {"name": "SAC", "policy": {"odd": True}},
-            "algorithm.policy.odd: only for PPO, A2C and RandomSearch",
+            "algorithm.policy.odd: only for PPO, A2C, RandomSearch, and SAC or TQC with backend: sbx",
         ),
         (
             {"name": "SAC", "backend": "sbx", "kwargs": {"param_resets": "yes"}},
