@@ -38,9 +38,7 @@ class Actor:
 
     layers: tuple[Layer, ...]
     squash: bool  # tanh on the output (SAC's squashed Gaussian, TD3's actor)
-    odd: bool = (
-        False  # the output before tanh is (g(o) - g(-o)) / 2 (`OddActorCriticPolicy`, sbx's odd actor)
-    )
+    odd: bool = False  # the output before tanh is (g(o) - g(-o)) / 2 (PPO's and sbx's odd actors)
 
     def __call__(self, observation: np.ndarray) -> np.ndarray:
         x = np.asarray(observation, dtype=np.float32)
