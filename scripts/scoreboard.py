@@ -61,7 +61,8 @@ MEASURED = {
         "with its end-stops every classical law fails against the driver off (LQG, LQG + ground, LQG + "
         "ground model: 21, 22, 35 of 261 worse, check J1 0.710-0.713); random search from LQG + ground "
         "model on the standard's objective gets to 16 of 261 (bound 9.2 %) at check J1 0.801 and no lower "
-        "in 90 M steps; SAC from nothing on the driver with its stops stays at or above the driver off "
+        "in 90 M steps (with a network for the residual, 26); SAC from nothing on the driver with its stops "
+        "stays at or above the driver off "
         "(validation J1 1.56-1.98 without a trigger, 0.829-0.845 behind one, the driver off 0.834) "
         '(docs/devices.md, "Round 7: the roof driver with its stops")'
     ),
