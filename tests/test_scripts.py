@@ -159,6 +159,38 @@ def test_an_active_mass_driver_is_also_checked_switched_off(tmp_path):
     assert off["check suite"].mean_J1 > verdicts["LQG + ground model"].criteria["check suite"].mean_J1
 
 
+@pytest.mark.slow
+def test_a_driver_switched_off_from_the_start_is_its_reference_and_never_switched_off_is_the_law(tmp_path):
+    """driver_sensitivity.py's OffAbove: off from a ground reading of 0 it is the driver switched off (J1 1,
+    none worse); from one never reached it is the law it wraps, motion for motion."""
+    import yaml
+
+    from rlcontroller.config import load_experiment, load_safety_check
+    from rlcontroller.evaluation.evaluation import classical_controllers
+    from rlcontroller.evaluation.safety import drift_bounds, suite_criterion
+    from rlcontroller.physics.plant import Plant
+
+    standard = yaml.safe_load((SCRIPTS.parent / "configs" / "checks" / "standard.yaml").read_text())
+    path = tmp_path / "small.yaml"
+    path.write_text(yaml.safe_dump(standard | {"motions": 6}))
+    check = load_safety_check(path)
+    plant = Plant(load_experiment(SCRIPTS.parent / "configs" / "experiments" / "five_story_amd.yaml"))
+    bounds = drift_bounds(plant, check)
+    law = next(c for c in classical_controllers(plant) if c.name == "LQG + ground model")
+    off_above = load_script("driver_sensitivity").OffAbove
+    alone, never, at_once = (
+        suite_criterion(plant, controller, check, bounds)
+        for controller in (law, off_above(law, plant, 1e9), off_above(law, plant, 0.0))
+    )
+    assert at_once.mean_J1 == pytest.approx(1.0, abs=1e-12) and at_once.strict_failure_count == 0
+    assert alone.mean_J1 < 0.99  # the law acts
+    ratios = [
+        {name: row.ratio for name, row in suite.per_motion.items() if row.significant}
+        for suite in (never, alone)
+    ]
+    assert ratios[0] and ratios[0] == pytest.approx(ratios[1], abs=1e-12)
+
+
 def test_the_supervisor_study_chooses_by_its_rule_on_generated_motions_only():
     """Passing, weak-band J1 within 15 % of unsupervised LQG + ground model's, selection J2 no higher than
     its: the lowest selection J1 among those; the seven records play no part."""
