@@ -182,7 +182,9 @@ RESERVED_KWARGS = {
     "verbose",
     "_init_setup_model",
 }
-CHOICE_KWARGS = {"objective": ("return", "standard")}  # RandomSearch: what f is (its module docstring)
+CHOICE_KWARGS = {
+    "objective": ("return", "standard", "peaks")
+}  # RandomSearch: what f is (its module docstring)
 # sbx: the time steps (whole numbers >= 0) after which its networks are reset
 STEP_LIST_KWARGS = {"param_resets"}
 # (low, high, integer) for the learners' common numeric keyword arguments.

@@ -18,7 +18,9 @@ With `objective: standard` f aims at the safety check instead of the reward: the
 runs on the same motions, noise and plants, and f is the mean over the motions of the candidate's J1
 against it (mean over stories of each story's peak drift ratio) plus `STANDARD_PENALTY` times how far the
 check's own measure (`metrics.ratio_to_reference`) exceeds 1: every motion made worse than failing safe
-is priced, as the check fails it.
+is priced, as the check fails it. With `objective: peaks` each motion's J2 against the same reference (mean
+over floors of each floor's peak absolute acceleration ratio) is added to its J1: drift and floor acceleration
+weighed alike, as the check and the scoreboard weigh them, on the peaks no quadratic cost states.
 
 The policy is `OddActorCriticPolicy` (a stable-baselines3 actor-critic policy) with a linear actor
 (`actor_arch: []`; its action layer is W, bias 0; no critic is trained), or for an affine policy
@@ -53,7 +55,8 @@ from rlcontroller.physics.motions.excitation import Load
 from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
-STANDARD_PENALTY = 10.0  # per unit of the check's ratio above 1 (objective: standard)
+STANDARD_PENALTY = 10.0  # per unit of the check's ratio above 1 (objective: standard or peaks)
+OBJECTIVES = ("return", "standard", "peaks")
 
 
 class RandomSearch(BatchLearner):
@@ -67,8 +70,8 @@ class RandomSearch(BatchLearner):
     learning_rate : step size of W's update, as in the module docstring's formula.
     initial_bias : b at the start, every action's (an affine policy, or an affine network's action layer):
         1 starts dampers at full voltage (passive-on), -1 at their least (passive-off).
-    objective : "return" (the reward) or "standard" (J1 against the building failed safe, every motion
-        made worse priced: module docstring).
+    objective : "return" (the reward), "standard" (J1 against the building failed safe, every motion
+        made worse priced: module docstring) or "peaks" (the same with J2 added).
     """
 
     policy_aliases = {"MlpPolicy": ActorCriticPolicy}  # affine; the odd policy is passed as its class
@@ -95,8 +98,8 @@ class RandomSearch(BatchLearner):
         self.n_motions = n_motions
         self.delta_std = delta_std
         self.initial_bias = initial_bias
-        if objective not in ("return", "standard"):
-            raise ValueError(f"objective {objective!r}: expected return or standard")
+        if objective not in OBJECTIVES:
+            raise ValueError(f"objective {objective!r}: expected one of {', '.join(OBJECTIVES)}")
         self.objective = objective
         if _init_setup_model:
             self._setup_model()
@@ -173,12 +176,13 @@ class RandomSearch(BatchLearner):
         candidates = [self.weights + d for d in deltas] + [self.weights - d for d in deltas]
         controllers = [self.candidate(parameters) for parameters in candidates]
         runs = batch_rollout(self.plant, motions, controllers, seeds=seeds, randomize=True)
-        if self.objective == "standard":  # the reference with the control system failed safe: no supervisor
+        if self.objective != "return":  # the reference with the control system failed safe: no supervisor
             failed_safe = self.plant.failed_safe
             reference = batch_rollout(
                 failed_safe, motions, [fail_safe_controller(failed_safe)], seeds=seeds, randomize=True
             )
-            f = np.array([standard_cost(lane, reference[0]) for lane in runs])
+            peaks = self.objective == "peaks"
+            f = np.array([standard_cost(lane, reference[0], accelerations=peaks) for lane in runs])
         else:
             f = np.array([np.mean([np.log(max(-total, 1e-300)) for _, total in lane]) for lane in runs])
         episodes = [
@@ -203,12 +207,15 @@ class RandomSearch(BatchLearner):
         return steps
 
 
-def standard_cost(lane: list, reference: list) -> float:
+def standard_cost(lane: list, reference: list, *, accelerations: bool = False) -> float:
     """`objective: standard`'s f of one candidate: over its (response, return) runs and the building failed
-    safe's on the same motions, the mean of J1 against the reference plus the priced excess of the check's
-    measure over 1."""
+    safe's on the same motions, the mean of J1 against the reference (with `accelerations`, `objective:
+    peaks`: J1 + J2) plus the priced excess of the check's measure over 1."""
     costs = []
     for (response, _), (failed_safe, _) in zip(lane, reference, strict=True):
-        j1 = float(np.mean(peak(response.drift) / peak(failed_safe.drift)))
-        costs.append(j1 + STANDARD_PENALTY * max(ratio_to_reference(response, failed_safe) - 1.0, 0.0))
+        j = float(np.mean(peak(response.drift) / peak(failed_safe.drift)))
+        if accelerations:
+            acceleration = response.absolute_acceleration
+            j += float(np.mean(peak(acceleration) / peak(failed_safe.absolute_acceleration)))
+        costs.append(j + STANDARD_PENALTY * max(ratio_to_reference(response, failed_safe) - 1.0, 0.0))
     return float(np.mean(costs))

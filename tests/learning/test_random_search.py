@@ -97,6 +97,33 @@ def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe
     assert max(plus[0], minus[0]) > 1.0 + STANDARD_PENALTY * 0.01  # priced beyond its J1
 
 
+def test_the_peaks_objective_adds_each_motions_floor_acceleration_ratio():
+    """`objective: peaks`: a candidate that never acts costs exactly 2 (J1 and J2 of the building failed safe
+    against itself); one that acts costs its standard cost plus its mean J2, motion by motion."""
+    model = new_model(tiny(residual_lqg=False, kwargs={"objective": "peaks"}))
+    motions, seeds = synthetic_suite(count=2), [11, 12]
+    plus, minus, _ = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)
+    assert plus[0] == minus[0] == 2.0
+    pushing = np.zeros((1, *model.weights.shape))
+    pushing[0, :, 0] = 5.0
+    plus, _, _ = model.paired_log_costs(pushing, motions, seeds)
+    runs = batch_rollout(
+        model.plant,
+        motions,
+        [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
+        seeds=seeds,
+        randomize=True,
+    )
+    j2 = [
+        np.mean(
+            np.max(np.abs(r.absolute_acceleration), axis=0) / np.max(np.abs(f.absolute_acceleration), axis=0)
+        )
+        for (r, _), (f, _) in zip(runs[0], runs[1], strict=True)
+    ]
+    assert j2[0] != pytest.approx(1.0, abs=1e-3)  # the push moves the floors
+    assert plus[0] == pytest.approx(standard_cost(runs[0], runs[1]) + np.mean(j2), rel=1e-12)
+
+
 def model_controller(model, weights):
     from rlcontroller.control.controllers import LinearFeedback
 
@@ -256,7 +283,7 @@ def test_the_progress_bar_counts_simulated_steps(tmp_path, capsys):
         ("{kwargs: {batch_size: 64}}", "algorithm.kwargs.batch_size: not a keyword argument of RandomSearch"),
         (
             "{kwargs: {objective: check}}",
-            "algorithm.kwargs.objective: expected one of return, standard, got 'check'",
+            "algorithm.kwargs.objective: expected one of return, standard, peaks, got 'check'",
         ),
     ],
 )
