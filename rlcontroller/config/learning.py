@@ -182,9 +182,8 @@ RESERVED_KWARGS = {
     "verbose",
     "_init_setup_model",
 }
-CHOICE_KWARGS = {
-    "objective": ("return", "standard", "peaks")
-}  # RandomSearch: what f is (its module docstring)
+# RandomSearch: what f is (its module docstring)
+CHOICE_KWARGS = {"objective": ("return", "standard", "peaks")}
 # sbx: the time steps (whole numbers >= 0) after which its networks are reset
 STEP_LIST_KWARGS = {"param_resets"}
 # (low, high, integer) for the learners' common numeric keyword arguments.

@@ -44,6 +44,7 @@ import numpy as np
 import torch
 from stable_baselines3.common.policies import ActorCriticPolicy
 
+from rlcontroller.config.learning import CHOICE_KWARGS
 from rlcontroller.control.controllers import Controller, LinearFeedback, fail_safe_controller
 from rlcontroller.control.networks import Actor, Layer
 from rlcontroller.control.policy_controller import PolicyController
@@ -56,7 +57,7 @@ from rlcontroller.physics.motions.loads import generate_suite
 from rlcontroller.simulation.rollout import batch_rollout
 
 STANDARD_PENALTY = 10.0  # per unit of the check's ratio above 1 (objective: standard or peaks)
-OBJECTIVES = ("return", "standard", "peaks")
+OBJECTIVES = CHOICE_KWARGS["objective"]
 
 
 class RandomSearch(BatchLearner):

@@ -76,6 +76,16 @@ def test_an_iteration_steps_downhill_on_its_own_motions():
     assert after < before
 
 
+def pushed(model, motions, seeds):
+    """f(W + d), f(W - d) of a candidate d that drives every actuator by the first reading (energy in), and
+    that candidate's and the building failed safe's runs on the same motions and seeds."""
+    pushing = np.zeros((1, *model.weights.shape))
+    pushing[0, :, 0] = 5.0
+    plus, minus, _ = model.paired_log_costs(pushing, motions, seeds)
+    controllers = [model_controller(model, pushing[0]), fail_safe_controller(model.plant)]
+    return plus, minus, batch_rollout(model.plant, motions, controllers, seeds=seeds, randomize=True)
+
+
 def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe():
     """f of a candidate that never acts is exactly 1 (J1 of the building failed safe against itself, nothing
     priced); a candidate that pushes the building is priced by the check's own measure."""
@@ -83,16 +93,7 @@ def test_the_standard_objective_prices_every_motion_made_worse_than_failing_safe
     motions, seeds = synthetic_suite(count=2), [11, 12]
     plus, minus, _ = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)
     assert plus[0] == minus[0] == 1.0
-    pushing = np.zeros((1, *model.weights.shape))
-    pushing[0, :, 0] = 5.0  # every actuator driven by the first reading: energy in
-    plus, minus, _ = model.paired_log_costs(pushing, motions, seeds)
-    runs = batch_rollout(
-        model.plant,
-        motions,
-        [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
-        seeds=seeds,
-        randomize=True,
-    )
+    plus, minus, runs = pushed(model, motions, seeds)
     assert plus[0] == pytest.approx(standard_cost(runs[0], runs[1]), rel=1e-12)
     assert max(plus[0], minus[0]) > 1.0 + STANDARD_PENALTY * 0.01  # priced beyond its J1
 
@@ -104,16 +105,7 @@ def test_the_peaks_objective_adds_each_motions_floor_acceleration_ratio():
     motions, seeds = synthetic_suite(count=2), [11, 12]
     plus, minus, _ = model.paired_log_costs(np.zeros((1, *model.weights.shape)), motions, seeds)
     assert plus[0] == minus[0] == 2.0
-    pushing = np.zeros((1, *model.weights.shape))
-    pushing[0, :, 0] = 5.0
-    plus, _, _ = model.paired_log_costs(pushing, motions, seeds)
-    runs = batch_rollout(
-        model.plant,
-        motions,
-        [model_controller(model, pushing[0]), fail_safe_controller(model.plant)],
-        seeds=seeds,
-        randomize=True,
-    )
+    plus, _, runs = pushed(model, motions, seeds)
     j2 = [
         np.mean(
             np.max(np.abs(r.absolute_acceleration), axis=0) / np.max(np.abs(f.absolute_acceleration), axis=0)
