@@ -231,7 +231,8 @@ def targets(rows: dict[str, dict], nothing: list[str], won: int) -> list[str]:
         f"4. Learned wins on >= 3 experiments: {'met' if won >= 3 else 'missed'} ({won}); where limits bind "
         'MPC is the lead to win and its imitations tie it (docs/mpc.md, "Why none wins by 5 %"); random '
         "search aimed at the peaks (objective: peaks) beats MPC on the default's strong check motions by "
-        '7-11 % and loses 3-5 % to it on the seven records (docs/mpc.md, "Aimed at the peaks").',
+        "7-11 % and loses 3-5 % to it on the seven records; on the yielding building it trails LQG + ground "
+        'by 1-2 % on the strong motions (docs/mpc.md, "Aimed at the peaks").',
         "5. RL from nothing reaches LQG's validation J1 and J2 in 30 min: reached, not held: the fast SAC "
         "recipe with an odd linear actor and 4 gradient steps per batch step, J1 0.634, J2 0.863 at 3.2 min "
         "(seed 1: 0.647, 0.869 at 1.6 min) against LQG's 0.656, 0.953, then J1 0.69-0.82; with 2 its best is "
